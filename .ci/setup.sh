@@ -1,0 +1,32 @@
+#!/usr/bin/env bash
+# Set-up from nothing: installs every missing build and run dependency from Debian 12's
+# packages (as root, or through sudo), then configures and builds rendulic in ./build.
+# Idempotent: a second call installs nothing and only rebuilds what changed.
+# Environment: BUILD_DIR (default build), BUILD_TYPE (default Release), JOBS (default nproc),
+# RENDULIC_MPI=ON to build with OpenMPI, CI set -> warnings are errors.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+pkgs=(g++ make cmake pkg-config git ca-certificates
+      libeigen3-dev libceres-dev libgoogle-glog-dev libgflags-dev
+      libnlopt-dev libnlopt-cxx-dev libhdf5-dev hdf5-tools
+      libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev libtomlplusplus-dev
+      python3 python3-matplotlib python3-h5py python3-numpy)
+if [ "${RENDULIC_MPI:-OFF}" = "ON" ]; then pkgs+=(libopenmpi-dev openmpi-bin); fi
+
+missing=()
+for p in "${pkgs[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  echo "setup: installing ${missing[*]}" >&2
+  SUDO=""
+  [ "$(id -u)" -eq 0 ] || SUDO="sudo"
+  $SUDO apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+fi
+
+build_dir=${BUILD_DIR:-build}
+cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE="${BUILD_TYPE:-Release}" \
+      -DRENDULIC_MPI="${RENDULIC_MPI:-OFF}" >/dev/null
+cmake --build "$build_dir" -j "${JOBS:-$(nproc)}"

@@ -1,0 +1,31 @@
+// Subcommand registry of the `rendulic` CLI (interfaces.md "Command line"). Each cmd_*.cpp
+// adds its options to the parent app and returns the action main() runs when it is chosen;
+// options live in objects owned by the action, so registration has no globals.
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <functional>
+
+#include "rendulic/core/scenario.hpp"
+
+namespace rendulic::app {
+
+using Action = std::function<int()>;
+struct Subcommand {
+  CLI::App* app;
+  Action action;
+};
+
+Subcommand add_run(CLI::App& parent);
+Subcommand add_fit(CLI::App& parent);
+Subcommand add_envelope(CLI::App& parent);
+Subcommand add_calibrate(CLI::App& parent);
+Subcommand add_bench(CLI::App& parent);
+Subcommand add_inspect(CLI::App& parent);
+Subcommand add_plot(CLI::App& parent);
+Subcommand add_keys(CLI::App& parent);
+
+// Every scenario key of every module (app/schema.cpp).
+const ScenarioSchema& scenario_schema();
+
+}  // namespace rendulic::app

@@ -1,0 +1,27 @@
+// The stages of `rendulic run` (interfaces.md, physics.md section 4): a table from stage name
+// to the function that runs it against the open results file. The scenario key run.stages
+// picks which run, in the table's order. A stage with no implementation yet is refused
+// before anything is written.
+#pragma once
+
+#include <filesystem>
+
+#include "rendulic/core/results.hpp"
+#include "rendulic/core/scenario.hpp"
+
+namespace rendulic::app {
+
+struct RunContext {
+  std::filesystem::path out_dir;
+  int threads = 0;     // 0: OpenMP's default
+  bool quiet = false;  // no progress display
+};
+
+// Registers the run.* keys (seed, stages, ...).
+void register_run_keys(ScenarioSchema& schema);
+// NotAvailable naming the first requested stage that has not landed.
+void check_stages_available(const Scenario& scenario);
+// Runs every requested stage, in order, writing into `out`.
+void run_pipeline(const Scenario& scenario, ResultsWriter& out, const RunContext& ctx);
+
+}  // namespace rendulic::app

@@ -1,0 +1,17 @@
+// The complete scenario schema: run.* keys plus every module's own keys. The one place that
+// knows which modules contribute keys; each module declares its keys next to its options.
+#include "commands.hpp"
+#include "pipeline.hpp"
+
+namespace rendulic::app {
+
+const ScenarioSchema& scenario_schema() {
+  static const ScenarioSchema schema = [] {
+    ScenarioSchema s;
+    register_run_keys(s);
+    return s;
+  }();
+  return schema;
+}
+
+}  // namespace rendulic::app

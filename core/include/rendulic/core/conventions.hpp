@@ -1,0 +1,120 @@
+// Sign conventions, tensor invariants and Rendulic coordinates: the one place that defines
+// them (physics.md sections 2, 3 and 5; models.md "Coordinates"). Everything else calls these
+// functions instead of re-deriving a sign or a sqrt(2).
+//
+// - Strain epsilon = -E: compression positive. Stress: compression positive.
+// - Q_dev = +-sqrt(2 J2), the sign of J3 (+ for axial compression, - for axial extension).
+// - Rendulic pair of a tensor Q: (sqrt(2) * lateral, axial), lateral = (Q_yy + Q_zz) / 2,
+//   axial = Q_xx. The (iso, dev) frame is that pair rotated by atan(1/sqrt(2)) = 35.26 deg.
+// - Mandel 6-vectors: (xx, yy, zz, sqrt2 yz, sqrt2 xz, sqrt2 xy), so that the Euclidean
+//   product of two Mandel vectors is the double contraction of the tensors.
+#pragma once
+
+#include <Eigen/Dense>
+#include <cmath>
+#include <numbers>
+
+namespace rendulic {
+
+using Vector6d = Eigen::Matrix<double, 6, 1>;
+using Matrix6d = Eigen::Matrix<double, 6, 6>;
+
+inline constexpr double kSqrt2 = std::numbers::sqrt2;
+inline constexpr double kSqrt3 = std::numbers::sqrt3;
+inline constexpr double kPi = std::numbers::pi;
+
+inline constexpr double deg_to_rad(double deg) { return deg * kPi / 180.0; }
+inline constexpr double rad_to_deg(double rad) { return rad * 180.0 / kPi; }
+
+// Special directions of the strain Rendulic plane (physics.md section 5), in degrees.
+// atan(1/sqrt(2)) is the angle of the isotropic axis (1, 1, 1) in the (sqrt2 lat, ax) plane.
+inline const double kIsoCompressionDeg = rad_to_deg(std::atan(1.0 / kSqrt2));  // 35.26
+inline const double kIsoExtensionDeg = kIsoCompressionDeg + 180.0;              // 215.26
+inline constexpr double kUniaxialCompressionDeg = 90.0;
+inline constexpr double kUniaxialExtensionDeg = 270.0;
+inline const double kDevCompressionDeg = kIsoCompressionDeg + 90.0;  // 125.26, constant volume
+inline const double kDevExtensionDeg = kIsoCompressionDeg + 270.0;   // 305.26
+
+// Strain (compression positive) from the kinematic strain E (extension positive).
+inline Eigen::Matrix3d strain_from_kinematic(const Eigen::Matrix3d& E) { return -E; }
+
+inline double isotropic_part(const Eigen::Matrix3d& Q) { return Q.trace() / 3.0; }
+// P = tr(sigma)/3 (compression positive stress gives positive pressure).
+inline double pressure(const Eigen::Matrix3d& sigma) { return isotropic_part(sigma); }
+// eps_v = tr(epsilon) = -tr(E): positive on compression.
+inline double volumetric_strain(const Eigen::Matrix3d& eps) { return eps.trace(); }
+
+inline Eigen::Matrix3d deviator(const Eigen::Matrix3d& Q) {
+  return Q - isotropic_part(Q) * Eigen::Matrix3d::Identity();
+}
+// J2 = (1/2) Q^D : Q^D, which equals half the sum of squared deviator eigenvalues.
+inline double j2(const Eigen::Matrix3d& Q) {
+  const Eigen::Matrix3d d = deviator(Q);
+  return 0.5 * (d.array() * d.array()).sum();
+}
+inline double j3(const Eigen::Matrix3d& Q) { return deviator(Q).determinant(); }
+
+// Q_dev = sign(J3) sqrt(2 J2). J3 = 0 (no deviator, or a non-axisymmetric deviator with a
+// zero middle eigenvalue) takes the + sign: the magnitude is then the only defined part.
+inline double signed_deviator(const Eigen::Matrix3d& Q) {
+  const double mag = std::sqrt(2.0 * j2(Q));
+  return j3(Q) < 0.0 ? -mag : mag;
+}
+
+// Rendulic pair (sqrt(2) * lateral, axial) with lateral the mean of yy and zz.
+inline Eigen::Vector2d rendulic_pair(const Eigen::Matrix3d& Q) {
+  return {kSqrt2 * 0.5 * (Q(1, 1) + Q(2, 2)), Q(0, 0)};
+}
+// The axisymmetric tensor whose Rendulic pair is r: diag(axial, lateral, lateral).
+inline Eigen::Matrix3d from_rendulic_pair(const Eigen::Vector2d& r) {
+  const double lat = r.x() / kSqrt2;
+  return Eigen::Vector3d(r.y(), lat, lat).asDiagonal();
+}
+
+// Rotation from Rendulic (sqrt2 lat, ax) to the (iso, dev) frame of models.md:
+// iso = tr(Q)/sqrt(3), dev = sqrt(2/3) (ax - lat). Orthonormal, so it preserves norms.
+inline Eigen::Matrix2d rendulic_to_iso_dev() {
+  const double c = std::sqrt(2.0 / 3.0), s = 1.0 / kSqrt3;  // cos, sin of 35.26 deg
+  Eigen::Matrix2d R;
+  R << c, s, -s, c;
+  return R;
+}
+inline Eigen::Vector2d iso_dev_from_rendulic(const Eigen::Vector2d& r) {
+  return rendulic_to_iso_dev() * r;
+}
+inline Eigen::Vector2d rendulic_from_iso_dev(const Eigen::Vector2d& q) {
+  return rendulic_to_iso_dev().transpose() * q;
+}
+
+// Probe strain (compression positive) for direction theta (physics.md section 5):
+// amplitude * diag(sin theta, cos theta / sqrt2, cos theta / sqrt2). Its Frobenius norm is
+// the amplitude and its Rendulic pair is amplitude * (cos theta, sin theta).
+inline Eigen::Matrix3d probe_strain(double theta_deg, double amplitude) {
+  const double t = deg_to_rad(theta_deg);
+  const double lat = amplitude * std::cos(t) / kSqrt2;
+  return Eigen::Vector3d(amplitude * std::sin(t), lat, lat).asDiagonal();
+}
+// Direction of a strain Rendulic pair, in [0, 360) degrees.
+inline double probe_direction_deg(const Eigen::Vector2d& strain_pair) {
+  double deg = rad_to_deg(std::atan2(strain_pair.y(), strain_pair.x()));
+  return deg < 0.0 ? deg + 360.0 : deg;
+}
+// M equally spaced directions starting at 0 deg.
+inline Eigen::VectorXd probe_directions_deg(int m) {
+  return Eigen::VectorXd::LinSpaced(m, 0.0, 360.0 * (m - 1) / m);
+}
+
+// Mandel form of a symmetric tensor and back.
+inline Vector6d to_mandel(const Eigen::Matrix3d& Q) {
+  Vector6d v;
+  v << Q(0, 0), Q(1, 1), Q(2, 2), kSqrt2 * Q(1, 2), kSqrt2 * Q(0, 2), kSqrt2 * Q(0, 1);
+  return v;
+}
+inline Eigen::Matrix3d from_mandel(const Vector6d& v) {
+  Eigen::Matrix3d Q;
+  const double yz = v(3) / kSqrt2, xz = v(4) / kSqrt2, xy = v(5) / kSqrt2;
+  Q << v(0), xy, xz, xy, v(1), yz, xz, yz, v(2);
+  return Q;
+}
+
+}  // namespace rendulic

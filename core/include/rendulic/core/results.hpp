@@ -1,0 +1,95 @@
+// Results files (HDF5 C++ API), schema "rendulic/1" of interfaces.md. The writer builds the
+// file under a temporary name in the output folder and renames it onto the final name only
+// in commit(): a run that fails or is interrupted leaves no file that looks complete, and a
+// results file from an earlier run stays untouched until the new one is whole. Groups along
+// a dataset path are created on demand. The reader refuses files that are not HDF5 or not
+// ours with an InputError, never an HDF5 error stack.
+#pragma once
+
+#include <Eigen/Dense>
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace rendulic {
+
+class ResultsWriter {
+ public:
+  // A new file that will become `final_path` on commit(); creates the folder if needed and
+  // stamps the root attributes schema, version and git_sha.
+  explicit ResultsWriter(const std::filesystem::path& final_path);
+  // Modifies an existing results file atomically: works on a temporary copy, renamed back
+  // over the original on commit().
+  static ResultsWriter update(const std::filesystem::path& existing_path);
+  ResultsWriter(ResultsWriter&&) noexcept;
+  ResultsWriter& operator=(ResultsWriter&&) noexcept;
+  // Without commit(), removes the temporary file: nothing half-written survives.
+  ~ResultsWriter();
+
+  // Attributes on a group (created if absent) or an existing dataset.
+  void attr(const std::string& object, const std::string& name, double value);
+  void attr(const std::string& object, const std::string& name, std::int64_t value);
+  void attr(const std::string& object, const std::string& name, const std::string& value);
+  void attr(const std::string& object, const std::string& name, const char* value);
+  void attr(const std::string& object, const std::string& name, const std::vector<double>& value);
+
+  // Fixed datasets, replacing any dataset of the same path: [n], [n,2], [n,3,3], [3,3], [r,c].
+  void write(const std::string& path, const std::vector<double>& values);
+  void write(const std::string& path, const std::vector<Eigen::Vector2d>& pairs);
+  void write(const std::string& path, const std::vector<Eigen::Matrix3d>& tensors);
+  void write(const std::string& path, const Eigen::Matrix3d& tensor);
+  void write(const std::string& path, const Eigen::MatrixXd& matrix);
+
+  // Growable series: each call adds one row to [n], [n,2] or [n,3,3] (chunked, unlimited).
+  void append(const std::string& path, double value);
+  void append(const std::string& path, const Eigen::Vector2d& pair);
+  void append(const std::string& path, const Eigen::Matrix3d& tensor);
+
+  void create_group(const std::string& path);
+  // Flushes, closes, renames the temporary file onto the final path. Once only.
+  void commit();
+
+  const std::filesystem::path& final_path() const;
+  const std::filesystem::path& temporary_path() const;
+
+ private:
+  ResultsWriter() = default;
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+class ResultsReader {
+ public:
+  // InputError naming the file if it is missing, not HDF5, corrupt, or lacks schema rendulic/1.
+  explicit ResultsReader(const std::filesystem::path& path);
+  ResultsReader(ResultsReader&&) noexcept;
+  ~ResultsReader();
+
+  bool exists(const std::string& path) const;
+  bool has_attr(const std::string& object, const std::string& name) const;
+  std::vector<std::string> children(const std::string& group) const;
+
+  double attr_double(const std::string& object, const std::string& name) const;
+  std::int64_t attr_int(const std::string& object, const std::string& name) const;
+  std::string attr_string(const std::string& object, const std::string& name) const;
+  std::vector<double> attr_doubles(const std::string& object, const std::string& name) const;
+
+  std::vector<std::uint64_t> shape(const std::string& path) const;
+  std::vector<double> read_vector(const std::string& path) const;
+  std::vector<Eigen::Vector2d> read_pairs(const std::string& path) const;
+  std::vector<Eigen::Matrix3d> read_tensors(const std::string& path) const;
+  Eigen::Matrix3d read_tensor(const std::string& path) const;
+  Eigen::MatrixXd read_matrix(const std::string& path) const;
+
+  // Human summary for `rendulic inspect`: every group, its attributes, dataset shapes.
+  std::string summary() const;
+  const std::filesystem::path& path() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace rendulic
