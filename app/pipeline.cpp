@@ -9,6 +9,13 @@
 #include "rendulic/core/errors.hpp"
 
 namespace rendulic::app {
+
+// DEM stages (app/stages_dem.cpp, issue 3).
+void stage_prepare(const Scenario&, ResultsWriter&, const RunContext&);
+void stage_isotropic(const Scenario&, ResultsWriter&, const RunContext&);
+void stage_path(const Scenario&, ResultsWriter&, const RunContext&);
+void stage_states(const Scenario&, ResultsWriter&, const RunContext&);
+
 namespace {
 
 using StageFn = std::function<void(const Scenario&, ResultsWriter&, const RunContext&)>;
@@ -20,9 +27,15 @@ struct Stage {
 
 const std::vector<Stage>& stages() {
   static const std::vector<Stage> table = {
-      {"prepare", "3", {}},      {"isotropic", "3", {}}, {"path", "3", {}},
-      {"states", "3", {}},       {"probes", "4", {}},    {"linear_response", "4", {}},
-      {"fits", "5", {}},         {"calibration", "7", {}}, {"report", "8", {}},
+      {"prepare", "3", stage_prepare},
+      {"isotropic", "3", stage_isotropic},
+      {"path", "3", stage_path},
+      {"states", "3", stage_states},
+      {"probes", "4", {}},
+      {"linear_response", "4", {}},
+      {"fits", "5", {}},
+      {"calibration", "7", {}},
+      {"report", "8", {}},
   };
   return table;
 }
