@@ -4,6 +4,8 @@
 // rounding per pair.
 #include "rendulic/dem/dem_system.hpp"
 
+#include <omp.h>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -126,51 +128,84 @@ void DemSystem::compute_forces(const double* __restrict vx, const double* __rest
   const std::uint8_t* __restrict code = list_.shift_code.data();
   double* __restrict sd = stress_scratch_.data();
 
-#pragma omp parallel for schedule(static) if (n > kSerialBelow)
-  for (std::size_t i = 0; i < n; ++i) {
-    const double xi = x[i], yi = y[i], zi = z[i];
-    const double vxi = vx[i], vyi = vy[i], vzi = vz[i], ri = rad[i];
-    double fx = 0, fy = 0, fz = 0, sxx = 0, syy = 0, szz = 0;
-    for (std::int64_t e = off[i]; e < off[i + 1]; ++e) {
-      const std::int32_t j = idx[e];
-      const std::uint8_t c = code[e];
-      const double dx = xi - x[j] + tx[c];
-      const double dy = yi - y[j] + ty[c];
-      const double dz = zi - z[j] + tz[c];
-      const double R = ri + rad[j];
-      const double r2 = dx * dx + dy * dy + dz * dz;
-      if (r2 >= R * R) continue;
-      const double d = std::sqrt(r2);
-      const double inv = 1.0 / d;
-      const double nx = dx * inv, ny = dy * inv, nz = dz * inv;
-      // True relative velocity: peculiar part plus the affine part D l.
-      const double ddot =
-          -(nx * (vxi - vx[j] + Dx * dx) + ny * (vyi - vy[j] + Dy * dy) + nz * (vzi - vz[j] + Dz * dz));
-      const double fn = k * (R - d) + gamma * ddot;
-      fx += fn * nx;
-      fy += fn * ny;
-      fz += fn * nz;
+  // Half list: each pair once, its force added to i and subtracted from j. Threads scatter
+  // into private buffers that are summed in thread order: deterministic for a given thread
+  // count (and pair forces are exact opposites, so momentum is conserved to round-off).
+  const int threads = n > kSerialBelow ? omp_get_max_threads() : 1;
+  const std::size_t stride = 3 * n;
+  if (force_buffer_.size() < static_cast<std::size_t>(threads) * stride)
+    force_buffer_.resize(static_cast<std::size_t>(threads) * stride);
+  double* const buffers = force_buffer_.data();
+
+#pragma omp parallel num_threads(threads) if (threads > 1)
+  {
+    double* __restrict bx = buffers + static_cast<std::size_t>(omp_get_thread_num()) * stride;
+    double* __restrict by = bx + n;
+    double* __restrict bz = by + n;
+    std::fill(bx, bx + stride, 0.0);
+#pragma omp for schedule(static)
+    for (std::size_t i = 0; i < n; ++i) {
+      const double xi = x[i], yi = y[i], zi = z[i];
+      const double vxi = vx[i], vyi = vy[i], vzi = vz[i], ri = rad[i];
+      double fx = 0, fy = 0, fz = 0, sxx = 0, syy = 0, szz = 0;
+      for (std::int64_t e = off[i]; e < off[i + 1]; ++e) {
+        const std::int32_t j = idx[e];
+        const std::uint8_t c = code[e];
+        const double dx = xi - x[j] + tx[c];
+        const double dy = yi - y[j] + ty[c];
+        const double dz = zi - z[j] + tz[c];
+        const double R = ri + rad[j];
+        const double r2 = dx * dx + dy * dy + dz * dz;
+        if (r2 >= R * R) continue;
+        const double d = std::sqrt(r2);
+        const double inv = 1.0 / d;
+        const double nx = dx * inv, ny = dy * inv, nz = dz * inv;
+        // True relative velocity: peculiar part plus the affine part D l.
+        const double ddot = -(nx * (vxi - vx[j] + Dx * dx) + ny * (vyi - vy[j] + Dy * dy) +
+                              nz * (vzi - vz[j] + Dz * dz));
+        const double fn = k * (R - d) + gamma * ddot;
+        const double gx = fn * nx, gy = fn * ny, gz = fn * nz;
+        fx += gx;
+        fy += gy;
+        fz += gz;
+        bx[j] -= gx;
+        by[j] -= gy;
+        bz[j] -= gz;
+        if constexpr (kStress) {
+          sxx += dx * gx;
+          syy += dy * gy;
+          szz += dz * gz;
+        }
+      }
+      bx[i] += fx;
+      by[i] += fy;
+      bz[i] += fz;
       if constexpr (kStress) {
-        sxx += dx * fn * nx;
-        syy += dy * fn * ny;
-        szz += dz * fn * nz;
+        sd[3 * i] = sxx;
+        sd[3 * i + 1] = syy;
+        sd[3 * i + 2] = szz;
       }
     }
-    fxo[i] = fx - gamma_b * vxi;
-    fyo[i] = fy - gamma_b * vyi;
-    fzo[i] = fz - gamma_b * vzi;
-    if constexpr (kStress) {
-      sd[3 * i] = sxx;
-      sd[3 * i + 1] = syy;
-      sd[3 * i + 2] = szz;
+    // (implicit barrier: every buffer is complete)
+#pragma omp for schedule(static)
+    for (std::size_t i = 0; i < n; ++i) {
+      double fx = 0, fy = 0, fz = 0;
+      for (int t = 0; t < threads; ++t) {
+        const double* b = buffers + static_cast<std::size_t>(t) * stride;
+        fx += b[i];
+        fy += b[n + i];
+        fz += b[2 * n + i];
+      }
+      fxo[i] = fx - gamma_b * vx[i];
+      fyo[i] = fy - gamma_b * vy[i];
+      fzo[i] = fz - gamma_b * vz[i];
     }
   }
   if constexpr (kStress) {
-    // Serial sum in particle order: independent of the thread count. Each pair was seen from
-    // both ends, hence the 1/2.
+    // Serial sum in particle order: independent of the thread count.
     Eigen::Vector3d s = Eigen::Vector3d::Zero();
     for (std::size_t i = 0; i < n; ++i) s += Eigen::Vector3d(sd[3 * i], sd[3 * i + 1], sd[3 * i + 2]);
-    last_stress_diag_ = 0.5 * s / cell_.volume();
+    last_stress_diag_ = s / cell_.volume();
   }
 }
 
@@ -270,7 +305,6 @@ std::vector<Contact> DemSystem::contacts() const {
   for (std::size_t i = 0; i < n; ++i) {
     for (std::int64_t e = list_.offset[i]; e < list_.offset[i + 1]; ++e) {
       const std::int32_t j = list_.index[e];
-      if (static_cast<std::size_t>(j) < i) continue;
       const Eigen::Vector3d l = p_.position(i) - p_.position(j) +
                                 NeighborList::shift(list_.shift_code[e]).cwiseProduct(L);
       const double R = p_.radius[i] + p_.radius[j];

@@ -116,7 +116,9 @@ void NeighborList::build(const Particles& p, const Eigen::Vector3d& L, double sk
   for (std::size_t i = 0; i < n; ++i) {
     std::int64_t c = 0;
     for_candidates(i, p, L, nb, bin_of, bin_start, bin_members, brute,
-                   [&](std::int32_t j, std::uint8_t code) { c += within(i, j, code); });
+                   [&](std::int32_t j, std::uint8_t code) {
+                     c += static_cast<std::size_t>(j) > i && within(i, j, code);
+                   });
     count[i + 1] = c;
   }
   offset.assign(n + 1, 0);
@@ -128,7 +130,7 @@ void NeighborList::build(const Particles& p, const Eigen::Vector3d& L, double sk
     std::int64_t k = offset[i];
     for_candidates(i, p, L, nb, bin_of, bin_start, bin_members, brute,
                    [&](std::int32_t j, std::uint8_t code) {
-                     if (within(i, j, code)) {
+                     if (static_cast<std::size_t>(j) > i && within(i, j, code)) {
                        index[k] = j;
                        shift_code[k] = code;
                        ++k;

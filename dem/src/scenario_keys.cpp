@@ -58,7 +58,7 @@ void register_dem_keys(ScenarioSchema& s) {
             "Time step as a fraction of the contact duration t_c of the two smallest particles; "
             "values beyond the explicit stability limit are refused.",
             0, 1, true));
-  s.add(num("dem.skin", 0.1, "-", "Verlet-list skin in units of <r> (speed only, not physics).",
+  s.add(num("dem.skin", 0.3, "-", "Verlet-list skin in units of <r> (speed only, not physics).",
             0, 2, true));
   s.add(num("preparation.nu_gas", 0.3, "-", "Volume fraction of the initial random gas.", 0, 0.4,
             true));
