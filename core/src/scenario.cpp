@@ -10,6 +10,7 @@
 #include <cctype>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
@@ -117,7 +118,9 @@ std::string check_number(const KeySpec& s, double x) {
   const bool below = s.min_open ? !(x > s.min) : x < s.min;
   const bool above = s.max_open ? !(x < s.max) : x > s.max;
   if (below || above)
-    return "value " + format_double(x) + " is out of range " + format_range(s);
+    return "value " +
+           (s.type == KeyType::kInt ? std::to_string(static_cast<long long>(x)) : format_double(x)) +
+           " is out of range " + format_range(s);
   return "";
 }
 
@@ -174,7 +177,9 @@ bool holds_type(const KeySpec& s, const ScenarioValue& v) {
 // TOML node -> typed value. Integers are accepted where numbers are expected (TOML writes
 // 9261 and 9261.0 differently; a user means the same). Throws std::string on a type mismatch.
 ScenarioValue convert(const KeySpec& s, const toml::node& n) {
-  const std::string want = std::string("expected a ") + type_name(s.type) + ", got a " +
+  auto article = [](const char* w) { return std::strchr("aeiou", w[0]) ? "an " : "a "; };
+  const std::string want = std::string("expected ") + article(type_name(s.type)) +
+                           type_name(s.type) + ", got " + article(node_type_name(n)) +
                            node_type_name(n);
   switch (s.type) {
     case KeyType::kBool:
@@ -390,7 +395,7 @@ void Scenario::apply_override(std::string_view assignment) {
       v = xs;
     } else {
       throw InputError(what + ": key '" + key + "': '" + text + "' is not a valid " +
-                       type_name(spec->type));
+                       type_name(spec->type));  // e.g. "not a valid number"
     }
   } catch (const std::string& why) {
     throw InputError(what + ": key '" + key + "': " + why);

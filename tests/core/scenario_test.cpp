@@ -90,7 +90,7 @@ TEST(Scenario, WrongTypeIsNamed) {
             std::string::npos)
       << msg;
   msg = input_error([&] { Scenario::from_string("[run]\nseed = 1.5\n", "s.toml", schema); });
-  EXPECT_NE(msg.find("key 'run.seed': expected a integer"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("key 'run.seed': expected an integer"), std::string::npos) << msg;
   msg = input_error(
       [&] { Scenario::from_string("[states]\neps_dev = [0.1, \"x\"]\n", "s.toml", schema); });
   EXPECT_NE(msg.find("key 'states.eps_dev'"), std::string::npos) << msg;
