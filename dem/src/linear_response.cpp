@@ -8,8 +8,13 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <memory>
 #include <numbers>
 #include <sstream>
+
+#ifdef RENDULIC_WITH_CHOLMOD
+#include <Eigen/CholmodSupport>
+#endif
 
 #include "rendulic/core/errors.hpp"
 
@@ -56,7 +61,58 @@ Eigen::Matrix3d mandel_basis(int a) {
   return from_mandel(e);
 }
 
+using SparseMatrix = Eigen::SparseMatrix<double>;
+using Ldlt = Eigen::SimplicialLDLT<SparseMatrix, Eigen::Lower, Eigen::AMDOrdering<int>>;
+
+// LDL^T with the count of negative and (relatively) zero pivots; nullptr if it failed.
+std::unique_ptr<Ldlt> count_pivots(const SparseMatrix& hessian, double tolerance,
+                                   LinearResponse* out) {
+  auto ldlt = std::make_unique<Ldlt>(hessian);
+  if (ldlt->info() != Eigen::Success) return nullptr;
+  const Eigen::VectorXd d = ldlt->vectorD();
+  const double d_max = d.cwiseAbs().maxCoeff();
+  out->min_pivot_ratio = d.minCoeff() / d_max;
+  out->n_zero_pivots = out->n_negative_pivots = 0;
+  for (Eigen::Index r = 0; r < d.size(); ++r) {
+    if (std::abs(d(r)) <= tolerance * d_max) {
+      ++out->n_zero_pivots;
+    } else if (d(r) < 0.0) {
+      ++out->n_negative_pivots;
+    }
+  }
+  return ldlt;
+}
+
+#ifdef RENDULIC_WITH_CHOLMOD
+// CHOLMOD's reciprocal condition estimate, (min diag L / max diag L)^2, is the pivot ratio.
+class SupernodalLlt : public Eigen::CholmodSupernodalLLT<SparseMatrix, Eigen::Lower> {
+ public:
+  double pivot_ratio() { return cholmod_rcond(this->m_cholmodFactor, &this->cholmod()); }
+};
+bool cholmod_solve(const SparseMatrix& hessian, const Eigen::MatrixXd& rhs, Eigen::MatrixXd* u,
+                   double* pivot_ratio) {
+  SupernodalLlt llt;
+  llt.compute(hessian);
+  if (llt.info() != Eigen::Success) return false;
+  *pivot_ratio = llt.pivot_ratio();
+  *u = llt.solve(rhs);
+  return true;
+}
+#else
+bool cholmod_solve(const SparseMatrix&, const Eigen::MatrixXd&, Eigen::MatrixXd*, double*) {
+  throw InputError("linear response: solver 'cholmod' requested but this build has no CHOLMOD");
+}
+#endif
+
 }  // namespace
+
+bool linear_response_has_cholmod() {
+#ifdef RENDULIC_WITH_CHOLMOD
+  return true;
+#else
+  return false;
+#endif
+}
 
 LinearResponse linear_response(const PackingData& packing, const LinearResponseOptions& options) {
   std::string why;
@@ -181,43 +237,71 @@ LinearResponse linear_response(const PackingData& packing, const LinearResponseO
       if (dj >= 0) rhs.block<3, 1>(dj, a) += g;
     }
   }
-  Eigen::SparseMatrix<double> hessian(n_dof, n_dof);
+  SparseMatrix hessian(n_dof, n_dof);
   hessian.setFromTriplets(triplets.begin(), triplets.end());
   triplets.clear();
   triplets.shrink_to_fit();
   out.seconds_assembly = seconds_since(t_start);
 
   const auto t_factor = Clock::now();
-  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower, Eigen::AMDOrdering<int>> ldlt;
-  ldlt.compute(hessian);
-  out.seconds_factorisation = seconds_since(t_factor);
-  if (ldlt.info() != Eigen::Success) {
-    out.message = "linear response: the LDL^T factorisation of the Hessian failed";
+  const bool use_cholmod = options.solver == LinearSolver::kCholmod ||
+                           (options.solver == LinearSolver::kAuto && linear_response_has_cholmod());
+  Eigen::MatrixXd u;
+  auto fail = [&](const std::string& reason) {
+    out.message = reason;
     out.seconds_total = seconds_since(t_start);
     return out;
-  }
-  const Eigen::VectorXd d = ldlt.vectorD();
-  const double d_max = d.cwiseAbs().maxCoeff();
-  out.min_pivot_ratio = d.minCoeff() / d_max;
-  for (Eigen::Index r = 0; r < d.size(); ++r) {
-    if (std::abs(d(r)) <= options.pivot_tolerance * d_max) {
-      ++out.n_zero_pivots;
-    } else if (d(r) < 0.0) {
-      ++out.n_negative_pivots;
-    }
-  }
-  if (out.n_zero_pivots > 0 || out.n_negative_pivots > 0) {
+  };
+  auto pivot_failure = [&]() {
     std::ostringstream os;
     os << "linear response: the contact network is "
        << (out.n_negative_pivots > 0 ? "unstable" : "floppy") << " (" << out.n_negative_pivots
        << " negative and " << out.n_zero_pivots
        << " zero pivots of the Hessian after removing rattlers and translations): no elastic "
           "response exists";
-    out.message = os.str();
-    out.seconds_total = seconds_since(t_start);
-    return out;
+    return fail(os.str());
+  };
+  if (use_cholmod) {
+    out.solver = "cholmod";
+    if (!cholmod_solve(hessian, rhs, &u, &out.min_pivot_ratio)) {
+      out.seconds_factorisation = seconds_since(t_factor);
+      if (n_dof > options.diagnose_max_dof) {
+        out.n_negative_pivots = out.n_zero_pivots = -1;
+        return fail(
+            "linear response: the Hessian is not positive definite (the contact network is "
+            "unstable or floppy): no elastic response exists");
+      }
+      count_pivots(hessian, options.pivot_tolerance, &out);
+      return pivot_failure();
+    }
+    out.seconds_factorisation = seconds_since(t_factor);
+    if (out.min_pivot_ratio <= options.pivot_tolerance) {
+      out.n_zero_pivots = -1;  // at least one; CHOLMOD gives the ratio, not the count
+      return fail(
+          "linear response: the Hessian is singular to working precision (a floppy "
+          "mode survived rattler removal): no elastic response exists");
+    }
+  } else {
+    out.solver = "simplicial_ldlt";
+    const auto ldlt = count_pivots(hessian, options.pivot_tolerance, &out);
+    out.seconds_factorisation = seconds_since(t_factor);
+    if (!ldlt) return fail("linear response: the LDL^T factorisation of the Hessian failed");
+    if (out.n_zero_pivots > 0 || out.n_negative_pivots > 0) return pivot_failure();
+    u = ldlt->solve(rhs);
   }
-  const Eigen::MatrixXd u = ldlt.solve(rhs);
+  for (int a = 0; a < 6; ++a) {
+    const double b = rhs.col(a).norm();
+    if (b > 0.0) {
+      out.solve_residual =
+          std::max(out.solve_residual, (hessian * u.col(a) - rhs.col(a)).norm() / b);
+    }
+  }
+  if (!u.allFinite() || !(out.solve_residual < 1e-6)) {
+    std::ostringstream os;
+    os << "linear response: the sparse solve is inaccurate (relative residual "
+       << out.solve_residual << "): the Hessian is nearly singular";
+    return fail(os.str());
+  }
 
   // Stress and fabric rates in the tension frame (dE), column by column.
   const Eigen::Matrix3d sigma_t = -out.stress;
