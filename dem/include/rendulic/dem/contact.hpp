@@ -1,0 +1,57 @@
+// Contact law, time scales and the time step of the DEM engine (physics.md section 1, seed
+// paper section 2.1). NormalContact is a pure kernel: the normal force from the overlap and
+// its rate, nothing else; the contact loop (dem_system.cpp) owns minimum image, the affine
+// relative velocity and the sums. The closed forms here (contact duration, restitution) are
+// what the two-particle tests compare the integrator against.
+#pragma once
+
+#include <cmath>
+#include <numbers>
+#include <string>
+
+namespace rendulic::dem {
+
+// Linear spring-dashpot normal contact: f = k delta + gamma d(delta)/dt, positive = repulsive.
+// The force is not clipped at zero: the closed forms of t_c and e below assume exactly this
+// law (the dashpot may pull slightly just before separation).
+struct NormalContact {
+  double k = 1e8;     // kg/s^2
+  double gamma = 1.;  // kg/s
+  double force(double delta, double delta_dot) const { return k * delta + gamma * delta_dot; }
+};
+
+// Material of the seed study (physics.md section 1), SI units.
+struct Material {
+  double k = 1e8;          // normal stiffness, kg/s^2
+  double gamma = 1.0;      // contact viscosity, kg/s
+  double gamma_b = 0.1;    // background damping on the peculiar velocity, kg/s
+  double density = 2000;   // kg/m^3
+  double r_mean = 1e-3;    // m
+  double w = 3.0;          // r_max / r_min
+  double r_min() const { return 2.0 * r_mean / (1.0 + w); }
+  double r_max() const { return w * r_min(); }
+  // k* = k / (2 <r>): the stress scale of sigma* (seed paper section 2.2).
+  double k_star() const { return k / (2.0 * r_mean); }
+  double sphere_mass(double r) const { return density * 4.0 / 3.0 * std::numbers::pi * r * r * r; }
+  NormalContact contact() const { return {k, gamma}; }
+  bool IsValid(std::string* why) const;
+};
+
+// Duration of a binary collision, t_c = pi / sqrt(k/m_red - (gamma / (2 m_red))^2).
+// Returns +inf for an overdamped pair (no rebound).
+double contact_time(const NormalContact& c, double m_reduced);
+// Coefficient of normal restitution, e = exp(-gamma t_c / (2 m_red)).
+double restitution(const NormalContact& c, double m_reduced);
+
+// Time step: dt = factor * t_c of the two smallest particles (physics.md section 1).
+double time_step(const Material& m, double factor);
+// A sufficient bound for the stability of the explicit scheme on any packing of this
+// material. Springs: Gershgorin on the mass-weighted stiffness matrix bounds the highest
+// frequency by omega_max^2 <= 2 z k / m_min with z = 12 contacts at most on the smallest
+// particle; Verlet is stable for omega_max dt < 2. Dashpots, treated explicitly: the same
+// bound with the damping rate (2 z gamma + gamma_b) / m_min in place of omega_max.
+double stability_limit(const Material& m);
+// Throws InputError (naming `key`) if factor gives a dt at or beyond stability_limit().
+void check_time_step(const Material& m, double factor, const std::string& key);
+
+}  // namespace rendulic::dem

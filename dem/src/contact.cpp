@@ -1,0 +1,73 @@
+// Closed forms of the linear spring-dashpot contact and the time-step rules (physics.md
+// section 1). See contact.hpp for the derivation of the stability bound.
+#include "rendulic/dem/contact.hpp"
+
+#include <algorithm>
+#include <limits>
+#include <sstream>
+
+#include "rendulic/core/errors.hpp"
+
+namespace rendulic::dem {
+
+bool Material::IsValid(std::string* why) const {
+  auto fail = [why](const char* m) {
+    if (why) *why = m;
+    return false;
+  };
+  if (!(k > 0 && std::isfinite(k))) return fail("k must be positive and finite");
+  if (!(gamma >= 0 && std::isfinite(gamma))) return fail("gamma must be >= 0");
+  if (!(gamma_b >= 0 && std::isfinite(gamma_b))) return fail("gamma_b must be >= 0");
+  if (!(density > 0 && std::isfinite(density))) return fail("density must be positive");
+  if (!(r_mean > 0 && std::isfinite(r_mean))) return fail("r_mean must be positive");
+  if (!(w >= 1 && std::isfinite(w))) return fail("w must be >= 1");
+  return true;
+}
+
+double contact_time(const NormalContact& c, double m_reduced) {
+  const double eta = c.gamma / (2.0 * m_reduced);
+  const double omega2 = c.k / m_reduced - eta * eta;
+  if (omega2 <= 0) return std::numeric_limits<double>::infinity();
+  return std::numbers::pi / std::sqrt(omega2);
+}
+
+double restitution(const NormalContact& c, double m_reduced) {
+  const double tc = contact_time(c, m_reduced);
+  if (!std::isfinite(tc)) return 0.0;
+  return std::exp(-c.gamma / (2.0 * m_reduced) * tc);
+}
+
+namespace {
+double smallest_reduced_mass(const Material& m) { return 0.5 * m.sphere_mass(m.r_min()); }
+}  // namespace
+
+double time_step(const Material& m, double factor) {
+  return factor * contact_time(m.contact(), smallest_reduced_mass(m));
+}
+
+double stability_limit(const Material& m) {
+  constexpr double kMaxContacts = 12.0;  // kissing number: most contacts a smallest sphere has
+  const double m_min = m.sphere_mass(m.r_min());
+  const double omega_max = std::sqrt(2.0 * kMaxContacts * m.k / m_min);
+  const double damping_rate = (2.0 * kMaxContacts * m.gamma + m.gamma_b) / m_min;
+  double limit = 2.0 / omega_max;
+  if (damping_rate > 0) limit = std::min(limit, 2.0 / damping_rate);
+  return limit;
+}
+
+void check_time_step(const Material& m, double factor, const std::string& key) {
+  const double tc = contact_time(m.contact(), smallest_reduced_mass(m));
+  if (!std::isfinite(tc))
+    throw InputError(key + ": the smallest pair is overdamped (gamma too large for k), no "
+                           "contact time to derive a time step from");
+  const double dt = factor * tc;
+  const double limit = stability_limit(m);
+  if (!(factor > 0) || !(dt < limit)) {
+    std::ostringstream s;
+    s << key << " = " << factor << " gives dt = " << dt << " s, beyond the explicit stability "
+      << "limit " << limit << " s (= " << limit / tc << " t_c); use a smaller factor";
+    throw InputError(s.str());
+  }
+}
+
+}  // namespace rendulic::dem

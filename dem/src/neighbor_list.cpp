@@ -1,0 +1,155 @@
+// Cell-list construction of the full Verlet list and its rebuild rule (see neighbor_list.hpp).
+#include "rendulic/dem/neighbor_list.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <numeric>
+#include <sstream>
+
+#include "rendulic/core/errors.hpp"
+
+namespace rendulic::dem {
+namespace {
+
+std::uint8_t encode(int sx, int sy, int sz) {
+  return static_cast<std::uint8_t>((sx + 1) + 3 * (sy + 1) + 9 * (sz + 1));
+}
+
+// Calls visit(j, code) for every candidate partner of i (j != i), in a fixed order.
+template <class Visit>
+void for_candidates(std::size_t i, const Particles& p, const Eigen::Vector3d& L,
+                    const std::array<int, 3>& nb, const std::vector<int>& bin_of,
+                    const std::vector<std::int64_t>& bin_start,
+                    const std::vector<std::int32_t>& bin_members, bool brute, Visit&& visit) {
+  const std::size_t n = p.size();
+  if (brute) {
+    for (std::size_t j = 0; j < n; ++j) {
+      if (j == i) continue;
+      const int sx = -static_cast<int>(std::lround((p.x[i] - p.x[j]) / L[0]));
+      const int sy = -static_cast<int>(std::lround((p.y[i] - p.y[j]) / L[1]));
+      const int sz = -static_cast<int>(std::lround((p.z[i] - p.z[j]) / L[2]));
+      visit(static_cast<std::int32_t>(j), encode(sx, sy, sz));
+    }
+    return;
+  }
+  const int b = bin_of[i];
+  const int bx = b % nb[0], by = (b / nb[0]) % nb[1], bz = b / (nb[0] * nb[1]);
+  for (int dz = -1; dz <= 1; ++dz)
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dx = -1; dx <= 1; ++dx) {
+        int cx = bx + dx, cy = by + dy, cz = bz + dz;
+        // A partner in a wrapped bin is seen through its image: l = x_i - x_j + s L.
+        int sx = 0, sy = 0, sz = 0;
+        if (cx < 0) cx += nb[0], sx = 1;
+        if (cx >= nb[0]) cx -= nb[0], sx = -1;
+        if (cy < 0) cy += nb[1], sy = 1;
+        if (cy >= nb[1]) cy -= nb[1], sy = -1;
+        if (cz < 0) cz += nb[2], sz = 1;
+        if (cz >= nb[2]) cz -= nb[2], sz = -1;
+        const int c = cx + nb[0] * (cy + nb[1] * cz);
+        const std::uint8_t code = encode(sx, sy, sz);
+        for (std::int64_t k = bin_start[c]; k < bin_start[c + 1]; ++k) {
+          const std::int32_t j = bin_members[k];
+          if (static_cast<std::size_t>(j) != i) visit(j, code);
+        }
+      }
+}
+
+}  // namespace
+
+void NeighborList::build(const Particles& p, const Eigen::Vector3d& L, double skin) {
+  const std::size_t n = p.size();
+  r_max_ = n ? *std::max_element(p.radius.begin(), p.radius.end()) : 0.0;
+  skin_ = skin;
+  const double cutoff = 2.0 * r_max_ + skin;
+  for (int a = 0; a < 3; ++a)
+    if (!(L[a] > 2.0 * cutoff)) {
+      std::ostringstream s;
+      s << "periodic cell too small: length " << L[a] << " m on axis " << a
+        << " must exceed twice the interaction range " << cutoff
+        << " m (use more particles or a smaller skin)";
+      throw InputError(s.str());
+    }
+  ref_x_ = p.x;
+  ref_y_ = p.y;
+  ref_z_ = p.z;
+  ref_lengths_ = L;
+
+  std::array<int, 3> nb{};
+  bool brute = false;
+  for (int a = 0; a < 3; ++a) {
+    nb[a] = static_cast<int>(std::floor(L[a] / cutoff));
+    if (nb[a] < 3) brute = true;
+  }
+  std::vector<int> bin_of(n, 0);
+  std::vector<std::int64_t> bin_start;
+  std::vector<std::int32_t> bin_members;
+  if (!brute) {
+    const int nbins = nb[0] * nb[1] * nb[2];
+    bin_start.assign(nbins + 1, 0);
+    for (std::size_t i = 0; i < n; ++i) {
+      const double q[3] = {p.x[i] / L[0], p.y[i] / L[1], p.z[i] / L[2]};
+      int c[3];
+      for (int a = 0; a < 3; ++a) c[a] = std::clamp(static_cast<int>(q[a] * nb[a]), 0, nb[a] - 1);
+      bin_of[i] = c[0] + nb[0] * (c[1] + nb[1] * c[2]);
+      ++bin_start[bin_of[i] + 1];
+    }
+    std::partial_sum(bin_start.begin(), bin_start.end(), bin_start.begin());
+    bin_members.resize(n);
+    std::vector<std::int64_t> fill(bin_start.begin(), bin_start.end() - 1);
+    for (std::size_t i = 0; i < n; ++i)
+      bin_members[fill[bin_of[i]]++] = static_cast<std::int32_t>(i);
+  }
+
+  auto within = [&](std::size_t i, std::int32_t j, std::uint8_t code) {
+    const Eigen::Vector3d s = shift(code);
+    const double dx = p.x[i] - p.x[j] + s[0] * L[0];
+    const double dy = p.y[i] - p.y[j] + s[1] * L[1];
+    const double dz = p.z[i] - p.z[j] + s[2] * L[2];
+    const double rc = p.radius[i] + p.radius[j] + skin;
+    return dx * dx + dy * dy + dz * dz < rc * rc;
+  };
+
+  std::vector<std::int64_t> count(n + 1, 0);
+#pragma omp parallel for schedule(static) if (n > 256)
+  for (std::size_t i = 0; i < n; ++i) {
+    std::int64_t c = 0;
+    for_candidates(i, p, L, nb, bin_of, bin_start, bin_members, brute,
+                   [&](std::int32_t j, std::uint8_t code) { c += within(i, j, code); });
+    count[i + 1] = c;
+  }
+  offset.assign(n + 1, 0);
+  std::partial_sum(count.begin(), count.end(), offset.begin());
+  index.resize(offset[n]);
+  shift_code.resize(offset[n]);
+#pragma omp parallel for schedule(static) if (n > 256)
+  for (std::size_t i = 0; i < n; ++i) {
+    std::int64_t k = offset[i];
+    for_candidates(i, p, L, nb, bin_of, bin_start, bin_members, brute,
+                   [&](std::int32_t j, std::uint8_t code) {
+                     if (within(i, j, code)) {
+                       index[k] = j;
+                       shift_code[k] = code;
+                       ++k;
+                     }
+                   });
+    // Ascending partner index: friendlier memory access in the force loop, and an order that
+    // does not depend on the bin layout.
+    const std::int64_t b = offset[i], e = offset[i + 1];
+    for (std::int64_t a = b + 1; a < e; ++a)
+      for (std::int64_t c = a; c > b && index[c - 1] > index[c]; --c) {
+        std::swap(index[c - 1], index[c]);
+        std::swap(shift_code[c - 1], shift_code[c]);
+      }
+  }
+  ++builds_;
+}
+
+bool NeighborList::must_rebuild(double u_max, const Eigen::Vector3d& L) const {
+  const double s_min = (L.array() / ref_lengths_.array()).minCoeff();
+  const double shrink = std::max(0.0, 1.0 - s_min) * 2.0 * r_max_;
+  return 2.0 * u_max + shrink >= s_min * skin_;
+}
+
+}  // namespace rendulic::dem

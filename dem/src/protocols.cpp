@@ -1,0 +1,290 @@
+// Protocols of physics.md section 4 and the probe primitives of section 5 (see protocols.hpp).
+#include "rendulic/dem/protocols.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <sstream>
+
+#include "rendulic/core/conventions.hpp"
+#include "rendulic/core/errors.hpp"
+
+namespace rendulic::dem {
+namespace {
+bool fail(std::string* why, const std::string& m) {
+  if (why) *why = m;
+  return false;
+}
+}  // namespace
+
+bool GasOptions::IsValid(std::string* why) const {
+  if (n_particles < 2) return fail(why, "n_particles must be at least 2");
+  if (!(volume_fraction > 0 && volume_fraction <= 0.4))
+    return fail(why, "gas volume fraction must be in (0, 0.4] (random insertion)");
+  if (!(velocity >= 0 && std::isfinite(velocity))) return fail(why, "gas velocity must be >= 0");
+  return true;
+}
+bool RelaxOptions::IsValid(std::string* why) const {
+  if (!(kinetic_to_elastic > 0)) return fail(why, "relax threshold must be positive");
+  if (!(time_cap > 0 && std::isfinite(time_cap))) return fail(why, "relax time cap must be > 0");
+  if (check_every < 1) return fail(why, "relax check interval must be >= 1");
+  return true;
+}
+bool CompressOptions::IsValid(std::string* why) const {
+  if (!(target_nu > 0 && target_nu < 1)) return fail(why, "target volume fraction in (0, 1)");
+  if (!(rate_max > 0 && std::isfinite(rate_max))) return fail(why, "rate_max must be > 0");
+  if (!(rate_min > 0 && rate_min <= rate_max)) return fail(why, "rate_min in (0, rate_max]");
+  if (!(inertial_number >= 0)) return fail(why, "inertial number must be >= 0");
+  if (samples < 0 || samples == 1) return fail(why, "samples must be 0 or >= 2");
+  return true;
+}
+bool PathOptions::IsValid(std::string* why) const {
+  if (!(rate > 0 && std::isfinite(rate))) return fail(why, "path rate must be > 0");
+  if (!(eps_dev_max > 0)) return fail(why, "eps_dev_max must be > 0");
+  if (samples < 2) return fail(why, "path samples must be >= 2");
+  for (double e : snapshot_eps_dev)
+    if (!(e > 0 && e <= eps_dev_max))
+      return fail(why, "every snapshot -eps_dev must be in (0, eps_dev_max]");
+  return true;
+}
+
+DemSystem make_gas(const SystemOptions& options, const GasOptions& gas, std::uint64_t seed) {
+  std::string why;
+  if (!gas.IsValid(&why)) throw InputError("gas: " + why);
+  Rng rng(seed);
+  Particles p = make_particles(options.material, gas.n_particles, rng);
+  const double L = std::cbrt(p.total_volume() / gas.volume_fraction);
+  const double r_max = *std::max_element(p.radius.begin(), p.radius.end());
+  const int nb = std::max(1, static_cast<int>(std::floor(L / (2.0 * r_max))));
+  const double bin = L / nb;
+  std::vector<std::vector<std::int32_t>> bins(static_cast<std::size_t>(nb) * nb * nb);
+  std::vector<std::size_t> order(p.size());
+  std::iota(order.begin(), order.end(), 0);
+  // Largest first: the hard part of random insertion is finding room for big spheres.
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::size_t a, std::size_t b) { return p.radius[a] > p.radius[b]; });
+  auto wrap = [&](int c) { return ((c % nb) + nb) % nb; };
+  constexpr int kMaxTries = 100000;
+  for (std::size_t i : order) {
+    bool placed = false;
+    for (int t = 0; t < kMaxTries && !placed; ++t) {
+      const Eigen::Vector3d q(rng.uniform(0, L), rng.uniform(0, L), rng.uniform(0, L));
+      const int cx = std::min(nb - 1, int(q[0] / bin)), cy = std::min(nb - 1, int(q[1] / bin)),
+                cz = std::min(nb - 1, int(q[2] / bin));
+      bool ok = true;
+      const int span = nb >= 3 ? 1 : 0;
+      for (int dz = -span; dz <= span && ok; ++dz)
+        for (int dy = -span; dy <= span && ok; ++dy)
+          for (int dx = -span; dx <= span && ok; ++dx) {
+            const auto& members =
+                nb >= 3 ? bins[wrap(cx + dx) + nb * (wrap(cy + dy) + nb * wrap(cz + dz))]
+                        : bins[0];
+            for (std::int32_t j : members) {
+              Eigen::Vector3d d = q - p.position(j);
+              for (int a = 0; a < 3; ++a) d[a] -= L * std::round(d[a] / L);
+              const double R = p.radius[i] + p.radius[j];
+              if (d.squaredNorm() < R * R) {
+                ok = false;
+                break;
+              }
+            }
+          }
+      if (!ok) continue;
+      p.x[i] = q[0], p.y[i] = q[1], p.z[i] = q[2];
+      const int c = nb >= 3 ? cx + nb * (cy + nb * cz) : 0;
+      bins[c].push_back(static_cast<std::int32_t>(i));
+      placed = true;
+    }
+    if (!placed)
+      throw InputError("gas: could not place particle " + std::to_string(i) +
+                       " without overlap; lower the gas volume fraction");
+  }
+  // Random velocities without net momentum.
+  Eigen::Vector3d momentum = Eigen::Vector3d::Zero();
+  double mass = 0;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    p.vx[i] = gas.velocity * rng.normal();
+    p.vy[i] = gas.velocity * rng.normal();
+    p.vz[i] = gas.velocity * rng.normal();
+    momentum += p.mass(i) * p.velocity(i);
+    mass += p.mass(i);
+  }
+  const Eigen::Vector3d v0 = momentum / mass;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    p.vx[i] -= v0[0];
+    p.vy[i] -= v0[1];
+    p.vz[i] -= v0[2];
+  }
+  return DemSystem(std::move(p), PeriodicCell{Eigen::Vector3d::Constant(L)}, options);
+}
+
+double relax_ratio(const DemSystem& sys) {
+  const Material& m = sys.material();
+  const double floor = static_cast<double>(sys.particles().size()) * 0.5 * m.k *
+                       (1e-6 * m.r_mean) * (1e-6 * m.r_mean);
+  return sys.kinetic_energy() / std::max(sys.elastic_energy(), floor);
+}
+
+RelaxSummary relax(DemSystem& sys, const RelaxOptions& options, const ProgressFn& progress) {
+  std::string why;
+  if (!options.IsValid(&why)) throw InputError("relax: " + why);
+  RelaxSummary s;
+  const double t0 = sys.time();
+  const Eigen::Vector3d still = Eigen::Vector3d::Zero();
+  s.ratio = relax_ratio(sys);
+  while (!(s.ratio < options.kinetic_to_elastic)) {
+    if (sys.time() - t0 >= options.time_cap) break;
+    sys.advance(options.check_every, still);
+    s.steps += options.check_every;
+    s.ratio = relax_ratio(sys);
+    if (!std::isfinite(s.ratio)) (void)sys.measure();  // throws with a clear message
+    if (progress) progress(std::min(1.0, (sys.time() - t0) / options.time_cap));
+  }
+  s.converged = s.ratio < options.kinetic_to_elastic;
+  s.time = sys.time() - t0;
+  if (progress) progress(1.0);
+  return s;
+}
+
+CompressSummary compress_isotropic(DemSystem& sys, const CompressOptions& o, const SampleFn& sample,
+                                   const ProgressFn& progress) {
+  std::string why;
+  if (!o.IsValid(&why)) throw InputError("isotropic compression: " + why);
+  CompressSummary s;
+  const double t0 = sys.time();
+  const double ln_start = std::log(sys.volume_fraction());
+  const double ln_target = std::log(o.target_nu);
+  const double total = ln_target - ln_start;  // > 0: compression
+  const double sign = total >= 0 ? 1.0 : -1.0;
+  const double dt = sys.dt();
+  const Material& mat = sys.material();
+  int next_sample = 0;
+  auto record = [&](const Measures& m) {
+    if (m.pressure > 0 && m.strain_rate > 0 && std::isfinite(m.inertial_number))
+      s.max_inertial_number = std::max(s.max_inertial_number, m.inertial_number);
+    if (sample) sample(m);
+  };
+  auto sample_point = [&](int k) { return ln_start + total * k / (o.samples - 1); };
+  if (o.samples >= 2) {
+    record(sys.measure());
+    next_sample = 1;
+  }
+  double rate = o.rate_max;
+  constexpr int kRateUpdate = 20;  // steps between rate updates from the pressure
+  for (std::int64_t it = 0;; ++it) {
+    const double done = std::log(sys.volume_fraction()) - ln_start;
+    const double remaining = sign * (total - done);
+    if (o.inertial_number > 0 && it % kRateUpdate == 0) {
+      const double P = pressure(sys.stress());
+      const double r = P > 0 ? o.inertial_number * std::sqrt(P / mat.density) / (2.0 * mat.r_mean)
+                             : o.rate_min;
+      rate = std::clamp(r, o.rate_min, o.rate_max);
+    }
+    const bool last = remaining <= 3.0 * rate * dt;
+    // d ln(nu) / dt = -tr(D) = 3 * rate for D = -rate I.
+    const double r = last ? std::max(remaining, 0.0) / (3.0 * dt) : rate;
+    sys.step(Eigen::Vector3d::Constant(-sign * r));
+    ++s.steps;
+    const double now = sign * (std::log(sys.volume_fraction()) - ln_start);
+    while (o.samples >= 2 && next_sample < o.samples &&
+           (last || now >= sign * (sample_point(next_sample) - ln_start))) {
+      record(sys.measure());
+      ++next_sample;
+    }
+    if (progress && it % 256 == 0) progress(std::abs(total) > 0 ? now / std::abs(total) : 1.0);
+    if (last) break;
+  }
+  s.time = sys.time() - t0;
+  if (progress) progress(1.0);
+  return s;
+}
+
+PathSummary undrained_extension(DemSystem& sys, const PathOptions& o, const SampleFn& sample,
+                                const ProgressFn& progress) {
+  std::string why;
+  if (!o.IsValid(&why)) throw InputError("path: " + why);
+  PathSummary s;
+  const double t0 = sys.time();
+  sys.reset_strain();
+  // -eps_dev = sqrt(3/2) E_xx on this path (the deviator of diag(1, -1/2, -1/2) E_xx).
+  const double kFactor = std::sqrt(1.5);
+  const double dt = sys.dt();
+  const double inc = kFactor * o.rate * dt;
+  std::vector<std::size_t> snap_order(o.snapshot_eps_dev.size());
+  std::iota(snap_order.begin(), snap_order.end(), 0);
+  std::stable_sort(snap_order.begin(), snap_order.end(), [&](std::size_t a, std::size_t b) {
+    return o.snapshot_eps_dev[a] < o.snapshot_eps_dev[b];
+  });
+  std::vector<DemSystem> snaps(o.snapshot_eps_dev.size(), sys);
+  std::size_t next_snap = 0;
+  int next_sample = 1;
+  auto sample_at = [&](int k) { return o.eps_dev_max * k / (o.samples - 1); };
+  auto record = [&](const Measures& m) {
+    if (m.pressure > 0 && std::isfinite(m.inertial_number))
+      s.max_inertial_number = std::max(s.max_inertial_number, m.inertial_number);
+    if (sample) sample(m);
+  };
+  const Eigen::Vector3d shape(1.0, -0.5, -0.5);
+  record(sys.measure());
+  // Events (samples, snapshots, the end) are hit exactly by shortening the step's rate.
+  constexpr double kHit = 1e-12;  // relative tolerance of landing on an event
+  for (std::int64_t it = 0;; ++it) {
+    const double now = kFactor * sys.strain_E()[0];
+    double event = std::min(o.eps_dev_max, next_sample < o.samples ? sample_at(next_sample) : 1e300);
+    if (next_snap < snap_order.size()) event = std::min(event, o.snapshot_eps_dev[snap_order[next_snap]]);
+    const double f = std::min(1.0, (event - now) / inc);
+    sys.step(o.rate * std::max(f, 0.0) * shape);
+    ++s.steps;
+    const double after = kFactor * sys.strain_E()[0];
+    const double tol = kHit * std::max(1.0, o.eps_dev_max);
+    while (next_snap < snap_order.size() && after >= o.snapshot_eps_dev[snap_order[next_snap]] - tol) {
+      snaps[snap_order[next_snap]] = sys;
+      ++next_snap;
+    }
+    bool sampled = false;
+    while (next_sample < o.samples && after >= sample_at(next_sample) - tol) {
+      if (!sampled) record(sys.measure());
+      sampled = true;
+      ++next_sample;
+    }
+    if (progress && it % 256 == 0) progress(after / o.eps_dev_max);
+    if (after >= o.eps_dev_max - tol && next_sample >= o.samples && next_snap >= snap_order.size())
+      break;
+  }
+  s.snapshots = std::move(snaps);
+  s.time = sys.time() - t0;
+  if (progress) progress(1.0);
+  return s;
+}
+
+std::int64_t impose_strain_increment(DemSystem& sys, const Eigen::Vector3d& d_eps, double rate) {
+  if (!(rate > 0 && std::isfinite(rate))) throw InputError("strain increment: rate must be > 0");
+  if (!d_eps.allFinite()) throw InputError("strain increment: non-finite component");
+  const double largest = d_eps.cwiseAbs().maxCoeff();
+  if (largest == 0) return 0;
+  const std::int64_t n =
+      std::max<std::int64_t>(1, static_cast<std::int64_t>(std::ceil(largest / (rate * sys.dt()))));
+  // epsilon = -E: a compressive increment is a negative D.
+  const Eigen::Vector3d D = -d_eps / (static_cast<double>(n) * sys.dt());
+  sys.advance(n, D);
+  return n;
+}
+
+DemSystem system_from_positions(const Eigen::MatrixXd& positions, const std::vector<double>& radii,
+                                const Eigen::Vector3d& lengths, const SystemOptions& options) {
+  if (positions.cols() != 3 || static_cast<std::size_t>(positions.rows()) != radii.size())
+    throw InputError("stored state: positions must be [N,3] with N = number of radii");
+  Particles p;
+  p.resize(radii.size());
+  for (std::size_t i = 0; i < radii.size(); ++i) {
+    if (!(radii[i] > 0)) throw InputError("stored state: radius " + std::to_string(i) + " <= 0");
+    p.radius[i] = radii[i];
+    p.inv_mass[i] = 1.0 / options.material.sphere_mass(radii[i]);
+    p.x[i] = positions(i, 0);
+    p.y[i] = positions(i, 1);
+    p.z[i] = positions(i, 2);
+  }
+  return DemSystem(std::move(p), PeriodicCell{lengths}, options);
+}
+
+}  // namespace rendulic::dem
