@@ -41,15 +41,15 @@ double seconds_since(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
 }
 
-struct Contact {
+struct BackboneContact {
   int i, j;
   Eigen::Vector3d n;  // unit normal, from j to i
   double r;           // |l|
   double f;           // k delta > 0
 };
 
-// Contact Hessian block: d^2 phi(|l|) / dl dl = k n n - (f/r)(I - n n).
-Eigen::Matrix3d contact_block(const Contact& c, double k) {
+// BackboneContact Hessian block: d^2 phi(|l|) / dl dl = k n n - (f/r)(I - n n).
+Eigen::Matrix3d contact_block(const BackboneContact& c, double k) {
   const Eigen::Matrix3d nn = c.n * c.n.transpose();
   return k * nn - (c.f / c.r) * (Eigen::Matrix3d::Identity() - nn);
 }
@@ -124,7 +124,7 @@ LinearResponse linear_response(const PackingData& packing, const LinearResponseO
   out.n_particles = n;
   out.volume = packing.volume();
 
-  std::vector<Contact> all;
+  std::vector<BackboneContact> all;
   for (const PairGeometry& p : find_pairs(packing, 0.0)) {
     if (p.overlap > 0.0) all.push_back({p.i, p.j, p.l / p.distance, p.distance, k * p.overlap});
   }
@@ -140,7 +140,7 @@ LinearResponse linear_response(const PackingData& packing, const LinearResponseO
     changed = false;
     std::fill(count.begin(), count.end(), 0);
     for (auto& b : local) b.setZero();
-    for (const Contact& c : all) {
+    for (const BackboneContact& c : all) {
       if (!keep[c.i] || !keep[c.j]) continue;
       ++count[c.i];
       ++count[c.j];
@@ -163,8 +163,8 @@ LinearResponse linear_response(const PackingData& packing, const LinearResponseO
       }
     }
   }
-  std::vector<Contact> contacts;
-  for (const Contact& c : all) {
+  std::vector<BackboneContact> contacts;
+  for (const BackboneContact& c : all) {
     if (keep[c.i] && keep[c.j]) contacts.push_back(c);
   }
   out.n_backbone_contacts = static_cast<int>(contacts.size());
@@ -175,7 +175,7 @@ LinearResponse linear_response(const PackingData& packing, const LinearResponseO
   auto particle_volume = [&](int p) {
     return 4.0 / 3.0 * std::numbers::pi * std::pow(packing.radii(p), 3);
   };
-  for (const Contact& c : contacts) {
+  for (const BackboneContact& c : contacts) {
     const Eigen::Matrix3d nn = c.n * c.n.transpose();
     out.stress += (c.f * c.r) * nn;
     out.fabric += (particle_volume(c.i) + particle_volume(c.j)) * nn;
@@ -222,7 +222,7 @@ LinearResponse linear_response(const PackingData& packing, const LinearResponseO
     for (int r = 0; r < 3; ++r)
       for (int s = 0; s < 3; ++s) triplets.emplace_back(row + r, col + s, b(r, s));
   };
-  for (const Contact& c : contacts) {
+  for (const BackboneContact& c : contacts) {
     const Eigen::Matrix3d kc = contact_block(c, k);
     const int di = dof[c.i], dj = dof[c.j];
     add_block(di, di, kc);
@@ -310,7 +310,7 @@ LinearResponse linear_response(const PackingData& packing, const LinearResponseO
     const Eigen::Matrix3d& de = basis[a];
     Eigen::Matrix3d ds_full = Eigen::Matrix3d::Zero(), ds_affine = Eigen::Matrix3d::Zero();
     Eigen::Matrix3d df = Eigen::Matrix3d::Zero();
-    for (const Contact& c : contacts) {
+    for (const BackboneContact& c : contacts) {
       const Eigen::Vector3d l = c.r * c.n;
       const Eigen::Vector3d dl_affine = de * l;
       Eigen::Vector3d dl = dl_affine;
