@@ -338,10 +338,12 @@ void register_probe_keys(ScenarioSchema& schema) {
   s = {};
   s.path = "probes.methods";
   s.type = KeyType::kStringList;
-  s.default_value = std::vector<std::string>{"dynamic", "linear_response"};
+  s.default_value = std::vector<std::string>{"dynamic"};
   s.unit = "-";
-  s.help = "Probe methods run at every state: dynamic, minimisation, linear_response.";
-  s.choices = {"dynamic", "minimisation", "linear_response"};
+  s.help =
+      "Probe methods of the probes stage (dynamic, minimisation); the linear_response stage "
+      "adds the exact elastic envelopes for the same directions and amplitudes.";
+  s.choices = {"dynamic", "minimisation"};
   s.min_size = 1;
   schema.add(s);
   s = {};

@@ -73,7 +73,8 @@ std::vector<Envelope> run_probe_campaign(const DemSystem& state, const std::stri
 // Scenario keys of the probe campaigns (section [probes]) and the options they give.
 void register_probe_keys(ScenarioSchema& schema);
 ProbeOptions probe_options_from(const Scenario& scenario);
-// The methods a scenario asks for: a subset of {"dynamic", "minimisation", "linear_response"}.
+// The methods of the probes stage: a subset of {"dynamic", "minimisation"} (the
+// linear_response stage calls run_probe_campaign with {"linear_response"}).
 std::vector<std::string> probe_methods_from(const Scenario& scenario);
 
 }  // namespace rendulic::dem
