@@ -1,0 +1,80 @@
+// Probe campaigns (physics.md section 5; issue 4 items 1-3): from one relaxed state, M strain
+// probes per amplitude, by one of three separate methods (never substituted for each other):
+//  - dynamic: a copy of the DEM state takes the probe strain (core probe_strain, log strain,
+//    diagonal) at a controlled rate, then relaxes at fixed cell until E_kin / E_el falls below
+//    the threshold (or the time cap, reported per probe); d_sigma, d_F = after - before with the
+//    engine's own measures (eq. 1 with the dashpot part of the contact force, eq. 2 over all
+//    contacts);
+//  - minimisation: the state is first brought to its nearest energy minimum at fixed cell (so
+//    that residual forces of the relaxed state are not counted as response), then every probe
+//    is an affine step x -> exp(-d_eps) x followed by FIRE to the force tolerance;
+//  - linear_response: the exact small-strain response of the contact network
+//    (linear_response.hpp), no dynamics.
+// Probes are independent: they run in parallel over an OpenMP team (each on its own copy, the
+// engine's inner loops then serial), and every probe's result is a function of the state and
+// its direction alone, so the envelope is identical whatever the thread count.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "rendulic/core/results.hpp"
+#include "rendulic/core/scenario.hpp"
+#include "rendulic/dem/dem_system.hpp"
+#include "rendulic/dem/linear_response.hpp"
+#include "rendulic/dem/probe_envelope.hpp"
+#include "rendulic/dem/probe_minimise.hpp"
+#include "rendulic/dem/protocols.hpp"
+
+namespace rendulic::dem {
+
+struct ProbeOptions {
+  int directions = 36;                            // equally spaced from 0 deg
+  std::vector<double> amplitudes = {5e-5, 2e-3};  // |d_eps|, Frobenius
+  // Loading rate of the largest strain component: from the inertial number
+  // I = rate 2<r> sqrt(rho / P) at the state's pressure, unless `rate` > 0 fixes it (1/s).
+  double inertial_number = 1e-4;
+  double rate = 0.0;
+  // Relaxation after loading (dynamic): E_kin / E_el below kinetic_to_elastic, or time_cap.
+  RelaxOptions relax{1e-9, 2e-3, 200};
+  // Minimisation probes: FIRE to max net force < force_tolerance * mean contact force.
+  MinimiseOptions minimise{};
+  LinearResponseOptions linear{};
+  int threads = 0;  // OpenMP threads over probes; 0: OpenMP's default
+  bool IsValid(std::string* why) const;
+};
+
+// The probe directions: M equally spaced angles from 0 deg (core probe_directions_deg).
+std::vector<double> probe_directions(int m);
+// The loading rate for a state (1/s).
+double probe_rate(const DemSystem& state, const ProbeOptions& options);
+
+Envelope dynamic_envelope(const DemSystem& state, double amplitude,
+                          const std::vector<double>& theta_deg, const ProbeOptions& options);
+Envelope minimisation_envelope(const DemSystem& state, double amplitude,
+                               const std::vector<double>& theta_deg, const ProbeOptions& options);
+// The linear response of the state (its positions, radii and cell) and its envelope.
+PackingData packing_of(const DemSystem& state);
+Envelope linear_response_envelope(const DemSystem& state, double amplitude,
+                                  const std::vector<double>& theta_deg, const ProbeOptions& options,
+                                  LinearResponse* response = nullptr);
+
+// Name of an envelope in the results file: "<method>_<amplitude %g>", e.g. "dynamic_5e-05".
+std::string envelope_name(const std::string& method, double amplitude);
+
+// The whole campaign of one state: every method x amplitude, written under
+// /states/<label>/envelopes/<envelope_name> (interfaces.md). The linear-response envelopes
+// also store the 6x6 Mandel stiffness [Pa] and fabric stiffness as datasets `stiffness` and
+// `fabric_stiffness`. Returns the envelopes in the order written.
+std::vector<Envelope> run_probe_campaign(const DemSystem& state, const std::string& label,
+                                         const std::vector<std::string>& methods,
+                                         const ProbeOptions& options, ResultsWriter& out);
+
+// Scenario keys of the probe campaigns (section [probes]) and the options they give.
+void register_probe_keys(ScenarioSchema& schema);
+ProbeOptions probe_options_from(const Scenario& scenario);
+// The methods of the probes stage: a subset of {"dynamic", "minimisation"} (the
+// linear_response stage calls run_probe_campaign with {"linear_response"}).
+std::vector<std::string> probe_methods_from(const Scenario& scenario);
+
+}  // namespace rendulic::dem

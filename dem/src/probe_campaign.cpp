@@ -1,0 +1,419 @@
+// Probe campaigns by the dynamic, minimisation and linear-response methods, and their
+// scenario keys (physics.md section 5, issue 4). See probe_campaign.hpp.
+#include "rendulic/dem/probe_campaign.hpp"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <iterator>
+
+#include "rendulic/core/conventions.hpp"
+#include "rendulic/core/errors.hpp"
+#include "rendulic/dem/envelope_io.hpp"
+
+namespace rendulic::dem {
+
+bool ProbeOptions::IsValid(std::string* why) const {
+  auto fail = [&](const std::string& m) {
+    if (why) *why = m;
+    return false;
+  };
+  if (directions < 3) return fail("probes: directions must be >= 3");
+  if (amplitudes.empty()) return fail("probes: at least one amplitude");
+  for (double a : amplitudes) {
+    if (!(a > 0.0) || !(a <= 0.05)) return fail("probes: amplitudes must be in (0, 0.05]");
+  }
+  if (!(inertial_number > 0.0) || !(inertial_number <= 1e-2))
+    return fail("probes: inertial_number must be in (0, 1e-2]");
+  if (!(rate >= 0.0) || !std::isfinite(rate)) return fail("probes: rate must be >= 0");
+  if (threads < 0) return fail("probes: threads must be >= 0");
+  if (!relax.IsValid(why)) return false;
+  if (!minimise.IsValid(why)) return false;
+  return linear.IsValid(why);
+}
+
+std::vector<double> probe_directions(int m) {
+  const Eigen::VectorXd d = probe_directions_deg(m);
+  return {d.data(), d.data() + d.size()};
+}
+
+double probe_rate(const DemSystem& state, const ProbeOptions& options) {
+  if (options.rate > 0.0) return options.rate;
+  const Material& mat = state.material();
+  const double p = pressure(state.stress());
+  if (!(p > 0.0)) {
+    throw InputError(
+        "probes: the state has no pressure, so the inertial number cannot set the rate; give "
+        "probes.rate");
+  }
+  return options.inertial_number * std::sqrt(p / mat.density) / (2.0 * mat.r_mean);
+}
+
+namespace {
+
+// Contacts as sorted (i, j) keys, i < j.
+std::vector<std::uint64_t> contact_keys(const std::vector<Contact>& contacts) {
+  std::vector<std::uint64_t> keys;
+  keys.reserve(contacts.size());
+  for (const Contact& c : contacts) {
+    const auto a = static_cast<std::uint64_t>(std::min(c.i, c.j));
+    const auto b = static_cast<std::uint64_t>(std::max(c.i, c.j));
+    keys.push_back(a << 32 | b);
+  }
+  std::sort(keys.begin(), keys.end());
+  return keys;
+}
+std::vector<std::uint64_t> contact_keys(const std::vector<PairGeometry>& pairs) {
+  std::vector<std::uint64_t> keys;
+  for (const PairGeometry& c : pairs) {
+    if (c.overlap > 0.0) keys.push_back(static_cast<std::uint64_t>(c.i) << 32 | c.j);
+  }
+  std::sort(keys.begin(), keys.end());
+  return keys;
+}
+// (opened, closed) between two sorted key sets.
+std::pair<double, double> contact_changes(const std::vector<std::uint64_t>& before,
+                                          const std::vector<std::uint64_t>& after) {
+  std::vector<std::uint64_t> d;
+  std::set_difference(before.begin(), before.end(), after.begin(), after.end(),
+                      std::back_inserter(d));
+  const double opened = static_cast<double>(d.size());
+  d.clear();
+  std::set_difference(after.begin(), after.end(), before.begin(), before.end(),
+                      std::back_inserter(d));
+  return {opened, static_cast<double>(d.size())};
+}
+
+// The keys whose two particles are both in `keep` (the backbone of the starting state).
+std::vector<std::uint64_t> among(const std::vector<std::uint64_t>& keys,
+                                 const std::vector<bool>& keep) {
+  std::vector<std::uint64_t> out;
+  for (std::uint64_t key : keys) {
+    if (keep[key >> 32] && keep[key & 0xffffffffu]) out.push_back(key);
+  }
+  return out;
+}
+
+void check(const ProbeOptions& options, double amplitude, const std::vector<double>& theta) {
+  std::string why;
+  if (!options.IsValid(&why)) throw InputError(why);
+  if (!(amplitude > 0.0) || !(amplitude <= 0.05))
+    throw InputError("probes: amplitude must be in (0, 0.05]");
+  if (theta.empty()) throw InputError("probes: no directions");
+}
+
+int team_size(const ProbeOptions& options) {
+  return options.threads > 0 ? options.threads : omp_get_max_threads();
+}
+
+// Symmetric matrix exponential: the deformation gradient exp(-d_eps) of a log strain.
+Eigen::Matrix3d exp_sym(const Eigen::Matrix3d& a) {
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(a);
+  return eig.eigenvectors() * eig.eigenvalues().array().exp().matrix().asDiagonal() *
+         eig.eigenvectors().transpose();
+}
+
+}  // namespace
+
+Envelope dynamic_envelope(const DemSystem& state, double amplitude,
+                          const std::vector<double>& theta_deg, const ProbeOptions& options) {
+  check(options, amplitude, theta_deg);
+  const double rate = probe_rate(state, options);
+  const Measures before = state.measure();
+  const std::vector<Contact> contacts_before = state.contacts();
+  const std::vector<std::uint64_t> keys_before = contact_keys(contacts_before);
+  const std::vector<bool> backbone = non_rattlers(state.particles().size(), contacts_before);
+  const int m = static_cast<int>(theta_deg.size());
+  std::vector<Measures> after(m);
+  std::vector<RelaxSummary> relaxed(m);
+  std::vector<std::int64_t> load_steps(m);
+  std::vector<std::pair<double, double>> changes(m), backbone_changes(m);
+  std::vector<std::string> errors(m);
+#pragma omp parallel for schedule(dynamic, 1) num_threads(team_size(options))
+  for (int p = 0; p < m; ++p) {
+    try {
+      DemSystem sys = state;
+      const Eigen::Matrix3d d_eps = probe_strain(theta_deg[p], amplitude);
+      load_steps[p] = impose_strain_increment(sys, d_eps.diagonal(), rate);
+      relaxed[p] = relax(sys, options.relax);
+      after[p] = sys.measure();
+      const std::vector<std::uint64_t> keys_after = contact_keys(sys.contacts());
+      changes[p] = contact_changes(keys_before, keys_after);
+      backbone_changes[p] =
+          contact_changes(among(keys_before, backbone), among(keys_after, backbone));
+    } catch (const std::exception& e) {  // no exception may leave a parallel region
+      errors[p] = e.what();
+    }
+  }
+  for (const std::string& e : errors) {
+    if (!e.empty()) throw std::runtime_error("dynamic probe: " + e);
+  }
+  Envelope env;
+  env.method = "dynamic";
+  env.amplitude = amplitude;
+  env.k_star = state.material().k_star();
+  auto& diag = env.diagnostics;
+  for (int p = 0; p < m; ++p) {
+    env.add(theta_deg[p], probe_strain(theta_deg[p], amplitude), after[p].stress - before.stress,
+            after[p].fabric - before.fabric);
+    diag["contacts_opened"].push_back(changes[p].first);
+    diag["contacts_closed"].push_back(changes[p].second);
+    diag["backbone_contacts_opened"].push_back(backbone_changes[p].first);
+    diag["backbone_contacts_closed"].push_back(backbone_changes[p].second);
+    diag["load_steps"].push_back(static_cast<double>(load_steps[p]));
+    diag["relax_steps"].push_back(static_cast<double>(relaxed[p].steps));
+    diag["relax_time"].push_back(relaxed[p].time);
+    diag["kinetic_to_elastic"].push_back(relaxed[p].ratio);
+    diag["relax_converged"].push_back(relaxed[p].converged ? 1.0 : 0.0);
+  }
+  const Material& mat = state.material();
+  env.attributes["rate"] = rate;
+  env.attributes["inertial_number"] =
+      rate * 2.0 * mat.r_mean * std::sqrt(mat.density / std::max(before.pressure, 1e-300));
+  env.attributes["relax_kinetic_to_elastic"] = options.relax.kinetic_to_elastic;
+  env.attributes["relax_time_cap"] = options.relax.time_cap;
+  env.attributes["dt"] = state.dt();
+  env.attributes["kinetic_to_elastic_before"] = relax_ratio(state);
+  return env;
+}
+
+PackingData packing_of(const DemSystem& state) {
+  const Particles& p = state.particles();
+  const int n = static_cast<int>(p.size());
+  Eigen::MatrixX3d x(n, 3);
+  Eigen::VectorXd r(n);
+  for (int i = 0; i < n; ++i) {
+    x.row(i) << p.x[i], p.y[i], p.z[i];
+    r(i) = p.radius[i];
+  }
+  return PackingData::orthorhombic(std::move(x), std::move(r), state.cell().lengths);
+}
+
+Envelope minimisation_envelope(const DemSystem& state, double amplitude,
+                               const std::vector<double>& theta_deg, const ProbeOptions& options) {
+  check(options, amplitude, theta_deg);
+  MinimiseOptions mo = options.minimise;
+  mo.k = state.material().k;
+  PackingData ref = packing_of(state);
+  const MinimiseSummary ref_summary = minimise_energy(ref, mo);
+  if (!ref_summary.converged) {
+    throw std::runtime_error("minimisation probes: the reference state did not converge (" +
+                             ref_summary.message + ")");
+  }
+  const StressFabric before = measure_stress_fabric(ref, mo.k);
+  const std::vector<std::uint64_t> keys_before = contact_keys(find_pairs(ref, 0.0));
+  std::vector<bool> backbone(ref.size(), true);
+  {
+    std::vector<Contact> cs;
+    for (const PairGeometry& c : find_pairs(ref, 0.0)) {
+      if (c.overlap > 0.0) cs.push_back({c.i, c.j, c.l, c.overlap, mo.k * c.overlap});
+    }
+    backbone = non_rattlers(ref.size(), cs);
+  }
+  const int m = static_cast<int>(theta_deg.size());
+  std::vector<StressFabric> after(m);
+  std::vector<MinimiseSummary> summaries(m);
+  std::vector<std::pair<double, double>> changes(m), backbone_changes(m);
+  std::vector<std::string> errors(m);
+#pragma omp parallel for schedule(dynamic, 1) num_threads(team_size(options))
+  for (int p = 0; p < m; ++p) {
+    try {
+      PackingData probe = ref;
+      const Eigen::Matrix3d f = exp_sym(-probe_strain(theta_deg[p], amplitude));
+      probe.positions = probe.positions * f.transpose();
+      probe.cell = f * probe.cell;
+      summaries[p] = minimise_energy(probe, mo);
+      after[p] = measure_stress_fabric(probe, mo.k);
+      const std::vector<std::uint64_t> keys_after = contact_keys(find_pairs(probe, 0.0));
+      changes[p] = contact_changes(keys_before, keys_after);
+      backbone_changes[p] =
+          contact_changes(among(keys_before, backbone), among(keys_after, backbone));
+    } catch (const std::exception& e) {
+      errors[p] = e.what();
+    }
+  }
+  for (const std::string& e : errors) {
+    if (!e.empty()) throw std::runtime_error("minimisation probe: " + e);
+  }
+  Envelope env;
+  env.method = "minimisation";
+  env.amplitude = amplitude;
+  env.k_star = state.material().k_star();
+  auto& diag = env.diagnostics;
+  for (int p = 0; p < m; ++p) {
+    env.add(theta_deg[p], probe_strain(theta_deg[p], amplitude), after[p].stress - before.stress,
+            after[p].fabric - before.fabric);
+    diag["contacts_opened"].push_back(changes[p].first);
+    diag["contacts_closed"].push_back(changes[p].second);
+    diag["backbone_contacts_opened"].push_back(backbone_changes[p].first);
+    diag["backbone_contacts_closed"].push_back(backbone_changes[p].second);
+    diag["iterations"].push_back(static_cast<double>(summaries[p].iterations));
+    diag["max_force"].push_back(summaries[p].max_force);
+    diag["converged"].push_back(summaries[p].converged ? 1.0 : 0.0);
+  }
+  env.attributes["force_tolerance"] = mo.force_tolerance;
+  env.attributes["reference_iterations"] = static_cast<double>(ref_summary.iterations);
+  return env;
+}
+
+Envelope linear_response_envelope(const DemSystem& state, double amplitude,
+                                  const std::vector<double>& theta_deg, const ProbeOptions& options,
+                                  LinearResponse* response) {
+  check(options, amplitude, theta_deg);
+  LinearResponseOptions lo = options.linear;
+  lo.k = state.material().k;
+  const LinearResponse lr = linear_response(packing_of(state), lo);
+  if (response) *response = lr;
+  if (!lr.ok) throw std::runtime_error(lr.message);
+  return linear_response_envelope(lr, theta_deg, amplitude, state.material().k_star());
+}
+
+std::string envelope_name(const std::string& method, double amplitude) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%s_%g", method.c_str(), amplitude);
+  return buf;
+}
+
+std::vector<Envelope> run_probe_campaign(const DemSystem& state, const std::string& label,
+                                         const std::vector<std::string>& methods,
+                                         const ProbeOptions& options, ResultsWriter& out) {
+  std::string why;
+  if (!options.IsValid(&why)) throw InputError(why);
+  const std::vector<double> theta = probe_directions(options.directions);
+  std::vector<Envelope> envelopes;
+  for (const std::string& method : methods) {
+    if (method != "dynamic" && method != "minimisation" && method != "linear_response") {
+      throw InputError("probes.methods: unknown method '" + method + "'");
+    }
+    LinearResponse lr;
+    for (double amplitude : options.amplitudes) {
+      Envelope env;
+      if (method == "dynamic") {
+        env = dynamic_envelope(state, amplitude, theta, options);
+      } else if (method == "minimisation") {
+        env = minimisation_envelope(state, amplitude, theta, options);
+      } else if (!lr.ok) {
+        env = linear_response_envelope(state, amplitude, theta, options, &lr);
+      } else {  // one factorisation serves every amplitude
+        env = linear_response_envelope(lr, theta, amplitude, state.material().k_star());
+      }
+      const std::string group = envelope_path(label, envelope_name(method, amplitude));
+      write_envelope(out, group, env);
+      if (method == "linear_response") {
+        out.write(group + "/stiffness", Eigen::MatrixXd(lr.stiffness));
+        out.write(group + "/fabric_stiffness", Eigen::MatrixXd(lr.fabric_stiffness));
+      }
+      envelopes.push_back(std::move(env));
+    }
+  }
+  return envelopes;
+}
+
+void register_probe_keys(ScenarioSchema& schema) {
+  const ProbeOptions d;
+  KeySpec s;
+  s = {};
+  s.path = "probes.directions";
+  s.type = KeyType::kInt;
+  s.default_value = std::int64_t{d.directions};
+  s.unit = "-";
+  s.help = "Number of probe directions, equally spaced in the Rendulic plane from 0 deg.";
+  s.min = 3;
+  s.max = 3600;
+  schema.add(s);
+  s = {};
+  s.path = "probes.amplitudes";
+  s.type = KeyType::kDoubleList;
+  s.default_value = d.amplitudes;
+  s.unit = "-";
+  s.help = "Probe strain amplitudes |d_eps| (Frobenius): < 1e-4 elastic, > 1e-3 elasto-plastic.";
+  s.min = 0.0;
+  s.min_open = true;
+  s.max = 0.05;
+  s.min_size = 1;
+  schema.add(s);
+  s = {};
+  s.path = "probes.methods";
+  s.type = KeyType::kStringList;
+  s.default_value = std::vector<std::string>{"dynamic"};
+  s.unit = "-";
+  s.help =
+      "Probe methods of the probes stage (dynamic, minimisation); the linear_response stage "
+      "adds the exact elastic envelopes for the same directions and amplitudes.";
+  s.choices = {"dynamic", "minimisation"};
+  s.min_size = 1;
+  schema.add(s);
+  s = {};
+  s.path = "probes.inertial_number";
+  s.type = KeyType::kDouble;
+  s.default_value = d.inertial_number;
+  s.unit = "-";
+  s.help = "Inertial number that sets the dynamic probes' loading rate at the state's pressure.";
+  s.min = 0.0;
+  s.min_open = true;
+  s.max = 1e-2;
+  schema.add(s);
+  s = {};
+  s.path = "probes.rate";
+  s.type = KeyType::kDouble;
+  s.default_value = d.rate;
+  s.unit = "1/s";
+  s.help = "Fixed loading rate of the largest strain component; 0 uses probes.inertial_number.";
+  s.min = 0.0;
+  schema.add(s);
+  s = {};
+  s.path = "probes.relax_kinetic_to_elastic";
+  s.type = KeyType::kDouble;
+  s.default_value = d.relax.kinetic_to_elastic;
+  s.unit = "-";
+  s.help = "Dynamic probes relax at fixed cell until kinetic/elastic energy is below this.";
+  s.min = 0.0;
+  s.min_open = true;
+  s.max = 1.0;
+  s.max_open = true;
+  schema.add(s);
+  s = {};
+  s.path = "probes.relax_time_cap";
+  s.type = KeyType::kDouble;
+  s.default_value = d.relax.time_cap;
+  s.unit = "s";
+  s.help = "Longest relaxation of a dynamic probe (probes that hit it are flagged).";
+  s.min = 0.0;
+  s.min_open = true;
+  schema.add(s);
+  s = {};
+  s.path = "probes.force_tolerance";
+  s.type = KeyType::kDouble;
+  s.default_value = d.minimise.force_tolerance;
+  s.unit = "-";
+  s.help =
+      "Minimisation probes stop when the largest net force is below this x mean contact force.";
+  s.min = 0.0;
+  s.min_open = true;
+  s.max = 1.0;
+  s.max_open = true;
+  schema.add(s);
+}
+
+ProbeOptions probe_options_from(const Scenario& scenario) {
+  ProbeOptions o;
+  o.directions = static_cast<int>(scenario.get_int("probes.directions"));
+  o.amplitudes = scenario.get_doubles("probes.amplitudes");
+  o.inertial_number = scenario.get_double("probes.inertial_number");
+  o.rate = scenario.get_double("probes.rate");
+  o.relax.kinetic_to_elastic = scenario.get_double("probes.relax_kinetic_to_elastic");
+  o.relax.time_cap = scenario.get_double("probes.relax_time_cap");
+  o.minimise.force_tolerance = scenario.get_double("probes.force_tolerance");
+  std::string why;
+  if (!o.IsValid(&why)) throw InputError(why);
+  return o;
+}
+
+std::vector<std::string> probe_methods_from(const Scenario& scenario) {
+  return scenario.get_strings("probes.methods");
+}
+
+}  // namespace rendulic::dem

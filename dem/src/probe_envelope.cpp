@@ -1,0 +1,91 @@
+// Envelope data, the linear-response envelope and the Rendulic map of an envelope
+// (physics.md sections 5 and 6). See probe_envelope.hpp.
+#include "rendulic/dem/probe_envelope.hpp"
+
+#include <cmath>
+#include <stdexcept>
+
+#include "rendulic/core/conventions.hpp"
+
+namespace rendulic::dem {
+
+void Envelope::add(double theta, const Eigen::Matrix3d& d_eps, const Eigen::Matrix3d& d_sigma,
+                   const Eigen::Matrix3d& d_f) {
+  theta_deg.push_back(theta);
+  strain.push_back(rendulic_pair(d_eps));
+  stress_star.push_back(rendulic_pair(d_sigma) / k_star);
+  fabric.push_back(rendulic_pair(d_f));
+  d_stress.push_back(d_sigma);
+  d_fabric.push_back(d_f);
+}
+
+Envelope linear_response_envelope(const LinearResponse& response,
+                                  const std::vector<double>& theta_deg, double amplitude,
+                                  double k_star) {
+  if (!response.ok) {
+    throw std::invalid_argument("linear_response_envelope: no stiffness (" + response.message +
+                                ")");
+  }
+  Envelope env;
+  env.method = "linear_response";
+  env.amplitude = amplitude;
+  env.k_star = k_star;
+  for (double theta : theta_deg) {
+    const Eigen::Matrix3d d_eps = probe_strain(theta, amplitude);
+    env.add(theta, d_eps, response.stress_increment(d_eps), response.fabric_increment(d_eps));
+  }
+  env.attributes["n_rattlers"] = response.n_rattlers;
+  env.attributes["n_backbone_contacts"] = response.n_backbone_contacts;
+  env.attributes["residual_force_ratio"] = response.residual_force_ratio;
+  env.attributes["seconds"] = response.seconds_total;
+  return env;
+}
+
+RendulicMap ellipse_of(const Eigen::Matrix2d& map, double amplitude) {
+  RendulicMap out;
+  out.map = map;
+  const Eigen::JacobiSVD<Eigen::Matrix2d> svd(map, Eigen::ComputeFullU);
+  out.semi_major = amplitude * svd.singularValues()(0);
+  out.semi_minor = amplitude * svd.singularValues()(1);
+  const Eigen::Vector2d u = svd.matrixU().col(0);
+  double deg = rad_to_deg(std::atan2(u.y(), u.x()));
+  deg = std::fmod(deg + 360.0, 180.0);  // a direction, not an orientation
+  out.inclination_deg = deg >= 180.0 ? deg - 180.0 : deg;
+  return out;
+}
+
+RendulicMap fit_rendulic_map(const std::vector<Eigen::Vector2d>& strain,
+                             const std::vector<Eigen::Vector2d>& response) {
+  const std::size_t m = strain.size();
+  if (m != response.size() || m < 3) {
+    throw std::invalid_argument("fit_rendulic_map: needs >= 3 probes with matching responses");
+  }
+  // Rows (s_x, s_y, 1): the same design for both response components.
+  Eigen::MatrixXd a(m, 3);
+  Eigen::MatrixXd b(m, 2);
+  double amplitude = 0.0;
+  for (std::size_t r = 0; r < m; ++r) {
+    a.row(r) << strain[r].x(), strain[r].y(), 1.0;
+    b.row(r) = response[r].transpose();
+    amplitude += strain[r].norm() / static_cast<double>(m);
+  }
+  const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(a);
+  if (qr.rank() < 3) throw std::invalid_argument("fit_rendulic_map: strain pairs are collinear");
+  const Eigen::MatrixXd x = qr.solve(b);  // 3 x 2
+  RendulicMap out = ellipse_of(x.topRows<2>().transpose(), amplitude);
+  out.center = x.row(2).transpose();
+  out.rms = std::sqrt((a * x - b).squaredNorm() / static_cast<double>(m));
+  return out;
+}
+
+Eigen::Matrix2d rendulic_map_of(const Matrix6d& stiffness) {
+  Eigen::Matrix2d map;
+  for (int c = 0; c < 2; ++c) {
+    Eigen::Vector2d s = Eigen::Vector2d::Zero();
+    s(c) = 1.0;
+    map.col(c) = rendulic_pair(from_mandel(stiffness * to_mandel(from_rendulic_pair(s))));
+  }
+  return map;
+}
+
+}  // namespace rendulic::dem

@@ -1,0 +1,152 @@
+// Contact geometry of a periodic packing for the probe tools (physics.md sections 1-3): cell
+// lists over fractional coordinates, minimum image, static stress and fabric. See
+// probe_geometry.hpp.
+#include "rendulic/dem/probe_geometry.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <numbers>
+#include <sstream>
+
+#include "rendulic/core/errors.hpp"
+
+namespace rendulic::dem {
+
+PackingData PackingData::orthorhombic(Eigen::MatrixX3d positions, Eigen::VectorXd radii,
+                                      const Eigen::Vector3d& cell_lengths) {
+  PackingData p;
+  p.positions = std::move(positions);
+  p.radii = std::move(radii);
+  p.cell = cell_lengths.asDiagonal();
+  return p;
+}
+
+Eigen::Vector3d minimum_image(const Eigen::Matrix3d& cell, const Eigen::Matrix3d& cell_inverse,
+                              const Eigen::Vector3d& separation) {
+  Eigen::Vector3d s = cell_inverse * separation;
+  for (int a = 0; a < 3; ++a) s(a) -= std::nearbyint(s(a));
+  return cell * s;
+}
+
+namespace {
+
+void check_packing(const PackingData& packing) {
+  const int n = packing.size();
+  if (packing.positions.rows() != n) {
+    std::ostringstream os;
+    os << "packing: " << packing.positions.rows() << " positions but " << n << " radii";
+    throw InputError(os.str());
+  }
+  if (!(packing.volume() > 0.0) || !packing.cell.allFinite()) {
+    throw InputError("packing: the cell matrix is not finite with a positive volume");
+  }
+  if (!packing.positions.allFinite() || !packing.radii.allFinite() ||
+      (n > 0 && !(packing.radii.minCoeff() > 0.0))) {
+    throw InputError("packing: positions and radii must be finite, radii positive");
+  }
+}
+
+}  // namespace
+
+std::vector<PairGeometry> find_pairs(const PackingData& packing, double skin) {
+  check_packing(packing);
+  const int n = packing.size();
+  std::vector<PairGeometry> pairs;
+  if (n < 2) return pairs;
+  const Eigen::Matrix3d& h = packing.cell;
+  const Eigen::Matrix3d h_inv = h.inverse();
+  const double cutoff = 2.0 * packing.radii.maxCoeff() + skin;
+  // Perpendicular width of the cell along each fractional axis: V / |h_b x h_c|.
+  const double volume = packing.volume();
+  std::array<int, 3> bins{};
+  for (int a = 0; a < 3; ++a) {
+    const double width = volume / h.col((a + 1) % 3).cross(h.col((a + 2) % 3)).norm();
+    if (width < 2.0 * cutoff) {
+      std::ostringstream os;
+      os << "packing: cell width " << width << " m along axis " << a
+         << " is below twice the contact range " << cutoff
+         << " m; the minimum image would be ambiguous";
+      throw InputError(os.str());
+    }
+    bins[a] = std::max(1, static_cast<int>(std::floor(width / cutoff)));
+  }
+  const int n_bins = bins[0] * bins[1] * bins[2];
+  // Bin of each particle from its wrapped fractional coordinates; counting sort into cells.
+  std::vector<int> bin_of(n);
+  for (int p = 0; p < n; ++p) {
+    Eigen::Vector3d s = h_inv * packing.positions.row(p).transpose();
+    int b[3];
+    for (int a = 0; a < 3; ++a) {
+      double f = s(a) - std::floor(s(a));
+      b[a] = std::min(bins[a] - 1, static_cast<int>(f * bins[a]));
+    }
+    bin_of[p] = (b[0] * bins[1] + b[1]) * bins[2] + b[2];
+  }
+  std::vector<int> start(n_bins + 1, 0), members(n);
+  for (int p = 0; p < n; ++p) ++start[bin_of[p] + 1];
+  for (int b = 0; b < n_bins; ++b) start[b + 1] += start[b];
+  {
+    std::vector<int> fill(start.begin(), start.end() - 1);
+    for (int p = 0; p < n; ++p) members[fill[bin_of[p]]++] = p;
+  }
+  // Neighbouring bins, without repeats (fewer than 3 bins along an axis would otherwise visit
+  // a bin twice and count its pairs twice).
+  auto neighbours = [&](int b0, int a) {
+    std::vector<int> out;
+    for (int d = -1; d <= 1; ++d) {
+      const int v = ((b0 + d) % bins[a] + bins[a]) % bins[a];
+      if (std::find(out.begin(), out.end(), v) == out.end()) out.push_back(v);
+    }
+    return out;
+  };
+  for (int p = 0; p < n; ++p) {
+    const int b = bin_of[p];
+    const int bx = b / (bins[1] * bins[2]), by = (b / bins[2]) % bins[1], bz = b % bins[2];
+    const Eigen::Vector3d xp = packing.positions.row(p).transpose();
+    for (int nx : neighbours(bx, 0)) {
+      for (int ny : neighbours(by, 1)) {
+        for (int nz : neighbours(bz, 2)) {
+          const int nb = (nx * bins[1] + ny) * bins[2] + nz;
+          for (int m = start[nb]; m < start[nb + 1]; ++m) {
+            const int q = members[m];
+            if (q <= p) continue;
+            const Eigen::Vector3d l =
+                minimum_image(h, h_inv, xp - packing.positions.row(q).transpose());
+            const double r = l.norm();
+            const double overlap = packing.radii(p) + packing.radii(q) - r;
+            if (overlap > -skin) pairs.push_back({p, q, l, r, overlap});
+          }
+        }
+      }
+    }
+  }
+  std::sort(pairs.begin(), pairs.end(), [](const PairGeometry& a, const PairGeometry& b) {
+    return a.i != b.i ? a.i < b.i : a.j < b.j;
+  });
+  return pairs;
+}
+
+StressFabric measure_stress_fabric(const PackingData& packing, double k,
+                                   const std::vector<char>* include) {
+  StressFabric out;
+  const double volume = packing.volume();
+  for (const PairGeometry& c : find_pairs(packing, 0.0)) {
+    if (c.overlap <= 0.0) continue;
+    if (include && (!(*include)[c.i] || !(*include)[c.j])) continue;
+    const Eigen::Vector3d n = c.l / c.distance;
+    const double f = k * c.overlap;
+    // l (x) f with f = f n along l: compression positive.
+    out.stress += (f * c.distance) * (n * n.transpose());
+    const double ri = packing.radii(c.i), rj = packing.radii(c.j);
+    const double vp = 4.0 / 3.0 * std::numbers::pi * (ri * ri * ri + rj * rj * rj);
+    out.fabric += vp * (n * n.transpose());
+    out.elastic_energy += 0.5 * k * c.overlap * c.overlap;
+    ++out.contacts;
+  }
+  out.stress /= volume;
+  out.fabric /= volume;
+  return out;
+}
+
+}  // namespace rendulic::dem

@@ -1,0 +1,200 @@
+// FIRE 2.0 energy minimisation of a periodic frictionless sphere packing at fixed cell, affine
+// strain steps and generated jammed packings (physics.md sections 1, 2, 5; issue 4 item 2).
+// See probe_minimise.hpp.
+#include "rendulic/dem/probe_minimise.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <random>
+#include <sstream>
+
+#include "rendulic/core/errors.hpp"
+
+namespace rendulic::dem {
+
+bool MinimiseOptions::IsValid(std::string* why) const {
+  auto fail = [&](const char* m) {
+    if (why) *why = m;
+    return false;
+  };
+  if (!(k > 0.0) || !std::isfinite(k)) return fail("minimise: k must be positive and finite");
+  if (!(force_tolerance > 0.0) || !(force_tolerance < 1.0))
+    return fail("minimise: force_tolerance must be in (0, 1)");
+  if (max_iterations < 1) return fail("minimise: max_iterations must be >= 1");
+  if (!(skin > 0.0) || !(skin <= 1.0)) return fail("minimise: skin must be in (0, 1]");
+  return true;
+}
+
+bool GeneratedPackingOptions::IsValid(std::string* why) const {
+  auto fail = [&](const char* m) {
+    if (why) *why = m;
+    return false;
+  };
+  if (n < 2) return fail("generated packing: n must be >= 2");
+  if (!(w >= 1.0)) return fail("generated packing: w must be >= 1");
+  if (!(r_mean > 0.0)) return fail("generated packing: r_mean must be positive");
+  if (!(volume_fraction > 0.0) || !(volume_fraction < 1.5))
+    return fail("generated packing: volume_fraction must be in (0, 1.5)");
+  return minimise.IsValid(why);
+}
+
+namespace {
+
+// Net contact forces on every particle from a candidate pair list; returns the elastic energy.
+double contact_forces(const PackingData& packing, const Eigen::Matrix3d& h_inv,
+                      const std::vector<PairGeometry>& pairs, double k, Eigen::MatrixX3d& force,
+                      double* sum_contact_force, int* n_contacts) {
+  force.setZero();
+  double energy = 0.0, sum_f = 0.0;
+  int contacts = 0;
+  for (const PairGeometry& c : pairs) {
+    const Eigen::Vector3d l = minimum_image(
+        packing.cell, h_inv, (packing.positions.row(c.i) - packing.positions.row(c.j)).transpose());
+    const double r = l.norm();
+    const double delta = packing.radii(c.i) + packing.radii(c.j) - r;
+    if (delta <= 0.0) continue;
+    const double f = k * delta;
+    const Eigen::RowVector3d fv = (f / r) * l.transpose();
+    force.row(c.i) += fv;
+    force.row(c.j) -= fv;
+    energy += 0.5 * k * delta * delta;
+    sum_f += f;
+    ++contacts;
+  }
+  *sum_contact_force = sum_f;
+  *n_contacts = contacts;
+  return energy;
+}
+
+}  // namespace
+
+MinimiseSummary minimise_energy(PackingData& packing, const MinimiseOptions& options) {
+  std::string why;
+  if (!options.IsValid(&why)) throw InputError(why);
+  MinimiseSummary summary;
+  const int n = packing.size();
+  if (n < 2) {
+    summary.converged = true;
+    summary.message = "fewer than two particles";
+    return summary;
+  }
+  const double r_mean = packing.radii.mean();
+  const double skin = options.skin * r_mean;
+  const Eigen::Matrix3d h_inv = packing.cell.inverse();
+  const double k = options.k;
+
+  // FIRE 2.0 parameters (Guenole et al. 2020, table 1), time in units of 1/sqrt(k/m), m = 1.
+  // The largest vibration frequency is below sqrt(2 z_max k) ~ sqrt(30 k); semi-implicit Euler
+  // is stable for dt < 2/omega_max ~ 0.36/sqrt(k), so dt_max sits just under it and FIRE's
+  // uphill back-off handles the rare overshoot.
+  const double t_unit = 1.0 / std::sqrt(k);
+  const double dt_start = 0.05 * t_unit, dt_max = 0.3 * t_unit, dt_min = 0.001 * t_unit;
+  const int n_delay = 20, n_negative_max = 2000;
+  const double f_inc = 1.1, f_dec = 0.5, alpha_start = 0.25, f_alpha = 0.99;
+
+  std::vector<PairGeometry> pairs = find_pairs(packing, skin);
+  Eigen::MatrixX3d reference = packing.positions;
+  summary.pair_rebuilds = 1;
+  Eigen::MatrixX3d force(n, 3), velocity = Eigen::MatrixX3d::Zero(n, 3);
+  double sum_f = 0.0;
+  int contacts = 0;
+  auto evaluate = [&]() {
+    summary.elastic_energy = contact_forces(packing, h_inv, pairs, k, force, &sum_f, &contacts);
+    summary.max_force = force.rowwise().norm().maxCoeff();
+    summary.mean_contact_force = contacts > 0 ? sum_f / contacts : 0.0;
+  };
+  auto converged = [&]() {
+    const double reference_force = contacts > 0 ? summary.mean_contact_force : k * r_mean;
+    return summary.max_force <= options.force_tolerance * reference_force;
+  };
+  evaluate();
+  double dt = dt_start, alpha = alpha_start;
+  int n_positive = 0, n_negative = 0;
+  for (std::int64_t it = 0; it < options.max_iterations; ++it) {
+    if (converged()) {
+      summary.converged = true;
+      summary.iterations = it;
+      summary.message = "converged";
+      return summary;
+    }
+    const double power = (force.array() * velocity.array()).sum();
+    if (power > 0.0) {
+      ++n_positive;
+      n_negative = 0;
+      if (n_positive > n_delay) {
+        dt = std::min(dt * f_inc, dt_max);
+        alpha *= f_alpha;
+      }
+    } else {
+      n_positive = 0;
+      if (++n_negative > n_negative_max) {
+        summary.iterations = it;
+        summary.message = "FIRE stalled: too many consecutive uphill steps";
+        return summary;
+      }
+      if (it >= n_delay) {
+        dt = std::max(dt * f_dec, dt_min);
+        alpha = alpha_start;
+      }
+      packing.positions -= 0.5 * dt * velocity;
+      velocity.setZero();
+    }
+    velocity += dt * force;
+    const double f_norm = force.norm();
+    if (f_norm > 0.0) {
+      velocity = (1.0 - alpha) * velocity + (alpha * velocity.norm() / f_norm) * force;
+    }
+    packing.positions += dt * velocity;
+    // Rebuild the candidate pairs once any particle may have closed the skin.
+    if ((packing.positions - reference).rowwise().norm().maxCoeff() > 0.5 * skin) {
+      pairs = find_pairs(packing, skin);
+      reference = packing.positions;
+      ++summary.pair_rebuilds;
+    }
+    evaluate();
+  }
+  summary.iterations = options.max_iterations;
+  summary.converged = converged();
+  std::ostringstream os;
+  os << (summary.converged ? "converged" : "not converged") << " after " << options.max_iterations
+     << " iterations";
+  summary.message = os.str();
+  return summary;
+}
+
+void apply_affine_strain(PackingData& packing, const Eigen::Matrix3d& eps) {
+  const Eigen::Matrix3d f = Eigen::Matrix3d::Identity() - eps;
+  packing.positions = packing.positions * f.transpose();
+  packing.cell = f * packing.cell;
+}
+
+PackingData generate_packing(const GeneratedPackingOptions& options, MinimiseSummary* summary) {
+  std::string why;
+  if (!options.IsValid(&why)) throw InputError(why);
+  std::mt19937_64 rng(options.seed);
+  // Own uniform draw (53 random bits) so that the packing does not depend on the standard
+  // library's distribution implementation.
+  auto uniform = [&rng]() { return static_cast<double>(rng() >> 11) * 0x1.0p-53; };
+  const double r_min = 2.0 * options.r_mean / (1.0 + options.w);
+  const double r_max = options.w * r_min;
+  Eigen::VectorXd radii(options.n);
+  double solid = 0.0;
+  for (int p = 0; p < options.n; ++p) {
+    radii(p) = r_min + (r_max - r_min) * uniform();
+    solid += 4.0 / 3.0 * std::numbers::pi * std::pow(radii(p), 3);
+  }
+  const double length = std::cbrt(solid / options.volume_fraction);
+  Eigen::MatrixX3d positions(options.n, 3);
+  for (int p = 0; p < options.n; ++p) {
+    for (int a = 0; a < 3; ++a) positions(p, a) = length * uniform();
+  }
+  PackingData packing = PackingData::orthorhombic(std::move(positions), std::move(radii),
+                                                  Eigen::Vector3d::Constant(length));
+  MinimiseOptions minimise = options.minimise;
+  const MinimiseSummary s = minimise_energy(packing, minimise);
+  if (summary) *summary = s;
+  return packing;
+}
+
+}  // namespace rendulic::dem

@@ -1,0 +1,68 @@
+// Envelopes in the results file (interfaces.md /states/<label>/envelopes/<name>): the
+// datasets and attributes of the contract, and an exact round trip including diagnostics.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+#include "rendulic/core/errors.hpp"
+#include "rendulic/dem/envelope_io.hpp"
+
+namespace rendulic::dem {
+namespace {
+
+Envelope sample_envelope() {
+  Envelope env;
+  env.method = "dynamic";
+  env.amplitude = 5e-5;
+  env.k_star = 5e10;
+  for (int i = 0; i < 5; ++i) {
+    const double t = 72.0 * i;
+    Eigen::Matrix3d ds = Eigen::Matrix3d::Random() * 1e6;
+    ds = 0.5 * (ds + ds.transpose()).eval();
+    Eigen::Matrix3d df = Eigen::Matrix3d::Random() * 1e-4;
+    df = 0.5 * (df + df.transpose()).eval();
+    env.add(t, probe_strain(t, env.amplitude), ds, df);
+    env.diagnostics["contacts_opened"].push_back(i);
+    env.diagnostics["relax_time"].push_back(1e-4 * i);
+  }
+  env.attributes["rate"] = 79.5;
+  return env;
+}
+
+TEST(EnvelopeIo, RoundTripWithTheContractNames) {
+  const std::filesystem::path dir = std::filesystem::path(RENDULIC_TEST_TMP) / "envelope_io";
+  std::filesystem::create_directories(dir);
+  const std::filesystem::path file = dir / "results.h5";
+  const Envelope env = sample_envelope();
+  const std::string group = envelope_path("s0", "elastic_dynamic");
+  EXPECT_EQ(group, "/states/s0/envelopes/elastic_dynamic");
+  {
+    ResultsWriter out(file);
+    write_envelope(out, group, env);
+    out.commit();
+  }
+  const ResultsReader in(file);
+  EXPECT_DOUBLE_EQ(in.attr_double(group, "amplitude"), 5e-5);
+  EXPECT_EQ(in.attr_string(group, "method"), "dynamic");
+  EXPECT_EQ(in.attr_int(group, "directions"), 5);
+  for (const char* name : {"theta_deg", "strain", "stress_star", "fabric", "d_stress", "d_fabric"})
+    EXPECT_TRUE(in.exists(group + "/" + name)) << name;
+  EXPECT_EQ(in.shape(group + "/d_stress"), (std::vector<std::uint64_t>{5, 3, 3}));
+  EXPECT_EQ(in.shape(group + "/strain"), (std::vector<std::uint64_t>{5, 2}));
+  const Envelope back = read_envelope(in, group);
+  EXPECT_EQ(back.method, env.method);
+  EXPECT_EQ(back.theta_deg, env.theta_deg);
+  for (std::size_t i = 0; i < env.size(); ++i) {
+    EXPECT_EQ(back.strain[i], env.strain[i]);
+    EXPECT_EQ(back.stress_star[i], env.stress_star[i]);
+    EXPECT_EQ(back.fabric[i], env.fabric[i]);
+    EXPECT_EQ(back.d_stress[i], env.d_stress[i]);
+    EXPECT_EQ(back.d_fabric[i], env.d_fabric[i]);
+  }
+  EXPECT_EQ(back.diagnostics, env.diagnostics);
+  EXPECT_EQ(back.attributes, env.attributes);
+  EXPECT_THROW(read_envelope(in, envelope_path("s0", "missing")), InputError);
+}
+
+}  // namespace
+}  // namespace rendulic::dem
