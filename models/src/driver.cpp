@@ -70,7 +70,10 @@ StepResult integrate_fixed(const Law& law, const MaterialState& start, const Eig
     }
     const LawRate r1 = law.rate(y, de);
     ++res.rate_evaluations;
-    const MaterialState y1 = advance(y, r1, tr_de);
+    MaterialState y1 = advance(y, r1, tr_de);
+    // A plastic predictor stays on the yield surface (consistency), up to its O(h^2) drift;
+    // without this the corrector could see the predictor a hair inside and switch branch.
+    if (heun) law.correct(&y1, r1.plastic);
     if (!finite(r1)) {
       res.reason = "non-finite rate at substep " + std::to_string(k + 1);
       res.end = y;
@@ -97,9 +100,15 @@ StepResult integrate_fixed(const Law& law, const MaterialState& start, const Eig
     } else {
       y = y1;
     }
-    law.correct(&y);
+    law.correct(&y, r1.plastic);
     res.error_estimate = std::max(res.error_estimate, err);
     ++res.substeps;
+    if (!law.admissible(y, &why)) {
+      res.reason = std::string(heun ? "fixed modified Euler" : "explicit Euler") + " substep " +
+                   std::to_string(k + 1) + " left the law's domain: " + why;
+      res.end = y;
+      return res;
+    }
   }
   res.end = y;
   res.within_tolerance = res.error_estimate <= o.tolerance;
@@ -136,26 +145,54 @@ StepResult integrate_adaptive(const Law& law, const MaterialState& start,
       res.end = y;
       return res;
     }
-    const Eigen::Matrix3d de = dt * d_eps;
-    const double tr_de = de.trace();
-    const LawRate r1 = law.rate(y, de);
-    ++res.rate_evaluations;
-    bool ok = finite(r1);
-    const MaterialState y1 = advance(y, r1, tr_de);
-    LawRate r2;
-    MaterialState yh;
-    double err = 0.0;
-    if (ok) ok = law.admissible(y1, nullptr);
-    if (ok) {
-      r2 = law.rate(y1, de);
+    // One Heun trial over the fraction h of the increment.
+    struct Trial {
+      bool ok = false;
+      MaterialState yh;
+      double err = 0.0;
+      bool plastic = false;
+    };
+    auto trial = [&](double h) {
+      Trial tr;
+      const Eigen::Matrix3d de = h * d_eps;
+      const double tr_de = de.trace();
+      const LawRate r1 = law.rate(y, de);
       ++res.rate_evaluations;
-      ok = finite(r2);
+      if (!finite(r1)) return tr;
+      MaterialState y1 = advance(y, r1, tr_de);
+      law.correct(&y1, r1.plastic);  // see integrate_fixed
+      if (!law.admissible(y1, nullptr)) return tr;
+      const LawRate r2 = law.rate(y1, de);
+      ++res.rate_evaluations;
+      if (!finite(r2)) return tr;
+      tr.yh = advance_heun(y, r1, r2, tr_de);
+      tr.ok = law.admissible(tr.yh, nullptr);
+      tr.plastic = r1.plastic;
+      tr.err = error_estimate(r1, r2, tr.yh, o.stress_floor);
+      return tr;
+    };
+    Trial tr = trial(dt);
+    // Elastic-to-plastic transition inside the substep: shorten it to end on the yield
+    // surface (bisection on the elastic trial; Sloan 1987), so that no substep averages the
+    // elastic and the plastic rate across the kink.
+    const double f0 = law.yield_function(y);
+    if (tr.ok && f0 < -kYieldSurfaceBand && std::isfinite(f0) && law.yield_function(tr.yh) > 0.0) {
+      double lo = 0.0, hi = 1.0;
+      while (hi - lo > 1e-13) {
+        const double mid = 0.5 * (lo + hi);
+        const Trial tm = trial(mid * dt);
+        if (tm.ok && law.yield_function(tm.yh) <= 0.0)
+          lo = mid;
+        else
+          hi = mid;
+      }
+      // lo = 0 means the state was already within rounding of the surface: step just past it.
+      dt *= lo > 0.0 ? lo : hi;
+      tr = trial(dt);
     }
-    if (ok) {
-      yh = advance_heun(y, r1, r2, tr_de);
-      ok = law.admissible(yh, nullptr);
-      err = error_estimate(r1, r2, yh, o.stress_floor);
-    }
+    const bool ok = tr.ok;
+    const double err = tr.err;
+    const MaterialState& yh = tr.yh;
     if (!ok || err > o.tolerance) {
       // Sloan's factor q = 0.9 sqrt(TOL/R) (second-order local error), never below 0.1.
       const double q = ok ? std::max(0.9 * std::sqrt(o.tolerance / err), 0.1) : 0.1;
@@ -165,7 +202,7 @@ StepResult integrate_adaptive(const Law& law, const MaterialState& start,
       continue;
     }
     y = yh;
-    law.correct(&y);
+    law.correct(&y, tr.plastic);
     t += dt;
     ++res.substeps;
     res.error_estimate = std::max(res.error_estimate, err);

@@ -13,6 +13,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -94,7 +95,10 @@ struct IsotropicElastic {
     return Vector6d::Zero();
   }
   static bool admissible(const double*, const MaterialState&, std::string*) { return true; }
-  static void correct(const double*, MaterialState*) {}
+  static void correct(const double*, MaterialState*, bool) {}
+  static double yield_function(const double*, const MaterialState&) {
+    return -std::numeric_limits<double>::infinity();
+  }
 };
 
 // Family 2 (Kumar, Luding, Magnanimo 2014), see the file comment.
@@ -131,7 +135,10 @@ struct AnisotropicElastic {
     return Vector6d::Zero();
   }
   static bool admissible(const double*, const MaterialState&, std::string*) { return true; }
-  static void correct(const double*, MaterialState*) {}
+  static void correct(const double*, MaterialState*, bool) {}
+  static double yield_function(const double*, const MaterialState&) {
+    return -std::numeric_limits<double>::infinity();
+  }
 };
 
 }  // namespace rendulic::models

@@ -20,6 +20,7 @@
 #pragma once
 
 #include <cmath>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -33,10 +34,6 @@ struct ElastoplasticFabric {
   enum : int { kB, kG, kBetaA, kNp, kPref, kAg, kCf, kM, kMss, kBetaS, kBetaF, kFmax, kCount };
   static const std::vector<ParameterInfo>& parameter_info();
   static const std::vector<std::string>& internal_names();
-
-  // Plastic loading is tested when f >= -kOnSurface * m: a state corrected onto the surface
-  // sits at f = 0 up to rounding.
-  static constexpr double kOnSurface = 1e-9;
 
   template <typename T>
   struct Plastic {
@@ -58,7 +55,7 @@ struct ElastoplasticFabric {
     const Mat3<T> r = dev(s.stress) / pr;
     const Mat3<T> xi = r - tensor_of<T>(s.internal);
     const T xi_norm = safe_norm(xi);
-    if (!(xi_norm > T(0)) || xi_norm - p[kM] < -T(kOnSurface) * p[kM]) return out;
+    if (!(xi_norm > T(0)) || xi_norm - p[kM] < -T(kYieldSurfaceBand) * p[kM]) return out;
     out.n = xi / xi_norm;
     const T r_n = ddot(r, out.n);
     out.nf = (out.n - (r_n / T(3)) * identity3<T>()) / pr;
@@ -87,6 +84,7 @@ struct ElastoplasticFabric {
     r.d_fabric = detail::elastic_fabric_increment(s.fabric, p[kCf], de);
     const Plastic<T> pl = plastic_part(p, s, b, g, f_dev, r.d_stress);
     if (pl.loading) {
+      r.plastic = true;
       r.d_stress -= pl.lambda * pl.d_n;
       r.d_internal = mandel_of<T>((pl.hardening * pl.lambda) * pl.n);
       r.d_fabric += (p[kBetaF] * pl.lambda) * (p[kFmax] * pl.n - f_dev);
@@ -123,17 +121,25 @@ struct ElastoplasticFabric {
     return false;
   }
 
-  // Drift correction after an explicit substep that overshot the elastic domain: alpha moves
-  // along n until |r - alpha| = m. Only the back ratio changes, never stress or fabric, so the
-  // correction cannot create stress that the strain did not cause.
-  static void correct(const double* p, MaterialState* s) {
+  // f = (|r - alpha| - m_e) / m_e; -infinity where P <= 0 (the law is then inadmissible).
+  static double yield_function(const double* p, const MaterialState& s) {
+    const double pr = s.stress.trace() / 3.0;
+    if (!(pr > 0.0)) return -std::numeric_limits<double>::infinity();
+    return ((deviator(s.stress) / pr - from_mandel(s.internal)).norm() - p[kM]) / p[kM];
+  }
+
+  // Drift correction after an explicit substep: alpha moves along n until |r - alpha| = m
+  // (outward drift always; inward drift only after plastic loading, `on_surface`). Only the
+  // back ratio changes, never stress or fabric, so the correction cannot create stress that
+  // the strain did not cause.
+  static void correct(const double* p, MaterialState* s, bool on_surface) {
     const double pr = s->stress.trace() / 3.0;
     if (!(pr > 0.0)) return;
     const Eigen::Matrix3d r = deviator(s->stress) / pr;
     const Eigen::Matrix3d xi = r - from_mandel(s->internal);
     const double xi_norm = xi.norm();
     const double f = xi_norm - p[kM];
-    if (f > 0.0) s->internal += to_mandel(xi * (f / xi_norm));
+    if ((f > 0.0 || on_surface) && xi_norm > 0.0) s->internal += to_mandel(xi * (f / xi_norm));
   }
 };
 

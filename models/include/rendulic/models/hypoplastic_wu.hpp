@@ -13,6 +13,7 @@
 #pragma once
 
 #include <cmath>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -62,7 +63,10 @@ struct HypoplasticWu {
              std::to_string(s.stress.trace()) + " Pa";
     return false;
   }
-  static void correct(const double*, MaterialState*) {}
+  static void correct(const double*, MaterialState*, bool) {}
+  static double yield_function(const double*, const MaterialState&) {
+    return -std::numeric_limits<double>::infinity();
+  }
 };
 
 }  // namespace rendulic::models

@@ -22,6 +22,11 @@ namespace rendulic::models {
 
 inline constexpr int kMaxInternal = 6;
 
+// Yield functions are normalised by the size of the elastic domain; a state with
+// f >= -kYieldSurfaceBand counts as on the surface (rounding after a drift correction or after
+// the driver's bisection onto the surface).
+inline constexpr double kYieldSurfaceBand = 1e-9;
+
 // State of a material point. `internal` holds a law's scalar internal variables (the number
 // and meaning are the law's: Law::internal_names()); unused entries stay zero.
 template <typename T>
@@ -40,6 +45,7 @@ struct RateT {
   Mat3<T> d_stress = Mat3<T>::Zero();
   Mat3<T> d_fabric = Mat3<T>::Zero();
   Vec6<T> d_internal = Vec6<T>::Zero();
+  bool plastic = false;  // the plastic (loading) branch was active
 };
 using LawRate = RateT<double>;
 
@@ -73,8 +79,16 @@ class Law {
                                     const Eigen::Matrix3d& fabric) const = 0;
   // Whether the law is defined at `state` (e.g. hypoplasticity needs tr(sigma) > 0).
   virtual bool admissible(const MaterialState& state, std::string* why) const = 0;
-  // Post-step correction of a drifted state (yield-surface drift); a no-op for most laws.
-  virtual void correct(MaterialState* state) const = 0;
+  // Correction of yield-surface drift after an explicit (sub)step: a state outside the
+  // surface is brought back onto it; with `on_surface` (the step was plastic loading, so the
+  // exact solution stays on the surface) a state slightly inside is brought onto it as well.
+  // A no-op for laws without an elastic domain.
+  virtual void correct(MaterialState* state, bool on_surface) const = 0;
+  // Yield function f (f < 0 elastic, f = 0 on the surface, normalised: f = -1 at the centre of
+  // the elastic domain) for laws with one; -infinity for laws without one. The driver uses it to
+  // end a substep where an elastic step meets the surface (Sloan 1987), instead of averaging across
+  // the kink.
+  virtual double yield_function(const MaterialState& state) const = 0;
 
   // Parameters in parameter_info() order.
   const std::vector<double>& parameters() const { return params_; }

@@ -5,7 +5,8 @@
 //   static Matrix6d tangent(const double* p, const MaterialState& s, const Matrix3d& de)
 //   static Vector6d initial_internal(const double* p, const Matrix3d& stress, const Matrix3d& F)
 //   static bool admissible(const double* p, const MaterialState& s, std::string* why)
-//   static void correct(const double* p, MaterialState* s)
+//   static void correct(const double* p, MaterialState* s, bool on_surface)
+//   static double yield_function(const double* p, const MaterialState& s)  (-inf: none)
 // so that calibration code can call M::rate<ceres::Jet<...>> directly (models.md
 // "Calibration": autodiff through the law where the law is smooth).
 #pragma once
@@ -34,7 +35,12 @@ class LawModel final : public Law {
   bool admissible(const MaterialState& s, std::string* why) const override {
     return M::admissible(params_.data(), s, why);
   }
-  void correct(MaterialState* s) const override { M::correct(params_.data(), s); }
+  void correct(MaterialState* s, bool on_surface) const override {
+    M::correct(params_.data(), s, on_surface);
+  }
+  double yield_function(const MaterialState& s) const override {
+    return M::yield_function(params_.data(), s);
+  }
 };
 
 }  // namespace rendulic::models
