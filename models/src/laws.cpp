@@ -67,7 +67,7 @@ const std::vector<ParameterInfo>& ElastoplasticFabric::parameter_info() {
     v.push_back(
         {"m_e", "1", 1e-3, 1e-8, 0.5, "elastic range: radius of |r - alpha| (r = sigma^D/P)"});
     v.push_back({"M_ss", "1", 0.2, 1e-3, 3.0, "steady-state stress ratio |sigma^D|/P"});
-    v.push_back({"beta_s", "1", 50.0, 1e-2, 1e5,
+    v.push_back({"beta_s", "1", 10.0, 1e-2, 1e5,
                  "rate of approach of the stress ratio to M_ss per plastic strain"});
     v.push_back(
         {"beta_F", "1", 30.0, 0.0, 1e5, "rate of approach of F^D to F_dev_max per plastic strain"});

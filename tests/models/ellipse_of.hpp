@@ -30,9 +30,10 @@ inline AffineEllipse ellipse_of(const Eigen::Matrix<double, Eigen::Dynamic, 2>& 
   e.map = coef.bottomRows(2).transpose();
   e.rms = std::sqrt((x * coef - response).squaredNorm() / m);
   Eigen::JacobiSVD<Eigen::Matrix2d> svd(e.map, Eigen::ComputeFullU);
-  // The probe points have |s| = amplitude, so the singular values are the semi-axes.
-  e.a = svd.singularValues()(0);
-  e.b = svd.singularValues()(1);
+  // The probe points lie on a circle of radius |d_eps|: semi-axes = singular values x radius.
+  const double radius = strain.rowwise().norm().mean();
+  e.a = svd.singularValues()(0) * radius;
+  e.b = svd.singularValues()(1) * radius;
   const Eigen::Vector2d u = svd.matrixU().col(0);
   double deg = std::atan2(u.y(), u.x()) * 180.0 / M_PI;
   while (deg < 0) deg += 180.0;
