@@ -44,7 +44,7 @@ ModelEnvelope model_envelope(const Law& law, const MaterialState& state,
     } else {
       const StepResult res = integrate(law, state, de, options.step);
       if (!res.success) {
-        env.reason = "probe theta = " + std::to_string(env.theta_deg(i)) + " deg: " + res.reason;
+        env.reason = "probe theta = " + format_g(env.theta_deg(i)) + " deg: " + res.reason;
         return env;
       }
       env.d_stress[i] = res.end.stress - state.stress;
@@ -54,8 +54,7 @@ ModelEnvelope model_envelope(const Law& law, const MaterialState& state,
       env.total_substeps += res.substeps;
     }
     if (!env.d_stress[i].allFinite() || !env.d_fabric[i].allFinite()) {
-      env.reason =
-          "probe theta = " + std::to_string(env.theta_deg(i)) + " deg: non-finite response";
+      env.reason = "probe theta = " + format_g(env.theta_deg(i)) + " deg: non-finite response";
       return env;
     }
     env.strain.row(i) = rendulic_pair(de).transpose();
