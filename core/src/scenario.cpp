@@ -1,0 +1,469 @@
+// Strict scenario parsing and validation (see scenario.hpp; interfaces.md `rendulic run`).
+// The TOML tree is walked against the schema: a table is descended only if some declared key
+// lives below it, so an unknown key is reported at its own line with the closest declared
+// key as a suggestion. Values are converted once, here; the rest of the code reads typed
+// values and never sees TOML.
+#include "rendulic/core/scenario.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cctype>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+#include <toml++/toml.h>
+
+#include "rendulic/core/errors.hpp"
+
+namespace rendulic {
+namespace {
+
+const char* type_name(KeyType t) {
+  switch (t) {
+    case KeyType::kBool: return "boolean";
+    case KeyType::kInt: return "integer";
+    case KeyType::kDouble: return "number";
+    case KeyType::kString: return "string";
+    case KeyType::kDoubleList: return "list of numbers";
+    case KeyType::kStringList: return "list of strings";
+  }
+  return "?";
+}
+
+const char* node_type_name(const toml::node& n) {
+  if (n.is_boolean()) return "boolean";
+  if (n.is_integer()) return "integer";
+  if (n.is_floating_point()) return "number";
+  if (n.is_string()) return "string";
+  if (n.is_array()) return "array";
+  if (n.is_table()) return "table";
+  return "date/time";
+}
+
+// Shortest round-trip text of a double that TOML reads back as a float.
+std::string format_double(double v) {
+  if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
+  char buf[40];
+  for (int prec = 6; prec <= 17; ++prec) {
+    std::snprintf(buf, sizeof buf, "%.*g", prec, v);
+    if (std::strtod(buf, nullptr) == v) break;
+  }
+  std::string s = buf;
+  if (s.find_first_of(".eEn") == std::string::npos) s += ".0";
+  return s;
+}
+
+std::string quote(const std::string& s) {
+  std::string out = "\"";
+  for (char c : s) {
+    switch (c) {
+      case '"': out += "\\\""; break;
+      case '\\': out += "\\\\"; break;
+      case '\n': out += "\\n"; break;
+      case '\t': out += "\\t"; break;
+      case '\r': out += "\\r"; break;
+      default: out += c;
+    }
+  }
+  return out + "\"";
+}
+
+std::string format_value(const ScenarioValue& v) {
+  struct Visitor {
+    std::string operator()(bool b) const { return b ? "true" : "false"; }
+    std::string operator()(std::int64_t i) const { return std::to_string(i); }
+    std::string operator()(double d) const { return format_double(d); }
+    std::string operator()(const std::string& s) const { return quote(s); }
+    std::string operator()(const std::vector<double>& xs) const {
+      std::string out = "[";
+      for (std::size_t i = 0; i < xs.size(); ++i) out += (i ? ", " : "") + format_double(xs[i]);
+      return out + "]";
+    }
+    std::string operator()(const std::vector<std::string>& xs) const {
+      std::string out = "[";
+      for (std::size_t i = 0; i < xs.size(); ++i) out += (i ? ", " : "") + quote(xs[i]);
+      return out + "]";
+    }
+  };
+  return std::visit(Visitor{}, v);
+}
+
+std::string format_range(const KeySpec& s) {
+  if (!s.choices.empty()) {
+    std::string out = "one of ";
+    for (std::size_t i = 0; i < s.choices.size(); ++i) out += (i ? ", " : "") + s.choices[i];
+    return out;
+  }
+  if (s.type == KeyType::kBool || s.type == KeyType::kString) return "";
+  const bool lo = std::isfinite(s.min), hi = std::isfinite(s.max);
+  if (!lo && !hi) return "";
+  std::string out;
+  out += lo ? (s.min_open ? "(" : "[") : "(";
+  auto num = [&](double x) {
+    return s.type == KeyType::kInt ? std::to_string(static_cast<long long>(x)) : format_double(x);
+  };
+  out += lo ? num(s.min) : std::string("-inf");
+  out += ", ";
+  out += hi ? num(s.max) : std::string("inf");
+  out += hi ? (s.max_open ? ")" : "]") : ")";
+  return out;
+}
+
+// Range check of one number; returns the reason or "".
+std::string check_number(const KeySpec& s, double x) {
+  if (!std::isfinite(x)) return "must be a finite number, got " + format_double(x);
+  const bool below = s.min_open ? !(x > s.min) : x < s.min;
+  const bool above = s.max_open ? !(x < s.max) : x > s.max;
+  if (below || above)
+    return "value " +
+           (s.type == KeyType::kInt ? std::to_string(static_cast<long long>(x)) : format_double(x)) +
+           " is out of range " + format_range(s);
+  return "";
+}
+
+std::string check_choice(const KeySpec& s, const std::string& x) {
+  if (s.choices.empty() || std::find(s.choices.begin(), s.choices.end(), x) != s.choices.end())
+    return "";
+  return "'" + x + "' is not " + format_range(s);
+}
+
+// Validates a value against its spec; returns the reason or "".
+std::string validate(const KeySpec& s, const ScenarioValue& v) {
+  switch (s.type) {
+    case KeyType::kBool: return "";
+    case KeyType::kInt: return check_number(s, static_cast<double>(std::get<std::int64_t>(v)));
+    case KeyType::kDouble: return check_number(s, std::get<double>(v));
+    case KeyType::kString: return check_choice(s, std::get<std::string>(v));
+    case KeyType::kDoubleList: {
+      const auto& xs = std::get<std::vector<double>>(v);
+      if (xs.size() < s.min_size || xs.size() > s.max_size)
+        return "list has " + std::to_string(xs.size()) + " entries, allowed " +
+               std::to_string(s.min_size) + ".." +
+               (s.max_size == std::numeric_limits<std::size_t>::max() ? std::string("any")
+                                                                      : std::to_string(s.max_size));
+      for (double x : xs)
+        if (auto r = check_number(s, x); !r.empty()) return r;
+      return "";
+    }
+    case KeyType::kStringList: {
+      const auto& xs = std::get<std::vector<std::string>>(v);
+      if (xs.size() < s.min_size || xs.size() > s.max_size)
+        return "list has " + std::to_string(xs.size()) + " entries, allowed at least " +
+               std::to_string(s.min_size);
+      for (const auto& x : xs)
+        if (auto r = check_choice(s, x); !r.empty()) return r;
+      return "";
+    }
+  }
+  return "";
+}
+
+// The value type a spec expects; std::nullopt-like failure is reported as a reason string.
+bool holds_type(const KeySpec& s, const ScenarioValue& v) {
+  switch (s.type) {
+    case KeyType::kBool: return std::holds_alternative<bool>(v);
+    case KeyType::kInt: return std::holds_alternative<std::int64_t>(v);
+    case KeyType::kDouble: return std::holds_alternative<double>(v);
+    case KeyType::kString: return std::holds_alternative<std::string>(v);
+    case KeyType::kDoubleList: return std::holds_alternative<std::vector<double>>(v);
+    case KeyType::kStringList: return std::holds_alternative<std::vector<std::string>>(v);
+  }
+  return false;
+}
+
+// TOML node -> typed value. Integers are accepted where numbers are expected (TOML writes
+// 9261 and 9261.0 differently; a user means the same). Throws std::string on a type mismatch.
+ScenarioValue convert(const KeySpec& s, const toml::node& n) {
+  auto article = [](const char* w) { return std::strchr("aeiou", w[0]) ? "an " : "a "; };
+  const std::string want = std::string("expected ") + article(type_name(s.type)) +
+                           type_name(s.type) + ", got " + article(node_type_name(n)) +
+                           node_type_name(n);
+  switch (s.type) {
+    case KeyType::kBool:
+      if (auto b = n.as_boolean()) return b->get();
+      throw want;
+    case KeyType::kInt:
+      if (auto i = n.as_integer()) return i->get();
+      throw want;
+    case KeyType::kDouble:
+      if (auto i = n.as_integer()) return static_cast<double>(i->get());
+      if (auto d = n.as_floating_point()) return d->get();
+      throw want;
+    case KeyType::kString:
+      if (auto str = n.as_string()) return str->get();
+      throw want;
+    case KeyType::kDoubleList: {
+      auto arr = n.as_array();
+      if (!arr) throw want;
+      std::vector<double> xs;
+      for (const auto& e : *arr) {
+        if (auto i = e.as_integer()) xs.push_back(static_cast<double>(i->get()));
+        else if (auto d = e.as_floating_point()) xs.push_back(d->get());
+        else throw std::string("expected a list of numbers, found a ") + node_type_name(e);
+      }
+      return xs;
+    }
+    case KeyType::kStringList: {
+      auto arr = n.as_array();
+      if (!arr) throw want;
+      std::vector<std::string> xs;
+      for (const auto& e : *arr) {
+        if (auto str = e.as_string()) xs.push_back(str->get());
+        else throw std::string("expected a list of strings, found a ") + node_type_name(e);
+      }
+      return xs;
+    }
+  }
+  throw want;
+}
+
+std::size_t edit_distance(std::string_view a, std::string_view b) {
+  std::vector<std::size_t> prev(b.size() + 1), cur(b.size() + 1);
+  for (std::size_t j = 0; j <= b.size(); ++j) prev[j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    cur[0] = i;
+    for (std::size_t j = 1; j <= b.size(); ++j)
+      cur[j] = std::min({prev[j] + 1, cur[j - 1] + 1, prev[j - 1] + (a[i - 1] != b[j - 1])});
+    std::swap(prev, cur);
+  }
+  return prev[b.size()];
+}
+
+std::string section_of(const std::string& path) {
+  auto dot = path.rfind('.');
+  return dot == std::string::npos ? std::string{} : path.substr(0, dot);
+}
+
+}  // namespace
+
+ScenarioSchema& ScenarioSchema::add(KeySpec spec) {
+  if (find(spec.path)) throw std::logic_error("scenario key declared twice: " + spec.path);
+  if (!holds_type(spec, spec.default_value))
+    throw std::logic_error("scenario key " + spec.path + ": default has the wrong type");
+  if (auto r = validate(spec, spec.default_value); !r.empty())
+    throw std::logic_error("scenario key " + spec.path + ": default " + r);
+  keys_.push_back(std::move(spec));
+  return *this;
+}
+
+const KeySpec* ScenarioSchema::find(std::string_view path) const {
+  for (const auto& k : keys_)
+    if (k.path == path) return &k;
+  return nullptr;
+}
+
+std::string ScenarioSchema::suggest(std::string_view path) const {
+  std::string best;
+  std::size_t best_d = std::max<std::size_t>(2, path.size() / 4) + 1;
+  for (const auto& k : keys_) {
+    const std::size_t d = edit_distance(path, k.path);
+    if (d < best_d) best_d = d, best = k.path;
+  }
+  if (!best.empty()) return best;
+  // Same leaf name in another section: a key put in the wrong table.
+  const auto leaf = path.substr(path.rfind('.') == std::string_view::npos ? 0 : path.rfind('.') + 1);
+  for (const auto& k : keys_)
+    if (k.path.size() > leaf.size() && k.path.ends_with("." + std::string(leaf))) return k.path;
+  return "";
+}
+
+std::string ScenarioSchema::markdown() const {
+  std::ostringstream out;
+  std::string current;
+  for (const auto& k : keys_) {
+    const auto dot = k.path.find('.');
+    const std::string top = dot == std::string::npos ? "(top level)" : k.path.substr(0, dot);
+    if (top != current) {
+      current = top;
+      out << "\n## [" << top << "]\n\n"
+          << "| key | type | unit | default | range | meaning |\n"
+          << "|---|---|---|---|---|---|\n";
+    }
+    std::string help = k.help;
+    std::replace(help.begin(), help.end(), '|', '/');
+    out << "| `" << k.path << "` | " << type_name(k.type) << " | " << k.unit << " | `"
+        << format_value(k.default_value) << "` | " << format_range(k) << " | " << help << " |\n";
+  }
+  return out.str();
+}
+
+Scenario::Scenario(const ScenarioSchema& schema) : schema_(&schema) {
+  for (const auto& k : schema.keys()) {
+    values_[k.path] = k.default_value;
+    origins_[k.path] = "default";
+  }
+}
+
+Scenario Scenario::from_file(const std::string& path, const ScenarioSchema& schema) {
+  std::ifstream probe(path);
+  if (!probe) throw InputError(path + ": cannot read scenario file");
+  std::stringstream text;
+  text << probe.rdbuf();
+  return from_string(text.str(), path, schema);
+}
+
+Scenario Scenario::from_string(std::string_view text, const std::string& source_name,
+                               const ScenarioSchema& schema) {
+  Scenario sc(schema);
+  sc.source_name_ = source_name;
+  toml::table root;
+  try {
+    root = toml::parse(text, source_name);
+  } catch (const toml::parse_error& e) {
+    throw InputError(source_name + ":" + std::to_string(e.source().begin.line) +
+                     ": TOML syntax error: " + std::string(e.description()));
+  }
+  auto where = [&](const toml::source_region& r) {
+    return source_name + ":" + std::to_string(r.begin.line);
+  };
+  auto has_below = [&](const std::string& prefix) {
+    for (const auto& k : schema.keys())
+      if (k.path.starts_with(prefix + ".")) return true;
+    return false;
+  };
+  // Recursive walk; std::function would be fine, a local struct keeps it allocation-free.
+  struct Walker {
+    Scenario& sc;
+    const ScenarioSchema& schema;
+    decltype(where)& where_fn;
+    decltype(has_below)& below_fn;
+    void walk(const toml::table& t, const std::string& prefix) {
+      for (auto&& [key, node] : t) {
+        const std::string path =
+            prefix.empty() ? std::string(key.str()) : prefix + "." + std::string(key.str());
+        const toml::source_region& loc =
+            node.source().begin.line ? node.source() : key.source();
+        if (const KeySpec* spec = schema.find(path)) {
+          ScenarioValue v;
+          try {
+            v = convert(*spec, node);
+          } catch (const std::string& why) {
+            throw InputError(where_fn(loc) + ": key '" + path + "': " + why);
+          }
+          if (auto r = validate(*spec, v); !r.empty())
+            throw InputError(where_fn(loc) + ": key '" + path + "': " + r);
+          sc.values_[path] = std::move(v);
+          sc.origins_[path] = where_fn(loc);
+        } else if (node.is_table() && below_fn(path)) {
+          walk(*node.as_table(), path);
+        } else {
+          const std::string hint = schema.suggest(path);
+          throw InputError(where_fn(key.source()) + ": unknown key '" + path + "'" +
+                           (hint.empty() ? std::string(" (see rendulic keys)")
+                                         : " (did you mean '" + hint + "'?)"));
+        }
+      }
+    }
+  } walker{sc, schema, where, has_below};
+  walker.walk(root, "");
+  return sc;
+}
+
+void Scenario::apply_override(std::string_view assignment) {
+  const std::string what = "--set " + std::string(assignment);
+  const auto eq = assignment.find('=');
+  if (eq == std::string_view::npos || eq == 0)
+    throw InputError(what + ": expected key=value");
+  auto trim = [](std::string_view s) {
+    while (!s.empty() && std::isspace(static_cast<unsigned char>(s.front()))) s.remove_prefix(1);
+    while (!s.empty() && std::isspace(static_cast<unsigned char>(s.back()))) s.remove_suffix(1);
+    return std::string(s);
+  };
+  const std::string key = trim(assignment.substr(0, eq));
+  const std::string text = trim(assignment.substr(eq + 1));
+  const KeySpec* spec = schema_->find(key);
+  if (!spec) {
+    const std::string hint = schema_->suggest(key);
+    throw InputError(what + ": unknown key '" + key + "'" +
+                     (hint.empty() ? std::string{} : " (did you mean '" + hint + "'?)"));
+  }
+  ScenarioValue v;
+  try {
+    toml::table t = toml::parse("v = " + text);
+    v = convert(*spec, *t.get("v"));
+  } catch (const toml::parse_error&) {
+    // Bare words are what a shell user types for strings: accept them where a string is due.
+    if (spec->type == KeyType::kString) {
+      v = text;
+    } else if (spec->type == KeyType::kStringList) {
+      std::vector<std::string> xs;
+      std::stringstream ss(text);
+      for (std::string item; std::getline(ss, item, ',');) xs.push_back(trim(item));
+      v = xs;
+    } else {
+      throw InputError(what + ": key '" + key + "': '" + text + "' is not a valid " +
+                       type_name(spec->type));  // e.g. "not a valid number"
+    }
+  } catch (const std::string& why) {
+    throw InputError(what + ": key '" + key + "': " + why);
+  }
+  if (auto r = validate(*spec, v); !r.empty()) throw InputError(what + ": key '" + key + "': " + r);
+  values_[key] = std::move(v);
+  origins_[key] = "--set";
+}
+
+void Scenario::set(std::string_view path, const ScenarioValue& value) {
+  const KeySpec& s = spec(path);
+  if (!holds_type(s, value))
+    throw InputError("key '" + s.path + "': expected a " + type_name(s.type));
+  if (auto r = validate(s, value); !r.empty()) throw InputError("key '" + s.path + "': " + r);
+  values_[s.path] = value;
+  origins_[s.path] = "api";
+}
+
+const KeySpec& Scenario::spec(std::string_view path) const {
+  const KeySpec* s = schema_->find(path);
+  if (!s) throw std::logic_error("scenario key not declared: " + std::string(path));
+  return *s;
+}
+
+const ScenarioValue& Scenario::value(std::string_view path) const {
+  spec(path);
+  return values_.find(path)->second;
+}
+
+bool Scenario::get_bool(std::string_view p) const { return std::get<bool>(value(p)); }
+std::int64_t Scenario::get_int(std::string_view p) const {
+  return std::get<std::int64_t>(value(p));
+}
+double Scenario::get_double(std::string_view p) const { return std::get<double>(value(p)); }
+const std::string& Scenario::get_string(std::string_view p) const {
+  return std::get<std::string>(value(p));
+}
+const std::vector<double>& Scenario::get_doubles(std::string_view p) const {
+  return std::get<std::vector<double>>(value(p));
+}
+const std::vector<std::string>& Scenario::get_strings(std::string_view p) const {
+  return std::get<std::vector<std::string>>(value(p));
+}
+bool Scenario::is_set(std::string_view p) const { return origin(p) != "default"; }
+std::string Scenario::origin(std::string_view p) const {
+  spec(p);
+  return origins_.find(p)->second;
+}
+
+std::string Scenario::to_toml() const {
+  std::ostringstream out;
+  out << "# effective scenario (defaults + " << source_name_ << " + overrides)\n";
+  // Keys without a section must precede the first table header.
+  for (const auto& k : schema_->keys())
+    if (section_of(k.path).empty()) out << k.path << " = " << format_value(value(k.path)) << "\n";
+  std::vector<std::string> sections;
+  for (const auto& k : schema_->keys()) {
+    const std::string s = section_of(k.path);
+    if (!s.empty() && std::find(sections.begin(), sections.end(), s) == sections.end())
+      sections.push_back(s);
+  }
+  for (const auto& s : sections) {
+    out << "\n[" << s << "]\n";
+    for (const auto& k : schema_->keys())
+      if (section_of(k.path) == s)
+        out << k.path.substr(s.size() + 1) << " = " << format_value(value(k.path)) << "\n";
+  }
+  return out.str();
+}
+
+}  // namespace rendulic

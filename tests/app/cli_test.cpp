@@ -1,0 +1,158 @@
+// End-to-end tests of the `rendulic` executable's foundation behaviour (issue 2): exit codes,
+// one-line errors naming the culprit, nothing written on bad input, the effective scenario
+// stored in the results file, `inspect` on good and bad files. Runs the real binary.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+
+#include "rendulic/core/results.hpp"
+
+namespace {
+namespace fs = std::filesystem;
+
+struct CmdResult {
+  int code;
+  std::string out;  // stdout and stderr together
+};
+
+CmdResult rendulic(const std::string& args) {
+  const std::string cmd = std::string(RENDULIC_EXE) + " " + args + " 2>&1";
+  CmdResult r{-1, {}};
+  FILE* p = popen(cmd.c_str(), "r");
+  std::array<char, 4096> buf{};
+  while (fgets(buf.data(), buf.size(), p)) r.out += buf.data();
+  const int status = pclose(p);
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+fs::path fresh_dir(const std::string& name) {
+  const fs::path d = fs::path(RENDULIC_TEST_TMP) / "app_cli" / name;
+  fs::remove_all(d);
+  fs::create_directories(d);
+  return d;
+}
+
+fs::path write_file(const fs::path& p, const std::string& text) {
+  std::ofstream(p) << text;
+  return p;
+}
+
+int lines(const std::string& s) { return static_cast<int>(std::count(s.begin(), s.end(), '\n')); }
+
+TEST(Cli, HelpAndVersionSucceed) {
+  EXPECT_EQ(rendulic("--help").code, 0);
+  EXPECT_EQ(rendulic("--version").code, 0);
+  for (const char* sub : {"run", "fit", "envelope", "calibrate", "bench", "inspect", "plot", "keys"})
+    EXPECT_EQ(rendulic(std::string(sub) + " --help").code, 0) << sub;
+}
+
+TEST(Cli, UnknownSubcommandOrOptionExits2) {
+  EXPECT_EQ(rendulic("frobnicate").code, 2);
+  EXPECT_EQ(rendulic("inspect --bogus x").code, 2);
+  EXPECT_EQ(rendulic("").code, 2);
+}
+
+TEST(Cli, BadScenarioExits2NamingTheKeyAndWritesNothing) {
+  const fs::path d = fresh_dir("bad_scenario");
+  struct Case {
+    std::string toml, expect, line;
+  } cases[] = {
+      {"[run]\nsede = 3\n", "unknown key 'run.sede' (did you mean 'run.seed'?)", "s.toml:2"},
+      {"[run]\nseed = \"x\"\n", "key 'run.seed': expected an integer", "s.toml:2"},
+      {"[run]\nseed = -4\n", "key 'run.seed': value -4 is out of range", "s.toml:2"},
+      {"[run]\nstages = [\"prepare\", \"dance\"]\n", "'dance' is not one of", "s.toml:2"},
+      {"[bogus_section]\nx = 1\n", "unknown key 'bogus_section'", "s.toml:1"},
+  };
+  for (const auto& c : cases) {
+    const fs::path scen = write_file(d / "s.toml", c.toml);
+    const fs::path out = d / "out";
+    const CmdResult r = rendulic("run " + scen.string() + " --out " + out.string());
+    EXPECT_EQ(r.code, 2) << r.out;
+    EXPECT_NE(r.out.find(c.expect), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find(c.line), std::string::npos) << r.out;
+    EXPECT_EQ(lines(r.out), 1) << r.out;
+    EXPECT_FALSE(fs::exists(out)) << "nothing written";
+  }
+  const CmdResult missing = rendulic("run " + (d / "nope.toml").string());
+  EXPECT_EQ(missing.code, 2);
+  EXPECT_NE(missing.out.find("nope.toml"), std::string::npos);
+}
+
+TEST(Cli, BadOverrideExits2NamingTheKey) {
+  const fs::path d = fresh_dir("bad_set");
+  const fs::path scen = write_file(d / "s.toml", "[run]\nstages = []\n");
+  const fs::path out = d / "out";
+  for (const std::string set : {"run.sed=3", "run.seed=abc", "run.seed=-1", "run.seed"}) {
+    const CmdResult r = rendulic("run " + scen.string() + " --out " + out.string() + " --set " + set);
+    EXPECT_EQ(r.code, 2) << set << ": " << r.out;
+    EXPECT_NE(r.out.find("--set " + set), std::string::npos) << r.out;
+    EXPECT_EQ(lines(r.out), 1) << r.out;
+    EXPECT_FALSE(fs::exists(out));
+  }
+}
+
+TEST(Cli, StageNotLandedIsRefusedBeforeWriting) {
+  const fs::path d = fresh_dir("not_landed");
+  const fs::path scen = write_file(d / "s.toml", "[run]\nstages = [\"calibration\"]\n");
+  const CmdResult r = rendulic("run " + scen.string() + " --out " + (d / "out").string());
+  // Until issue 7 lands this stage is refused; once it has, this test must be updated.
+  if (r.code != 0) {
+    EXPECT_EQ(r.code, 2);
+    EXPECT_NE(r.out.find("has not landed"), std::string::npos) << r.out;
+    EXPECT_FALSE(fs::exists(d / "out"));
+  }
+}
+
+TEST(Cli, EffectiveScenarioIsStoredAndInspectable) {
+  const fs::path d = fresh_dir("effective");
+  const fs::path scen =
+      write_file(d / "s.toml", "[run]\nstages = []\nseed = 5\ndescription = \"cli test\"\n");
+  const fs::path out = d / "out";
+  const CmdResult r = rendulic("run " + scen.string() + " --out " + out.string() + " --set run.seed=42");
+  ASSERT_EQ(r.code, 0) << r.out;
+  rendulic::ResultsReader reader(out / "results.h5");
+  EXPECT_EQ(reader.attr_int("/", "seed"), 42);
+  const std::string stored = reader.attr_string("/", "scenario");
+  EXPECT_NE(stored.find("seed = 42"), std::string::npos) << stored;
+  EXPECT_NE(stored.find("description = \"cli test\""), std::string::npos) << stored;
+
+  const CmdResult ins = rendulic("inspect " + (out / "results.h5").string());
+  EXPECT_EQ(ins.code, 0) << ins.out;
+  EXPECT_NE(ins.out.find("@schema = \"rendulic/1\""), std::string::npos) << ins.out;
+  EXPECT_NE(ins.out.find("@seed = 42"), std::string::npos) << ins.out;
+}
+
+TEST(Cli, InspectRefusesFilesThatAreNotOurs) {
+  const fs::path d = fresh_dir("inspect_bad");
+  const fs::path txt = write_file(d / "notes.h5", "just text\n");
+  CmdResult r = rendulic("inspect " + txt.string());
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.out.find("not an HDF5 file"), std::string::npos) << r.out;
+  EXPECT_EQ(lines(r.out), 1);
+  r = rendulic("inspect " + (d / "missing.h5").string());
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.out.find("no such file"), std::string::npos) << r.out;
+}
+
+TEST(Cli, KeysReferenceMatchesTheDocs) {
+  // docs/scenario-keys.md embeds `rendulic keys` verbatim between two markers: if a key is
+  // added or changed without updating the docs, this fails and says how to regenerate.
+  const CmdResult r = rendulic("keys");
+  ASSERT_EQ(r.code, 0);
+  std::ifstream in(fs::path(RENDULIC_SOURCE_DIR) / "docs" / "scenario-keys.md");
+  ASSERT_TRUE(in) << "docs/scenario-keys.md missing";
+  std::string doc((std::istreambuf_iterator<char>(in)), {});
+  const std::string begin = "<!-- BEGIN rendulic keys -->\n", end = "<!-- END rendulic keys -->";
+  const auto b = doc.find(begin), e = doc.find(end);
+  ASSERT_NE(b, std::string::npos);
+  ASSERT_NE(e, std::string::npos);
+  EXPECT_EQ(doc.substr(b + begin.size(), e - b - begin.size()), r.out)
+      << "docs/scenario-keys.md is stale: regenerate with docs/update-keys.sh";
+}
+
+}  // namespace

@@ -1,0 +1,193 @@
+// Tests of core/scenario.hpp (issue 2, item 4): strict parsing, one-line errors naming the key
+// and file:line, --set overrides with the same validation, and the effective scenario
+// round-tripping through its TOML text.
+#include "rendulic/core/scenario.hpp"
+
+#include <gtest/gtest.h>
+
+#include "rendulic/core/errors.hpp"
+
+namespace rendulic {
+namespace {
+
+ScenarioSchema make_schema() {
+  ScenarioSchema s;
+  s.add({.path = "run.seed", .type = KeyType::kInt, .default_value = std::int64_t{1},
+         .unit = "-", .help = "seed", .min = 0});
+  s.add({.path = "material.k", .type = KeyType::kDouble, .default_value = 1e8, .unit = "kg/s^2",
+         .help = "normal stiffness", .min = 0, .min_open = true});
+  s.add({.path = "material.w", .type = KeyType::kDouble, .default_value = 3.0, .unit = "-",
+         .help = "polydispersity", .min = 1, .max = 10});
+  s.add({.path = "states.eps_dev", .type = KeyType::kDoubleList,
+         .default_value = std::vector<double>{0.006, 0.32}, .unit = "-", .help = "states",
+         .min = 0, .max = 1, .min_size = 1});
+  s.add({.path = "probes.method", .type = KeyType::kString, .default_value = std::string("dynamic"),
+         .unit = "-", .help = "method", .choices = {"dynamic", "minimisation"}});
+  s.add({.path = "output.report", .type = KeyType::kBool, .default_value = true, .unit = "-",
+         .help = "report"});
+  s.add({.path = "run.stages", .type = KeyType::kStringList,
+         .default_value = std::vector<std::string>{"a"}, .unit = "-", .help = "stages",
+         .choices = {"a", "b", "c"}});
+  return s;
+}
+
+// Runs `fn`, expects an InputError, returns its message.
+template <class Fn>
+std::string input_error(Fn&& fn) {
+  try {
+    fn();
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  ADD_FAILURE() << "no InputError";
+  return "";
+}
+
+TEST(Scenario, DefaultsWithoutAFile) {
+  const auto schema = make_schema();
+  Scenario sc(schema);
+  EXPECT_EQ(sc.get_int("run.seed"), 1);
+  EXPECT_DOUBLE_EQ(sc.get_double("material.k"), 1e8);
+  EXPECT_FALSE(sc.is_set("material.k"));
+  EXPECT_EQ(sc.origin("material.k"), "default");
+}
+
+TEST(Scenario, ParsesTypedValuesAndRecordsTheirLines) {
+  const auto schema = make_schema();
+  const auto sc = Scenario::from_string(
+      "[run]\nseed = 7\n\n[material]\nk = 2e8\nw = 2\n[states]\neps_dev = [0.1, 0.2]\n",
+      "x.toml", schema);
+  EXPECT_EQ(sc.get_int("run.seed"), 7);
+  EXPECT_DOUBLE_EQ(sc.get_double("material.k"), 2e8);
+  EXPECT_DOUBLE_EQ(sc.get_double("material.w"), 2.0);  // an integer where a number is due
+  EXPECT_EQ(sc.get_doubles("states.eps_dev"), (std::vector<double>{0.1, 0.2}));
+  EXPECT_EQ(sc.origin("material.k"), "x.toml:5");
+  EXPECT_TRUE(sc.is_set("run.seed"));
+}
+
+TEST(Scenario, UnknownKeyIsNamedWithItsLineAndASuggestion) {
+  const auto schema = make_schema();
+  const auto msg = input_error(
+      [&] { Scenario::from_string("[material]\nk = 1e8\n[states]\nesp_dev = [0.1]\n", "s.toml", schema); });
+  EXPECT_NE(msg.find("s.toml:4"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("unknown key 'states.esp_dev'"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("did you mean 'states.eps_dev'"), std::string::npos) << msg;
+  EXPECT_EQ(msg.find('\n'), std::string::npos) << "one line";
+}
+
+TEST(Scenario, UnknownSectionIsAnUnknownKey) {
+  const auto schema = make_schema();
+  const auto msg =
+      input_error([&] { Scenario::from_string("[materal]\nk = 1e8\n", "s.toml", schema); });
+  EXPECT_NE(msg.find("unknown key 'materal"), std::string::npos) << msg;
+}
+
+TEST(Scenario, WrongTypeIsNamed) {
+  const auto schema = make_schema();
+  auto msg = input_error(
+      [&] { Scenario::from_string("[material]\nk = \"stiff\"\n", "s.toml", schema); });
+  EXPECT_NE(msg.find("s.toml:2: key 'material.k': expected a number, got a string"),
+            std::string::npos)
+      << msg;
+  msg = input_error([&] { Scenario::from_string("[run]\nseed = 1.5\n", "s.toml", schema); });
+  EXPECT_NE(msg.find("key 'run.seed': expected an integer"), std::string::npos) << msg;
+  msg = input_error(
+      [&] { Scenario::from_string("[states]\neps_dev = [0.1, \"x\"]\n", "s.toml", schema); });
+  EXPECT_NE(msg.find("key 'states.eps_dev'"), std::string::npos) << msg;
+}
+
+TEST(Scenario, OutOfRangeIsNamed) {
+  const auto schema = make_schema();
+  auto msg = input_error([&] { Scenario::from_string("[material]\nk = 0\n", "s.toml", schema); });
+  EXPECT_NE(msg.find("key 'material.k': value 0.0 is out of range (0.0, inf)"),
+            std::string::npos)
+      << msg;
+  msg = input_error([&] { Scenario::from_string("[material]\nw = 11\n", "s.toml", schema); });
+  EXPECT_NE(msg.find("material.w"), std::string::npos) << msg;
+  msg = input_error([&] { Scenario::from_string("[material]\nw = nan\n", "s.toml", schema); });
+  EXPECT_NE(msg.find("finite"), std::string::npos) << msg;
+  msg = input_error(
+      [&] { Scenario::from_string("[states]\neps_dev = []\n", "s.toml", schema); });
+  EXPECT_NE(msg.find("states.eps_dev"), std::string::npos) << msg;
+  msg = input_error(
+      [&] { Scenario::from_string("[probes]\nmethod = \"magic\"\n", "s.toml", schema); });
+  EXPECT_NE(msg.find("'magic' is not one of dynamic, minimisation"), std::string::npos) << msg;
+}
+
+TEST(Scenario, SyntaxErrorNamesTheLine) {
+  const auto schema = make_schema();
+  const auto msg =
+      input_error([&] { Scenario::from_string("[run]\nseed = = 3\n", "s.toml", schema); });
+  EXPECT_NE(msg.find("s.toml:2"), std::string::npos) << msg;
+}
+
+TEST(Scenario, MissingFileIsAnInputError) {
+  const auto schema = make_schema();
+  const auto msg = input_error([&] { Scenario::from_file("/nonexistent/x.toml", schema); });
+  EXPECT_NE(msg.find("/nonexistent/x.toml"), std::string::npos);
+}
+
+TEST(Scenario, OverridesAreValidatedLikeTheFile) {
+  const auto schema = make_schema();
+  Scenario sc(schema);
+  sc.apply_override("material.k=3e8");
+  EXPECT_DOUBLE_EQ(sc.get_double("material.k"), 3e8);
+  EXPECT_EQ(sc.origin("material.k"), "--set");
+  sc.apply_override("probes.method=minimisation");  // bare string
+  EXPECT_EQ(sc.get_string("probes.method"), "minimisation");
+  sc.apply_override("states.eps_dev=[0.01, 0.02, 0.03]");
+  EXPECT_EQ(sc.get_doubles("states.eps_dev").size(), 3u);
+  sc.apply_override("run.stages=a,c");  // bare list
+  EXPECT_EQ(sc.get_strings("run.stages"), (std::vector<std::string>{"a", "c"}));
+  sc.apply_override("output.report=false");
+  EXPECT_FALSE(sc.get_bool("output.report"));
+
+  auto msg = input_error([&] { sc.apply_override("material.kk=1"); });
+  EXPECT_NE(msg.find("--set material.kk=1: unknown key 'material.kk'"), std::string::npos) << msg;
+  msg = input_error([&] { sc.apply_override("material.k=-1"); });
+  EXPECT_NE(msg.find("--set material.k=-1: key 'material.k'"), std::string::npos) << msg;
+  msg = input_error([&] { sc.apply_override("material.k=abc"); });
+  EXPECT_NE(msg.find("not a valid number"), std::string::npos) << msg;
+  msg = input_error([&] { sc.apply_override("material.k"); });
+  EXPECT_NE(msg.find("expected key=value"), std::string::npos) << msg;
+  msg = input_error([&] { sc.apply_override("run.seed=2.5"); });
+  EXPECT_NE(msg.find("run.seed"), std::string::npos) << msg;
+}
+
+TEST(Scenario, EffectiveScenarioRoundTripsThroughToml) {
+  const auto schema = make_schema();
+  auto sc = Scenario::from_string("[material]\nk = 123456789.123\n", "a.toml", schema);
+  sc.apply_override("states.eps_dev=[0.006, 0.021, 0.32]");
+  sc.apply_override("probes.method=minimisation");
+  const auto back = Scenario::from_string(sc.to_toml(), "effective", schema);
+  for (const auto& k : schema.keys()) {
+    EXPECT_EQ(back.to_toml().find(k.path.substr(k.path.find('.') + 1)) != std::string::npos, true);
+  }
+  EXPECT_EQ(back.get_double("material.k"), 123456789.123);  // exact: shortest round-trip
+  EXPECT_EQ(back.get_doubles("states.eps_dev"), sc.get_doubles("states.eps_dev"));
+  EXPECT_EQ(back.get_string("probes.method"), "minimisation");
+  EXPECT_EQ(back.to_toml().substr(back.to_toml().find('\n')),
+            sc.to_toml().substr(sc.to_toml().find('\n')));
+}
+
+TEST(Scenario, SchemaRejectsBadDeclarations) {
+  ScenarioSchema s;
+  s.add({.path = "a.b", .type = KeyType::kDouble, .default_value = 1.0});
+  EXPECT_THROW(s.add({.path = "a.b", .type = KeyType::kDouble, .default_value = 1.0}),
+               std::logic_error);
+  EXPECT_THROW(s.add({.path = "a.c", .type = KeyType::kDouble, .default_value = 5.0, .max = 1}),
+               std::logic_error);
+  EXPECT_THROW(s.add({.path = "a.d", .type = KeyType::kInt, .default_value = 5.0}),
+               std::logic_error);
+}
+
+TEST(Scenario, MarkdownReferenceListsEveryKey) {
+  const auto schema = make_schema();
+  const std::string md = schema.markdown();
+  for (const auto& k : schema.keys()) EXPECT_NE(md.find("`" + k.path + "`"), std::string::npos);
+  EXPECT_NE(md.find("kg/s^2"), std::string::npos);
+  EXPECT_NE(md.find("(0.0, inf)"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace rendulic
