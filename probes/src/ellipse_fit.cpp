@@ -1,0 +1,431 @@
+// Geometric ellipse and circle fits with Ceres (physics.md section 6, issue 5 items 1, 3, 4).
+// Each point p_i gets a latent angle t_i and two residuals p(t_i) - p_i, so the cost is the
+// sum of squared orthogonal distances at the optimum (Gander, Golub and Strebel 1994), not
+// the algebraic conic residual that biases thin ellipses. The semi-axes are free reals: the
+// curve set {c + R(phi) diag(a, b) u(t)} is invariant under a -> -a, b -> -b and under
+// (a, b, phi) -> (b, a, phi + 90 deg), so a >= b >= 0 and phi in [0, 180) are obtained by
+// folding after the solve. Bounds at b = 0 instead would pin lines and thin ellipses on a
+// bound where the covariance is undefined; with free signs b = 0 is an interior point.
+#include <ceres/ceres.h>
+
+#include <algorithm>
+#include <cmath>
+#include <memory>
+
+#include "fit_internal.hpp"
+#include "rendulic/core/conventions.hpp"
+#include "rendulic/core/errors.hpp"
+#include "rendulic/probes/envelope_fit.hpp"
+
+namespace rendulic {
+namespace fit_detail {
+namespace {
+
+struct EllipsePointResidual {
+  double x, y;
+  template <typename T>
+  bool operator()(const T* s, const T* t, T* r) const {
+    using std::cos;
+    using std::sin;
+    const T cp = cos(s[4]), sp = sin(s[4]);
+    const T ex = s[2] * cos(t[0]), ey = s[3] * sin(t[0]);
+    r[0] = s[0] + cp * ex - sp * ey - x;
+    r[1] = s[1] + sp * ex + cp * ey - y;
+    return true;
+  }
+};
+
+struct CirclePointResidual {
+  double x, y;
+  template <typename T>
+  bool operator()(const T* s, const T* t, T* r) const {
+    using std::cos;
+    using std::sin;
+    r[0] = s[0] + s[2] * cos(t[0]) - x;
+    r[1] = s[1] + s[2] * sin(t[0]) - y;
+    return true;
+  }
+};
+
+// Classical 95%-efficiency tuning constants (in units of the noise sigma) for Gaussian data.
+constexpr double kHuberK = 1.345;
+constexpr double kCauchyK = 2.385;
+// Smallest loss scale relative to the normalized data size: exact data (MAD = 0) must not
+// make every point an outlier.
+constexpr double kMinLossScale = 1e-8;
+
+std::unique_ptr<ceres::LossFunction> make_loss(FitLoss loss, double scale) {
+  switch (loss) {
+    case FitLoss::kHuber:
+      return std::make_unique<ceres::HuberLoss>(scale);
+    case FitLoss::kCauchy:
+      return std::make_unique<ceres::CauchyLoss>(scale);
+    default:
+      return nullptr;
+  }
+}
+
+double tuning_constant(FitLoss loss) { return loss == FitLoss::kHuber ? kHuberK : kCauchyK; }
+
+template <class Residual, int kP>
+CurveFit solve_once(const std::vector<Eigen::Vector2d>& q, std::vector<double> params,
+                    std::vector<double> t, FitLoss loss, double loss_scale, bool covariance,
+                    int max_iterations) {
+  CurveFit out;
+  out.params = std::move(params);
+  out.t = std::move(t);
+  out.loss_scale = loss == FitLoss::kNone ? 0.0 : loss_scale;
+  std::unique_ptr<ceres::LossFunction> loss_fn = make_loss(loss, loss_scale);
+  ceres::Problem::Options popts;
+  popts.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  ceres::Problem problem(popts);
+  for (std::size_t i = 0; i < q.size(); ++i) {
+    auto* cost =
+        new ceres::AutoDiffCostFunction<Residual, 2, kP, 1>(new Residual{q[i].x(), q[i].y()});
+    problem.AddResidualBlock(cost, loss_fn.get(), out.params.data(), &out.t[i]);
+  }
+  ceres::Solver::Options opts;
+  // The latent angles form a block-diagonal part that the Schur complement eliminates
+  // exactly: the reduced system is kP x kP whatever the number of points.
+  opts.linear_solver_type = ceres::DENSE_SCHUR;
+  opts.max_num_iterations = max_iterations;
+  // Noiseless data must be recovered to near machine precision (tests ask 1e-9 relative).
+  opts.function_tolerance = 1e-15;
+  opts.gradient_tolerance = 1e-15;
+  opts.parameter_tolerance = 1e-13;
+  opts.logging_type = ceres::SILENT;
+  opts.minimizer_progress_to_stdout = false;
+  opts.num_threads = 1;
+  ceres::Solver::Summary summary;
+  ceres::Solve(opts, &problem, &summary);
+  out.converged = summary.termination_type == ceres::CONVERGENCE;
+  out.iterations = static_cast<int>(summary.iterations.size());
+
+  out.d.resize(q.size());
+  for (std::size_t i = 0; i < q.size(); ++i) {
+    double r[2];
+    Residual{q[i].x(), q[i].y()}(out.params.data(), &out.t[i], r);
+    out.d[i] = std::hypot(r[0], r[1]);
+  }
+  if (covariance) {
+    ceres::Covariance::Options copts;
+    // Dense SVD with a pseudo-inverse: a latent angle at an exact tip of a degenerate
+    // ellipse has a zero Jacobian column that must be dropped, not reported as a failure.
+    // Shape directions are never that small unless the shape is genuinely unidentified
+    // (an exact circle's inclination), which fit_ellipse detects separately.
+    copts.algorithm_type = ceres::DENSE_SVD;
+    copts.null_space_rank = -1;
+    copts.min_reciprocal_condition_number = 1e-14;
+    copts.num_threads = 1;
+    ceres::Covariance cov(copts);
+    std::vector<std::pair<const double*, const double*>> blocks = {
+        {out.params.data(), out.params.data()}};
+    if (cov.Compute(blocks, &problem)) {
+      Eigen::Matrix<double, kP, kP, Eigen::RowMajor> c;
+      if (cov.GetCovarianceBlock(out.params.data(), out.params.data(), c.data())) {
+        out.cov_unit = c;
+        out.cov_ok = c.allFinite();
+      }
+    }
+  }
+  return out;
+}
+
+template <class Residual, int kP>
+CurveFit solve_curve(const std::vector<Eigen::Vector2d>& q, std::vector<double> params,
+                     std::vector<double> t, FitLoss loss, double loss_scale, bool covariance,
+                     int max_iterations, const std::vector<double>& d0) {
+  const auto n = static_cast<double>(q.size());
+  CurveFit fit;
+  if (loss == FitLoss::kNone) {
+    fit = solve_once<Residual, kP>(q, std::move(params), std::move(t), loss, 0.0, covariance,
+                                   max_iterations);
+    double ssr = 0.0;
+    for (double d : fit.d) ssr += d * d;
+    fit.sigma = std::sqrt(ssr / std::max(1.0, n - kP));
+    return fit;
+  }
+  const double k = tuning_constant(loss);
+  if (loss_scale > 0.0) {
+    fit = solve_once<Residual, kP>(q, std::move(params), std::move(t), loss, loss_scale, covariance,
+                                   max_iterations);
+  } else {
+    // Pass 1: scale from the distances to the starting curve; pass 2: from the first robust
+    // fit, whose residuals are no longer inflated by the outliers' pull.
+    const double s1 = std::max(kMinLossScale, k * mad_scale(d0));
+    CurveFit first = solve_once<Residual, kP>(q, std::move(params), std::move(t), loss, s1, false,
+                                              max_iterations);
+    const double s2 = std::max(kMinLossScale, k * mad_scale(first.d));
+    fit = solve_once<Residual, kP>(q, first.params, first.t, loss, s2, covariance, max_iterations);
+    fit.iterations += first.iterations;
+  }
+  // The robust fit's noise level: MAD of the residuals, rescaled for the n - p parameters
+  // that the fit absorbed (the plain fit's sqrt(SSR / (n - p)) has the same correction).
+  fit.sigma =
+      std::max(mad_scale(fit.d) * std::sqrt(n / std::max(1.0, n - kP)), kMinLossScale * 1e-3);
+  return fit;
+}
+
+std::vector<double> distances(const std::vector<Eigen::Vector2d>& q, const EllipseGuess& g) {
+  std::vector<double> d;
+  d.reserve(q.size());
+  for (const auto& p : q) d.push_back(ellipse_distance(p, g.center, g.a, g.b, g.phi));
+  return d;
+}
+
+}  // namespace
+
+Normalized normalize(const std::vector<Eigen::Vector2d>& points) {
+  Normalized out;
+  if (points.empty()) return out;
+  for (const auto& p : points) out.origin += p;
+  out.origin /= static_cast<double>(points.size());
+  double s2 = 0.0;
+  for (const auto& p : points) s2 += (p - out.origin).squaredNorm();
+  out.scale = std::sqrt(s2 / static_cast<double>(points.size()));
+  if (!(out.scale > 0.0)) return out;
+  out.q.reserve(points.size());
+  for (const auto& p : points) out.q.push_back((p - out.origin) / out.scale);
+  return out;
+}
+
+int count_distinct(const std::vector<Eigen::Vector2d>& q, double tol) {
+  std::vector<Eigen::Vector2d> kept;
+  for (const auto& p : q) {
+    bool seen = false;
+    for (const auto& k : kept)
+      if ((k - p).norm() <= tol) {
+        seen = true;
+        break;
+      }
+    if (!seen) kept.push_back(p);
+  }
+  return static_cast<int>(kept.size());
+}
+
+double robust_cost(const std::vector<double>& d, FitLoss loss, double scale) {
+  double sum = 0.0;
+  const double c2 = scale * scale;
+  for (double v : d) {
+    const double s = v * v;
+    if (loss == FitLoss::kHuber && scale > 0.0)
+      sum += s <= c2 ? s : 2.0 * scale * std::sqrt(s) - c2;
+    else if (loss == FitLoss::kCauchy && scale > 0.0)
+      sum += c2 * std::log1p(s / c2);
+    else
+      sum += s;
+  }
+  return sum;
+}
+
+EllipseGuess best_guess(const std::vector<Eigen::Vector2d>& q, const std::vector<double>& theta,
+                        bool use_theta, bool* used_theta) {
+  *used_theta = false;
+  if (use_theta && theta.size() == q.size()) {
+    EllipseGuess g = ellipse_guess_from_affine(fit_affine(q, theta), theta);
+    if (g.ok) {
+      *used_theta = true;
+      return g;
+    }
+  }
+  EllipseGuess g = ellipse_guess_algebraic(q);
+  if (g.ok) return g;
+  // Principal axes: for points spread evenly in t, the variance along an axis of length a is
+  // a^2 / 2. This always exists (collinear points give b = 0, a line).
+  Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+  for (const auto& p : q) mean += p;
+  mean /= static_cast<double>(q.size());
+  Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
+  for (const auto& p : q) cov += (p - mean) * (p - mean).transpose();
+  cov /= static_cast<double>(q.size());
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> es(cov);
+  g.center = mean;
+  g.a = std::sqrt(2.0 * std::max(0.0, es.eigenvalues()(1)));
+  g.b = std::sqrt(2.0 * std::max(0.0, es.eigenvalues()(0)));
+  const Eigen::Vector2d major = es.eigenvectors().col(1);
+  g.phi = std::atan2(major.y(), major.x());
+  g.t.clear();
+  for (const auto& p : q) g.t.push_back(nearest_latent_angle(p, g.center, g.a, g.b, g.phi));
+  g.ok = true;
+  return g;
+}
+
+CurveFit solve_ellipse(const std::vector<Eigen::Vector2d>& q, const EllipseGuess& g, FitLoss loss,
+                       double loss_scale, bool covariance, int max_iterations) {
+  std::vector<double> d0;
+  if (loss != FitLoss::kNone && !(loss_scale > 0.0)) d0 = distances(q, g);
+  return solve_curve<EllipsePointResidual, 5>(q, {g.center.x(), g.center.y(), g.a, g.b, g.phi}, g.t,
+                                              loss, loss_scale, covariance, max_iterations, d0);
+}
+
+CurveFit solve_circle(const std::vector<Eigen::Vector2d>& q, const Eigen::Vector2d& c, double r,
+                      const std::vector<double>& t, FitLoss loss, double loss_scale,
+                      bool covariance, int max_iterations) {
+  std::vector<double> d0;
+  if (loss != FitLoss::kNone && !(loss_scale > 0.0))
+    for (const auto& p : q) d0.push_back(std::abs((p - c).norm() - r));
+  return solve_curve<CirclePointResidual, 3>(q, {c.x(), c.y(), r}, t, loss, loss_scale, covariance,
+                                             max_iterations, d0);
+}
+
+}  // namespace fit_detail
+
+namespace {
+
+using fit_detail::CurveFit;
+
+void check_points(const Envelope& env, int min_points, const char* what) {
+  std::string why;
+  if (!env.IsValid(&why)) throw InputError(why);
+  if (static_cast<int>(env.size()) < min_points)
+    throw InputError(std::string("fit: ") + what + " needs at least " + std::to_string(min_points) +
+                     " points, got " + std::to_string(env.size()));
+}
+
+// Fills the common members from a circle solution (normalized units -> data units).
+EnvelopeFit circle_result(const fit_detail::Normalized& nz, const CurveFit& f,
+                          const FitOptions& options, bool used_theta) {
+  EnvelopeFit out;
+  out.shape = FitShape::kCircle;
+  out.n_points = static_cast<int>(nz.q.size());
+  const double L = nz.scale;
+  out.center = nz.origin + L * Eigen::Vector2d(f.params[0], f.params[1]);
+  out.a = out.b = L * std::abs(f.params[2]);
+  double ssr = 0.0;
+  for (double d : f.d) {
+    out.residuals.push_back(L * d);
+    ssr += L * L * d * d;
+  }
+  out.rms = std::sqrt(ssr / static_cast<double>(f.d.size()));
+  out.loss = options.loss;
+  out.loss_scale = L * f.loss_scale;
+  out.converged = f.converged;
+  out.iterations = f.iterations;
+  out.used_theta = used_theta;
+  if (f.cov_ok) {
+    const Eigen::Matrix3d c3 = f.cov_unit * (f.sigma * f.sigma * L * L);
+    out.has_stderr = true;
+    out.center_stderr = Eigen::Vector2d(std::sqrt(c3(0, 0)), std::sqrt(c3(1, 1)));
+    out.a_stderr = out.b_stderr = std::sqrt(c3(2, 2));
+    out.covariance.topLeftCorner<3, 3>() = c3;
+    out.covariance(3, 3) = c3(2, 2);
+    out.covariance.block<3, 1>(0, 3) = c3.col(2);
+    out.covariance.block<1, 3>(3, 0) = c3.row(2);
+  }
+  return out;
+}
+
+}  // namespace
+
+EnvelopeFit fit_circle(const Envelope& env, const FitOptions& options) {
+  check_points(env, 3, "a circle");
+  const fit_detail::Normalized nz = fit_detail::normalize(env.response);
+  if (!(nz.scale > 0.0)) throw InputError("fit: degenerate data, all points coincide");
+  // Kasa's linear fit x^2 + y^2 + D x + E y + F = 0 as the start.
+  const auto n = static_cast<Eigen::Index>(nz.q.size());
+  Eigen::MatrixXd X(n, 3);
+  Eigen::VectorXd y(n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const auto& p = nz.q[static_cast<std::size_t>(i)];
+    X.row(i) << p.x(), p.y(), 1.0;
+    y(i) = -p.squaredNorm();
+  }
+  const Eigen::Vector3d s = X.colPivHouseholderQr().solve(y);
+  Eigen::Vector2d c(-s(0) / 2.0, -s(1) / 2.0);
+  double r2 = c.squaredNorm() - s(2);
+  if (!c.allFinite() || !(r2 > 0.0)) c.setZero(), r2 = 1.0;
+  std::vector<double> t;
+  for (const auto& p : nz.q) t.push_back(std::atan2(p.y() - c.y(), p.x() - c.x()));
+  const double scale = options.loss_scale > 0.0 ? options.loss_scale / nz.scale : 0.0;
+  const CurveFit f = fit_detail::solve_circle(nz.q, c, std::sqrt(r2), t, options.loss, scale,
+                                              options.compute_covariance, options.max_iterations);
+  EnvelopeFit out = circle_result(nz, f, options, false);
+  out.selection_note = "circle requested";
+  return out;
+}
+
+EnvelopeFit fit_ellipse(const Envelope& env, const FitOptions& options) {
+  std::string why;
+  if (!options.IsValid(&why)) throw InputError(why);
+  check_points(env, 5, "an ellipse");
+  const fit_detail::Normalized nz = fit_detail::normalize(env.response);
+  if (!(nz.scale > 0.0)) throw InputError("fit: degenerate data, all points coincide");
+  // Five distinct points determine a conic; duplicates carry no shape information.
+  constexpr double kDistinctTol = 1e-9;
+  if (fit_detail::count_distinct(nz.q, kDistinctTol) < 5)
+    throw InputError("fit: an ellipse needs at least 5 distinct points");
+  bool used_theta = false;
+  const EllipseGuess g =
+      fit_detail::best_guess(nz.q, env.theta_deg, options.use_theta, &used_theta);
+  const double scale = options.loss_scale > 0.0 ? options.loss_scale / nz.scale : 0.0;
+  CurveFit f = fit_detail::solve_ellipse(nz.q, g, options.loss, scale, options.compute_covariance,
+                                         options.max_iterations);
+  const double L = nz.scale;
+
+  // Fold to a >= b >= 0, phi in [0, pi). F maps the raw (cx, cy, a, b, phi) covariance.
+  double a = f.params[2], b = f.params[3], phi = f.params[4];
+  Eigen::Matrix<double, 5, 5> F = Eigen::Matrix<double, 5, 5>::Identity();
+  if (a < 0.0) a = -a, F(2, 2) = -1.0;
+  if (b < 0.0) b = -b, F(3, 3) = -1.0;
+  if (b > a) {
+    std::swap(a, b);
+    F.row(2).swap(F.row(3));
+    phi += kPi / 2.0;
+  }
+  phi = fit_detail::fold_pi(phi);
+
+  EnvelopeFit out;
+  out.shape = FitShape::kEllipse;
+  out.n_points = static_cast<int>(env.size());
+  out.center = nz.origin + L * Eigen::Vector2d(f.params[0], f.params[1]);
+  out.a = L * a;
+  out.b = L * b;
+  out.inclination_deg = rad_to_deg(phi);
+  double ssr = 0.0;
+  for (double d : f.d) {
+    out.residuals.push_back(L * d);
+    ssr += L * L * d * d;
+  }
+  out.rms = std::sqrt(ssr / static_cast<double>(f.d.size()));
+  out.loss = options.loss;
+  out.loss_scale = L * f.loss_scale;
+  out.converged = f.converged;
+  out.iterations = f.iterations;
+  out.used_theta = used_theta;
+  out.selection_note = "ellipse requested";
+
+  // A circle has no inclination: a - b within circle_z standard errors (or exactly equal to
+  // 1e-9 relative, the noiseless case) is refitted as a circle.
+  constexpr double kCircleRelTol = 1e-9;
+  bool circle = (a - b) <= kCircleRelTol * a;
+  if (f.cov_ok) {
+    Eigen::Matrix<double, 5, 5> D = Eigen::Matrix<double, 5, 5>::Identity();
+    D.diagonal() << L, L, L, L, 1.0;
+    const Eigen::Matrix<double, 5, 5> C =
+        D * F * f.cov_unit * F.transpose() * D * (f.sigma * f.sigma);
+    const double var_diff = C(2, 2) + C(3, 3) - 2.0 * C(2, 3);
+    if (var_diff > 0.0 && out.a - out.b <= options.circle_z * std::sqrt(var_diff)) circle = true;
+    out.covariance = C;
+    out.has_stderr = C.diagonal().minCoeff() >= 0.0;
+    if (out.has_stderr) {
+      out.center_stderr = Eigen::Vector2d(std::sqrt(C(0, 0)), std::sqrt(C(1, 1)));
+      out.a_stderr = std::sqrt(C(2, 2));
+      out.b_stderr = std::sqrt(C(3, 3));
+      out.inclination_stderr_deg = rad_to_deg(std::sqrt(C(4, 4)));
+    }
+  }
+  if (circle) {
+    std::vector<double> t;
+    for (const auto& p : nz.q) t.push_back(std::atan2(p.y() - f.params[1], p.x() - f.params[0]));
+    const CurveFit fc = fit_detail::solve_circle(
+        nz.q, Eigen::Vector2d(f.params[0], f.params[1]), 0.5 * (a + b), t, options.loss, scale,
+        options.compute_covariance, options.max_iterations);
+    EnvelopeFit c = circle_result(nz, fc, options, used_theta);
+    c.selection_note = "ellipse requested; axes equal within " + std::to_string(options.circle_z) +
+                       " standard errors: circle, inclination undefined";
+    return c;
+  }
+  return out;
+}
+
+}  // namespace rendulic

@@ -1,0 +1,93 @@
+// Helpers shared by the fit sources of probes/ (not installed): frames, latent angles and the
+// robust noise scale used by envelope_fit.cpp, ellipse_fit.cpp and initial_guess.cpp.
+#pragma once
+
+#include <Eigen/Dense>
+#include <cmath>
+#include <vector>
+
+#include "rendulic/core/conventions.hpp"
+
+namespace rendulic::fit_detail {
+
+inline Eigen::Matrix2d rotation(double phi) {
+  Eigen::Matrix2d r;
+  r << std::cos(phi), -std::sin(phi), std::sin(phi), std::cos(phi);
+  return r;
+}
+
+// Point of the ellipse c + R(phi) diag(a, b) (cos t, sin t).
+inline Eigen::Vector2d ellipse_point(const Eigen::Vector2d& c, double a, double b, double phi,
+                                     double t) {
+  return c + rotation(phi) * Eigen::Vector2d(a * std::cos(t), b * std::sin(t));
+}
+
+// Latent angle of the point of the ellipse nearest to p: best of a 32-angle grid, then
+// guarded Newton steps on the stationarity condition (monotone in the distance).
+double nearest_latent_angle(const Eigen::Vector2d& p, const Eigen::Vector2d& c, double a, double b,
+                            double phi);
+
+// Orthogonal distance of p to the ellipse (via nearest_latent_angle).
+double ellipse_distance(const Eigen::Vector2d& p, const Eigen::Vector2d& c, double a, double b,
+                        double phi);
+
+// 1.4826 * median(|d|): the normal-consistent robust scale of unsigned orthogonal distances.
+double mad_scale(std::vector<double> d);
+
+// Angle folded into [0, pi).
+inline double fold_pi(double phi) {
+  double f = std::fmod(phi, kPi);
+  if (f < 0.0) f += kPi;
+  if (f >= kPi) f -= kPi;
+  return f;
+}
+
+}  // namespace rendulic::fit_detail
+
+#include "rendulic/probes/envelope_fit.hpp"
+
+namespace rendulic::fit_detail {
+
+// Points moved to their centroid and divided by their rms distance from it, so that Ceres'
+// tolerances mean the same thing for stresses in Pa and for fabric changes of 1e-6.
+struct Normalized {
+  Eigen::Vector2d origin = Eigen::Vector2d::Zero();
+  double scale = 0.0;
+  std::vector<Eigen::Vector2d> q;
+};
+Normalized normalize(const std::vector<Eigen::Vector2d>& points);
+
+// Result of the latent-angle least-squares fit of an ellipse (5 parameters cx, cy, a, b, phi)
+// or a circle (3 parameters cx, cy, r), in normalized units, before folding to a >= b >= 0.
+struct CurveFit {
+  std::vector<double> params;
+  std::vector<double> t;
+  std::vector<double> d;  // orthogonal distances at the solution
+  bool converged = false;
+  int iterations = 0;
+  bool cov_ok = false;
+  Eigen::MatrixXd cov_unit;  // shape block of (J^T J)^+ (unit residual variance)
+  double loss_scale = 0.0;   // 0 for FitLoss::kNone
+  double sigma = 0.0;        // noise estimate used to scale cov_unit
+};
+
+// Ellipse from guess g (normalized units). With a robust loss and loss_scale <= 0 the scale is
+// chosen from the residuals (two passes: from the guess, then from the first robust fit).
+CurveFit solve_ellipse(const std::vector<Eigen::Vector2d>& q, const EllipseGuess& g, FitLoss loss,
+                       double loss_scale, bool covariance, int max_iterations);
+CurveFit solve_circle(const std::vector<Eigen::Vector2d>& q, const Eigen::Vector2d& c, double r,
+                      const std::vector<double>& t, FitLoss loss, double loss_scale,
+                      bool covariance, int max_iterations);
+
+// Best starting ellipse for the points: affine (theta) if allowed and possible, then
+// Halir-Flusser, then principal axes (always succeeds for non-coincident points).
+EllipseGuess best_guess(const std::vector<Eigen::Vector2d>& q, const std::vector<double>& theta,
+                        bool use_theta, bool* used_theta);
+
+// Robust cost sum rho(d^2) (plain sum of squares for kNone) at the given scale.
+double robust_cost(const std::vector<double>& d, FitLoss loss, double scale);
+
+// Count of points distinct at a relative tolerance: an ellipse needs five.
+int count_distinct(const std::vector<Eigen::Vector2d>& q, double tol);
+
+}  // namespace rendulic::fit_detail
