@@ -1,0 +1,88 @@
+// Material-point driver (models.md "Material-point driver"; MGIS/MTest style, architecture.md):
+// integrates a Law over one strain increment with sub-stepping, either
+// - kModifiedEuler: Heun's method with the embedded forward-Euler error estimate and automatic
+//   substep control (Sloan 1987; Sloan, Abbo and Sheng 2001): a substep is accepted when the
+//   local relative error estimate R = |y_heun - y_euler| / |y| is below `tolerance`;
+// - kExplicitEuler: the plain explicit scheme with a fixed number of substeps, kept so that its
+//   failures can be shown: the same error estimate is computed (one extra rate evaluation per
+//   substep) and the result says whether it exceeded the tolerance.
+// Mixed control: stress-controlled Mandel components are solved by Newton iterations with the
+// law's tangent. Nothing here throws: every call returns success or a reason.
+#pragma once
+
+#include <array>
+#include <string>
+
+#include "rendulic/models/law.hpp"
+
+namespace rendulic::models {
+
+enum class Scheme { kModifiedEuler, kExplicitEuler };
+
+struct StepOptions {
+  Scheme scheme = Scheme::kModifiedEuler;
+  // Local relative error per substep (stress and fabric relative to their norms, internal
+  // variables absolute: they are dimensionless ratios). 1e-6 keeps a 2e-3 probe of the
+  // hypoplastic law within about 1e-6 of its converged value (tests/models/driver_test.cpp).
+  double tolerance = 1e-6;
+  // false: modified Euler with `fixed_substeps` equal substeps and no control (order tests).
+  bool adaptive = true;
+  // Substeps of the explicit scheme, and of modified Euler when !adaptive.
+  int fixed_substeps = 1;
+  int max_substeps = 100000;
+  double min_fraction = 1e-10;  // smallest substep, as a fraction of the increment
+  double stress_floor = 1.0;    // Pa: floor of |sigma| in the relative error (stress-free states)
+  bool IsValid(std::string* why) const;
+};
+
+struct StepResult {
+  bool success = false;
+  std::string reason;  // why it failed; empty on success
+  MaterialState end;
+  // Largest local error estimate over the accepted substeps (modified Euler) or over all
+  // substeps (explicit). within_tolerance is false when an explicit step exceeded it.
+  double error_estimate = 0.0;
+  bool within_tolerance = true;
+  int substeps = 0;
+  int rejected = 0;
+  int rate_evaluations = 0;
+};
+
+// Integrates `law` from `start` over the strain increment d_eps (compression positive).
+// The volume fraction follows the kinematics: d nu = nu tr(d_eps) per substep.
+StepResult integrate(const Law& law, const MaterialState& start, const Eigen::Matrix3d& d_eps,
+                     const StepOptions& options = {});
+
+// Mixed control in Mandel components: where stress_controlled[i], the stress increment
+// component i is prescribed (stress_increment(i)) and the strain component is unknown; elsewhere
+// the strain component strain_increment(i) is prescribed.
+struct MixedControl {
+  std::array<bool, 6> stress_controlled{};
+  Vector6d strain_increment = Vector6d::Zero();
+  Vector6d stress_increment = Vector6d::Zero();
+};
+
+struct MixedOptions {
+  StepOptions step;
+  int max_iterations = 50;
+  // Convergence: |residual| <= stress_tolerance_abs + stress_tolerance_rel * |sigma_end| on the
+  // controlled components. 1e-9 relative sits three orders above the integrator's
+  // reproducibility, so Newton is not chasing sub-step noise.
+  double stress_tolerance_rel = 1e-9;
+  double stress_tolerance_abs = 1e-6;  // Pa
+  // The increment is applied in this many equal load steps, each solved by Newton.
+  int load_steps = 1;
+  bool IsValid(std::string* why) const;
+};
+
+struct MixedResult {
+  StepResult step;  // of the last load step, with `end` the final state
+  Vector6d strain_increment = Vector6d::Zero();  // the full solved increment (Mandel)
+  int iterations = 0;                            // Newton iterations, summed over load steps
+  double stress_residual = 0.0;                  // largest final residual over load steps (Pa)
+};
+
+MixedResult integrate_mixed(const Law& law, const MaterialState& start, const MixedControl& control,
+                            const MixedOptions& options = {});
+
+}  // namespace rendulic::models

@@ -1,0 +1,146 @@
+// Family 4 of models.md: an elasto-plastic rate law with fabric evolution, in the spirit of
+// Imole et al. (2013) and Kumar et al. (2014). Our own minimal design, documented in
+// docs/models.md:
+// - elastic part: the anisotropic_elastic operator (same first seven parameters);
+// - stress ratio r = sigma^D / P; an elastic domain |r - alpha| <= m of small radius m
+//   around a back ratio alpha (internal variables: alpha in Mandel form), so that small
+//   probes are elastic and large ones are not;
+// - plastic strain d_eps_p = lambda n, n = (r - alpha)/|r - alpha| (deviatoric, no plastic
+//   volume change: frictionless packings deform at constant volume in the main test);
+// - hardening makes the deviatoric stress ratio approach its steady value M exponentially
+//   with plastic deviatoric strain: n : dr = beta_s (M - r : n) lambda (alpha follows,
+//   d_alpha = beta_s (M - r : n) lambda n, so |r - alpha| stays m);
+// - fabric: d_F = c_F tr(d_eps) F/tr(F) + beta_F (F_dev_max n - F^D) lambda, i.e. the spec's
+//   dF_dev = beta_F (F_dev_max - F_dev) |d_eps_dev| driven by the plastic deviatoric strain
+//   (no deviatoric fabric change while elastic, seed Fig. 4).
+// At the steady state (r : n = M) the plastic modulus vanishes: loading probes give no change
+// of the stress ratio, so the envelope collapses toward a line (seed Fig. 5e).
+// A state read from a file (stress and fabric only) is taken as relaxed: alpha = r, the
+// centre of its elastic domain.
+#pragma once
+
+#include <cmath>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "rendulic/models/elastic_laws.hpp"
+
+namespace rendulic::models {
+
+struct ElastoplasticFabric {
+  static constexpr std::string_view kName = "elastoplastic_fabric";
+  // The first seven indices coincide with AnisotropicElastic's (its moduli() is reused).
+  enum : int { kB, kG, kBetaA, kNp, kPref, kAg, kCf, kM, kMss, kBetaS, kBetaF, kFmax, kCount };
+  static const std::vector<ParameterInfo>& parameter_info();
+  static const std::vector<std::string>& internal_names();
+
+  template <typename T>
+  struct Plastic {
+    bool loading = false;
+    T lambda = T(0);
+    T hardening = T(0);
+    T denominator = T(1);
+    Mat3<T> n = Mat3<T>::Zero();
+    Mat3<T> d_n = Mat3<T>::Zero();  // elastic operator applied to n
+    Mat3<T> nf = Mat3<T>::Zero();   // yield-function gradient d f / d sigma
+  };
+
+  template <typename T>
+  static Plastic<T> plastic_part(const T* p, const StateT<T>& s, const T& b, const T& g,
+                                 const Mat3<T>& f_dev, const Mat3<T>& d_sigma_e) {
+    Plastic<T> out;
+    const T pr = trace(s.stress) / T(3);
+    if (!(pr > T(0))) return out;
+    const Mat3<T> r = dev(s.stress) / pr;
+    const Mat3<T> xi = r - tensor_of<T>(s.internal);
+    const T xi_norm = safe_norm(xi);
+    if (!(xi_norm > T(0)) || xi_norm - p[kM] < -T(kYieldSurfaceBand) * p[kM]) return out;
+    out.n = xi / xi_norm;
+    const T r_n = ddot(r, out.n);
+    out.nf = (out.n - (r_n / T(3)) * identity3<T>()) / pr;
+    out.d_n = detail::anisotropic_apply(b, g, p[kBetaA], f_dev, out.n);
+    out.hardening = p[kBetaS] * (p[kMss] - r_n);
+    out.denominator = out.hardening + ddot(out.nf, out.d_n);
+    // A softening modulus larger than the elastic one would make the step ill-posed; the
+    // floor keeps lambda finite (the driver's error control then shortens the step).
+    const T floor = T(1e-6) * T(2) * g / pr;
+    if (out.denominator < floor) out.denominator = floor;
+    const T lambda = ddot(out.nf, d_sigma_e) / out.denominator;
+    if (lambda > T(0)) {
+      out.loading = true;
+      out.lambda = lambda;
+    }
+    return out;
+  }
+
+  template <typename T>
+  static RateT<T> rate(const T* p, const StateT<T>& s, const Mat3<T>& de) {
+    T b, g;
+    AnisotropicElastic::moduli(p, s, &b, &g);
+    const Mat3<T> f_dev = dev(s.fabric);
+    RateT<T> r;
+    r.d_stress = detail::anisotropic_apply(b, g, p[kBetaA], f_dev, de);
+    r.d_fabric = detail::elastic_fabric_increment(s.fabric, p[kCf], de);
+    const Plastic<T> pl = plastic_part(p, s, b, g, f_dev, r.d_stress);
+    if (pl.loading) {
+      r.plastic = true;
+      r.d_stress -= pl.lambda * pl.d_n;
+      r.d_internal = mandel_of<T>((pl.hardening * pl.lambda) * pl.n);
+      r.d_fabric += (p[kBetaF] * pl.lambda) * (p[kFmax] * pl.n - f_dev);
+    }
+    return r;
+  }
+
+  static Matrix6d tangent(const double* p, const MaterialState& s, const Eigen::Matrix3d& de) {
+    double b, g;
+    AnisotropicElastic::moduli(p, s, &b, &g);
+    const Eigen::Matrix3d f_dev = dev(s.fabric);
+    const Matrix6d d = detail::anisotropic_matrix(b, g, p[kBetaA], f_dev);
+    const Eigen::Matrix3d d_sigma_e =
+        detail::anisotropic_apply(b, g, p[kBetaA], f_dev, Eigen::Matrix3d(de));
+    const Plastic<double> pl = plastic_part(p, s, b, g, f_dev, d_sigma_e);
+    if (!pl.loading) return d;
+    const Vector6d dn = to_mandel(pl.d_n);
+    const Vector6d nf = to_mandel(pl.nf);
+    return d - dn * (d.transpose() * nf).transpose() / pl.denominator;
+  }
+
+  static Vector6d initial_internal(const double*, const Eigen::Matrix3d& stress,
+                                   const Eigen::Matrix3d&) {
+    const double pr = stress.trace() / 3.0;
+    if (!(pr > 0.0)) return Vector6d::Zero();
+    return to_mandel(deviator(stress) / pr);
+  }
+
+  static bool admissible(const double*, const MaterialState& s, std::string* why) {
+    if (s.stress.trace() > 0.0) return true;
+    if (why)
+      *why = "elastoplastic_fabric needs P > 0 (its yield function uses sigma^D / P), got P = " +
+             std::to_string(s.stress.trace() / 3.0) + " Pa";
+    return false;
+  }
+
+  // f = (|r - alpha| - m_e) / m_e; -infinity where P <= 0 (the law is then inadmissible).
+  static double yield_function(const double* p, const MaterialState& s) {
+    const double pr = s.stress.trace() / 3.0;
+    if (!(pr > 0.0)) return -std::numeric_limits<double>::infinity();
+    return ((deviator(s.stress) / pr - from_mandel(s.internal)).norm() - p[kM]) / p[kM];
+  }
+
+  // Drift correction after an explicit substep: alpha moves along n until |r - alpha| = m
+  // (outward drift always; inward drift only after plastic loading, `on_surface`). Only the
+  // back ratio changes, never stress or fabric, so the correction cannot create stress that
+  // the strain did not cause.
+  static void correct(const double* p, MaterialState* s, bool on_surface) {
+    const double pr = s->stress.trace() / 3.0;
+    if (!(pr > 0.0)) return;
+    const Eigen::Matrix3d r = deviator(s->stress) / pr;
+    const Eigen::Matrix3d xi = r - from_mandel(s->internal);
+    const double xi_norm = xi.norm();
+    const double f = xi_norm - p[kM];
+    if ((f > 0.0 || on_surface) && xi_norm > 0.0) s->internal += to_mandel(xi * (f / xi_norm));
+  }
+};
+
+}  // namespace rendulic::models

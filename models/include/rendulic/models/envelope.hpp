@@ -1,0 +1,44 @@
+// Model response envelopes (models.md "Material-point driver"; physics.md section 5): from a
+// given state, the DEM's probe set (core probe_directions_deg, probe_strain) is applied to a
+// law and the stress and fabric increments are returned as Rendulic pairs, exactly as the DEM
+// campaign reports them. Each probe starts from the same state (probes are independent).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "rendulic/models/driver.hpp"
+
+namespace rendulic::models {
+
+enum class EnvelopeMethod {
+  kIntegrated,  // each probe integrated by the driver (the finite-amplitude response)
+  kRate,        // one evaluation of the rate law: the exact image of the probe under the
+                // rate equation at the start state (the envelope of Gudehus 1979 / Wu 2000)
+};
+
+struct EnvelopeOptions {
+  double amplitude = 5e-5;  // |d_eps| (Frobenius), physics.md section 5 elastic default
+  int directions = 36;
+  EnvelopeMethod method = EnvelopeMethod::kIntegrated;
+  StepOptions step;
+  bool IsValid(std::string* why) const;
+};
+
+struct ModelEnvelope {
+  bool success = false;
+  std::string reason;
+  Eigen::VectorXd theta_deg;
+  Eigen::Matrix<double, Eigen::Dynamic, 2> strain;  // (sqrt2 lat, ax) of d_eps
+  Eigen::Matrix<double, Eigen::Dynamic, 2> stress;  // of d_sigma, Pa
+  Eigen::Matrix<double, Eigen::Dynamic, 2> fabric;  // of d_F
+  std::vector<Eigen::Matrix3d> d_stress, d_fabric;
+  double max_error_estimate = 0.0;
+  bool within_tolerance = true;
+  int total_substeps = 0;
+};
+
+ModelEnvelope model_envelope(const Law& law, const MaterialState& state,
+                             const EnvelopeOptions& options = {});
+
+}  // namespace rendulic::models

@@ -1,0 +1,20 @@
+// Reading law parameters and material-point states from small TOML files (interfaces.md
+// `rendulic envelope`). Kept apart from the laws (no I/O inside physics classes).
+//   parameters file: keys are the law's parameter names, numeric values; missing keys keep
+//     their defaults; an unknown key or a value out of bounds is an InputError naming the key
+//     and the file.
+//   state file: `stress` (3x3 array, Pa, compression positive, required), `fabric` (3x3,
+//     optional, default zero), `volume_fraction` (optional, default 0: no law uses it yet).
+#pragma once
+
+#include <string>
+
+#include "rendulic/models/law.hpp"
+
+namespace rendulic::models {
+
+// Throws rendulic::InputError on any problem.
+void load_parameters_toml(const std::string& path, Law* law);
+MaterialState load_state_toml(const std::string& path, const Law& law);
+
+}  // namespace rendulic::models

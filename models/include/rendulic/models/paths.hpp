@@ -1,0 +1,39 @@
+// Main loading paths driven through a law (issue 6 item 4, compared with the DEM curves of the
+// seed's Fig. 1 and the isotropic branch of physics.md section 4): isotropic compression, and
+// undrained (constant-volume) axisymmetric deformation along x,
+// d_eps = a diag(1, -1/2, -1/2) (compression positive; a < 0 is the seed's axial extension).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "rendulic/models/driver.hpp"
+
+namespace rendulic::models {
+
+struct PathOptions {
+  int steps = 200;  // recorded, equal strain steps; each is integrated with error control
+  StepOptions step;
+  bool IsValid(std::string* why) const;
+};
+
+// One row per recorded sample, the first being the start state.
+struct PathSeries {
+  bool success = false;
+  std::string reason;
+  std::vector<Eigen::Matrix3d> strain, stress, fabric;  // accumulated strain, compression +
+  std::vector<double> eps_v, eps_dev, volume_fraction;  // eps_dev signed (physics.md 3)
+  std::vector<Vector6d> internal;
+  double max_error_estimate = 0.0;
+  int total_substeps = 0;
+};
+
+// Isotropic compression from `start` to volumetric strain eps_v_end (> 0 compresses).
+PathSeries isotropic_compression_path(const Law& law, const MaterialState& start, double eps_v_end,
+                                      const PathOptions& options = {});
+// Undrained axisymmetric path from `start` to signed deviatoric strain eps_dev_end
+// (negative: axial extension along x, as in the seed; e.g. -0.32).
+PathSeries undrained_axisymmetric_path(const Law& law, const MaterialState& start,
+                                       double eps_dev_end, const PathOptions& options = {});
+
+}  // namespace rendulic::models

@@ -1,0 +1,371 @@
+// Material-point driver: modified Euler with error control, the plain explicit scheme with an
+// error report, and mixed strain/stress control (models.md "Material-point driver"; see
+// driver.hpp for the schemes and their sources).
+#include "rendulic/models/driver.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+#include <vector>
+
+namespace rendulic::models {
+namespace {
+
+bool finite(const LawRate& r) {
+  return r.d_stress.allFinite() && r.d_fabric.allFinite() && r.d_internal.allFinite();
+}
+
+MaterialState advance(const MaterialState& s, const LawRate& r, double tr_de) {
+  MaterialState o = s;
+  o.stress += r.d_stress;
+  o.fabric += r.d_fabric;
+  o.internal += r.d_internal;
+  o.volume_fraction = s.volume_fraction * std::exp(tr_de);  // nu V = const, eps_v log strain
+  return o;
+}
+
+MaterialState advance_heun(const MaterialState& s, const LawRate& r1, const LawRate& r2,
+                           double tr_de) {
+  MaterialState o = s;
+  o.stress += 0.5 * (r1.d_stress + r2.d_stress);
+  o.fabric += 0.5 * (r1.d_fabric + r2.d_fabric);
+  o.internal += 0.5 * (r1.d_internal + r2.d_internal);
+  o.volume_fraction = s.volume_fraction * std::exp(tr_de);
+  return o;
+}
+
+// Local error estimate |y_heun - y_euler| = |r2 - r1| / 2, relative for stress and fabric,
+// absolute for the (dimensionless) internal variables; the worst block counts.
+double error_estimate(const LawRate& r1, const LawRate& r2, const MaterialState& y,
+                      double stress_floor) {
+  const double e_s =
+      0.5 * (r2.d_stress - r1.d_stress).norm() / std::max(y.stress.norm(), stress_floor);
+  const double e_f = 0.5 * (r2.d_fabric - r1.d_fabric).norm() / std::max(y.fabric.norm(), 1e-12);
+  const double e_q = 0.5 * (r2.d_internal - r1.d_internal).lpNorm<Eigen::Infinity>();
+  return std::max({e_s, e_f, e_q});
+}
+
+std::string fmt(double v) {
+  std::ostringstream os;
+  os.precision(3);
+  os << v;
+  return os.str();
+}
+
+StepResult integrate_fixed(const Law& law, const MaterialState& start, const Eigen::Matrix3d& d_eps,
+                           const StepOptions& o) {
+  StepResult res;
+  const int n = o.fixed_substeps;
+  const Eigen::Matrix3d de = d_eps / n;
+  const double tr_de = de.trace();
+  MaterialState y = start;
+  const bool heun = o.scheme == Scheme::kModifiedEuler;
+  for (int k = 0; k < n; ++k) {
+    std::string why;
+    if (!law.admissible(y, &why)) {
+      res.reason = "substep " + std::to_string(k + 1) + " of " + std::to_string(n) + ": " + why;
+      res.end = y;
+      return res;
+    }
+    const LawRate r1 = law.rate(y, de);
+    ++res.rate_evaluations;
+    MaterialState y1 = advance(y, r1, tr_de);
+    // A plastic predictor stays on the yield surface (consistency), up to its O(h^2) drift;
+    // without this the corrector could see the predictor a hair inside and switch branch.
+    if (heun) law.correct(&y1, r1.plastic);
+    if (!finite(r1)) {
+      res.reason = "non-finite rate at substep " + std::to_string(k + 1);
+      res.end = y;
+      return res;
+    }
+    // The error estimate needs the rate at the Euler end point; where the law is undefined
+    // there, the explicit step has certainly left its accuracy (estimate = infinity).
+    double err = std::numeric_limits<double>::infinity();
+    LawRate r2;
+    const bool second = law.admissible(y1, nullptr);
+    if (second) {
+      r2 = law.rate(y1, de);
+      ++res.rate_evaluations;
+      if (finite(r2)) err = error_estimate(r1, r2, y1, o.stress_floor);
+    }
+    if (heun) {
+      if (!second || !finite(r2)) {
+        res.reason = "modified Euler: law undefined at the predictor of substep " +
+                     std::to_string(k + 1) + " (use adaptive stepping)";
+        res.end = y;
+        return res;
+      }
+      y = advance_heun(y, r1, r2, tr_de);
+    } else {
+      y = y1;
+    }
+    law.correct(&y, r1.plastic);
+    res.error_estimate = std::max(res.error_estimate, err);
+    ++res.substeps;
+    if (!law.admissible(y, &why)) {
+      res.reason = std::string(heun ? "fixed modified Euler" : "explicit Euler") + " substep " +
+                   std::to_string(k + 1) + " left the law's domain: " + why;
+      res.end = y;
+      return res;
+    }
+  }
+  res.end = y;
+  res.within_tolerance = res.error_estimate <= o.tolerance;
+  res.success = true;
+  if (!res.within_tolerance)
+    res.reason = std::string(heun ? "fixed modified Euler" : "explicit Euler") +
+                 ": local error estimate " + fmt(res.error_estimate) + " exceeds tolerance " +
+                 fmt(o.tolerance) + " (use adaptive modified Euler or more substeps)";
+  return res;
+}
+
+StepResult integrate_adaptive(const Law& law, const MaterialState& start,
+                              const Eigen::Matrix3d& d_eps, const StepOptions& o) {
+  StepResult res;
+  MaterialState y = start;
+  double t = 0.0, dt = 1.0;
+  bool rejected_last = false;
+  while (t < 1.0) {
+    if (res.substeps + res.rejected >= o.max_substeps) {
+      res.reason = "modified Euler: more than " + std::to_string(o.max_substeps) +
+                   " substeps (reached fraction " + fmt(t) + " of the increment)";
+      res.end = y;
+      return res;
+    }
+    if (dt < o.min_fraction) {
+      res.reason = "modified Euler: substep below " + fmt(o.min_fraction) +
+                   " of the increment at fraction " + fmt(t) + " (law too stiff or undefined)";
+      res.end = y;
+      return res;
+    }
+    std::string why;
+    if (!law.admissible(y, &why)) {
+      res.reason = "at fraction " + fmt(t) + " of the increment: " + why;
+      res.end = y;
+      return res;
+    }
+    // One Heun trial over the fraction h of the increment.
+    struct Trial {
+      bool ok = false;
+      MaterialState yh;
+      double err = 0.0;
+      bool plastic = false;
+    };
+    auto trial = [&](double h) {
+      Trial tr;
+      const Eigen::Matrix3d de = h * d_eps;
+      const double tr_de = de.trace();
+      const LawRate r1 = law.rate(y, de);
+      ++res.rate_evaluations;
+      if (!finite(r1)) return tr;
+      MaterialState y1 = advance(y, r1, tr_de);
+      law.correct(&y1, r1.plastic);  // see integrate_fixed
+      if (!law.admissible(y1, nullptr)) return tr;
+      const LawRate r2 = law.rate(y1, de);
+      ++res.rate_evaluations;
+      if (!finite(r2)) return tr;
+      tr.yh = advance_heun(y, r1, r2, tr_de);
+      tr.ok = law.admissible(tr.yh, nullptr);
+      tr.plastic = r1.plastic;
+      tr.err = error_estimate(r1, r2, tr.yh, o.stress_floor);
+      return tr;
+    };
+    Trial tr = trial(dt);
+    // Elastic-to-plastic transition inside the substep: shorten it to end on the yield
+    // surface (bisection on the elastic trial; Sloan 1987), so that no substep averages the
+    // elastic and the plastic rate across the kink.
+    const double f0 = law.yield_function(y);
+    if (tr.ok && f0 < -kYieldSurfaceBand && std::isfinite(f0) && law.yield_function(tr.yh) > 0.0) {
+      double lo = 0.0, hi = 1.0;
+      while (hi - lo > 1e-13) {
+        const double mid = 0.5 * (lo + hi);
+        const Trial tm = trial(mid * dt);
+        if (tm.ok && law.yield_function(tm.yh) <= 0.0)
+          lo = mid;
+        else
+          hi = mid;
+      }
+      // lo = 0 means the state was already within rounding of the surface: step just past it.
+      dt *= lo > 0.0 ? lo : hi;
+      tr = trial(dt);
+    }
+    const bool ok = tr.ok;
+    const double err = tr.err;
+    const MaterialState& yh = tr.yh;
+    if (!ok || err > o.tolerance) {
+      // Sloan's factor q = 0.9 sqrt(TOL/R) (second-order local error), never below 0.1.
+      const double q = ok ? std::max(0.9 * std::sqrt(o.tolerance / err), 0.1) : 0.1;
+      dt *= q;
+      ++res.rejected;
+      rejected_last = true;
+      continue;
+    }
+    y = yh;
+    law.correct(&y, tr.plastic);
+    t += dt;
+    ++res.substeps;
+    res.error_estimate = std::max(res.error_estimate, err);
+    double q = err > 0.0 ? 0.9 * std::sqrt(o.tolerance / err) : 2.0;
+    q = std::min(q, rejected_last ? 1.0 : 2.0);  // no growth right after a rejection
+    rejected_last = false;
+    dt = q * dt;
+    if (t + dt > 1.0 || 1.0 - (t + dt) < 1e-12) dt = 1.0 - t;
+    if (1.0 - t < 1e-14) break;
+  }
+  res.end = y;
+  res.success = true;
+  res.within_tolerance = true;
+  return res;
+}
+
+}  // namespace
+
+bool StepOptions::IsValid(std::string* why) const {
+  auto fail = [&](const std::string& m) {
+    if (why) *why = m;
+    return false;
+  };
+  if (!(tolerance > 0.0 && tolerance < 1.0)) return fail("tolerance must be in (0, 1)");
+  if (fixed_substeps < 1) return fail("fixed_substeps must be >= 1");
+  if (max_substeps < 1) return fail("max_substeps must be >= 1");
+  if (!(min_fraction > 0.0 && min_fraction < 1.0)) return fail("min_fraction must be in (0, 1)");
+  if (!(stress_floor > 0.0)) return fail("stress_floor must be > 0");
+  return true;
+}
+
+bool MixedOptions::IsValid(std::string* why) const {
+  if (!step.IsValid(why)) return false;
+  auto fail = [&](const std::string& m) {
+    if (why) *why = m;
+    return false;
+  };
+  if (max_iterations < 1) return fail("max_iterations must be >= 1");
+  if (!(stress_tolerance_rel >= 0.0) || !(stress_tolerance_abs >= 0.0))
+    return fail("stress tolerances must be >= 0");
+  if (stress_tolerance_rel == 0.0 && stress_tolerance_abs == 0.0)
+    return fail("at least one stress tolerance must be > 0");
+  if (load_steps < 1) return fail("load_steps must be >= 1");
+  return true;
+}
+
+StepResult integrate(const Law& law, const MaterialState& start, const Eigen::Matrix3d& d_eps,
+                     const StepOptions& options) {
+  StepResult res;
+  std::string why;
+  if (!options.IsValid(&why)) {
+    res.reason = "invalid step options: " + why;
+    res.end = start;
+    return res;
+  }
+  if (!d_eps.allFinite()) {
+    res.reason = "non-finite strain increment";
+    res.end = start;
+    return res;
+  }
+  if (options.scheme == Scheme::kExplicitEuler || !options.adaptive)
+    return integrate_fixed(law, start, d_eps, options);
+  return integrate_adaptive(law, start, d_eps, options);
+}
+
+MixedResult integrate_mixed(const Law& law, const MaterialState& start, const MixedControl& control,
+                            const MixedOptions& options) {
+  MixedResult out;
+  std::string why;
+  if (!options.IsValid(&why)) {
+    out.step.reason = "invalid mixed options: " + why;
+    out.step.end = start;
+    return out;
+  }
+  std::vector<int> s_idx, e_idx;
+  for (int i = 0; i < 6; ++i) (control.stress_controlled[i] ? s_idx : e_idx).push_back(i);
+  const int ns = static_cast<int>(s_idx.size());
+  MaterialState y = start;
+  const double inv_l = 1.0 / options.load_steps;
+  for (int step = 0; step < options.load_steps; ++step) {
+    Vector6d e = control.strain_increment * inv_l;
+    const Vector6d target = control.stress_increment * inv_l;
+    StepResult res;
+    if (ns == 0) {
+      res = integrate(law, y, from_mandel(e), options.step);
+      if (!res.success) {
+        out.step = res;
+        return out;
+      }
+    } else {
+      auto solve_update = [&](const Matrix6d& c, const Eigen::VectorXd& rhs,
+                              Eigen::VectorXd* dx) -> bool {
+        Eigen::MatrixXd css(ns, ns);
+        for (int a = 0; a < ns; ++a)
+          for (int b = 0; b < ns; ++b) css(a, b) = c(s_idx[a], s_idx[b]);
+        Eigen::FullPivLU<Eigen::MatrixXd> lu(css);
+        if (!lu.isInvertible()) return false;
+        *dx = lu.solve(rhs);
+        return true;
+      };
+      // Predictor from the tangent at the start, in the direction of the prescribed strain.
+      for (int i : s_idx) e(i) = 0.0;
+      Matrix6d c = law.tangent(y, from_mandel(e));
+      Eigen::VectorXd rhs(ns), dx;
+      for (int a = 0; a < ns; ++a) {
+        double v = target(s_idx[a]);
+        for (int j : e_idx) v -= c(s_idx[a], j) * e(j);
+        rhs(a) = v;
+      }
+      if (!solve_update(c, rhs, &dx)) {
+        out.step.reason = "mixed control: tangent singular on the stress-controlled components";
+        out.step.end = y;
+        return out;
+      }
+      for (int a = 0; a < ns; ++a) e(s_idx[a]) = dx(a);
+      bool converged = false;
+      double res_norm = 0.0;
+      for (int it = 0; it < options.max_iterations; ++it) {
+        res = integrate(law, y, from_mandel(e), options.step);
+        ++out.iterations;
+        if (!res.success) {
+          out.step = res;
+          out.step.reason =
+              "mixed control, iteration " + std::to_string(it + 1) + ": " + res.reason;
+          return out;
+        }
+        const Vector6d ds = to_mandel(Eigen::Matrix3d(res.end.stress - y.stress));
+        Eigen::VectorXd r(ns);
+        for (int a = 0; a < ns; ++a) r(a) = ds(s_idx[a]) - target(s_idx[a]);
+        res_norm = r.lpNorm<Eigen::Infinity>();
+        const double tol =
+            options.stress_tolerance_abs + options.stress_tolerance_rel * res.end.stress.norm();
+        if (res_norm <= tol) {
+          converged = true;
+          break;
+        }
+        // The secant through the increment is best approximated by the mean of the tangents
+        // at its two ends (exact for a tangent that varies linearly along the step).
+        const Eigen::Matrix3d de = from_mandel(e);
+        c = 0.5 * (law.tangent(y, de) + law.tangent(res.end, de));
+        if (!solve_update(c, r, &dx)) {
+          out.step.reason = "mixed control: tangent singular on the stress-controlled components";
+          out.step.end = res.end;
+          return out;
+        }
+        for (int a = 0; a < ns; ++a) e(s_idx[a]) -= dx(a);
+      }
+      out.stress_residual = std::max(out.stress_residual, res_norm);
+      if (!converged) {
+        out.step = res;
+        out.step.success = false;
+        out.step.reason = "mixed control: Newton did not converge in " +
+                          std::to_string(options.max_iterations) + " iterations (residual " +
+                          fmt(res_norm) + " Pa)";
+        return out;
+      }
+    }
+    out.strain_increment += e;
+    y = res.end;
+    out.step = res;
+  }
+  out.step.end = y;
+  return out;
+}
+
+}  // namespace rendulic::models

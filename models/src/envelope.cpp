@@ -1,0 +1,69 @@
+// Model envelopes over the DEM probe set (envelope.hpp; physics.md section 5).
+#include "rendulic/models/envelope.hpp"
+
+#include <cmath>
+
+namespace rendulic::models {
+
+bool EnvelopeOptions::IsValid(std::string* why) const {
+  auto fail = [&](const std::string& m) {
+    if (why) *why = m;
+    return false;
+  };
+  if (!(amplitude > 0.0 && amplitude < 1.0)) return fail("amplitude must be in (0, 1)");
+  if (directions < 3 || directions > 100000) return fail("directions must be in [3, 100000]");
+  return step.IsValid(why);
+}
+
+ModelEnvelope model_envelope(const Law& law, const MaterialState& state,
+                             const EnvelopeOptions& options) {
+  ModelEnvelope env;
+  std::string why;
+  if (!options.IsValid(&why)) {
+    env.reason = "invalid envelope options: " + why;
+    return env;
+  }
+  if (!law.admissible(state, &why)) {
+    env.reason = "start state: " + why;
+    return env;
+  }
+  const int m = options.directions;
+  env.theta_deg = probe_directions_deg(m);
+  env.strain.resize(m, 2);
+  env.stress.resize(m, 2);
+  env.fabric.resize(m, 2);
+  env.d_stress.resize(m);
+  env.d_fabric.resize(m);
+  for (int i = 0; i < m; ++i) {
+    const Eigen::Matrix3d de = probe_strain(env.theta_deg(i), options.amplitude);
+    if (options.method == EnvelopeMethod::kRate) {
+      const LawRate r = law.rate(state, de);
+      env.d_stress[i] = r.d_stress;
+      env.d_fabric[i] = r.d_fabric;
+      ++env.total_substeps;
+    } else {
+      const StepResult res = integrate(law, state, de, options.step);
+      if (!res.success) {
+        env.reason = "probe theta = " + std::to_string(env.theta_deg(i)) + " deg: " + res.reason;
+        return env;
+      }
+      env.d_stress[i] = res.end.stress - state.stress;
+      env.d_fabric[i] = res.end.fabric - state.fabric;
+      env.max_error_estimate = std::max(env.max_error_estimate, res.error_estimate);
+      env.within_tolerance = env.within_tolerance && res.within_tolerance;
+      env.total_substeps += res.substeps;
+    }
+    if (!env.d_stress[i].allFinite() || !env.d_fabric[i].allFinite()) {
+      env.reason =
+          "probe theta = " + std::to_string(env.theta_deg(i)) + " deg: non-finite response";
+      return env;
+    }
+    env.strain.row(i) = rendulic_pair(de).transpose();
+    env.stress.row(i) = rendulic_pair(env.d_stress[i]).transpose();
+    env.fabric.row(i) = rendulic_pair(env.d_fabric[i]).transpose();
+  }
+  env.success = true;
+  return env;
+}
+
+}  // namespace rendulic::models

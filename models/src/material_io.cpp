@@ -1,0 +1,100 @@
+// TOML readers for law parameters and material-point states (material_io.hpp).
+#include "rendulic/models/material_io.hpp"
+
+#include <toml++/toml.h>
+
+#include <cmath>
+
+#include "rendulic/core/errors.hpp"
+
+namespace rendulic::models {
+namespace {
+
+toml::table parse(const std::string& path) {
+  try {
+    return toml::parse_file(path);
+  } catch (const toml::parse_error& e) {
+    const auto& where = e.source().begin;
+    throw InputError(path + ":" + std::to_string(where.line) + ": " + std::string(e.description()));
+  }
+}
+
+double number(const toml::node& node, const std::string& key, const std::string& path) {
+  const std::optional<double> v = node.value<double>();
+  if (!v || !std::isfinite(*v))
+    throw InputError(path + ": key '" + key + "' must be a finite number");
+  return *v;
+}
+
+Eigen::Matrix3d matrix3(const toml::node& node, const std::string& key, const std::string& path) {
+  const toml::array* rows = node.as_array();
+  if (!rows || rows->size() != 3)
+    throw InputError(path + ": key '" + key + "' must be a 3x3 array of numbers");
+  Eigen::Matrix3d m;
+  for (int i = 0; i < 3; ++i) {
+    const toml::array* row = (*rows)[i].as_array();
+    if (!row || row->size() != 3)
+      throw InputError(path + ": key '" + key + "' must be a 3x3 array of numbers");
+    for (int j = 0; j < 3; ++j)
+      m(i, j) =
+          number((*row)[j], key + "[" + std::to_string(i) + "][" + std::to_string(j) + "]", path);
+  }
+  // Stress and fabric are symmetric; an asymmetric input is a typo, not something to average.
+  const double scale = std::max(m.norm(), 1e-300);
+  if ((m - m.transpose()).norm() > 1e-12 * scale)
+    throw InputError(path + ": key '" + key + "' must be a symmetric 3x3 tensor");
+  return m;
+}
+
+}  // namespace
+
+void load_parameters_toml(const std::string& path, Law* law) {
+  const toml::table tbl = parse(path);
+  std::vector<double> values = law->parameters();
+  for (const auto& [k, node] : tbl) {
+    const std::string key(k.str());
+    const int i = law->parameter_index(key);
+    if (i < 0) {
+      std::string names;
+      for (const auto& p : law->parameter_info()) names += (names.empty() ? "" : ", ") + p.name;
+      throw InputError(path + ": unknown parameter '" + key + "' for model " +
+                       std::string(law->name()) + " (known: " + names + ")");
+    }
+    const double v = number(node, key, path);
+    const ParameterInfo& info = law->parameter_info()[i];
+    if (v < info.lower || v > info.upper)
+      throw InputError(path + ": parameter '" + key + "' = " + std::to_string(v) +
+                       " is outside its bounds [" + std::to_string(info.lower) + ", " +
+                       std::to_string(info.upper) + "] " + info.unit);
+    values[i] = v;
+  }
+  std::string why;
+  if (!law->set_parameters(values, &why)) throw InputError(path + ": " + why);
+}
+
+MaterialState load_state_toml(const std::string& path, const Law& law) {
+  const toml::table tbl = parse(path);
+  Eigen::Matrix3d stress, fabric = Eigen::Matrix3d::Zero();
+  double nu = 0.0;
+  bool have_stress = false;
+  for (const auto& [k, node] : tbl) {
+    const std::string key(k.str());
+    if (key == "stress") {
+      stress = matrix3(node, key, path);
+      have_stress = true;
+    } else if (key == "fabric") {
+      fabric = matrix3(node, key, path);
+    } else if (key == "volume_fraction") {
+      nu = number(node, key, path);
+      if (!(nu >= 0.0 && nu < 1.0))
+        throw InputError(path + ": key 'volume_fraction' must be in [0, 1)");
+    } else {
+      throw InputError(path + ": unknown key '" + key +
+                       "' (a state has stress, fabric, volume_fraction)");
+    }
+  }
+  if (!have_stress) throw InputError(path + ": missing key 'stress' (3x3, Pa)");
+  return law.make_state(stress, fabric, nu);
+}
+
+}  // namespace rendulic::models

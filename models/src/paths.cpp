@@ -1,0 +1,69 @@
+// Isotropic compression and undrained axisymmetric paths through a law (paths.hpp).
+#include "rendulic/models/paths.hpp"
+
+namespace rendulic::models {
+namespace {
+
+void record(PathSeries* s, const Eigen::Matrix3d& eps, const MaterialState& y) {
+  s->strain.push_back(eps);
+  s->eps_v.push_back(volumetric_strain(eps));
+  s->eps_dev.push_back(signed_deviator(eps));
+  s->stress.push_back(y.stress);
+  s->fabric.push_back(y.fabric);
+  s->volume_fraction.push_back(y.volume_fraction);
+  s->internal.push_back(y.internal);
+}
+
+PathSeries run_path(const Law& law, const MaterialState& start, const Eigen::Matrix3d& total,
+                    const PathOptions& o) {
+  PathSeries s;
+  std::string why;
+  if (!o.IsValid(&why)) {
+    s.reason = "invalid path options: " + why;
+    return s;
+  }
+  const Eigen::Matrix3d de = total / o.steps;
+  Eigen::Matrix3d eps = Eigen::Matrix3d::Zero();
+  MaterialState y = start;
+  record(&s, eps, y);
+  for (int k = 0; k < o.steps; ++k) {
+    const StepResult r = integrate(law, y, de, o.step);
+    if (!r.success) {
+      s.reason =
+          "step " + std::to_string(k + 1) + " of " + std::to_string(o.steps) + ": " + r.reason;
+      return s;
+    }
+    y = r.end;
+    eps += de;
+    s.max_error_estimate = std::max(s.max_error_estimate, r.error_estimate);
+    s.total_substeps += r.substeps;
+    record(&s, eps, y);
+  }
+  s.success = true;
+  return s;
+}
+
+}  // namespace
+
+bool PathOptions::IsValid(std::string* why) const {
+  if (steps < 1) {
+    if (why) *why = "steps must be >= 1";
+    return false;
+  }
+  return step.IsValid(why);
+}
+
+PathSeries isotropic_compression_path(const Law& law, const MaterialState& start, double eps_v_end,
+                                      const PathOptions& options) {
+  return run_path(law, start, (eps_v_end / 3.0) * Eigen::Matrix3d::Identity(), options);
+}
+
+PathSeries undrained_axisymmetric_path(const Law& law, const MaterialState& start,
+                                       double eps_dev_end, const PathOptions& options) {
+  // diag(1, -1/2, -1/2) has signed deviator +sqrt(3/2), so a = eps_dev_end / sqrt(3/2).
+  const double a = eps_dev_end / std::sqrt(1.5);
+  return run_path(law, start, a * Eigen::Vector3d(1.0, -0.5, -0.5).asDiagonal().toDenseMatrix(),
+                  options);
+}
+
+}  // namespace rendulic::models

@@ -1,0 +1,256 @@
+// Unit tests of the four laws (models.md "Families"; issue 6 item 1): parameter tables,
+// tangents against central finite differences and against automatic differentiation
+// (ceres::Jet through the templated laws), the pinned anisotropic form against its scalar
+// form, and the loading/unloading behaviour of elastoplastic_fabric.
+#include <ceres/jet.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "rendulic/models/elastic_laws.hpp"
+#include "rendulic/models/elastoplastic_fabric.hpp"
+#include "rendulic/models/hypoplastic_wu.hpp"
+#include "rendulic/models/law.hpp"
+
+namespace rendulic::models {
+namespace {
+
+// A generic (non-axisymmetric) compressive stress with some shear, Pa.
+Eigen::Matrix3d test_stress(double p) {
+  Eigen::Matrix3d s;
+  s << 1.1, 0.05, -0.02, 0.05, 0.95, 0.03, -0.02, 0.03, 0.9;
+  return p * s;
+}
+Eigen::Matrix3d test_fabric() {
+  Eigen::Matrix3d f;
+  f << 1.6, 0.04, 0.0, 0.04, 2.1, -0.03, 0.0, -0.03, 2.0;
+  return f;
+}
+Eigen::Matrix3d test_strain() {
+  Eigen::Matrix3d e;
+  e << 0.7, 0.2, -0.1, 0.2, -0.4, 0.3, -0.1, 0.3, 0.2;
+  return e / e.norm();
+}
+
+// Central differences of the rate in the Mandel components of d_eps. The laws are piecewise
+// linear or smooth in d_eps at fixed state, so the truncation error vanishes (linear) or is
+// O(h^2) relative to |d_eps| = 1; h = 1e-6 leaves rounding ~1e-16 * |D| / 1e-6 = 1e-10 |D|.
+Matrix6d fd_tangent(const Law& law, const MaterialState& s, const Eigen::Matrix3d& de) {
+  const double h = 1e-6;
+  Matrix6d t;
+  const Vector6d e0 = to_mandel(de);
+  for (int j = 0; j < 6; ++j) {
+    Vector6d ep = e0, em = e0;
+    ep(j) += h;
+    em(j) -= h;
+    t.col(j) = (to_mandel(law.rate(s, from_mandel(ep)).d_stress) -
+                to_mandel(law.rate(s, from_mandel(em)).d_stress)) /
+               (2 * h);
+  }
+  return t;
+}
+
+// FD agreement: relative to the tangent's norm; 1e-7 is three orders above the rounding floor.
+constexpr double kFdTol = 1e-7;
+
+TEST(Laws, RegistryAndDefaultsWithinBounds) {
+  for (const std::string& name : law_names()) {
+    auto law = make_law(name);
+    ASSERT_TRUE(law) << name;
+    EXPECT_EQ(law->name(), name);
+    for (size_t i = 0; i < law->parameter_info().size(); ++i) {
+      const auto& p = law->parameter_info()[i];
+      EXPECT_LE(p.lower, p.default_value) << name << "." << p.name;
+      EXPECT_GE(p.upper, p.default_value) << name << "." << p.name;
+      EXPECT_EQ(law->parameters()[i], p.default_value);
+    }
+  }
+  EXPECT_EQ(make_law("cam_clay"), nullptr);
+}
+
+TEST(Laws, SetParametersChecksBoundsAndNamesTheCulprit) {
+  auto law = make_law("anisotropic_elastic");
+  std::string why;
+  EXPECT_FALSE(law->set_parameter("B", -5.0, &why));
+  EXPECT_NE(why.find("B"), std::string::npos);
+  EXPECT_EQ(law->parameter("B"), 2.0e10);  // unchanged on failure
+  EXPECT_FALSE(law->set_parameter("nope", 1.0, &why));
+  EXPECT_NE(why.find("nope"), std::string::npos);
+  EXPECT_FALSE(law->set_parameter("G", std::nan(""), &why));
+  EXPECT_TRUE(law->set_parameter("beta_A", 0.7, &why));
+  EXPECT_EQ(law->parameter("beta_A"), 0.7);
+  EXPECT_FALSE(law->set_parameters({1.0, 2.0}, &why));
+}
+
+TEST(Laws, TangentsMatchFiniteDifferences) {
+  for (const std::string& name : law_names()) {
+    auto law = make_law(name);
+    std::string why;
+    ASSERT_TRUE(law->set_parameter(name == "hypoplastic_wu" ? "c1" : "n_p",
+                                   name == "hypoplastic_wu" ? -120.0 : 0.5, &why));
+    MaterialState s = law->make_state(test_stress(2e9), test_fabric(), 0.8);
+    for (const Eigen::Matrix3d& de : {test_strain(), Eigen::Matrix3d(-test_strain())}) {
+      const Matrix6d t = law->tangent(s, de);
+      const Matrix6d fd = fd_tangent(*law, s, de);
+      EXPECT_LE((t - fd).norm(), kFdTol * t.norm()) << name << "\n" << t << "\n" << fd;
+    }
+  }
+}
+
+TEST(Laws, ElastoplasticPlasticBranchTangentMatchesFiniteDifferences) {
+  auto law = make_law("elastoplastic_fabric");
+  MaterialState s = law->make_state(test_stress(2e9), test_fabric(), 0.8);
+  // Put the state on the yield surface: alpha = r - m_e n for a direction n.
+  const double p = s.stress.trace() / 3.0;
+  const Eigen::Matrix3d r = deviator(s.stress) / p;
+  Eigen::Matrix3d n = deviator(test_strain());
+  n /= n.norm();
+  s.internal = to_mandel(Eigen::Matrix3d(r - law->parameter("m_e") * n));
+  // Loading along n is plastic; its tangent must differ from the elastic one.
+  const Matrix6d t_load = law->tangent(s, n);
+  const Matrix6d t_unload = law->tangent(s, -n);
+  EXPECT_GT((t_load - t_unload).norm(), 1e-3 * t_unload.norm());
+  EXPECT_LE((t_load - fd_tangent(*law, s, n)).norm(), kFdTol * t_load.norm());
+  EXPECT_LE((t_unload - fd_tangent(*law, s, -n)).norm(), kFdTol * t_unload.norm());
+  // Consistency: a plastic rate keeps the state on the surface to first order.
+  const LawRate rate = law->rate(s, 1e-9 * n);
+  const Eigen::Matrix3d sig = s.stress + rate.d_stress;
+  const Eigen::Matrix3d xi =
+      deviator(sig) / (sig.trace() / 3.0) - from_mandel(Vector6d(s.internal + rate.d_internal));
+  // |xi| - m_e is second order in the 1e-9 step: ~ (1e-9 * |D|/P)^2 ~ 1e-17.
+  EXPECT_NEAR(xi.norm(), law->parameter("m_e"), 1e-13);
+}
+
+// Jets through the templated law: an independent derivative of the same rate code path.
+template <class M>
+Matrix6d jet_tangent(const std::vector<double>& params, const MaterialState& s,
+                     const Eigen::Matrix3d& de) {
+  using J = ceres::Jet<double, 6>;
+  std::vector<J> p(params.begin(), params.end());
+  StateT<J> sj;
+  sj.stress = s.stress.cast<J>();
+  sj.fabric = s.fabric.cast<J>();
+  sj.internal = s.internal.cast<J>();
+  sj.volume_fraction = J(s.volume_fraction);
+  Vec6<J> e;
+  const Vector6d e0 = to_mandel(de);
+  for (int i = 0; i < 6; ++i) e(i) = J(e0(i), i);
+  const RateT<J> r = M::template rate<J>(p.data(), sj, tensor_of<J>(e));
+  const Vec6<J> ds = mandel_of<J>(r.d_stress);
+  Matrix6d t;
+  for (int i = 0; i < 6; ++i) t.row(i) = ds(i).v.transpose();
+  return t;
+}
+
+TEST(Laws, AutodiffThroughTemplatedLawsMatchesAnalyticTangent) {
+  const MaterialState base = [] {
+    MaterialState s;
+    s.stress = test_stress(1e6);
+    s.fabric = test_fabric();
+    return s;
+  }();
+  const Eigen::Matrix3d de = test_strain();
+  {
+    auto law = make_law("anisotropic_elastic");
+    const Matrix6d t = jet_tangent<AnisotropicElastic>(law->parameters(), base, de);
+    EXPECT_LE((t - law->tangent(base, de)).norm(), 1e-12 * t.norm());
+  }
+  {
+    auto law = make_law("hypoplastic_wu");
+    const Matrix6d t = jet_tangent<HypoplasticWu>(law->parameters(), base, de);
+    EXPECT_LE((t - law->tangent(base, de)).norm(), 1e-12 * t.norm());
+  }
+  {
+    auto law = make_law("elastoplastic_fabric");
+    MaterialState s = base;
+    const double p = s.stress.trace() / 3.0;
+    Eigen::Matrix3d n = deviator(de);
+    n /= n.norm();
+    s.internal = to_mandel(Eigen::Matrix3d(deviator(s.stress) / p - law->parameter("m_e") * n));
+    const Matrix6d t = jet_tangent<ElastoplasticFabric>(law->parameters(), s, de);
+    EXPECT_LE((t - law->tangent(s, de)).norm(), 1e-12 * t.norm());
+  }
+}
+
+TEST(Laws, AnisotropicTensorFormReducesToPinnedScalarForm) {
+  auto law = make_law("anisotropic_elastic");
+  const double b = law->parameter("B"), g = law->parameter("G"), beta = law->parameter("beta_A");
+  // Axisymmetric fabric with extension (F_xx < F_yy = F_zz): F_dev < 0.
+  const Eigen::Matrix3d fabric = Eigen::Vector3d(1.7, 2.1, 2.1).asDiagonal();
+  const MaterialState s = law->make_state(Eigen::Matrix3d::Identity() * 1e9, fabric, 0.8);
+  const double f_dev = signed_deviator(fabric);
+  ASSERT_LT(f_dev, 0.0);
+  const double a = beta * f_dev * b;
+  for (double theta : {0.0, 35.26, 77.0, 125.26, 200.0, 305.26}) {
+    const Eigen::Matrix3d de = probe_strain(theta, 1e-4);
+    const double ev = volumetric_strain(de);
+    // Axisymmetric signed deviator along the unit axial direction diag(2,-1,-1)/sqrt6.
+    const Eigen::Matrix3d n_ax =
+        Eigen::Vector3d(Eigen::Vector3d(2, -1, -1) / std::sqrt(6.0)).asDiagonal();
+    const double ed = (de.array() * n_ax.array()).sum();
+    const Eigen::Matrix3d ds = law->rate(s, de).d_stress;
+    const double dp = ds.trace() / 3.0;
+    const double dsd = (ds.array() * n_ax.array()).sum();
+    const double scale = b * 1e-4;
+    EXPECT_NEAR(dp, b * ev + a * ed, 1e-12 * scale) << theta;
+    EXPECT_NEAR(dsd, a * ev + 2 * g * ed, 1e-12 * scale) << theta;
+    // Stays axisymmetric.
+    EXPECT_NEAR(ds(1, 1), ds(2, 2), 1e-12 * scale);
+  }
+}
+
+TEST(Laws, HypoplasticIsRateIndependentAndStressHomogeneous) {
+  auto law = make_law("hypoplastic_wu");
+  const MaterialState s = law->make_state(test_stress(1e5), Eigen::Matrix3d::Zero(), 0.6);
+  const Eigen::Matrix3d de = 1e-4 * test_strain();
+  const Eigen::Matrix3d r1 = law->rate(s, de).d_stress;
+  // Degree 1 in d_eps (rate independence) and in sigma (no intrinsic stress scale).
+  EXPECT_LE((law->rate(s, 3.0 * de).d_stress - 3.0 * r1).norm(), 1e-12 * r1.norm());
+  MaterialState s2 = s;
+  s2.stress *= 7.0;
+  EXPECT_LE((law->rate(s2, de).d_stress - 7.0 * r1).norm(), 1e-12 * 7.0 * r1.norm());
+  // Loading isotropic compression is softer than unloading (incremental non-linearity).
+  const MaterialState iso = law->make_state(1e5 * Eigen::Matrix3d::Identity(), {}, 0.6);
+  const Eigen::Matrix3d c = 1e-4 * Eigen::Matrix3d::Identity();
+  const double k_load = law->rate(iso, c).d_stress.trace();
+  const double k_unload = -law->rate(iso, Eigen::Matrix3d(-c)).d_stress.trace();
+  EXPECT_GT(k_load, 0.0);
+  EXPECT_GT(k_unload, k_load);
+  std::string why;
+  MaterialState tension = iso;
+  tension.stress *= -1.0;
+  EXPECT_FALSE(law->admissible(tension, &why));
+  EXPECT_NE(why.find("tr(sigma)"), std::string::npos);
+}
+
+TEST(Laws, ElastoplasticSmallProbesElasticLargeProbesNot) {
+  auto ep = make_law("elastoplastic_fabric");
+  auto el = make_law("anisotropic_elastic");
+  const Eigen::Matrix3d stress = Eigen::Vector3d(1.8e9, 2.2e9, 2.2e9).asDiagonal();
+  const Eigen::Matrix3d fabric = Eigen::Vector3d(1.8, 2.0, 2.0).asDiagonal();
+  const MaterialState s = ep->make_state(stress, fabric, 0.82);
+  // A relaxed state sits at the centre of its elastic domain: the first rate is elastic in
+  // every direction, identical to anisotropic_elastic, with no deviatoric fabric change.
+  for (double theta : {kIsoCompressionDeg, kDevCompressionDeg, kDevExtensionDeg, 10.0}) {
+    const Eigen::Matrix3d de = probe_strain(theta, 5e-5);
+    const LawRate r = ep->rate(s, de);
+    const LawRate e = el->rate(s, de);
+    EXPECT_LE((r.d_stress - e.d_stress).norm(), 1e-12 * r.d_stress.norm());
+    EXPECT_LE((r.d_fabric - e.d_fabric).norm(), 1e-12 * std::max(e.d_fabric.norm(), 1e-12));
+    EXPECT_EQ(r.d_internal.norm(), 0.0);
+  }
+  // A constant-volume probe changes no fabric at all while elastic (seed Fig. 4).
+  EXPECT_LE(ep->rate(s, probe_strain(kDevExtensionDeg, 5e-5)).d_fabric.norm(), 1e-15);
+  // On the yield surface (after loading along n), the same small probe along n is plastic:
+  // the back ratio moves and the deviatoric fabric changes.
+  MaterialState on = s;
+  const Eigen::Matrix3d n =
+      Eigen::Vector3d(Eigen::Vector3d(-2, 1, 1) / std::sqrt(6.0)).asDiagonal();
+  on.internal -= to_mandel(Eigen::Matrix3d(ep->parameter("m_e") * n));
+  const LawRate r = ep->rate(on, 5e-5 * n);
+  EXPECT_GT(r.d_internal.norm(), 0.0);
+  EXPECT_LT(signed_deviator(Eigen::Matrix3d(fabric + r.d_fabric)), signed_deviator(fabric));
+}
+
+}  // namespace
+}  // namespace rendulic::models

@@ -1,0 +1,90 @@
+// Unit tests of the main paths driven through the laws (issue 6 item 4): isotropic compression
+// and undrained axisymmetric extension, against closed forms for the linear law and against
+// the steady state that elastoplastic_fabric is built to reach.
+#include "rendulic/models/paths.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace rendulic::models {
+namespace {
+
+TEST(Paths, IsotropicElasticClosedForms) {
+  auto law = make_law("isotropic_elastic");
+  const double k = law->parameter("K"), g = law->parameter("G");
+  const MaterialState s =
+      law->make_state(Eigen::Matrix3d::Identity() * 1e8, Eigen::Matrix3d::Identity() * 2.0, 0.7);
+  const PathSeries iso = isotropic_compression_path(*law, s, 0.02);
+  ASSERT_TRUE(iso.success) << iso.reason;
+  ASSERT_EQ(iso.stress.size(), 201u);
+  for (size_t i = 0; i < iso.stress.size(); ++i) {
+    EXPECT_NEAR(pressure(iso.stress[i]), 1e8 + k * iso.eps_v[i], 1e-9 * k * 0.02);
+    EXPECT_NEAR(std::sqrt(2 * j2(iso.stress[i])), 0.0, 1e-6);
+  }
+  EXPECT_NEAR(iso.eps_v.back(), 0.02, 1e-15);
+  EXPECT_NEAR(iso.volume_fraction.back(), 0.7 * std::exp(0.02), 1e-12);
+  // d tr(F) = c_F d eps_v with F kept isotropic: tr(F) grows linearly.
+  EXPECT_NEAR(iso.fabric.back().trace(), 6.0 + law->parameter("c_F") * 0.02, 1e-12);
+
+  const PathSeries und = undrained_axisymmetric_path(*law, s, -0.05);
+  ASSERT_TRUE(und.success) << und.reason;
+  EXPECT_NEAR(und.eps_dev.back(), -0.05, 1e-15);
+  for (size_t i = 0; i < und.stress.size(); ++i) {
+    EXPECT_NEAR(und.eps_v[i], 0.0, 1e-15);
+    EXPECT_NEAR(pressure(und.stress[i]), 1e8, 1e-6 * 1e8);
+    EXPECT_NEAR(signed_deviator(und.stress[i]), 2 * g * und.eps_dev[i], 1e-9 * 2 * g * 0.05);
+  }
+  EXPECT_LT(und.strain.back()(0, 0), 0.0);  // axial extension along x
+}
+
+TEST(Paths, EveryLawRunsBothPaths) {
+  for (const std::string& name : law_names()) {
+    auto law = make_law(name);
+    const double p0 = name == "hypoplastic_wu" ? 1e5 : 2e9;  // sand in kPa, DEM scale in GPa
+    const MaterialState s =
+        law->make_state(Eigen::Matrix3d::Identity() * p0, Eigen::Matrix3d::Identity() * 2.0, 0.82);
+    PathOptions o;
+    o.steps = 64;
+    const PathSeries iso = isotropic_compression_path(*law, s, 0.01, o);
+    ASSERT_TRUE(iso.success) << name << ": " << iso.reason;
+    EXPECT_GT(pressure(iso.stress.back()), p0) << name;
+    const PathSeries und = undrained_axisymmetric_path(*law, s, -0.32, o);
+    ASSERT_TRUE(und.success) << name << ": " << und.reason;
+    EXPECT_EQ(und.stress.size(), 65u);
+    for (const auto& st : und.stress) EXPECT_TRUE(st.allFinite()) << name;
+    // Extension along x: the axial stress falls below the lateral ones.
+    EXPECT_LT(und.stress.back()(0, 0), und.stress.back()(1, 1)) << name;
+    EXPECT_NEAR(und.stress.back()(1, 1), und.stress.back()(2, 2), 1e-9 * p0) << name;
+  }
+}
+
+TEST(Paths, ElastoplasticReachesItsSteadyState) {
+  auto law = make_law("elastoplastic_fabric");
+  const MaterialState s =
+      law->make_state(Eigen::Matrix3d::Identity() * 2e9, Eigen::Matrix3d::Identity() * 2.0, 0.82);
+  PathOptions o;
+  o.steps = 100;
+  const PathSeries und = undrained_axisymmetric_path(*law, s, -0.32, o);
+  ASSERT_TRUE(und.success) << und.reason;
+  const Eigen::Matrix3d& end = und.stress.back();
+  // Stress ratio and fabric deviator approach M_ss and -F_dev_max exponentially with plastic
+  // deviatoric strain; beta_F = 30 over ~0.3 leaves exp(-9) ~ 1e-4, beta_s = 10 leaves ~5%.
+  const double ratio = signed_deviator(end) / pressure(end);
+  EXPECT_LT(ratio, 0.0);
+  EXPECT_NEAR(-ratio, law->parameter("M_ss") + law->parameter("m_e"), 0.1 * law->parameter("M_ss"));
+  EXPECT_NEAR(signed_deviator(und.fabric.back()), -law->parameter("F_dev_max"),
+              1e-3 * law->parameter("F_dev_max"));
+  // The seed's Fig. 1: sigma_xx falls, sigma_yy = sigma_zz rise; F_xx falls, F_yy rises.
+  EXPECT_LT(end(0, 0), 2e9);
+  EXPECT_GT(end(1, 1), 2e9);
+  EXPECT_LT(und.fabric.back()(0, 0), 2.0);
+  EXPECT_GT(und.fabric.back()(1, 1), 2.0);
+  // The ratio grows monotonically towards the steady state along the path.
+  for (size_t i = 1; i < und.stress.size(); ++i)
+    EXPECT_LE(signed_deviator(und.stress[i]) / pressure(und.stress[i]),
+              signed_deviator(und.stress[i - 1]) / pressure(und.stress[i - 1]) + 1e-12);
+}
+
+}  // namespace
+}  // namespace rendulic::models
