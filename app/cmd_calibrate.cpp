@@ -12,6 +12,8 @@
 #include <memory>
 #include <sstream>
 
+#include <unistd.h>
+
 #include "commands.hpp"
 #include "rendulic/calibration/calibrate.hpp"
 #include "rendulic/calibration/report.hpp"
@@ -93,7 +95,16 @@ int run_calibrate(const CalibrateArgs& a) {
   const CalibrationData data = load_calibration_data(a.results, lo);
   const CalibrationSummary summary = calibrate(data, opt);
   const std::string json = to_json(summary);
-  if (!a.no_write) {
+  // "When the file is ours" (issue 7): a rendulic/1 file (the reader refused anything else)
+  // that we may replace. A read-only file or folder is still calibrated, just not written to.
+  const std::filesystem::path rp(a.results);
+  const std::filesystem::path folder = rp.has_parent_path() ? rp.parent_path() : ".";
+  const bool writable = ::access(a.results.c_str(), W_OK) == 0 &&
+                        ::access(folder.c_str(), W_OK) == 0;
+  if (!a.no_write && !writable)
+    std::cerr << "rendulic: " << a.results
+              << " is read-only: /calibration/" << a.model << " not written\n";
+  if (!a.no_write && writable) {
     ResultsWriter w = ResultsWriter::update(a.results);
     write_calibration(w, summary);
     w.commit();

@@ -127,3 +127,40 @@ TEST(CalibrateCli, BadInputExitsTwoAndLeavesTheFileUntouched) {
 
 }  // namespace
 }  // namespace rendulic::calibration
+
+namespace rendulic::calibration {
+namespace {
+
+// The `calibration` run stage reads the run's own file while the writer still holds it open
+// (before commit); HDF5 shares the open file within the process, so the loader sees it all.
+TEST(CalibrateCli, LoaderReadsAFileStillBeingWritten) {
+  const fs::path dir = fs::path(RENDULIC_TEST_TMP) / "calibration_cli";
+  fs::create_directories(dir);
+  const fs::path src = make_results_file("open_src.h5");
+  const ResultsReader r(src);
+  ResultsWriter w(dir / "open.h5");
+  w.attr("/material", "k_star", kKStar);
+  for (const auto& l : r.children("/states")) {
+    const std::string g = "/states/" + l;
+    w.write(g + "/stress", r.read_tensor(g + "/stress"));
+    w.write(g + "/fabric", r.exists(g + "/fabric") ? r.read_tensor(g + "/fabric")
+                                                    : Eigen::Matrix3d(Eigen::Matrix3d::Zero()));
+    if (!r.exists(g + "/envelopes")) continue;
+    for (const auto& e : r.children(g + "/envelopes")) {
+      const std::string eg = g + "/envelopes/" + e;
+      w.attr(eg, "amplitude", r.attr_double(eg, "amplitude"));
+      w.write(eg + "/theta_deg", r.read_vector(eg + "/theta_deg"));
+      w.write(eg + "/strain", r.read_pairs(eg + "/strain"));
+      w.write(eg + "/stress_star", r.read_pairs(eg + "/stress_star"));
+      w.write(eg + "/fabric", r.read_pairs(eg + "/fabric"));
+    }
+  }
+  const CalibrationData d = load_calibration_data(w.temporary_path());
+  EXPECT_EQ(d.states.size(), 4u);
+  EXPECT_NEAR(d.states[0].envelopes[0].stress[3].norm() /
+                  (r.read_pairs("/states/s0/envelopes/elastic/stress_star")[3].norm() * kKStar),
+              1.0, 1e-12);
+}
+
+}  // namespace
+}  // namespace rendulic::calibration

@@ -45,7 +45,8 @@ TEST(Recovery, AnisotropicElasticNoiseless) {
   for (const auto& st : s.states) {
     ASSERT_TRUE(st.has_model);
     EXPECT_NEAR(st.model_elastic.B / st.elastic.B, 1.0, kNoiseless);
-    EXPECT_NEAR(st.model_elastic.A / st.elastic.A, 1.0, kNoiseless) << st.label;
+    // A vanishes at the isotropic state s0: compare it on the scale of B.
+    EXPECT_NEAR((st.model_elastic.A - st.elastic.A) / st.elastic.B, 0.0, kNoiseless) << st.label;
   }
 }
 
@@ -78,7 +79,9 @@ TEST(Recovery, NoisyWithinReportedUncertainty) {
     // 4 sigma: with 6 parameters the chance of a false failure is ~4e-4.
     EXPECT_LT(err, 4.0 * s.fit.stderr_[k]) << s.fit.names[k] << " " << s.fit.values[k];
   }
-  EXPECT_NEAR(s.fitted_misfit, 0.01, 0.003);  // the misfit is the noise level
+  // The misfit is the noise level: 1% per component, so sqrt(2) % per Rendulic pair (within
+  // 10%: 576 noisy numbers estimate it to ~3%).
+  EXPECT_NEAR(s.fitted_misfit / (0.01 * std::sqrt(2.0)), 1.0, 0.1);
 }
 
 TEST(Recovery, CovarianceAgreesWithCeresCovariance) {
@@ -96,6 +99,7 @@ TEST(Recovery, CovarianceAgreesWithCeresCovariance) {
   ceres::Problem problem;
   problem.AddResidualBlock(obj.make_cost_function(), nullptr, z.data());
   ceres::Covariance::Options co;
+  co.algorithm_type = ceres::DENSE_SVD;
   ceres::Covariance cov(co);
   std::vector<std::pair<const double*, const double*>> blocks = {{z.data(), z.data()}};
   ASSERT_TRUE(cov.Compute(blocks, &problem));
