@@ -1,13 +1,154 @@
-// `rendulic calibrate` (interfaces.md): fits a model to a results file. Lands with issue 7.
+// `rendulic calibrate` (interfaces.md "Command line"; issue 7): fits a constitutive law to the
+// envelopes (and main path) of a results file, per state and across states
+// (calibration/calibrate.hpp), prints or writes the JSON (model, params, stderr, correlation,
+// per_state.<label> with B, G, A and the plastic features) and, unless --no-write, stores
+// /calibration/<model> in the results file through ResultsWriter::update (atomic: the file is
+// replaced only once the new content is complete). Any rendulic/1 file qualifies, including
+// envelopes from another DEM code converted to the schema.
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <memory>
+#include <sstream>
+
+#include <unistd.h>
+
 #include "commands.hpp"
+#include "rendulic/calibration/calibrate.hpp"
+#include "rendulic/calibration/report.hpp"
 #include "rendulic/core/errors.hpp"
+#include "rendulic/core/results.hpp"
+#include "rendulic/models/law.hpp"
 
 namespace rendulic::app {
-Subcommand add_calibrate(CLI::App& parent) {
-  auto* sub = parent.add_subcommand("calibrate", "Fit a model to the envelopes of a results file");
-  sub->allow_extras();
-  return {sub, [] () -> int {
-            throw NotAvailable("calibrate: calibration has not landed yet (issue 7)");
-          }};
+namespace {
+
+struct CalibrateArgs {
+  std::string results, model, out, backend = "ceres";
+  std::vector<std::string> states, holdout, free, values;
+  bool no_path = false, features = false, no_write = false;
+};
+
+std::vector<std::string> split_commas(const std::vector<std::string>& in) {
+  std::vector<std::string> out;
+  for (const auto& s : in) {
+    std::stringstream ss(s);
+    std::string item;
+    while (std::getline(ss, item, ','))
+      if (!item.empty()) out.push_back(item);
+  }
+  return out;
 }
+
+void write_text_atomically(const std::string& path, const std::string& text) {
+  namespace fs = std::filesystem;
+  const fs::path final_path(path);
+  const fs::path tmp = final_path.string() + ".tmp";
+  {
+    std::ofstream f(tmp);
+    if (!f) throw InputError(path + ": cannot write the JSON output");
+    f << text;
+    if (!f.flush()) throw InputError(path + ": cannot write the JSON output");
+  }
+  std::error_code ec;
+  fs::rename(tmp, final_path, ec);
+  if (ec) {
+    fs::remove(tmp, ec);
+    throw InputError(path + ": cannot move the JSON output into place");
+  }
+}
+
+int run_calibrate(const CalibrateArgs& a) {
+  using namespace rendulic::calibration;
+  // Cheap checks first, so that bad input costs nothing and touches nothing.
+  if (!models::make_law(a.model)) {
+    std::string known;
+    for (const auto& n : models::law_names()) known += (known.empty() ? "" : ", ") + n;
+    throw InputError("calibrate: unknown model '" + a.model + "' (known: " + known + ")");
+  }
+  CalibrationOptions opt;
+  opt.model = a.model;
+  opt.solver.backend = backend_from_string(a.backend);
+  opt.holdout = split_commas(a.holdout);
+  opt.free = split_commas(a.free);
+  opt.objective.path = !a.no_path;
+  opt.objective.envelope_features = a.features;
+  for (const auto& kv : split_commas(a.values)) {
+    const auto eq = kv.find('=');
+    if (eq == std::string::npos) throw InputError("--value '" + kv + "': expected name=number");
+    try {
+      std::size_t used = 0;
+      const double v = std::stod(kv.substr(eq + 1), &used);
+      if (used != kv.size() - eq - 1) throw std::invalid_argument("trailing characters");
+      opt.values[kv.substr(0, eq)] = v;
+    } catch (const std::exception&) {
+      throw InputError("--value '" + kv + "': not a number");
+    }
+  }
+  LoadOptions lo;
+  lo.states = split_commas(a.states);
+  for (const auto& h : opt.holdout)
+    if (!lo.states.empty() && std::find(lo.states.begin(), lo.states.end(), h) == lo.states.end())
+      lo.states.push_back(h);
+  lo.load_path = !a.no_path;
+  const CalibrationData data = load_calibration_data(a.results, lo);
+  const CalibrationSummary summary = calibrate(data, opt);
+  const std::string json = to_json(summary);
+  // "When the file is ours" (issue 7): a rendulic/1 file (the reader refused anything else)
+  // that we may replace. A read-only file or folder is still calibrated, just not written to.
+  const std::filesystem::path rp(a.results);
+  const std::filesystem::path folder = rp.has_parent_path() ? rp.parent_path() : ".";
+  const bool writable = ::access(a.results.c_str(), W_OK) == 0 &&
+                        ::access(folder.c_str(), W_OK) == 0;
+  if (!a.no_write && !writable)
+    std::cerr << "rendulic: " << a.results
+              << " is read-only: /calibration/" << a.model << " not written\n";
+  if (!a.no_write && writable) {
+    ResultsWriter w = ResultsWriter::update(a.results);
+    write_calibration(w, summary);
+    w.commit();
+  }
+  if (a.out.empty()) {
+    std::cout << json;
+  } else {
+    write_text_atomically(a.out, json);
+    std::cout << summary.BriefReport();
+  }
+  return 0;
+}
+
+}  // namespace
+
+Subcommand add_calibrate(CLI::App& parent) {
+  auto* sub = parent.add_subcommand(
+      "calibrate", "Fit a constitutive model to the envelopes and path of a results file");
+  auto args = std::make_shared<CalibrateArgs>();
+  sub->add_option("--results", args->results, "Results file (HDF5, schema rendulic/1)")
+      ->required();
+  sub->add_option("--model", args->model,
+                  "Model: isotropic_elastic, anisotropic_elastic, hypoplastic_wu, "
+                  "elastoplastic_fabric")
+      ->required();
+  sub->add_option("--states", args->states, "States to use, comma separated (default: all with envelopes)")
+      ->delimiter(',');
+  sub->add_option("--out", args->out, "Write the JSON here (default: print it)");
+  sub->add_option("--holdout", args->holdout,
+                  "States to predict but not fit (held-out check), comma separated")
+      ->delimiter(',');
+  sub->add_option("--backend", args->backend,
+                  "ceres (default), multistart, global (NLopt global + BOBYQA + Ceres), bobyqa");
+  sub->add_option("--free", args->free, "Free parameters, comma separated (default: per model)")
+      ->delimiter(',');
+  sub->add_option("--value", args->values,
+                  "name=value: start value of a free parameter or value of a fixed one")
+      ->delimiter(',');
+  sub->add_flag("--no-path", args->no_path, "Ignore the main path (envelopes only)");
+  sub->add_flag("--features", args->features,
+                "Add the envelope-feature objective (centre and affine matrix of each envelope)");
+  sub->add_flag("--no-write", args->no_write,
+                "Do not store /calibration/<model> in the results file");
+  return {sub, [args]() -> int { return run_calibrate(*args); }};
+}
+
 }  // namespace rendulic::app

@@ -1,0 +1,71 @@
+// The `calibration` run stage (stages_calibration.hpp; issue 7, models.md "Calibration").
+// It reads the states and envelopes through a ResultsReader on the writer's temporary file
+// (same process: HDF5 shares the open file, so everything written so far is visible) and
+// writes /calibration/<model> through the same writer.
+#include "stages_calibration.hpp"
+
+#include <iostream>
+
+#include "rendulic/calibration/calibrate.hpp"
+#include "rendulic/calibration/report.hpp"
+#include "rendulic/core/errors.hpp"
+#include "rendulic/models/law.hpp"
+
+namespace rendulic::app {
+
+void register_calibration_keys(ScenarioSchema& schema) {
+  schema.add({.path = "calibration.model",
+              .type = KeyType::kString,
+              .default_value = std::string{"anisotropic_elastic"},
+              .unit = "-",
+              .help = "Constitutive law to calibrate against the envelopes and the path.",
+              .choices = models::law_names()});
+  schema.add({.path = "calibration.states",
+              .type = KeyType::kStringList,
+              .default_value = std::vector<std::string>{},
+              .unit = "-",
+              .help = "State labels to fit (empty: every state with envelopes)."});
+  schema.add({.path = "calibration.holdout",
+              .type = KeyType::kStringList,
+              .default_value = std::vector<std::string>{},
+              .unit = "-",
+              .help = "State labels predicted but not fitted (held-out error)."});
+  schema.add({.path = "calibration.backend",
+              .type = KeyType::kString,
+              .default_value = std::string{"ceres"},
+              .unit = "-",
+              .help = "ceres (local least squares), multistart, global (NLopt global + "
+                      "BOBYQA + Ceres polish) or bobyqa.",
+              .choices = {"ceres", "multistart", "global", "bobyqa"}});
+  schema.add({.path = "calibration.path",
+              .type = KeyType::kBool,
+              .default_value = true,
+              .unit = "-",
+              .help = "Fit the main undrained path together with the envelopes."});
+  schema.add({.path = "calibration.features",
+              .type = KeyType::kBool,
+              .default_value = false,
+              .unit = "-",
+              .help = "Add the envelope-feature objective (centre and affine matrix)."});
+}
+
+void run_calibration_stage(const Scenario& scenario, ResultsWriter& out, const RunContext& ctx) {
+  using namespace rendulic::calibration;
+  CalibrationOptions opt;
+  opt.model = scenario.get_string("calibration.model");
+  opt.holdout = scenario.get_strings("calibration.holdout");
+  opt.solver.backend = backend_from_string(scenario.get_string("calibration.backend"));
+  opt.objective.path = scenario.get_bool("calibration.path");
+  opt.objective.envelope_features = scenario.get_bool("calibration.features");
+  LoadOptions lo;
+  lo.states = scenario.get_strings("calibration.states");
+  if (!lo.states.empty())
+    for (const auto& h : opt.holdout) lo.states.push_back(h);
+  lo.load_path = opt.objective.path;
+  const CalibrationData data = load_calibration_data(out.temporary_path(), lo);
+  const CalibrationSummary summary = calibrate(data, opt);
+  write_calibration(out, summary);
+  if (!ctx.quiet) std::cout << summary.BriefReport();
+}
+
+}  // namespace rendulic::app

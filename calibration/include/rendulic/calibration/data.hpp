@@ -1,0 +1,88 @@
+// What calibration fits against (models.md "Calibration", interfaces.md "Results file"): per
+// state the relaxed stress and fabric and its probe envelopes (Rendulic pairs of d_sigma in Pa
+// and of d_F, one per probe direction), and the main undrained path (stress and fabric versus
+// eps_dev). The loader reads any results file with /material and /states/<label>/envelopes, so
+// envelopes from another DEM code converted to our schema calibrate the same way as ours.
+// Stress pairs are converted to Pa with /material k_star (interfaces.md: *_star datasets are
+// divided by k*). No physics here, only data and its provenance.
+#pragma once
+
+#include <Eigen/Dense>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace rendulic::calibration {
+
+// physics.md section 5: elastic probes have |d_eps| < 1e-4, elasto-plastic ones > 1e-3.
+inline constexpr double kElasticAmplitudeMax = 1e-4;
+inline constexpr double kPlasticAmplitudeMin = 1e-3;
+
+struct EnvelopeData {
+  std::string name;
+  std::string method;  // "dynamic", "linear_response", "model", ... (informational)
+  double amplitude = 0.0;
+  std::vector<double> theta_deg;
+  std::vector<Eigen::Matrix3d> d_eps;   // probe strain tensors, compression positive
+  std::vector<Eigen::Vector2d> strain;  // Rendulic pairs of d_eps
+  std::vector<Eigen::Vector2d> stress;  // Rendulic pairs of d_sigma, Pa
+  std::vector<Eigen::Vector2d> fabric;  // Rendulic pairs of d_F
+
+  int size() const { return static_cast<int>(stress.size()); }
+  bool elastic() const { return amplitude < kElasticAmplitudeMax; }
+  bool has_fabric() const { return fabric.size() == stress.size() && !fabric.empty(); }
+  // Sizes agree, everything finite, at least 3 directions.
+  bool IsValid(std::string* why) const;
+};
+
+struct StateData {
+  std::string label;
+  Eigen::Matrix3d stress = Eigen::Matrix3d::Zero();  // Pa, compression positive
+  Eigen::Matrix3d fabric = Eigen::Matrix3d::Zero();
+  double volume_fraction = 0.0;
+  double eps_dev = 0.0;
+  std::vector<EnvelopeData> envelopes;
+
+  // The elastic envelope with the smallest amplitude, or nullptr.
+  const EnvelopeData* elastic_envelope() const;
+  // The non-elastic envelope with the largest amplitude, or nullptr.
+  const EnvelopeData* plastic_envelope() const;
+};
+
+// The main path, subsampled; row 0 is the start state of the model path.
+struct PathData {
+  std::vector<double> eps_dev;  // signed (physics.md 3), relative to row 0 after loading
+  std::vector<Eigen::Matrix3d> stress;  // Pa
+  std::vector<Eigen::Matrix3d> fabric;
+  double volume_fraction = 0.0;  // at row 0
+  bool empty() const { return eps_dev.size() < 2; }
+};
+
+struct CalibrationData {
+  std::string source;  // file name or "synthetic"
+  double k_star = 0.0;  // Pa; 0 when not from a file
+  std::vector<StateData> states;
+  PathData path;
+
+  const StateData* find(const std::string& label) const;
+  std::vector<std::string> labels() const;
+};
+
+struct LoadOptions {
+  std::vector<std::string> states;  // empty: every state with at least one envelope
+  bool load_path = true;
+  int max_path_samples = 40;  // the path is subsampled evenly in eps_dev to at most this
+  bool IsValid(std::string* why) const;
+};
+
+// Throws InputError naming the file and the culprit: no /states, a requested label that does
+// not exist (the message lists the ones that do), a requested state without envelopes, no
+// envelope at all, malformed envelope datasets.
+CalibrationData load_calibration_data(const std::filesystem::path& file,
+                                      const LoadOptions& options = {});
+
+// Envelope from probe directions and amplitude with strain pairs and tensors filled in
+// (core's probe_strain); stress and fabric left empty for the caller.
+EnvelopeData probe_set(const std::string& name, double amplitude, int directions);
+
+}  // namespace rendulic::calibration

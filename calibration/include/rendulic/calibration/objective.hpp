@@ -1,0 +1,164 @@
+// The calibration objective (models.md "Calibration"; docs/calibration.md "Objectives"): one
+// residual vector over the free parameters of a law, built from blocks
+//   - envelope points: per state and envelope, the predicted minus measured Rendulic pair of
+//     d_sigma (and, as a separate block, of d_F) for every probe direction;
+//   - envelope features: the six numbers (centre c, matrix M) of the affine envelope
+//     R(theta) = c + M u(theta) (probes/ fit_affine), which carry the ellipse's axes,
+//     inclination and shift; a projection of the points that ignores non-elliptic scatter;
+//   - the main path: predicted minus measured (iso, dev) pairs of stress and of fabric at the
+//     measured eps_dev, from the undrained axisymmetric path of the law.
+// Normalisation: every block is divided by its data scale (the rms norm of its measured pairs)
+// and by sqrt(number of its residual pairs), then multiplied by sqrt(weight): each block counts
+// with its weight, whatever its units (Pa or fabric) and its number of directions or samples.
+//
+// Parameters: a ParameterSpace picks the free parameters of the law (the others stay at fixed
+// values) and maps them to unbounded-ish working coordinates z: log(p) for positive
+// parameters whose bounds span two decades or more (moduli, rates), p itself otherwise. Bounds
+// are kept in z. Prediction: envelopes of elastic amplitude are one evaluation of the rate law
+// (exact for the incrementally linear response); larger probes and the path are integrated
+// with the models/ driver. When every block is a rate evaluation the Jacobian is automatic
+// (Ceres Jets through the law's template); otherwise central differences (Ceres numeric).
+#pragma once
+
+#include <ceres/ceres.h>
+
+#include <Eigen/Dense>
+#include <map>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "rendulic/calibration/data.hpp"
+#include "rendulic/models/driver.hpp"
+#include "rendulic/models/law.hpp"
+
+namespace rendulic::calibration {
+
+struct FreeParameter {
+  std::string name;
+  int index = 0;        // in the law's parameter_info()
+  bool log = false;     // z = log(p) when true, z = p otherwise
+  double lower = 0.0;   // search bounds (physical units)
+  double upper = 0.0;
+};
+
+class ParameterSpace {
+ public:
+  // `values` is the law's full parameter vector (fixed values and the start of the free ones);
+  // `free` names the free parameters; `bounds` narrows their search boxes (within the law's
+  // bounds). Throws InputError on an unknown name, a duplicate, or a box outside the bounds.
+  ParameterSpace(const models::Law& law, const std::vector<double>& values,
+                 const std::vector<std::string>& free,
+                 const std::map<std::string, std::pair<double, double>>& bounds = {});
+
+  int size() const { return static_cast<int>(free_.size()); }
+  const std::vector<FreeParameter>& free() const { return free_; }
+  const std::vector<double>& base() const { return base_; }
+  std::vector<std::string> names() const;
+
+  // Full parameter vector for working coordinates z (the fixed ones from base()).
+  template <typename T>
+  void full(const T* z, T* p) const {
+    for (std::size_t i = 0; i < base_.size(); ++i) p[i] = T(base_[i]);
+    for (std::size_t k = 0; k < free_.size(); ++k) {
+      using std::exp;
+      p[free_[k].index] = free_[k].log ? T(exp(z[k])) : z[k];
+    }
+  }
+  std::vector<double> full(const std::vector<double>& z) const;
+  std::vector<double> to_z(const std::vector<double>& full_values) const;
+  double z_lower(int k) const;
+  double z_upper(int k) const;
+  // dp/dz of free parameter k at z.
+  double dp_dz(int k, double z) const;
+
+ private:
+  std::vector<double> base_;
+  std::vector<FreeParameter> free_;
+};
+
+enum class Prediction { kAuto, kRate, kIntegrated };
+
+struct ObjectiveOptions {
+  bool envelope_points = true;
+  bool envelope_features = false;
+  bool path = true;  // used when the data has a path
+  // Block weights (see the file comment); 0 drops a block.
+  double weight_stress = 1.0;
+  double weight_fabric = 1.0;
+  double weight_features = 1.0;
+  double weight_path_stress = 1.0;
+  double weight_path_fabric = 1.0;
+  // Fabric blocks are skipped for laws that carry no fabric (hypoplastic_wu) and where the
+  // measured fabric response is below this scale (nothing to fit, and its scale would divide
+  // by ~0).
+  double fabric_scale_min = 1e-14;
+  // kAuto: rate evaluation for elastic amplitudes (< 1e-4), integration otherwise.
+  Prediction prediction = Prediction::kAuto;
+  // Driver settings for integrated predictions. A tight tolerance keeps the objective smooth
+  // to ~1e-10 relative, which central differences with relative step 1e-6 need.
+  models::StepOptions step = [] {
+    models::StepOptions s;
+    s.tolerance = 1e-10;
+    return s;
+  }();
+  int path_steps = 200;  // recorded model path samples (interpolated to the data's eps_dev)
+  bool IsValid(std::string* why) const;
+};
+
+// One block of the residual vector, for reports and for per-state errors.
+struct ResidualBlock {
+  std::string state;  // label, or "path"
+  std::string kind;   // "stress", "fabric", "features", "path_stress", "path_fabric"
+  std::string envelope;
+  int offset = 0;
+  int size = 0;
+  double scale = 1.0;   // data scale (Pa for stress, 1 for fabric)
+  double weight = 1.0;
+  bool integrated = false;
+};
+
+class Objective {
+ public:
+  // Throws InputError: unknown law, a state label not in `data`, nothing to fit.
+  Objective(std::string law_name, const CalibrationData& data,
+            const std::vector<std::string>& states, ParameterSpace space,
+            const ObjectiveOptions& options = {});
+  ~Objective();
+  Objective(Objective&&) noexcept;
+
+  const std::string& law_name() const;
+  const ParameterSpace& space() const;
+  const std::vector<ResidualBlock>& blocks() const;
+  int num_residuals() const;
+  int num_parameters() const;
+  bool autodiff() const;  // Jacobian by Jets through the law template
+
+  // Residuals at working coordinates z; false where the law cannot be evaluated (inadmissible
+  // state, driver failure): back ends treat that as an infinite cost.
+  bool residuals(const double* z, double* r) const;
+  // Residuals and the Jacobian dr/dz (autodiff or central differences as autodiff() says).
+  bool jacobian(const double* z, Eigen::VectorXd* r, Eigen::MatrixXd* J) const;
+  // A Ceres cost function over the one parameter block z (the caller's problem owns it).
+  ceres::CostFunction* make_cost_function() const;
+
+  // Model envelope at the state of `state` for the probe set of `probes`, with full parameter
+  // vector p. The returned data has stress and fabric filled in; ok=false on a model failure.
+  EnvelopeData predict_envelope(const std::vector<double>& p, const StateData& state,
+                                const EnvelopeData& probes, bool* ok) const;
+
+  struct Impl;
+
+ private:
+  std::unique_ptr<Impl> impl_;
+};
+
+// Default free parameters of a law for calibration with `n_states` states (docs/calibration.md):
+// moduli and the anisotropy coupling always; pressure and fabric dependence of the moduli
+// (n_p, a_G) only from three states on; p_ref never (it is a unit of pressure, degenerate with
+// B and G: it is fixed at the median pressure of the states instead).
+std::vector<std::string> default_free_parameters(const std::string& law_name, int n_states,
+                                                 bool has_path, bool has_plastic);
+
+}  // namespace rendulic::calibration

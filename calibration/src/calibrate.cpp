@@ -1,0 +1,241 @@
+// Two-level calibration with held-out check (calibrate.hpp; models.md "Calibration").
+#include "rendulic/calibration/calibrate.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+#include <sstream>
+
+#include "rendulic/core/conventions.hpp"
+#include "rendulic/core/errors.hpp"
+#include "rendulic/models/law.hpp"
+
+namespace rendulic::calibration {
+
+bool CalibrationOptions::IsValid(std::string* why) const {
+  if (model.empty()) {
+    if (why) *why = "no model named";
+    return false;
+  }
+  return objective.IsValid(why) && solver.IsValid(why);
+}
+
+namespace {
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  const std::size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+StateSummary analyse_state(const StateData& s) {
+  StateSummary out;
+  out.label = s.label;
+  out.pressure = pressure(s.stress);
+  out.f_dev = signed_deviator(s.fabric);
+  out.eps_dev = s.eps_dev;
+  out.volume_fraction = s.volume_fraction;
+  if (const EnvelopeData* e = s.elastic_envelope()) {
+    out.elastic = fit_rendulic_stiffness(*e);
+    out.has_elastic = out.elastic.ok;
+  }
+  if (const EnvelopeData* e = s.plastic_envelope()) {
+    out.plastic = plastic_features(*e);
+    out.has_plastic = out.plastic.ok;
+  }
+  return out;
+}
+
+// Relative rms sqrt(sum r^2 / sum w) of the blocks whose state is `label` ("" = all).
+double misfit(const std::vector<ResidualBlock>& blocks, const std::vector<double>& r,
+              const std::string& label, const std::string& kind_prefix = "") {
+  double s = 0.0, w = 0.0;
+  for (const auto& b : blocks) {
+    if (!label.empty() && b.state != label) continue;
+    if (!kind_prefix.empty() && b.kind.rfind(kind_prefix, 0) != 0) continue;
+    for (int i = 0; i < b.size; ++i) s += r[b.offset + i] * r[b.offset + i];
+    w += b.weight;
+  }
+  return w > 0.0 ? std::sqrt(s / w) : 0.0;
+}
+
+}  // namespace
+
+std::vector<StateSummary> per_state_analysis(const CalibrationData& data) {
+  std::vector<StateSummary> out;
+  for (const auto& s : data.states) out.push_back(analyse_state(s));
+  return out;
+}
+
+CalibrationSummary calibrate(const CalibrationData& data, const CalibrationOptions& options) {
+  std::string why;
+  if (!options.IsValid(&why)) throw InputError("calibrate: " + why);
+  const std::unique_ptr<models::Law> law = models::make_law(options.model);
+  if (!law) {
+    std::string known;
+    for (const auto& n : models::law_names()) known += (known.empty() ? "" : ", ") + n;
+    throw InputError("calibrate: unknown model '" + options.model + "' (known: " + known + ")");
+  }
+  if (data.states.empty()) throw InputError("calibrate: no states in the data");
+  CalibrationSummary out;
+  out.model = options.model;
+  for (const auto& pi : law->parameter_info()) out.param_names.push_back(pi.name);
+  const std::set<std::string> hold(options.holdout.begin(), options.holdout.end());
+  for (const auto& h : hold)
+    if (!data.find(h)) throw InputError("calibrate: held-out state '" + h + "' is not in the data");
+  for (const auto& s : data.states)
+    (hold.count(s.label) ? out.held_out_states : out.fitted_states).push_back(s.label);
+  if (out.fitted_states.empty()) throw InputError("calibrate: every state is held out");
+
+  // Level 1.
+  std::vector<StateSummary> level1;
+  for (const auto& s : data.states) {
+    level1.push_back(analyse_state(s));
+    level1.back().held_out = hold.count(s.label) > 0;
+  }
+
+  // Start values: law defaults, then level-1 numbers, then the user's.
+  std::vector<double> values = law->default_parameters();
+  auto set = [&](const std::string& name, double v) {
+    const int i = law->parameter_index(name);
+    if (i < 0 || !std::isfinite(v)) return;
+    const auto& pi = law->parameter_info()[i];
+    values[i] = std::clamp(v, pi.lower, pi.upper);
+  };
+  bool has_plastic = false;
+  if (options.level_one_start) {
+    std::vector<double> bs, gs, ps;
+    double num = 0.0, den = 0.0, cf_num = 0.0, cf_den = 0.0;
+    for (const auto& st : level1) {
+      if (st.held_out) continue;
+      has_plastic = has_plastic || st.has_plastic;
+      ps.push_back(st.pressure);
+      if (!st.has_elastic) continue;
+      bs.push_back(st.elastic.B);
+      gs.push_back(st.elastic.G);
+      // A = beta_A F_dev B (models.md family 2): least squares through the origin.
+      num += st.elastic.A * st.f_dev * st.elastic.B;
+      den += std::pow(st.f_dev * st.elastic.B, 2);
+    }
+    for (const auto& s : data.states) {
+      if (hold.count(s.label)) continue;
+      const EnvelopeData* e = s.elastic_envelope();
+      const double trf = s.fabric.trace();
+      if (!e || !e->has_fabric() || !(trf > 0.0)) continue;
+      // Elastic fabric response c_F tr(d_eps) F / tr(F): regression of the measured pairs.
+      for (int i = 0; i < e->size(); ++i) {
+        const Eigen::Vector2d unit = rendulic_pair(e->d_eps[i].trace() * s.fabric / trf);
+        cf_num += unit.dot(e->fabric[i]);
+        cf_den += unit.squaredNorm();
+      }
+    }
+    const double p_med = median(ps);
+    if (p_med > 0.0) set("p_ref", p_med);
+    if (!bs.empty()) {
+      set(law->parameter_index("B") >= 0 ? "B" : "K", median(bs));
+      set("G", median(gs));
+    }
+    if (den > 0.0) set("beta_A", num / den);
+    if (cf_den > 0.0 && cf_num > 0.0) set("c_F", cf_num / cf_den);
+  } else {
+    for (const auto& st : level1) has_plastic = has_plastic || (!st.held_out && st.has_plastic);
+  }
+  for (const auto& [name, v] : options.values) {
+    const int i = law->parameter_index(name);
+    if (i < 0) throw InputError("calibrate: unknown parameter '" + name + "' of " + options.model);
+    const auto& pi = law->parameter_info()[i];
+    if (!(v >= pi.lower && v <= pi.upper))
+      throw InputError("calibrate: value of '" + name + "' outside its bounds");
+    values[i] = v;
+  }
+  const bool use_path = options.objective.path && !data.path.empty();
+  const std::vector<std::string> free =
+      options.free.empty() ? default_free_parameters(options.model,
+                                                     static_cast<int>(out.fitted_states.size()),
+                                                     use_path, has_plastic)
+                           : options.free;
+  ParameterSpace space(*law, values, free, options.bounds);
+  out.free_mask.assign(out.param_names.size(), false);
+  for (const auto& f : space.free()) out.free_mask[f.index] = true;
+
+  // Level 2.
+  const Objective objective(options.model, data, out.fitted_states, space, options.objective);
+  out.blocks = objective.blocks();
+  const std::vector<double> z0 = space.to_z(space.base());
+  out.fit = solve(objective, z0, options.solver);
+  out.warnings = out.fit.uncertainty.warnings;
+  if (!out.fit.converged)
+    out.warnings.push_back("the optimiser did not report convergence: " + out.fit.report);
+
+  std::vector<double> r(objective.num_residuals(), 0.0);
+  const bool ok = objective.residuals(out.fit.z.data(), r.data());
+  out.fitted_misfit = ok ? misfit(out.blocks, r, "") : INFINITY;
+  if (ok && use_path) out.path_misfit = misfit(out.blocks, r, "path");
+
+  // Held-out states: predicted with the fitted parameters, never fitted.
+  std::vector<double> rh;
+  std::vector<ResidualBlock> hb;
+  if (!out.held_out_states.empty()) {
+    ObjectiveOptions ho = options.objective;
+    ho.path = false;
+    const Objective held(options.model, data, out.held_out_states, space, ho);
+    hb = held.blocks();
+    rh.assign(held.num_residuals(), 0.0);
+    if (held.residuals(out.fit.z.data(), rh.data())) {
+      out.held_out_misfit = misfit(hb, rh, "");
+    } else {
+      out.warnings.push_back("the fitted model cannot be evaluated at the held-out states");
+    }
+  }
+
+  for (auto& st : level1) {
+    const StateData& s = *data.find(st.label);
+    st.misfit = st.held_out ? (rh.empty() ? -1.0 : misfit(hb, rh, st.label))
+                            : (ok ? misfit(out.blocks, r, st.label) : -1.0);
+    bool all_ok = true;
+    for (const auto& e : s.envelopes) {
+      bool pok = false;
+      EnvelopeData pe = objective.predict_envelope(out.fit.params, s, e, &pok);
+      all_ok = all_ok && pok;
+      if (pok) st.predicted.push_back(std::move(pe));
+    }
+    st.has_model = all_ok && !st.predicted.empty();
+    if (st.has_model) {
+      for (const auto& pe : st.predicted) {
+        if (pe.elastic() && !st.model_elastic.ok) st.model_elastic = fit_rendulic_stiffness(pe);
+        if (!pe.elastic() && !st.model_plastic.ok) st.model_plastic = plastic_features(pe);
+      }
+    }
+    if (st.has_elastic && !st.elastic.note.empty())
+      out.warnings.push_back("state '" + st.label + "': " + st.elastic.note);
+  }
+  out.states = std::move(level1);
+  return out;
+}
+
+std::string CalibrationSummary::BriefReport() const {
+  std::ostringstream o;
+  o << "calibration of " << model << " on " << fitted_states.size() << " state(s)";
+  if (!held_out_states.empty()) o << " (+" << held_out_states.size() << " held out)";
+  o << ": " << (fit.converged ? "converged" : "NOT converged") << ", back end " << fit.backend
+    << ", Jacobian " << fit.jacobian << ", cost " << fit.cost << ", relative rms misfit "
+    << fitted_misfit;
+  if (held_out_misfit) o << ", held-out misfit " << *held_out_misfit;
+  o << ", " << fit.seconds << " s\n";
+  for (std::size_t k = 0; k < fit.names.size(); ++k)
+    o << "  " << fit.names[k] << " = " << fit.values[k] << " +- " << fit.stderr_[k] << "\n";
+  for (const auto& s : states) {
+    o << "  state " << s.label << (s.held_out ? " (held out)" : "") << ": P = " << s.pressure
+      << " Pa, F_dev = " << s.f_dev;
+    if (s.has_elastic)
+      o << ", B = " << s.elastic.B << " G = " << s.elastic.G << " A = " << s.elastic.A << " Pa";
+    if (s.has_plastic)
+      o << ", shift/a = " << s.plastic.shift_ratio << " thinning b/a = " << s.plastic.thinning;
+    o << ", misfit " << s.misfit << "\n";
+  }
+  for (const auto& w : warnings) o << "  WARNING: " << w << "\n";
+  return o.str();
+}
+
+}  // namespace rendulic::calibration

@@ -1,0 +1,206 @@
+// Loading calibration data from a results file (data.hpp; interfaces.md "Results file").
+#include "rendulic/calibration/data.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "rendulic/core/conventions.hpp"
+#include "rendulic/core/errors.hpp"
+#include "rendulic/core/results.hpp"
+
+namespace rendulic::calibration {
+
+bool EnvelopeData::IsValid(std::string* why) const {
+  auto fail = [&](const std::string& m) {
+    if (why) *why = "envelope '" + name + "': " + m;
+    return false;
+  };
+  const std::size_t m = stress.size();
+  if (m < 3) return fail("fewer than 3 probe directions");
+  if (strain.size() != m || d_eps.size() != m || theta_deg.size() != m)
+    return fail("strain, directions and stress have different lengths");
+  if (!fabric.empty() && fabric.size() != m) return fail("fabric and stress differ in length");
+  if (!(amplitude > 0.0) || !std::isfinite(amplitude)) return fail("amplitude must be > 0");
+  for (std::size_t i = 0; i < m; ++i) {
+    if (!stress[i].allFinite() || !strain[i].allFinite() || !std::isfinite(theta_deg[i]) ||
+        (!fabric.empty() && !fabric[i].allFinite()))
+      return fail("non-finite value in probe " + std::to_string(i));
+  }
+  return true;
+}
+
+const EnvelopeData* StateData::elastic_envelope() const {
+  const EnvelopeData* best = nullptr;
+  for (const auto& e : envelopes)
+    if (e.elastic() && (!best || e.amplitude < best->amplitude)) best = &e;
+  return best;
+}
+
+const EnvelopeData* StateData::plastic_envelope() const {
+  const EnvelopeData* best = nullptr;
+  for (const auto& e : envelopes)
+    if (!e.elastic() && (!best || e.amplitude > best->amplitude)) best = &e;
+  return best;
+}
+
+const StateData* CalibrationData::find(const std::string& label) const {
+  for (const auto& s : states)
+    if (s.label == label) return &s;
+  return nullptr;
+}
+
+std::vector<std::string> CalibrationData::labels() const {
+  std::vector<std::string> out;
+  for (const auto& s : states) out.push_back(s.label);
+  return out;
+}
+
+bool LoadOptions::IsValid(std::string* why) const {
+  if (max_path_samples < 2) {
+    if (why) *why = "max_path_samples must be >= 2";
+    return false;
+  }
+  return true;
+}
+
+EnvelopeData probe_set(const std::string& name, double amplitude, int directions) {
+  EnvelopeData e;
+  e.name = name;
+  e.method = "model";
+  e.amplitude = amplitude;
+  const Eigen::VectorXd th = probe_directions_deg(directions);
+  for (int i = 0; i < directions; ++i) {
+    e.theta_deg.push_back(th(i));
+    e.d_eps.push_back(probe_strain(th(i), amplitude));
+    e.strain.push_back(rendulic_pair(e.d_eps.back()));
+  }
+  return e;
+}
+
+namespace {
+
+std::string join(const std::vector<std::string>& v) {
+  std::string s;
+  for (const auto& x : v) s += (s.empty() ? "" : ", ") + x;
+  return s.empty() ? "(none)" : s;
+}
+
+EnvelopeData read_envelope(const ResultsReader& r, const std::string& group,
+                           const std::string& name, double k_star) {
+  const std::string file = r.path().string();
+  EnvelopeData e;
+  e.name = name;
+  e.amplitude = r.attr_double(group, "amplitude");
+  e.method = r.has_attr(group, "method") ? r.attr_string(group, "method") : "unknown";
+  if (r.exists(group + "/stress_star")) {
+    for (const auto& p : r.read_pairs(group + "/stress_star")) e.stress.push_back(p * k_star);
+  } else if (r.exists(group + "/d_stress")) {
+    for (const auto& t : r.read_tensors(group + "/d_stress")) e.stress.push_back(rendulic_pair(t));
+  } else {
+    throw InputError(file + ": envelope " + group + " has neither stress_star nor d_stress");
+  }
+  if (r.exists(group + "/fabric")) {
+    e.fabric = r.read_pairs(group + "/fabric");
+  } else if (r.exists(group + "/d_fabric")) {
+    for (const auto& t : r.read_tensors(group + "/d_fabric")) e.fabric.push_back(rendulic_pair(t));
+  }
+  const std::size_t m = e.stress.size();
+  if (r.exists(group + "/strain")) {
+    e.strain = r.read_pairs(group + "/strain");
+  } else if (r.exists(group + "/theta_deg")) {
+    for (double t : r.read_vector(group + "/theta_deg"))
+      e.strain.push_back(rendulic_pair(probe_strain(t, e.amplitude)));
+  } else {
+    throw InputError(file + ": envelope " + group + " has neither strain nor theta_deg");
+  }
+  if (e.strain.size() != m)
+    throw InputError(file + ": envelope " + group + ": strain and stress differ in length");
+  if (r.exists(group + "/theta_deg")) {
+    e.theta_deg = r.read_vector(group + "/theta_deg");
+  } else {
+    for (const auto& s : e.strain) e.theta_deg.push_back(probe_direction_deg(s));
+  }
+  // The probe is axisymmetric (physics.md 5), so its tensor is fixed by its Rendulic pair.
+  for (const auto& s : e.strain) e.d_eps.push_back(from_rendulic_pair(s));
+  std::string why;
+  if (!e.IsValid(&why)) throw InputError(file + ": " + group + ": " + why);
+  return e;
+}
+
+}  // namespace
+
+CalibrationData load_calibration_data(const std::filesystem::path& file,
+                                      const LoadOptions& options) {
+  std::string why;
+  if (!options.IsValid(&why)) throw InputError("calibration data: " + why);
+  const ResultsReader r(file);
+  const std::string name = file.string();
+  CalibrationData data;
+  data.source = name;
+  if (!r.exists("/material")) throw InputError(name + ": no /material group");
+  data.k_star = r.attr_double("/material", "k_star");
+  if (!(data.k_star > 0.0) || !std::isfinite(data.k_star))
+    throw InputError(name + ": /material k_star must be a positive number");
+  if (!r.exists("/states")) throw InputError(name + ": no /states group (no relaxed states)");
+  const std::vector<std::string> all = r.children("/states");
+  auto has_envelopes = [&](const std::string& l) {
+    const std::string g = "/states/" + l + "/envelopes";
+    return r.exists(g) && !r.children(g).empty();
+  };
+  std::vector<std::string> wanted = options.states;
+  if (wanted.empty()) {
+    for (const auto& l : all)
+      if (has_envelopes(l)) wanted.push_back(l);
+    if (wanted.empty())
+      throw InputError(name + ": no state has envelopes (states: " + join(all) + ")");
+  }
+  for (const auto& l : wanted) {
+    if (std::find(all.begin(), all.end(), l) == all.end())
+      throw InputError(name + ": no state '" + l + "' (states: " + join(all) + ")");
+    if (!has_envelopes(l)) throw InputError(name + ": state '" + l + "' has no envelopes");
+    const std::string g = "/states/" + l;
+    StateData s;
+    s.label = l;
+    s.stress = r.read_tensor(g + "/stress");
+    s.fabric = r.exists(g + "/fabric") ? r.read_tensor(g + "/fabric") : Eigen::Matrix3d::Zero();
+    s.volume_fraction = r.has_attr(g, "volume_fraction") ? r.attr_double(g, "volume_fraction") : 0;
+    s.eps_dev = r.has_attr(g, "eps_dev") ? r.attr_double(g, "eps_dev") : 0.0;
+    if (!s.stress.allFinite() || !s.fabric.allFinite())
+      throw InputError(name + ": state '" + l + "' has non-finite stress or fabric");
+    for (const auto& e : r.children(g + "/envelopes"))
+      s.envelopes.push_back(read_envelope(r, g + "/envelopes/" + e, e, data.k_star));
+    data.states.push_back(std::move(s));
+  }
+  if (options.load_path && r.exists("/path/eps_dev") && r.exists("/path/stress") &&
+      r.exists("/path/fabric")) {
+    const auto e = r.read_vector("/path/eps_dev");
+    const auto st = r.read_tensors("/path/stress");
+    const auto fb = r.read_tensors("/path/fabric");
+    if (e.size() != st.size() || e.size() != fb.size())
+      throw InputError(name + ": /path eps_dev, stress and fabric differ in length");
+    if (e.size() >= 2) {
+      // Even subsampling in eps_dev keeps the cost of the path block bounded while covering
+      // the whole curve; the start row is always kept (it seeds the model path).
+      const double e0 = e.front(), span = e.back() - e.front();
+      const int n = options.max_path_samples;
+      std::size_t j = 0;
+      for (int k = 0; k < n; ++k) {
+        const double target = e0 + span * k / (n - 1);
+        while (j + 1 < e.size() && std::abs(e[j + 1] - e0) <= std::abs(target - e0)) ++j;
+        if (!data.path.eps_dev.empty() && std::abs(e[j] - e0) <= std::abs(data.path.eps_dev.back()))
+          continue;
+        data.path.eps_dev.push_back(e[j] - e0);
+        data.path.stress.push_back(st[j]);
+        data.path.fabric.push_back(fb[j]);
+      }
+      if (r.exists("/path/volume_fraction")) data.path.volume_fraction = r.read_vector("/path/volume_fraction").front();
+      for (std::size_t k = 0; k < data.path.eps_dev.size(); ++k)
+        if (!std::isfinite(data.path.eps_dev[k]) || !data.path.stress[k].allFinite() ||
+            !data.path.fabric[k].allFinite())
+          throw InputError(name + ": /path has non-finite values");
+    }
+  }
+  return data;
+}
+
+}  // namespace rendulic::calibration
