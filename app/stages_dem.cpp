@@ -132,7 +132,10 @@ void stage_prepare(const Scenario& sc, ResultsWriter& out, const RunContext& ctx
   out.attr("/material", "n_particles", static_cast<std::int64_t>(o.gas.n_particles));
 
   progress.start_task("gas");
-  dem::DemSystem sys = dem::make_gas(o.system, o.gas, static_cast<std::uint64_t>(sc.get_int("run.seed")));
+  dem::SystemOptions prep = o.system;
+  prep.material.gamma_b = o.prepare_gamma_b;
+  dem::check_time_step(prep.material, prep.dt_factor, "preparation.gamma_b");
+  dem::DemSystem sys = dem::make_gas(prep, o.gas, static_cast<std::uint64_t>(sc.get_int("run.seed")));
   if (o.mix_time > 0) {
     const auto n = static_cast<std::int64_t>(std::ceil(o.mix_time / sys.dt()));
     for (std::int64_t k = 0; k < n; ++k) {
@@ -152,8 +155,10 @@ void stage_prepare(const Scenario& sc, ResultsWriter& out, const RunContext& ctx
   out.attr("/preparation", "compression_time", c.time);
   write_relax(out, "/preparation", "", r);
   out.attr("/preparation", "steps", sys.steps());
+  out.attr("/preparation", "gamma_b", o.prepare_gamma_b);
   out.attr("/preparation", "wall_time_s", progress.elapsed());
-  session.system = std::move(sys);
+  // Later stages run with the material's own background damping.
+  session.system = dem::DemSystem::restore(sys.save(), o.system);
 }
 
 void stage_isotropic(const Scenario&, ResultsWriter& out, const RunContext& ctx) {

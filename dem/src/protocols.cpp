@@ -180,7 +180,7 @@ CompressSummary compress_isotropic(DemSystem& sys, const CompressOptions& o, con
   const Material& mat = sys.material();
   int next_sample = 0;
   auto record = [&](const Measures& m) {
-    if (m.pressure > 0 && m.strain_rate > 0 && std::isfinite(m.inertial_number))
+    if (m.pressure_star > kJammedPressureStar && m.strain_rate > 0)
       s.max_inertial_number = std::max(s.max_inertial_number, m.inertial_number);
     if (sample) sample(m);
   };

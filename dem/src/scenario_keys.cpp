@@ -72,6 +72,11 @@ void register_dem_keys(ScenarioSchema& s) {
             "Isotropic compression rate of the gas to nu0 (|D_aa|); fast compression heats the "
             "gas through affine collisions, which the relaxation at nu0 then removes.",
             0, 1e6, true));
+  s.add(num("preparation.gamma_b", 0.1, "kg/s",
+            "Background damping during the preparation only (gas, compression to nu0, relaxation "
+            "at nu0); the seed's value by default. A larger value cools the compressed gas "
+            "faster; the packing at nu0 is unjammed, and every later stage uses material.gamma_b.",
+            0, kInf, false, true));
   s.add(num("preparation.nu0", 0.64, "-", "Volume fraction nu0 reached by the gas compression, "
                                           "just below isotropic jamming.",
             0, 1, true, true));
@@ -144,6 +149,7 @@ DemRunOptions dem_options_from_scenario(const Scenario& sc) {
   o.gas.volume_fraction = sc.get_double("preparation.nu_gas");
   o.gas.velocity = sc.get_double("preparation.gas_velocity");
   o.mix_time = sc.get_double("preparation.mix_time");
+  o.prepare_gamma_b = sc.get_double("preparation.gamma_b");
   o.prepare.target_nu = sc.get_double("preparation.nu0");
   o.prepare.rate_max = o.prepare.rate_min = sc.get_double("preparation.rate");
   o.relax.kinetic_to_elastic = sc.get_double("relax.kinetic_to_elastic");

@@ -71,10 +71,13 @@ struct CompressOptions {
   int samples = 0;           // samples equally spaced in ln(nu), both ends included
   bool IsValid(std::string* why) const;
 };
+// Below this P* a packing counts as unjammed for the inertial-number bookkeeping: as P -> 0
+// the inertial number diverges at any finite rate, and it means nothing for a fluid.
+inline constexpr double kJammedPressureStar = 1e-4;
 struct CompressSummary {
   double time = 0;
   std::int64_t steps = 0;
-  double max_inertial_number = 0;  // over samples with P > 0 and strain rate > 0
+  double max_inertial_number = 0;  // over samples with P* > kJammedPressureStar
 };
 CompressSummary compress_isotropic(DemSystem& sys, const CompressOptions& options,
                                    const SampleFn& sample = {}, const ProgressFn& progress = {});

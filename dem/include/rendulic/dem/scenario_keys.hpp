@@ -19,6 +19,7 @@ struct DemRunOptions {
   SystemOptions system;
   GasOptions gas;
   double mix_time = 0;       // s at fixed cell before compressing the gas
+  double prepare_gamma_b = 0.1;  // background damping during gas, compression, relax at nu0
   CompressOptions prepare;   // gas -> nu0 (constant rate)
   RelaxOptions relax;        // at nu0 and at nu_max
   CompressOptions loading;   // nu0 -> nu_max (isotropic branch)
