@@ -66,10 +66,11 @@ std::vector<std::uint64_t> contact_keys(const std::vector<Contact>& contacts) {
   std::sort(keys.begin(), keys.end());
   return keys;
 }
-std::vector<std::uint64_t> contact_keys(const std::vector<PairGeometry>& pairs) {
+std::vector<std::uint64_t> contact_keys(const std::vector<PairGeometry>& pairs,
+                                        double min_overlap) {
   std::vector<std::uint64_t> keys;
   for (const PairGeometry& c : pairs) {
-    if (c.overlap > 0.0) keys.push_back(static_cast<std::uint64_t>(c.i) << 32 | c.j);
+    if (c.overlap > min_overlap) keys.push_back(static_cast<std::uint64_t>(c.i) << 32 | c.j);
   }
   std::sort(keys.begin(), keys.end());
   return keys;
@@ -203,13 +204,18 @@ Envelope minimisation_envelope(const DemSystem& state, double amplitude,
     throw std::runtime_error("minimisation probes: the reference state did not converge (" +
                              ref_summary.message + ")");
   }
-  const StressFabric before = measure_stress_fabric(ref, mo.k);
-  const std::vector<std::uint64_t> keys_before = contact_keys(find_pairs(ref, 0.0));
+  // Contacts are those whose force the minimiser resolves: overlap above
+  // force_tolerance * mean contact force / k. A particle pushed by the relaxation of its
+  // neighbours stops FIRE once its force is below the tolerance, still touching; counting
+  // such force-free touches would make eq. 2 jump by a whole contact.
+  const double min_overlap = mo.force_tolerance * ref_summary.mean_contact_force / mo.k;
+  const StressFabric before = measure_stress_fabric(ref, mo.k, nullptr, min_overlap);
+  const std::vector<std::uint64_t> keys_before = contact_keys(find_pairs(ref, 0.0), min_overlap);
   std::vector<bool> backbone(ref.size(), true);
   {
     std::vector<Contact> cs;
     for (const PairGeometry& c : find_pairs(ref, 0.0)) {
-      if (c.overlap > 0.0) cs.push_back({c.i, c.j, c.l, c.overlap, mo.k * c.overlap});
+      if (c.overlap > min_overlap) cs.push_back({c.i, c.j, c.l, c.overlap, mo.k * c.overlap});
     }
     backbone = non_rattlers(ref.size(), cs);
   }
@@ -226,8 +232,9 @@ Envelope minimisation_envelope(const DemSystem& state, double amplitude,
       probe.positions = probe.positions * f.transpose();
       probe.cell = f * probe.cell;
       summaries[p] = minimise_energy(probe, mo);
-      after[p] = measure_stress_fabric(probe, mo.k);
-      const std::vector<std::uint64_t> keys_after = contact_keys(find_pairs(probe, 0.0));
+      after[p] = measure_stress_fabric(probe, mo.k, nullptr, min_overlap);
+      const std::vector<std::uint64_t> keys_after =
+          contact_keys(find_pairs(probe, 0.0), min_overlap);
       changes[p] = contact_changes(keys_before, keys_after);
       backbone_changes[p] =
           contact_changes(among(keys_before, backbone), among(keys_after, backbone));
@@ -255,6 +262,7 @@ Envelope minimisation_envelope(const DemSystem& state, double amplitude,
     diag["converged"].push_back(summaries[p].converged ? 1.0 : 0.0);
   }
   env.attributes["force_tolerance"] = mo.force_tolerance;
+  env.attributes["min_overlap"] = min_overlap;
   env.attributes["reference_iterations"] = static_cast<double>(ref_summary.iterations);
   return env;
 }

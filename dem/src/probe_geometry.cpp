@@ -128,11 +128,11 @@ std::vector<PairGeometry> find_pairs(const PackingData& packing, double skin) {
 }
 
 StressFabric measure_stress_fabric(const PackingData& packing, double k,
-                                   const std::vector<char>* include) {
+                                   const std::vector<char>* include, double min_overlap) {
   StressFabric out;
   const double volume = packing.volume();
   for (const PairGeometry& c : find_pairs(packing, 0.0)) {
-    if (c.overlap <= 0.0) continue;
+    if (c.overlap <= min_overlap) continue;
     if (include && (!(*include)[c.i] || !(*include)[c.j])) continue;
     const Eigen::Vector3d n = c.l / c.distance;
     const double f = k * c.overlap;

@@ -44,7 +44,9 @@ Eigen::Vector3d minimum_image(const Eigen::Matrix3d& cell, const Eigen::Matrix3d
 
 // Static stress (compression positive, Pa) and fabric of the contacts with overlap > 0:
 // sigma = (1/V) sum l (x) f, F = (1/V) sum_p V_p sum_{c in p} n n. Particles with
-// include[p] == 0 (if `include` is given) and all their contacts are left out.
+// include[p] == 0 (if `include` is given) and all their contacts are left out, and so are
+// contacts with overlap <= min_overlap (a minimiser resolves forces only down to its
+// tolerance: below it a touching contact is indistinguishable from an open one).
 struct StressFabric {
   Eigen::Matrix3d stress = Eigen::Matrix3d::Zero();
   Eigen::Matrix3d fabric = Eigen::Matrix3d::Zero();
@@ -52,6 +54,7 @@ struct StressFabric {
   double elastic_energy = 0.0;  // sum k delta^2 / 2, J
 };
 StressFabric measure_stress_fabric(const PackingData& packing, double k,
-                                   const std::vector<char>* include = nullptr);
+                                   const std::vector<char>* include = nullptr,
+                                   double min_overlap = 0.0);
 
 }  // namespace rendulic::dem
