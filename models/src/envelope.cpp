@@ -65,4 +65,14 @@ ModelEnvelope model_envelope(const Law& law, const MaterialState& state,
   return env;
 }
 
+Eigen::Matrix2d rendulic_tangent(const Law& law, const MaterialState& state, double theta_deg) {
+  const Matrix6d t = law.tangent(state, probe_strain(theta_deg, 1.0));
+  Eigen::Matrix2d d;
+  for (int j = 0; j < 2; ++j) {
+    const Eigen::Matrix3d e = from_rendulic_pair(Eigen::Vector2d::Unit(j));
+    d.col(j) = rendulic_pair(from_mandel(Vector6d(t * to_mandel(e))));
+  }
+  return d;
+}
+
 }  // namespace rendulic::models

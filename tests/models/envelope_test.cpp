@@ -106,6 +106,24 @@ TEST(Envelope, AnisotropicTiltIsExactlyThePinnedAngle) {
   }
 }
 
+TEST(Envelope, RendulicTangentOfAnisotropicLawIsThePinnedStiffness) {
+  auto law = make_law("anisotropic_elastic");
+  const Eigen::Matrix3d fabric = Eigen::Vector3d(1.6, 2.2, 2.2).asDiagonal();
+  const MaterialState s = law->make_state(Eigen::Matrix3d::Identity() * 2e9, fabric, 0.82);
+  const double b = law->parameter("B"), g = law->parameter("G");
+  const double a = law->parameter("beta_A") * signed_deviator(fabric) * b;
+  const Eigen::Matrix2d r = rendulic_to_iso_dev();
+  const Eigen::Matrix2d d_isodev = r * rendulic_tangent(*law, s, 0.0) * r.transpose();
+  EXPECT_LE((d_isodev - pinned_d(b, g, a)).norm(), kExact * 3 * b);
+  // And it maps each probe onto its rate-envelope point.
+  const ModelEnvelope env = run(*law, s, 1e-4, EnvelopeMethod::kRate);
+  for (int i = 0; i < env.theta_deg.size(); ++i) {
+    const Eigen::Vector2d pred =
+        rendulic_tangent(*law, s, env.theta_deg(i)) * env.strain.row(i).transpose();
+    EXPECT_LE((pred - env.stress.row(i).transpose()).norm(), kExact * 3 * b * 1e-4);
+  }
+}
+
 TEST(Envelope, HypoplasticIsTheShiftedClosedFormEllipseScalingWithAmplitude) {
   auto law = make_law("hypoplastic_wu");
   const double p = 1e5;
