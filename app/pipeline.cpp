@@ -9,15 +9,11 @@
 #include <vector>
 
 #include "report.hpp"
+#include "stages.hpp"
+#include "stages_calibration.hpp"
 #include "rendulic/core/errors.hpp"
 
 namespace rendulic::app {
-
-// DEM stages (app/stages_dem.cpp, issue 3).
-void stage_prepare(const Scenario&, ResultsWriter&, const RunContext&);
-void stage_isotropic(const Scenario&, ResultsWriter&, const RunContext&);
-void stage_path(const Scenario&, ResultsWriter&, const RunContext&);
-void stage_states(const Scenario&, ResultsWriter&, const RunContext&);
 
 namespace {
 
@@ -42,10 +38,10 @@ const std::vector<Stage>& stages() {
       {"isotropic", "3", stage_isotropic},
       {"path", "3", stage_path},
       {"states", "3", stage_states},
-      {"probes", "4", {}},
-      {"linear_response", "4", {}},
-      {"fits", "5", {}},
-      {"calibration", "7", {}},
+      {"probes", "4", stage_probes},
+      {"linear_response", "4", stage_linear_response},
+      {"fits", "5", stage_fits},
+      {"calibration", "7", run_calibration_stage},
       {"report", "8", {}, report_stage},
   };
   return table;

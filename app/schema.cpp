@@ -2,7 +2,10 @@
 // knows which modules contribute keys; each module declares its keys next to its options.
 #include "commands.hpp"
 #include "pipeline.hpp"
+#include "rendulic/dem/probe_campaign.hpp"
 #include "rendulic/dem/scenario_keys.hpp"
+#include "stages.hpp"
+#include "stages_calibration.hpp"
 
 namespace rendulic::app {
 
@@ -11,6 +14,9 @@ const ScenarioSchema& scenario_schema() {
     ScenarioSchema s;
     register_run_keys(s);
     dem::register_dem_keys(s);
+    dem::register_probe_keys(s);
+    register_fit_keys(s);
+    register_calibration_keys(s);
     return s;
   }();
   return schema;

@@ -23,16 +23,9 @@
 #include "rendulic/core/errors.hpp"
 #include "rendulic/dem/protocols.hpp"
 #include "rendulic/dem/scenario_keys.hpp"
+#include "stages.hpp"
 
 namespace rendulic::app {
-
-// Live DEM state shared by the stages of one run.
-struct DemRunSession {
-  std::optional<dem::DemSystem> system;          // after prepare / isotropic / path
-  std::vector<dem::DemSystem> snapshots;         // taken on the path, in states.labels order
-  std::vector<std::pair<std::string, dem::DemSystem>> relaxed;  // after states
-  std::optional<dem::DemRunOptions> options;
-};
 
 DemRunSession& dem_run_session() {
   static DemRunSession session;

@@ -1,0 +1,110 @@
+// The `probes`, `linear_response` and `fits` stages of `rendulic run` (issues 4 and 5;
+// physics.md sections 5-6). Probes and linear response work on the relaxed states the
+// `states` stage left in memory; fits read every envelope already written (through a reader
+// on the writer's temporary file) and add fit_stress / fit_fabric beside it. An envelope that
+// cannot be fitted (no fabric change at all, a degenerate set) gets shape "none" and the
+// reason, never an invented fit.
+#include <iostream>
+
+#include "rendulic/core/errors.hpp"
+#include "rendulic/dem/probe_campaign.hpp"
+#include "rendulic/probes/envelope_fit.hpp"
+#include "rendulic/probes/fit_io.hpp"
+#include "stages.hpp"
+
+namespace rendulic::app {
+namespace {
+
+const std::vector<std::pair<std::string, dem::DemSystem>>& relaxed_states(const char* stage) {
+  const auto& relaxed = dem_run_session().relaxed;
+  if (relaxed.empty())
+    throw InputError(std::string("run: stage '") + stage +
+                     "' needs the stage 'states' in run.stages");
+  return relaxed;
+}
+
+void campaign(const Scenario& sc, ResultsWriter& out, const RunContext& ctx,
+              const std::vector<std::string>& methods, const char* stage) {
+  dem::ProbeOptions o = dem::probe_options_from(sc);
+  if (ctx.threads > 0) o.threads = ctx.threads;
+  for (const auto& [label, state] : relaxed_states(stage)) {
+    if (!ctx.quiet) std::cerr << "rendulic: " << stage << " of state " << label << "\n";
+    dem::run_probe_campaign(state, label, methods, o, out);
+  }
+}
+
+FitOptions fit_options(const Scenario& sc, const std::string& quantity) {
+  FitOptions o;
+  o.shape = fit_shape_from_string(sc.get_string("fits." + quantity + "_shape"));
+  o.loss = fit_loss_from_string(sc.get_string("fits.loss"));
+  o.use_theta = sc.get_bool("fits.use_theta");
+  std::string why;
+  if (!o.IsValid(&why)) throw InputError("fits: " + why);
+  return o;
+}
+
+}  // namespace
+
+void stage_probes(const Scenario& sc, ResultsWriter& out, const RunContext& ctx) {
+  campaign(sc, out, ctx, dem::probe_methods_from(sc), "probes");
+}
+
+void stage_linear_response(const Scenario& sc, ResultsWriter& out, const RunContext& ctx) {
+  campaign(sc, out, ctx, {"linear_response"}, "linear_response");
+}
+
+void register_fit_keys(ScenarioSchema& s) {
+  s.add({.path = "fits.stress_shape",
+         .type = KeyType::kString,
+         .default_value = std::string("auto"),
+         .unit = "-",
+         .help = "Shape fitted to stress envelopes; auto chooses ellipse or line by the "
+                 "statistical test of docs/fitting.md (steady-state envelopes collapse to lines).",
+         .choices = {"auto", "ellipse", "line"}});
+  s.add({.path = "fits.fabric_shape",
+         .type = KeyType::kString,
+         .default_value = std::string("line"),
+         .unit = "-",
+         .help = "Shape fitted to fabric envelopes (the seed fits lines).",
+         .choices = {"auto", "ellipse", "line"}});
+  s.add({.path = "fits.loss",
+         .type = KeyType::kString,
+         .default_value = std::string("none"),
+         .unit = "-",
+         .help = "Robust loss of the fits (none, huber, cauchy; scales in docs/fitting.md).",
+         .choices = {"none", "huber", "cauchy"}});
+  s.add({.path = "fits.use_theta",
+         .type = KeyType::kBool,
+         .default_value = true,
+         .unit = "-",
+         .help = "Use the probe directions (affine start, exact for a linear law plus shift)."});
+}
+
+void stage_fits(const Scenario& sc, ResultsWriter& out, const RunContext& ctx) {
+  const FitOptions stress_opts = fit_options(sc, "stress"), fabric_opts = fit_options(sc, "fabric");
+  const ResultsReader in(out.temporary_path());
+  int fitted = 0, failed = 0;
+  for (const auto& label : in.children("/states")) {
+    const std::string envs = "/states/" + label + "/envelopes";
+    for (const auto& name : in.children(envs)) {
+      const std::string g = envs + "/" + name;
+      for (const auto& [pairs, fit_group, opts] :
+           {std::tuple{"stress_star", "fit_stress", stress_opts},
+            std::tuple{"fabric", "fit_fabric", fabric_opts}}) {
+        try {
+          const Envelope env = read_envelope(in, g, pairs);
+          write_envelope_fit(out, g + "/" + fit_group, fit_envelope(env, opts));
+          ++fitted;
+        } catch (const InputError& e) {  // degenerate envelope: say so in the file
+          out.attr(g + "/" + fit_group, "shape", "none");
+          out.attr(g + "/" + fit_group, "error", std::string(e.what()));
+          ++failed;
+        }
+      }
+    }
+  }
+  if (!ctx.quiet)
+    std::cerr << "rendulic: fits: " << fitted << " fitted, " << failed << " not fittable\n";
+}
+
+}  // namespace rendulic::app
