@@ -314,9 +314,11 @@ std::vector<Contact> DemSystem::contacts() const {
       const Eigen::Vector3d vrel =
           p_.velocity(i) - p_.velocity(j) + last_D_.cwiseProduct(l);
       Contact c;
-      c.i = static_cast<std::int32_t>(i);
-      c.j = j;
-      c.branch = l;
+      // Reported with i < j (the list stores each pair once, in either order).
+      const bool swap = static_cast<std::size_t>(j) < i;
+      c.i = swap ? j : static_cast<std::int32_t>(i);
+      c.j = swap ? static_cast<std::int32_t>(i) : j;
+      c.branch = swap ? Eigen::Vector3d(-l) : l;
       c.overlap = R - d;
       c.force = k * c.overlap + gamma * (-nrm.dot(vrel));
       out.push_back(c);
