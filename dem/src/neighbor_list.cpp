@@ -1,13 +1,13 @@
 // Cell-list construction of the full Verlet list and its rebuild rule (see neighbor_list.hpp).
 #include "rendulic/dem/neighbor_list.hpp"
 
+#include <omp.h>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <numeric>
 #include <sstream>
-
-#include <omp.h>
 
 #include "rendulic/core/errors.hpp"
 

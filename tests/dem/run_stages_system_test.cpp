@@ -133,14 +133,14 @@ TEST(RunStages, TinyScenarioWritesTheInterfacesSchema) {
 TEST(RunStages, BadDemValuesExitTwoAndWriteNothing) {
   const std::string scenario = std::string(RENDULIC_SOURCE_DIR) + "/data/scenarios/quick.toml";
   const std::vector<std::string> bad = {
-      "dem.dt_factor=0.5",         // beyond the stability limit
-      "material.k=-1",             // out of range
-      "isotropic.nu_max=0.6",      // below nu0
+      "dem.dt_factor=0.5",            // beyond the stability limit
+      "material.k=-1",                // out of range
+      "isotropic.nu_max=0.6",         // below nu0
       "states.labels=[\"a\",\"b\"]",  // one label per state
       "states.eps_dev=[0.006,0.5]",   // beyond path.eps_dev_max (and labels mismatch)
-      "dem.n_particles=10",        // too few
-      "preparation.nu_gas=0.5",    // random insertion cannot reach it
-      "path.rate=0",               // not a rate
+      "dem.n_particles=10",           // too few
+      "preparation.nu_gas=0.5",       // random insertion cannot reach it
+      "path.rate=0",                  // not a rate
   };
   for (std::size_t k = 0; k < bad.size(); ++k) {
     const fs::path out = fresh_dir("bad" + std::to_string(k));
