@@ -61,7 +61,8 @@ double time_steps(const dem::DemSystem& base, int threads, const BenchOptions& o
       steps += 50;
       el = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     }
-    best = std::min(best, el * 1e9 / (static_cast<double>(steps) * static_cast<double>(s.particles().size())));
+    best = std::min(
+        best, el * 1e9 / (static_cast<double>(steps) * static_cast<double>(s.particles().size())));
   }
   return best;
 }

@@ -55,8 +55,8 @@ class Progress {
     const double f = std::clamp(fraction, 0.0, 1.0);
     char eta[32] = "?";
     if (f > 1e-3) std::snprintf(eta, sizeof eta, "%.0fs", el * (1 - f) / f);
-    std::fprintf(stderr, "\r\033[K[%s] %s %5.1f%%  ETA %s", stage_.c_str(), task_.c_str(),
-                 100 * f, eta);
+    std::fprintf(stderr, "\r\033[K[%s] %s %5.1f%%  ETA %s", stage_.c_str(), task_.c_str(), 100 * f,
+                 eta);
     std::fflush(stderr);
   }
   void start_task(std::string name) {
@@ -84,21 +84,23 @@ void write_relax(ResultsWriter& out, const std::string& group, const std::string
 
 void warn_cap(const RunContext& ctx, const std::string& what, const dem::RelaxSummary& r) {
   if (!r.converged && !ctx.quiet)
-    std::cerr << "rendulic: warning: relaxation " << what << " hit its time cap ("
-              << r.time << " s) at kinetic/elastic " << r.ratio << "\n";
+    std::cerr << "rendulic: warning: relaxation " << what << " hit its time cap (" << r.time
+              << " s) at kinetic/elastic " << r.ratio << "\n";
 }
 
 Eigen::MatrixXd as_matrix(const std::vector<double>& x, const std::vector<double>& y,
                           const std::vector<double>& z) {
   Eigen::MatrixXd m(static_cast<Eigen::Index>(x.size()), 3);
-  for (std::size_t i = 0; i < x.size(); ++i) m.row(static_cast<Eigen::Index>(i)) << x[i], y[i], z[i];
+  for (std::size_t i = 0; i < x.size(); ++i)
+    m.row(static_cast<Eigen::Index>(i)) << x[i], y[i], z[i];
   return m;
 }
 
 dem::DemSystem& live_system(const char* stage) {
   auto& s = dem_run_session();
   if (!s.system)
-    throw InputError(std::string("run: stage '") + stage + "' needs the stages before it "
+    throw InputError(std::string("run: stage '") + stage +
+                     "' needs the stages before it "
                      "(prepare, isotropic, path) in run.stages");
   return *s.system;
 }
@@ -128,7 +130,8 @@ void stage_prepare(const Scenario& sc, ResultsWriter& out, const RunContext& ctx
   dem::SystemOptions prep = o.system;
   prep.material.gamma_b = o.prepare_gamma_b;
   dem::check_time_step(prep.material, prep.dt_factor, "preparation.gamma_b");
-  dem::DemSystem sys = dem::make_gas(prep, o.gas, static_cast<std::uint64_t>(sc.get_int("run.seed")));
+  dem::DemSystem sys =
+      dem::make_gas(prep, o.gas, static_cast<std::uint64_t>(sc.get_int("run.seed")));
   if (o.mix_time > 0) {
     const auto n = static_cast<std::int64_t>(std::ceil(o.mix_time / sys.dt()));
     for (std::int64_t k = 0; k < n; ++k) {
@@ -245,8 +248,8 @@ void stage_states(const Scenario&, ResultsWriter& out, const RunContext& ctx) {
     const dem::Particles& p = sys.particles();
     out.write(g + "/positions", as_matrix(p.x, p.y, p.z));
     out.write(g + "/radii", p.radius);
-    out.write(g + "/cell_lengths", std::vector<double>(sys.cell().lengths.data(),
-                                                       sys.cell().lengths.data() + 3));
+    out.write(g + "/cell_lengths",
+              std::vector<double>(sys.cell().lengths.data(), sys.cell().lengths.data() + 3));
     out.write(g + "/stress", m.stress);
     out.write(g + "/fabric", m.fabric);
     // Checkpoint: everything DemSystem::restore() needs for a bit-identical continuation.

@@ -204,7 +204,8 @@ void DemSystem::compute_forces(const double* __restrict vx, const double* __rest
   if constexpr (kStress) {
     // Serial sum in particle order: independent of the thread count.
     Eigen::Vector3d s = Eigen::Vector3d::Zero();
-    for (std::size_t i = 0; i < n; ++i) s += Eigen::Vector3d(sd[3 * i], sd[3 * i + 1], sd[3 * i + 2]);
+    for (std::size_t i = 0; i < n; ++i)
+      s += Eigen::Vector3d(sd[3 * i], sd[3 * i + 1], sd[3 * i + 2]);
     last_stress_diag_ = s / cell_.volume();
   }
 }
@@ -259,7 +260,8 @@ void DemSystem::step_impl(const Eigen::Vector3d& D) {
     wx[i] = vxi + hm * fx[i];
     wy[i] = vyi + hm * fy[i];
     wz[i] = vzi + hm * fz[i];
-    const double xi = sx * (x[i] + dt * vxi), yi = sy * (y[i] + dt * vyi), zi = sz * (z[i] + dt * vzi);
+    const double xi = sx * (x[i] + dt * vxi), yi = sy * (y[i] + dt * vyi),
+                 zi = sz * (z[i] + dt * vzi);
     x[i] = xi;
     y[i] = yi;
     z[i] = zi;
@@ -311,12 +313,13 @@ std::vector<Contact> DemSystem::contacts() const {
       const double d = l.norm();
       if (d >= R) continue;
       const Eigen::Vector3d nrm = l / d;
-      const Eigen::Vector3d vrel =
-          p_.velocity(i) - p_.velocity(j) + last_D_.cwiseProduct(l);
+      const Eigen::Vector3d vrel = p_.velocity(i) - p_.velocity(j) + last_D_.cwiseProduct(l);
       Contact c;
-      c.i = static_cast<std::int32_t>(i);
-      c.j = j;
-      c.branch = l;
+      // Reported with i < j (the list stores each pair once, in either order).
+      const bool swap = static_cast<std::size_t>(j) < i;
+      c.i = swap ? j : static_cast<std::int32_t>(i);
+      c.j = swap ? static_cast<std::int32_t>(i) : j;
+      c.branch = swap ? Eigen::Vector3d(-l) : l;
       c.overlap = R - d;
       c.force = k * c.overlap + gamma * (-nrm.dot(vrel));
       out.push_back(c);
@@ -327,7 +330,8 @@ std::vector<Contact> DemSystem::contacts() const {
 
 Eigen::Matrix3d DemSystem::stress() const {
   Eigen::Matrix3d s = Eigen::Matrix3d::Zero();
-  for (const Contact& c : contacts()) s += c.force / c.branch.norm() * c.branch * c.branch.transpose();
+  for (const Contact& c : contacts())
+    s += c.force / c.branch.norm() * c.branch * c.branch.transpose();
   return s / cell_.volume();
 }
 
@@ -413,8 +417,9 @@ Measures DemSystem::measure() const {
   m.coordination_nonrattler = n_keep ? 2.0 * static_cast<double>(m_keep) / n_keep : 0.0;
   m.rattler_fraction = 1.0 - static_cast<double>(n_keep) / static_cast<double>(n);
   m.kinetic_energy = kinetic_energy();
-  m.kinetic_to_elastic = m.elastic_energy > 0 ? m.kinetic_energy / m.elastic_energy
-                         : (m.kinetic_energy > 0 ? std::numeric_limits<double>::infinity() : 0.0);
+  m.kinetic_to_elastic =
+      m.elastic_energy > 0 ? m.kinetic_energy / m.elastic_energy
+                           : (m.kinetic_energy > 0 ? std::numeric_limits<double>::infinity() : 0.0);
   m.strain_rate = last_D_.cwiseAbs().maxCoeff();
   const Material& mat = options_.material;
   if (m.strain_rate == 0)
@@ -423,8 +428,7 @@ Measures DemSystem::measure() const {
     m.inertial_number = m.strain_rate * 2.0 * mat.r_mean * std::sqrt(mat.density / m.pressure);
   else
     m.inertial_number = std::numeric_limits<double>::infinity();
-  if (!std::isfinite(m.kinetic_energy) || !std::isfinite(m.elastic_energy) ||
-      !m.stress.allFinite())
+  if (!std::isfinite(m.kinetic_energy) || !std::isfinite(m.elastic_energy) || !m.stress.allFinite())
     throw std::runtime_error("DEM integration diverged (non-finite energy or stress) at t = " +
                              std::to_string(time_) + " s");
   return m;

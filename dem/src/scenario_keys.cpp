@@ -49,8 +49,9 @@ void register_dem_keys(ScenarioSchema& s) {
   s.add(num("material.density", 2000, "kg/m^3", "Particle density rho.", 0, kInf, true, true));
   s.add(num("material.r_mean", 1e-3, "m", "Mean radius <r> of the uniform size distribution.", 0,
             kInf, true, true));
-  s.add(num("material.w", 3.0, "-", "Polydispersity w = r_max / r_min (radii uniform in "
-                                    "[r_min, r_max], number-weighted).",
+  s.add(num("material.w", 3.0, "-",
+            "Polydispersity w = r_max / r_min (radii uniform in "
+            "[r_min, r_max], number-weighted).",
             1, 100));
   s.add(integer("dem.n_particles", 9261, "-", "Number of particles N (the seed: 9261 = 21^3).", 50,
                 5e6));
@@ -58,8 +59,8 @@ void register_dem_keys(ScenarioSchema& s) {
             "Time step as a fraction of the contact duration t_c of the two smallest particles; "
             "values beyond the explicit stability limit are refused.",
             0, 1, true));
-  s.add(num("dem.skin", 0.3, "-", "Verlet-list skin in units of <r> (speed only, not physics).",
-            0, 2, true));
+  s.add(num("dem.skin", 0.3, "-", "Verlet-list skin in units of <r> (speed only, not physics).", 0,
+            2, true));
   s.add(num("preparation.nu_gas", 0.3, "-", "Volume fraction of the initial random gas.", 0, 0.4,
             true));
   s.add(num("preparation.gas_velocity", 1.0, "m/s",
@@ -77,8 +78,9 @@ void register_dem_keys(ScenarioSchema& s) {
             "at nu0); the seed's value by default. A larger value cools the compressed gas "
             "faster; the packing at nu0 is unjammed, and every later stage uses material.gamma_b.",
             0, kInf, false, true));
-  s.add(num("preparation.nu0", 0.64, "-", "Volume fraction nu0 reached by the gas compression, "
-                                          "just below isotropic jamming.",
+  s.add(num("preparation.nu0", 0.64, "-",
+            "Volume fraction nu0 reached by the gas compression, "
+            "just below isotropic jamming.",
             0, 1, true, true));
   s.add(num("relax.kinetic_to_elastic", 1e-5, "-",
             "Relaxation at nu0 and nu_max ends when E_kin / max(E_el, N k (1e-4 <r>)^2 / 2) "
@@ -86,8 +88,8 @@ void register_dem_keys(ScenarioSchema& s) {
             0, 1, true));
   s.add(num("relax.time_cap", 2e-3, "s", "Longest relaxation at nu0 and nu_max (reported if hit).",
             0, 10, true));
-  s.add(num("isotropic.nu_max", 0.82, "-", "Volume fraction nu_max of the isotropic loading.", 0,
-            1, true, true));
+  s.add(num("isotropic.nu_max", 0.82, "-", "Volume fraction nu_max of the isotropic loading.", 0, 1,
+            true, true));
   s.add(integer("isotropic.samples", 60, "-",
                 "Samples of the isotropic branch (equally spaced in ln nu, ends included).", 50,
                 1e6));
@@ -100,15 +102,15 @@ void register_dem_keys(ScenarioSchema& s) {
             "Smallest isotropic loading rate (used while the pressure is ~0, below jamming).", 0,
             1e6, true));
   s.add(num("path.rate", 400, "1/s",
-            "Axial extension rate D_xx of the undrained path D = rate diag(1, -1/2, -1/2).", 0,
-            1e6, true));
+            "Axial extension rate D_xx of the undrained path D = rate diag(1, -1/2, -1/2).", 0, 1e6,
+            true));
   s.add(num("path.eps_dev_max", 0.32, "-", "Final -eps_dev of the undrained path.", 0, 2, true));
-  s.add(integer("path.samples", 200, "-", "Samples along the path (equally spaced in -eps_dev).",
-                2, 1e7));
+  s.add(integer("path.samples", 200, "-", "Samples along the path (equally spaced in -eps_dev).", 2,
+                1e7));
   {
-    KeySpec k = num("states.eps_dev", 0, "-",
-                    "-eps_dev of the snapshots taken on the path and relaxed at fixed cell.", 0, 2,
-                    true);
+    KeySpec k =
+        num("states.eps_dev", 0, "-",
+            "-eps_dev of the snapshots taken on the path and relaxed at fixed cell.", 0, 2, true);
     k.type = KeyType::kDoubleList;
     k.default_value = std::vector<double>{0.006, 0.021, 0.043, 0.068, 0.32};
     k.min_size = 1;
@@ -128,8 +130,8 @@ void register_dem_keys(ScenarioSchema& s) {
   }
   s.add(num("states.kinetic_to_elastic", 1e-6, "-",
             "Relaxation of each snapshot ends when E_kin / E_el falls below this.", 0, 1, true));
-  s.add(num("states.time_cap", 2e-3, "s", "Longest relaxation of a snapshot (reported if hit).",
-            0, 10, true));
+  s.add(num("states.time_cap", 2e-3, "s", "Longest relaxation of a snapshot (reported if hit).", 0,
+            10, true));
 }
 
 DemRunOptions dem_options_from_scenario(const Scenario& sc) {

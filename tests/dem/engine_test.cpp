@@ -58,7 +58,8 @@ TEST(Engine, StressFabricCoordinationOfLatticeWithKnownForces) {
   EXPECT_DOUBLE_EQ(m.coordination, 6.0);
   EXPECT_DOUBLE_EQ(m.coordination_nonrattler, 6.0);
   EXPECT_DOUBLE_EQ(m.rattler_fraction, 0.0);
-  EXPECT_NEAR(m.elastic_energy, 3 * n * n * n * 0.5 * mat.k * delta * delta, 1e-12 * m.elastic_energy);
+  EXPECT_NEAR(m.elastic_energy, 3 * n * n * n * 0.5 * mat.k * delta * delta,
+              1e-12 * m.elastic_energy);
   EXPECT_DOUBLE_EQ(m.kinetic_energy, 0.0);
   // The fast per-step stress (servo) agrees with eq. 1.
   for (int d = 0; d < 3; ++d) EXPECT_NEAR(s.last_stress_diag()[d], expect, kRel * expect);
@@ -175,7 +176,7 @@ TEST(Engine, RestartIsBitIdentical) {
   a.advance(1500, D);
   DemSystem b = DemSystem::restore(saved, o);
   b.advance(1500, D);
-  EXPECT_GT(a.list_builds(), 1);  // the list was rebuilt along the way
+  EXPECT_GT(a.list_builds(), 1);                        // the list was rebuilt along the way
   EXPECT_EQ(flat(a.particles()), flat(b.particles()));  // exact, not near
   EXPECT_EQ(a.cell().lengths, b.cell().lengths);
   EXPECT_EQ(a.time(), b.time());

@@ -73,8 +73,8 @@ class DemSystem {
 
   Measures measure() const;
   std::vector<Contact> contacts() const;
-  Eigen::Matrix3d stress() const;   // eq. 1, Pa
-  Eigen::Matrix3d fabric() const;   // eq. 2
+  Eigen::Matrix3d stress() const;  // eq. 1, Pa
+  Eigen::Matrix3d fabric() const;  // eq. 2
   double kinetic_energy() const;
   double elastic_energy() const;
   double volume_fraction() const { return solid_volume_ / cell_.volume(); }
@@ -122,7 +122,9 @@ class DemSystem {
   Eigen::Vector3d last_stress_diag_ = Eigen::Vector3d::Zero();
   std::vector<double> stress_scratch_;
   std::vector<double> wx_, wy_, wz_;
-  std::vector<double> force_buffer_;  // per-thread force accumulators (half list)  // predicted velocities of the dissipative forces  // per-particle diagonal stress (servo steps)
+  std::vector<double>
+      force_buffer_;  // per-thread force accumulators (half list)  // predicted velocities of the
+                      // dissipative forces  // per-particle diagonal stress (servo steps)
 };
 
 }  // namespace rendulic::dem

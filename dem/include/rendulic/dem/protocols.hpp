@@ -47,8 +47,8 @@ DemSystem make_gas(const SystemOptions& options, const GasOptions& gas, std::uin
 // have E_el >> E_floor, so for them this is the plain E_kin / E_el.
 struct RelaxOptions {
   double kinetic_to_elastic = 1e-6;
-  double time_cap = 1e-3;           // s; reported if hit
-  std::int64_t check_every = 200;   // steps between energy checks
+  double time_cap = 1e-3;          // s; reported if hit
+  std::int64_t check_every = 200;  // steps between energy checks
   bool IsValid(std::string* why) const;
 };
 struct RelaxSummary {
@@ -65,10 +65,10 @@ double relax_ratio(const DemSystem& sys);  // E_kin / max(E_el, E_floor)
 // clamp(I_target sqrt(P/rho) / (2<r>), rate_min, rate_max); otherwise it is rate_max.
 struct CompressOptions {
   double target_nu = 0.64;
-  double rate_max = 1e3;     // 1/s
-  double rate_min = 50.0;    // 1/s
+  double rate_max = 1e3;       // 1/s
+  double rate_min = 50.0;      // 1/s
   double inertial_number = 0;  // 0: constant rate_max
-  int samples = 0;           // samples equally spaced in ln(nu), both ends included
+  int samples = 0;             // samples equally spaced in ln(nu), both ends included
   bool IsValid(std::string* why) const;
 };
 // Below this P* a packing counts as unjammed for the inertial-number bookkeeping: as P -> 0

@@ -18,11 +18,11 @@ void register_dem_keys(ScenarioSchema& schema);
 struct DemRunOptions {
   SystemOptions system;
   GasOptions gas;
-  double mix_time = 0;       // s at fixed cell before compressing the gas
+  double mix_time = 0;           // s at fixed cell before compressing the gas
   double prepare_gamma_b = 0.1;  // background damping during gas, compression, relax at nu0
-  CompressOptions prepare;   // gas -> nu0 (constant rate)
-  RelaxOptions relax;        // at nu0 and at nu_max
-  CompressOptions loading;   // nu0 -> nu_max (isotropic branch)
+  CompressOptions prepare;       // gas -> nu0 (constant rate)
+  RelaxOptions relax;            // at nu0 and at nu_max
+  CompressOptions loading;       // nu0 -> nu_max (isotropic branch)
   PathOptions path;
   std::vector<std::string> state_labels;  // one per path.snapshot_eps_dev
   RelaxOptions state_relax;
