@@ -13,6 +13,7 @@
 //   line itself (same projections, Gaussian noise of the line's residual level) with the
 //   very fitting procedure used on the data, so the test has its stated size.
 #include <cmath>
+#include <optional>
 #include <random>
 #include <sstream>
 
@@ -116,28 +117,21 @@ EnvelopeFit fit_envelope(const Envelope& env, const FitOptions& options) {
     line.selection_note = "auto: line (points collinear to rounding)";
     return line;
   }
-  EnvelopeFit ell = fit_ellipse(env, options);
-  const double scale = ell.loss_scale;
-  const double cost_l = cost_of(line, options.loss, scale);
-  double ssr_ell = 0.0;
-  for (double r : ell.residuals) ssr_ell += r * r;
-  if (ssr_ell <= tiny) {
-    ell.selection_note = "auto: " + to_string(ell.shape) + " (exact to rounding; line rms " +
-                         std::to_string(line.rms) + ")";
-    ell.line_p_value = 0.0;
-    return ell;
-  }
   const double phi = deg_to_rad(*line.inclination_deg);
   const Eigen::Vector2d d(std::cos(phi), std::sin(phi)), nrm(-d.y(), d.x());
   std::ostringstream note;
+  // The ellipse is fitted only when needed: on a noisy line, with the directions, it can
+  // wander off towards a -> infinity for its full iteration budget.
+  std::optional<EnvelopeFit> ell;
   auto choose = [&](double p, const std::string& how) -> EnvelopeFit {
     if (p < options.selection_alpha) {
-      note << "auto: " << to_string(ell.shape) << " (line rejected by " << how << ": p = " << p
+      if (!ell) ell = fit_ellipse(env, options);
+      note << "auto: " << to_string(ell->shape) << " (line rejected by " << how << ": p = " << p
            << " < " << options.selection_alpha << ")";
-      if (ell.shape == FitShape::kCircle) note << "; axes equal within the errors";
-      ell.line_p_value = p;
-      ell.selection_note = note.str();
-      return ell;
+      if (ell->shape == FitShape::kCircle) note << "; axes equal within the errors";
+      ell->line_p_value = p;
+      ell->selection_note = note.str();
+      return *ell;
     }
     note << "auto: line (" << how << ": p = " << p << " >= " << options.selection_alpha
          << ", the ellipse does not fit significantly better)";
@@ -181,6 +175,12 @@ EnvelopeFit fit_envelope(const Envelope& env, const FitOptions& options) {
     }
   }
 
+  ell = fit_ellipse(env, options);
+  double ssr_ell = 0.0;
+  for (double r : ell->residuals) ssr_ell += r * r;
+  if (ssr_ell <= tiny) return choose(0.0, "exact fit to rounding");
+  const double cost_l = cost_of(line, options.loss, ell->loss_scale);
+
   // Parametric bootstrap under the fitted line. Every fit of the statistic (the data's and
   // the draws') runs with the same iteration cap: on a noisy line the ellipse fit can wander
   // off to a -> infinity, and the test is only exact if data and draws see one procedure.
@@ -189,8 +189,9 @@ EnvelopeFit fit_envelope(const Envelope& env, const FitOptions& options) {
   sim_opts.compute_covariance = false;
   sim_opts.max_iterations = std::min(options.max_iterations, kBootstrapIterations);
   sim_opts.use_theta = false;
-  const EnvelopeFit ell_capped =
-      ell.iterations > sim_opts.max_iterations || ell.used_theta ? fit_ellipse(env, sim_opts) : ell;
+  const EnvelopeFit ell_capped = ell->iterations > sim_opts.max_iterations || ell->used_theta
+                                     ? fit_ellipse(env, sim_opts)
+                                     : *ell;
   const double t_obs = cost_l / cost_of(ell_capped, options.loss, ell_capped.loss_scale);
   const double sigma = options.loss == FitLoss::kNone
                            ? std::sqrt(ssr_line / std::max(1.0, n - 2.0))

@@ -1,0 +1,150 @@
+// End-to-end tests of `rendulic fit` (interfaces.md, issue 5 item 6): JSON keys and values on
+// a known ellipse and line, the circle's undefined inclination, the readable summary, and
+// bad input (missing file, empty file, missing column, NaN, too few points, degenerate data)
+// -> exit 2 with a one-line reason. Runs the real binary.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "synthetic.hpp"
+
+namespace rendulic {
+namespace {
+namespace fs = std::filesystem;
+
+struct CmdResult {
+  int code;
+  std::string out;  // stdout
+  std::string err;  // stderr
+};
+
+CmdResult run_fit(const std::string& args) {
+  const fs::path err = fs::path(RENDULIC_TEST_TMP) / "probes_cli" / "stderr.txt";
+  const std::string cmd = std::string(RENDULIC_EXE) + " fit " + args + " 2>" + err.string();
+  CmdResult r{-1, {}, {}};
+  FILE* p = popen(cmd.c_str(), "r");
+  std::array<char, 4096> buf{};
+  while (fgets(buf.data(), buf.size(), p)) r.out += buf.data();
+  const int status = pclose(p);
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  std::ifstream e(err);
+  std::stringstream ss;
+  ss << e.rdbuf();
+  r.err = ss.str();
+  return r;
+}
+
+fs::path dir() {
+  const fs::path d = fs::path(RENDULIC_TEST_TMP) / "probes_cli";
+  fs::create_directories(d);
+  return d;
+}
+
+fs::path write_csv(const std::string& name, const std::string& text) {
+  const fs::path p = dir() / name;
+  std::ofstream(p) << text;
+  return p;
+}
+
+fs::path envelope_csv(const std::string& name, const Envelope& env) {
+  std::ostringstream o;
+  o.precision(17);
+  o << (env.has_theta() ? "theta_deg,x,y,comment\n" : "x,y\n");
+  for (std::size_t i = 0; i < env.size(); ++i) {
+    if (env.has_theta()) o << env.theta_deg[i] << ",";
+    o << env.response[i].x() << "," << env.response[i].y();
+    if (env.has_theta()) o << ",probe" << i;
+    o << "\n";
+  }
+  return write_csv(name, o.str());
+}
+
+// The number after "key": in a one-line JSON object (our own writer's format), or the
+// first element of the array that follows it.
+double json_number(const std::string& json, const std::string& key, int index = 0) {
+  const auto k = json.find("\"" + key + "\": ");
+  EXPECT_NE(k, std::string::npos) << key << " in " << json;
+  if (k == std::string::npos) return std::nan("");
+  std::size_t p = k + key.size() + 4;
+  if (json[p] == '[') {
+    ++p;
+    for (int i = 0; i < index; ++i) p = json.find(',', p) + 1;
+  }
+  return std::strtod(json.c_str() + p, nullptr);
+}
+
+TEST(FitCli, EllipseJson) {
+  test::TrueEllipse e{{0.01, -0.02}, 0.5, 0.05, 30.0};
+  const fs::path csv = envelope_csv("ellipse.csv", test::ellipse_envelope(e, 36, 0.0, 1, true));
+  const CmdResult r = run_fit("--in " + csv.string() + " --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 1) << "one JSON object, one line";
+  EXPECT_NE(r.out.find("\"shape\": \"ellipse\""), std::string::npos) << r.out;
+  // Noiseless: exact to the solver's tolerance (the JSON carries 17 digits).
+  EXPECT_NEAR(json_number(r.out, "center", 0), 0.01, 1e-9);
+  EXPECT_NEAR(json_number(r.out, "center", 1), -0.02, 1e-9);
+  EXPECT_NEAR(json_number(r.out, "semi_axes", 0), 0.5, 1e-9);
+  EXPECT_NEAR(json_number(r.out, "semi_axes", 1), 0.05, 1e-9);
+  EXPECT_NEAR(json_number(r.out, "inclination_deg"), 30.0, 1e-6);
+  EXPECT_NE(r.out.find("\"stderr\": {\"center\": ["), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("\"used_theta\": true"), std::string::npos);
+}
+
+TEST(FitCli, LineAndCircleAndText) {
+  const fs::path line = envelope_csv("line.csv", test::line_envelope({1.0, 2.0}, 3.0, 35.26, 24));
+  const CmdResult rl = run_fit("--in " + line.string() + " --json --shape auto");
+  ASSERT_EQ(rl.code, 0) << rl.err;
+  EXPECT_NE(rl.out.find("\"shape\": \"line\""), std::string::npos) << rl.out;
+  EXPECT_NEAR(json_number(rl.out, "semi_axes", 1), 0.0, 0.0);
+  EXPECT_NEAR(json_number(rl.out, "inclination_deg"), 35.26, 1e-9);
+
+  test::TrueEllipse c{{0.0, 0.0}, 1.0, 1.0, 0.0};
+  const fs::path circle = envelope_csv("circle.csv", test::ellipse_envelope(c, 20));
+  const CmdResult rc = run_fit("--in " + circle.string() + " --json --loss huber");
+  ASSERT_EQ(rc.code, 0) << rc.err;
+  EXPECT_NE(rc.out.find("\"shape\": \"circle\""), std::string::npos) << rc.out;
+  EXPECT_NE(rc.out.find("\"inclination_deg\": null"), std::string::npos) << rc.out;
+  EXPECT_EQ(rc.out.find("nan"), std::string::npos);
+
+  const CmdResult rt = run_fit("--in " + circle.string());
+  ASSERT_EQ(rt.code, 0);
+  EXPECT_NE(rt.out.find("undefined (circle)"), std::string::npos) << rt.out;
+}
+
+void expect_input_error(const std::string& args, const std::string& reason) {
+  const CmdResult r = run_fit(args);
+  EXPECT_EQ(r.code, 2) << args << "\n" << r.out << r.err;
+  EXPECT_NE(r.err.find(reason), std::string::npos) << args << ": " << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << "one line: " << r.err;
+  EXPECT_TRUE(r.out.empty()) << r.out;
+}
+
+TEST(FitCli, BadInputExits2WithAReason) {
+  expect_input_error("--in " + (dir() / "missing.csv").string(), "no such file");
+  expect_input_error("--in " + write_csv("empty.csv", "").string(), "empty file");
+  expect_input_error("--in " + write_csv("header_only.csv", "x,y\n").string(), "no data rows");
+  expect_input_error("--in " + write_csv("no_y.csv", "x,z\n1,2\n").string(), "'x' and 'y'");
+  expect_input_error("--in " + write_csv("nan.csv", "x,y\n1,2\n3,nan\n4,5\n").string(),
+                     "nan.csv:3: column 'y'");
+  expect_input_error("--in " + write_csv("text.csv", "x,y\n1,2\n3,abc\n").string(), "not a number");
+  expect_input_error("--in " + write_csv("short.csv", "x,y\n1,2\n3\n").string(),
+                     "expected 2 fields");
+  const fs::path four = write_csv("four.csv", "x,y\n1,0\n0,1\n-1,0\n0,-0.5\n");
+  expect_input_error("--in " + four.string() + " --shape ellipse", "at least 5 points");
+  expect_input_error("--in " + four.string(), "at least 5 points");
+  expect_input_error(
+      "--in " + write_csv("same.csv", "x,y\n1,1\n1,1\n1,1\n1,1\n1,1\n1,1\n").string(),
+      "all points coincide");
+  const fs::path ok = write_csv("ok.csv", "x,y\n1,0\n0,1\n-1,0\n0,-1\n0.7,0.7\n");
+  EXPECT_EQ(run_fit("--in " + ok.string() + " --shape hyperbola").code, 2);
+  EXPECT_EQ(run_fit("--in " + ok.string() + " --loss l1").code, 2);
+  EXPECT_EQ(run_fit("").code, 2);
+}
+
+}  // namespace
+}  // namespace rendulic
