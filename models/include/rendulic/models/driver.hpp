@@ -37,7 +37,9 @@ struct StepOptions {
 
 struct StepResult {
   bool success = false;
-  std::string reason;  // why it failed; empty on success
+  // Why it failed; on success empty, except when a fixed-step scheme exceeded the tolerance
+  // (within_tolerance false): then it says so.
+  std::string reason;
   MaterialState end;
   // Largest local error estimate over the accepted substeps (modified Euler) or over all
   // substeps (explicit). within_tolerance is false when an explicit step exceeded it.
