@@ -172,6 +172,57 @@ TEST(Laws, AutodiffThroughTemplatedLawsMatchesAnalyticTangent) {
   }
 }
 
+// Calibration differentiates with respect to the parameters: Jets seeded on the parameter
+// vector must match central differences of the double-precision law (smooth laws; relative
+// step 1e-6, agreement 1e-6 covers truncation ~1e-12 and rounding ~1e-10 relative).
+template <class M>
+void expect_parameter_jacobian(const Law& law, const MaterialState& s, const Eigen::Matrix3d& de) {
+  constexpr int kN = 8;
+  using J = ceres::Jet<double, kN>;
+  const std::vector<double>& p0 = law.parameters();
+  ASSERT_LE(p0.size(), static_cast<size_t>(kN));
+  std::vector<J> p;
+  for (size_t i = 0; i < p0.size(); ++i) p.push_back(J(p0[i], static_cast<int>(i)));
+  StateT<J> sj;
+  sj.stress = s.stress.cast<J>();
+  sj.fabric = s.fabric.cast<J>();
+  sj.internal = s.internal.cast<J>();
+  const Mat3<J> dej = de.cast<J>();
+  const Vec6<J> ds = mandel_of<J>(M::template rate<J>(p.data(), sj, dej).d_stress);
+  for (size_t k = 0; k < p0.size(); ++k) {
+    const double h = 1e-6 * std::max(std::abs(p0[k]), 1e-3);
+    std::vector<double> pp = p0, pm = p0;
+    pp[k] += h;
+    pm[k] -= h;
+    const Vector6d fd = (to_mandel(M::template rate<double>(pp.data(), s, de).d_stress) -
+                         to_mandel(M::template rate<double>(pm.data(), s, de).d_stress)) /
+                        (2 * h);
+    Vector6d jet;
+    for (int i = 0; i < 6; ++i) jet(i) = ds(i).v(static_cast<int>(k));
+    const double scale =
+        std::max(to_mandel(law.rate(s, de).d_stress).norm() / std::abs(p0[k] + 1e-300), fd.norm());
+    EXPECT_LE((jet - fd).norm(), 1e-6 * scale + 1e-12)
+        << law.name() << " d/d" << law.parameter_info()[k].name;
+  }
+}
+
+TEST(Laws, ParameterDerivativesThroughJetsMatchFiniteDifferences) {
+  MaterialState s;
+  s.stress = test_stress(1e9);
+  s.fabric = test_fabric();
+  const Eigen::Matrix3d de = 1e-4 * test_strain();
+  auto iso = make_law("isotropic_elastic");
+  std::string why;
+  ASSERT_TRUE(iso->set_parameter("n_p", 0.4, &why));
+  expect_parameter_jacobian<IsotropicElastic>(*iso, s, de);
+  auto ani = make_law("anisotropic_elastic");
+  ASSERT_TRUE(ani->set_parameter("n_p", 0.4, &why));
+  ASSERT_TRUE(ani->set_parameter("a_G", 2.0, &why));
+  expect_parameter_jacobian<AnisotropicElastic>(*ani, s, de);
+  auto hyp = make_law("hypoplastic_wu");
+  expect_parameter_jacobian<HypoplasticWu>(*hyp, s, de);
+}
+
 TEST(Laws, AnisotropicTensorFormReducesToPinnedScalarForm) {
   auto law = make_law("anisotropic_elastic");
   const double b = law->parameter("B"), g = law->parameter("G"), beta = law->parameter("beta_A");
