@@ -6,6 +6,8 @@
 // The NLopt global stage samples the box, finds the basin, BOBYQA and Ceres finish.
 #include <gtest/gtest.h>
 
+#include <iostream>
+
 #include "rendulic/calibration/calibrate.hpp"
 #include "synthetic.hpp"
 
@@ -43,6 +45,11 @@ TEST(GlobalBackend, SucceedsFromAPoorStartWhereLocalFails) {
   o.solver.global_evaluations = 400;
   o.solver.local_evaluations = 300;
   const CalibrationSummary global = calibrate(d, o);
+  std::cout << "local: m_e " << local.fit.values[0] << " misfit " << local.fitted_misfit << ", "
+            << local.fit.seconds << " s; global: m_e " << global.fit.values[0] << " M_ss "
+            << global.fit.values[1] << " beta_s " << global.fit.values[2] << " misfit "
+            << global.fitted_misfit << ", " << global.fit.seconds << " s, "
+            << global.fit.evaluations << " evaluations\n";
   EXPECT_LT(global.fitted_misfit, 1e-5) << global.BriefReport() << global.fit.report;
   // Recovered to 1e-4 relative: the objective is the driver's integral (tolerance 1e-9 here,
   // central-difference Jacobian) rather than a closed form.
