@@ -47,6 +47,90 @@ struct CirclePointResidual {
   }
 };
 
+// Signed orthogonal distance of one point to the ellipse s = (cx, cy, a, b, phi): the
+// latent angle is eliminated by the nearest-point condition (warm-started from the last
+// evaluation), and the derivative follows from the envelope theorem, dr/ds = -n . de/ds at
+// fixed t, since p - e(t*) is normal to the curve. Its Jacobian is the Schur complement of
+// the latent-angle problem, so the 5 x 5 covariance of this problem is the marginal
+// covariance of the shape, at a fraction of the cost of the (n + 5)-square one.
+class EllipseDistanceCost : public ceres::SizedCostFunction<1, 5> {
+ public:
+  EllipseDistanceCost(const Eigen::Vector2d& p, double t0) : p_(p), t_(t0) {}
+  double latent_angle() const { return t_; }
+  bool Evaluate(double const* const* x, double* r, double** jac) const override {
+    const double* s = x[0];
+    const Eigen::Vector2d c(s[0], s[1]);
+    t_ = nearest_latent_angle_from(p_, c, s[2], s[3], s[4], t_);
+    const Eigen::Matrix2d R = rotation(s[4]);
+    const double ct = std::cos(t_), st = std::sin(t_);
+    const Eigen::Vector2d e = c + R * Eigen::Vector2d(s[2] * ct, s[3] * st);
+    Eigen::Vector2d nv = R * Eigen::Vector2d(s[3] * ct, s[2] * st);
+    if (nv.norm() < 1e-300) nv = p_ - e;  // tip of a zero-width ellipse
+    const double nn = nv.norm();
+    if (nn < 1e-300) {  // point exactly at such a tip: no direction, no residual
+      r[0] = 0.0;
+      if (jac && jac[0]) std::fill(jac[0], jac[0] + 5, 0.0);
+      return true;
+    }
+    const Eigen::Vector2d nh = nv / nn;
+    r[0] = nh.dot(p_ - e);
+    if (jac && jac[0]) {
+      const Eigen::Vector2d local(s[2] * ct, s[3] * st);
+      const Eigen::Vector2d de_phi = R * Eigen::Vector2d(-local.y(), local.x());
+      jac[0][0] = -nh.x();
+      jac[0][1] = -nh.y();
+      jac[0][2] = -nh.dot(R * Eigen::Vector2d(ct, 0.0));
+      jac[0][3] = -nh.dot(R * Eigen::Vector2d(0.0, st));
+      jac[0][4] = -nh.dot(de_phi);
+    }
+    return true;
+  }
+
+ private:
+  Eigen::Vector2d p_;
+  mutable double t_;
+};
+
+// Signed distance to the circle s = (cx, cy, r): closed form, no latent angle needed.
+class CircleDistanceCost : public ceres::SizedCostFunction<1, 3> {
+ public:
+  explicit CircleDistanceCost(const Eigen::Vector2d& p) : p_(p) {}
+  double latent_angle() const { return 0.0; }  // unused: the circle needs none
+  bool Evaluate(double const* const* x, double* r, double** jac) const override {
+    const double* s = x[0];
+    const Eigen::Vector2d v = p_ - Eigen::Vector2d(s[0], s[1]);
+    const double nv = v.norm();
+    r[0] = nv - s[2];
+    if (jac && jac[0]) {
+      const Eigen::Vector2d u = nv > 0.0 ? Eigen::Vector2d(v / nv) : Eigen::Vector2d(1.0, 0.0);
+      jac[0][0] = -u.x();
+      jac[0][1] = -u.y();
+      jac[0][2] = -1.0;
+    }
+    return true;
+  }
+
+ private:
+  Eigen::Vector2d p_;
+};
+
+template <int kP>
+struct DistanceCostOf;
+template <>
+struct DistanceCostOf<5> {
+  using Type = EllipseDistanceCost;
+  static Type* make(const Eigen::Vector2d& p, double t) { return new Type(p, t); }
+};
+template <>
+struct DistanceCostOf<3> {
+  using Type = CircleDistanceCost;
+  static Type* make(const Eigen::Vector2d& p, double) { return new Type(p); }
+};
+template <int kP>
+ceres::CostFunction* distance_cost(const Eigen::Vector2d& p, double t) {
+  return DistanceCostOf<kP>::make(p, t);
+}
+
 // Classical 95%-efficiency tuning constants (in units of the noise sigma) for Gaussian data.
 constexpr double kHuberK = 1.345;
 constexpr double kCauchyK = 2.385;
@@ -70,7 +154,7 @@ double tuning_constant(FitLoss loss) { return loss == FitLoss::kHuber ? kHuberK 
 template <class Residual, int kP>
 CurveFit solve_once(const std::vector<Eigen::Vector2d>& q, std::vector<double> params,
                     std::vector<double> t, FitLoss loss, double loss_scale, bool covariance,
-                    int max_iterations) {
+                    int max_iterations, FitMethod method) {
   CurveFit out;
   out.params = std::move(params);
   out.t = std::move(t);
@@ -78,18 +162,9 @@ CurveFit solve_once(const std::vector<Eigen::Vector2d>& q, std::vector<double> p
   std::unique_ptr<ceres::LossFunction> loss_fn = make_loss(loss, loss_scale);
   ceres::Problem::Options popts;
   popts.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-  ceres::Problem problem(popts);
-  for (std::size_t i = 0; i < q.size(); ++i) {
-    auto* cost =
-        new ceres::AutoDiffCostFunction<Residual, 2, kP, 1>(new Residual{q[i].x(), q[i].y()});
-    problem.AddResidualBlock(cost, loss_fn.get(), out.params.data(), &out.t[i]);
-  }
   ceres::Solver::Options opts;
-  // The latent angles form a block-diagonal part that the Schur complement eliminates
-  // exactly: the reduced system is kP x kP whatever the number of points.
-  opts.linear_solver_type = ceres::DENSE_SCHUR;
   opts.max_num_iterations = max_iterations;
-  // Noiseless data must be recovered to near machine precision (tests ask 1e-9 relative).
+  // Noiseless data must be recovered to near machine precision (tests ask 1e-8 relative).
   opts.function_tolerance = 1e-15;
   opts.gradient_tolerance = 1e-15;
   opts.parameter_tolerance = 1e-13;
@@ -97,7 +172,36 @@ CurveFit solve_once(const std::vector<Eigen::Vector2d>& q, std::vector<double> p
   opts.minimizer_progress_to_stdout = false;
   opts.num_threads = 1;
   ceres::Solver::Summary summary;
-  ceres::Solve(opts, &problem, &summary);
+  if (method == FitMethod::kLatentAngles || kP == 3) {
+    ceres::Problem problem(popts);
+    for (std::size_t i = 0; i < q.size(); ++i) {
+      auto* cost =
+          new ceres::AutoDiffCostFunction<Residual, 2, kP, 1>(new Residual{q[i].x(), q[i].y()});
+      problem.AddResidualBlock(cost, loss_fn.get(), out.params.data(), &out.t[i]);
+    }
+    // The latent angles form a block-diagonal part that the Schur complement eliminates
+    // exactly: the reduced system is kP x kP whatever the number of points.
+    opts.linear_solver_type = ceres::DENSE_SCHUR;
+    ceres::Solve(opts, &problem, &summary);
+  } else {
+    // Variable projection: the latent angles are solved inside each residual evaluation, so
+    // the solver sees kP unknowns only.
+    ceres::Problem problem(popts);
+    std::vector<const typename DistanceCostOf<kP>::Type*> costs;
+    for (std::size_t i = 0; i < q.size(); ++i) {
+      auto* cost = DistanceCostOf<kP>::make(q[i], out.t[i]);
+      costs.push_back(cost);
+      problem.AddResidualBlock(cost, loss_fn.get(), out.params.data());
+    }
+    opts.linear_solver_type = ceres::DENSE_QR;
+    ceres::Solve(opts, &problem, &summary);
+    // The costs hold the angles of the last evaluation, which may be a rejected trial step:
+    // take the nearest points of the accepted solution.
+    for (std::size_t i = 0; i < q.size(); ++i)
+      out.t[i] = nearest_latent_angle_from(q[i], Eigen::Vector2d(out.params[0], out.params[1]),
+                                           out.params[2], out.params[3], out.params[4],
+                                           costs[i]->latent_angle());
+  }
   out.converged = summary.termination_type == ceres::CONVERGENCE;
   out.iterations = static_cast<int>(summary.iterations.size());
 
@@ -108,11 +212,15 @@ CurveFit solve_once(const std::vector<Eigen::Vector2d>& q, std::vector<double> p
     out.d[i] = std::hypot(r[0], r[1]);
   }
   if (covariance) {
+    // The covariance is taken on the equivalent distance problem (5 or 3 parameters, see
+    // EllipseDistanceCost) at the solution, with the same loss.
+    ceres::Problem dproblem(popts);
+    for (std::size_t i = 0; i < q.size(); ++i)
+      dproblem.AddResidualBlock(distance_cost<kP>(q[i], out.t[i]), loss_fn.get(),
+                                out.params.data());
     ceres::Covariance::Options copts;
-    // Dense SVD with a pseudo-inverse: a latent angle at an exact tip of a degenerate
-    // ellipse has a zero Jacobian column that must be dropped, not reported as a failure.
-    // Shape directions are never that small unless the shape is genuinely unidentified
-    // (an exact circle's inclination), which fit_ellipse detects separately.
+    // Dense SVD with a pseudo-inverse: the one direction that can vanish is an exact
+    // circle's inclination, which fit_ellipse detects and refits as a circle.
     copts.algorithm_type = ceres::DENSE_SVD;
     copts.null_space_rank = -1;
     copts.min_reciprocal_condition_number = 1e-14;
@@ -120,7 +228,7 @@ CurveFit solve_once(const std::vector<Eigen::Vector2d>& q, std::vector<double> p
     ceres::Covariance cov(copts);
     std::vector<std::pair<const double*, const double*>> blocks = {
         {out.params.data(), out.params.data()}};
-    if (cov.Compute(blocks, &problem)) {
+    if (cov.Compute(blocks, &dproblem)) {
       Eigen::Matrix<double, kP, kP, Eigen::RowMajor> c;
       if (cov.GetCovarianceBlock(out.params.data(), out.params.data(), c.data())) {
         out.cov_unit = c;
@@ -134,43 +242,43 @@ CurveFit solve_once(const std::vector<Eigen::Vector2d>& q, std::vector<double> p
 template <class Residual, int kP>
 CurveFit solve_curve(const std::vector<Eigen::Vector2d>& q, std::vector<double> params,
                      std::vector<double> t, FitLoss loss, double loss_scale, bool covariance,
-                     int max_iterations, const std::vector<double>& d0) {
+                     int max_iterations, FitMethod method, const std::vector<double>& d0) {
   const auto n = static_cast<double>(q.size());
-  CurveFit fit;
-  if (loss == FitLoss::kNone) {
-    fit = solve_once<Residual, kP>(q, std::move(params), std::move(t), loss, 0.0, covariance,
-                                   max_iterations);
-    double ssr = 0.0;
-    for (double d : fit.d) ssr += d * d;
-    fit.sigma = std::sqrt(ssr / std::max(1.0, n - kP));
+  if (loss == FitLoss::kNone || loss_scale > 0.0) {
+    CurveFit fit = solve_once<Residual, kP>(q, std::move(params), std::move(t), loss, loss_scale,
+                                            covariance, max_iterations, method);
+    if (loss == FitLoss::kNone) {
+      double ssr = 0.0;
+      for (double d : fit.d) ssr += d * d;
+      fit.sigma = std::sqrt(ssr / std::max(1.0, n - kP));
+    } else {
+      fit.sigma =
+          std::max(mad_scale(fit.d) * std::sqrt(n / std::max(1.0, n - kP)), kMinLossScale * 1e-3);
+    }
     return fit;
   }
+  // Automatic scale from the distances d0 to a high-breakdown start (robust_guess): pass 1
+  // robust at k * MAD(d0); pass 2 rescaled from pass 1's residuals. A least-squares start
+  // would not do: four outliers in 36 points can pull it so far that every residual, and
+  // with them the MAD, is inflated and the loss no longer tells outliers from inliers.
   const double k = tuning_constant(loss);
-  if (loss_scale > 0.0) {
-    fit = solve_once<Residual, kP>(q, std::move(params), std::move(t), loss, loss_scale, covariance,
-                                   max_iterations);
-  } else {
-    // Pass 1: scale from the distances to the starting curve; pass 2: from the first robust
-    // fit, whose residuals are no longer inflated by the outliers' pull.
-    const double s1 = std::max(kMinLossScale, k * mad_scale(d0));
-    CurveFit first = solve_once<Residual, kP>(q, std::move(params), std::move(t), loss, s1, false,
-                                              max_iterations);
-    const double s2 = std::max(kMinLossScale, k * mad_scale(first.d));
-    fit = solve_once<Residual, kP>(q, first.params, first.t, loss, s2, covariance, max_iterations);
-    fit.iterations += first.iterations;
+  CurveFit fit;
+  fit.params = std::move(params);
+  fit.t = std::move(t);
+  fit.d = d0;
+  int iterations = 0;
+  for (int pass = 1; pass <= 2; ++pass) {
+    const double scale = std::max(kMinLossScale, k * mad_scale(fit.d));
+    fit = solve_once<Residual, kP>(q, fit.params, fit.t, loss, scale, covariance && pass == 2,
+                                   max_iterations, method);
+    iterations += fit.iterations;
   }
+  fit.iterations = iterations;
   // The robust fit's noise level: MAD of the residuals, rescaled for the n - p parameters
   // that the fit absorbed (the plain fit's sqrt(SSR / (n - p)) has the same correction).
   fit.sigma =
       std::max(mad_scale(fit.d) * std::sqrt(n / std::max(1.0, n - kP)), kMinLossScale * 1e-3);
   return fit;
-}
-
-std::vector<double> distances(const std::vector<Eigen::Vector2d>& q, const EllipseGuess& g) {
-  std::vector<double> d;
-  d.reserve(q.size());
-  for (const auto& p : q) d.push_back(ellipse_distance(p, g.center, g.a, g.b, g.phi));
-  return d;
 }
 
 }  // namespace
@@ -251,11 +359,13 @@ EllipseGuess best_guess(const std::vector<Eigen::Vector2d>& q, const std::vector
 }
 
 CurveFit solve_ellipse(const std::vector<Eigen::Vector2d>& q, const EllipseGuess& g, FitLoss loss,
-                       double loss_scale, bool covariance, int max_iterations) {
+                       double loss_scale, bool covariance, int max_iterations, FitMethod method) {
   std::vector<double> d0;
-  if (loss != FitLoss::kNone && !(loss_scale > 0.0)) d0 = distances(q, g);
+  if (loss != FitLoss::kNone && !(loss_scale > 0.0))
+    for (const auto& p : q) d0.push_back(ellipse_distance(p, g.center, g.a, g.b, g.phi));
   return solve_curve<EllipsePointResidual, 5>(q, {g.center.x(), g.center.y(), g.a, g.b, g.phi}, g.t,
-                                              loss, loss_scale, covariance, max_iterations, d0);
+                                              loss, loss_scale, covariance, max_iterations, method,
+                                              d0);
 }
 
 CurveFit solve_circle(const std::vector<Eigen::Vector2d>& q, const Eigen::Vector2d& c, double r,
@@ -265,7 +375,7 @@ CurveFit solve_circle(const std::vector<Eigen::Vector2d>& q, const Eigen::Vector
   if (loss != FitLoss::kNone && !(loss_scale > 0.0))
     for (const auto& p : q) d0.push_back(std::abs((p - c).norm() - r));
   return solve_curve<CirclePointResidual, 3>(q, {c.x(), c.y(), r}, t, loss, loss_scale, covariance,
-                                             max_iterations, d0);
+                                             max_iterations, FitMethod::kExactDistance, d0);
 }
 
 }  // namespace fit_detail
@@ -356,10 +466,13 @@ EnvelopeFit fit_ellipse(const Envelope& env, const FitOptions& options) {
     throw InputError("fit: an ellipse needs at least 5 distinct points");
   bool used_theta = false;
   const EllipseGuess g =
-      fit_detail::best_guess(nz.q, env.theta_deg, options.use_theta, &used_theta);
+      options.loss == FitLoss::kNone
+          ? fit_detail::best_guess(nz.q, env.theta_deg, options.use_theta, &used_theta)
+          : fit_detail::robust_guess(nz.q, env.theta_deg, options.use_theta, options.seed,
+                                     &used_theta);
   const double scale = options.loss_scale > 0.0 ? options.loss_scale / nz.scale : 0.0;
   CurveFit f = fit_detail::solve_ellipse(nz.q, g, options.loss, scale, options.compute_covariance,
-                                         options.max_iterations);
+                                         options.max_iterations, options.method);
   const double L = nz.scale;
 
   // Fold to a >= b >= 0, phi in [0, pi). F maps the raw (cx, cy, a, b, phi) covariance.

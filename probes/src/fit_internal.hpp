@@ -4,6 +4,7 @@
 
 #include <Eigen/Dense>
 #include <cmath>
+#include <cstdint>
 #include <vector>
 
 #include "rendulic/core/conventions.hpp"
@@ -26,6 +27,11 @@ inline Eigen::Vector2d ellipse_point(const Eigen::Vector2d& c, double a, double 
 // guarded Newton steps on the stationarity condition (monotone in the distance).
 double nearest_latent_angle(const Eigen::Vector2d& p, const Eigen::Vector2d& c, double a, double b,
                             double phi);
+
+// Same, by guarded Newton steps from t_start (a warm start); falls back to the grid when the
+// distance is not locally convex there.
+double nearest_latent_angle_from(const Eigen::Vector2d& p, const Eigen::Vector2d& c, double a,
+                                 double b, double phi, double t_start);
 
 // Orthogonal distance of p to the ellipse (via nearest_latent_angle).
 double ellipse_distance(const Eigen::Vector2d& p, const Eigen::Vector2d& c, double a, double b,
@@ -83,6 +89,13 @@ CurveFit solve_circle(const std::vector<Eigen::Vector2d>& q, const Eigen::Vector
 // Halir-Flusser, then principal axes (always succeeds for non-coincident points).
 EllipseGuess best_guess(const std::vector<Eigen::Vector2d>& q, const std::vector<double>& theta,
                         bool use_theta, bool* used_theta);
+
+// High-breakdown start for the robust losses (least median of squares): the best of many
+// minimal subsets (5 points through Halir-Flusser; 3 directions through the affine fit when
+// theta is used), judged by the median distance of all points (Sampson's first-order
+// distance for the conic, the 2D residual for the affine law). Seeded: reproducible.
+EllipseGuess robust_guess(const std::vector<Eigen::Vector2d>& q, const std::vector<double>& theta,
+                          bool use_theta, std::uint64_t seed, bool* used_theta);
 
 // Robust cost sum rho(d^2) (plain sum of squares for kNone) at the given scale.
 double robust_cost(const std::vector<double>& d, FitLoss loss, double scale);

@@ -5,6 +5,8 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <random>
 
 #include "fit_internal.hpp"
 #include "rendulic/core/conventions.hpp"
@@ -12,38 +14,116 @@
 
 namespace rendulic {
 namespace fit_detail {
+namespace {
+
+// In the ellipse's frame, with the point at (x, y): f(t) = |e(t) - q|^2 and
+// g(t) = (1/2) f'(t), h(t) = g'(t). Everything from one (cos t, sin t): trigonometric calls
+// are the cost of the whole fit.
+struct NearestPoint {
+  double x, y, a, b;
+  double f_cs(double c, double s) const {
+    const double dx = a * c - x, dy = b * s - y;
+    return dx * dx + dy * dy;
+  }
+  double f(double t) const { return f_cs(std::cos(t), std::sin(t)); }
+  double g_cs(double c, double s) const { return (b * b - a * a) * s * c + a * x * s - b * y * c; }
+  double g(double t) const { return g_cs(std::cos(t), std::sin(t)); }
+  double h_cs(double c, double s) const {
+    return (b * b - a * a) * (c * c - s * s) + a * x * c + b * y * s;
+  }
+  // Size of g's terms: what "g = 0" means to rounding.
+  double g_scale() const { return a * a + b * b + a * std::abs(x) + b * std::abs(y); }
+
+  // Guarded Newton descent from t; stops where f is not locally convex. Returns whether it
+  // ended at a stationary point (to rounding).
+  double descend(double t, bool* stationary) const {
+    double c = std::cos(t), s = std::sin(t);
+    double ft = f_cs(c, s);
+    *stationary = false;
+    for (int it = 0; it < 30; ++it) {
+      const double gv = g_cs(c, s), hv = h_cs(c, s);
+      if (std::abs(gv) <= 1e-13 * g_scale()) {
+        *stationary = true;
+        break;
+      }
+      if (!(hv > 0.0)) break;
+      const double t_new = t - gv / hv;
+      const double cn = std::cos(t_new), sn = std::sin(t_new);
+      const double v = f_cs(cn, sn);
+      if (!(v <= ft)) {
+        *stationary = std::abs(gv) <= 1e-9 * g_scale();  // rounding-level stall
+        break;
+      }
+      t = t_new, c = cn, s = sn, ft = v;
+    }
+    return t;
+  }
+
+  // Root of g in [lo, hi] with g(lo) <= 0 <= g(hi): Newton steps kept inside the bracket,
+  // bisection otherwise. Needed near the tips of thin ellipses, where the convex basin of
+  // the minimum is narrower than any grid spacing and plain Newton stalls.
+  double bracketed(double lo, double hi) const {
+    double t = 0.5 * (lo + hi);
+    for (int it = 0; it < 100; ++it) {
+      const double c = std::cos(t), s = std::sin(t);
+      const double gv = g_cs(c, s);
+      (gv <= 0.0 ? lo : hi) = t;
+      const double hv = h_cs(c, s);
+      double t_new = hv > 0.0 ? t - gv / hv : 0.5 * (lo + hi);
+      if (!(t_new > lo && t_new < hi)) t_new = 0.5 * (lo + hi);
+      if (std::abs(t_new - t) < 1e-16 * (1.0 + std::abs(t)) || hi - lo < 1e-15) return t_new;
+      t = t_new;
+    }
+    return t;
+  }
+};
+
+constexpr int kGrid = 32;
+constexpr double kStep = 2.0 * kPi / kGrid;
+struct GridTable {
+  double c[kGrid], s[kGrid];
+  GridTable() {
+    for (int k = 0; k < kGrid; ++k) c[k] = std::cos(kStep * k), s[k] = std::sin(kStep * k);
+  }
+};
+
+}  // namespace
 
 double nearest_latent_angle(const Eigen::Vector2d& p, const Eigen::Vector2d& c, double a, double b,
                             double phi) {
+  static const GridTable grid;
   const Eigen::Vector2d q = rotation(phi).transpose() * (p - c);
-  const double x = q.x(), y = q.y();
-  auto f = [&](double t) {
-    const double dx = a * std::cos(t) - x, dy = b * std::sin(t) - y;
-    return dx * dx + dy * dy;
-  };
-  // A grid fine enough that the nearest point's basin contains a grid node even for thin
-  // ellipses: the distance has at most four stationary points on the circle of t.
-  constexpr int kGrid = 32;
-  double best_t = 0.0, best_f = f(0.0);
-  for (int k = 1; k < kGrid; ++k) {
-    const double t = 2.0 * kPi * k / kGrid;
-    const double v = f(t);
+  const NearestPoint np{q.x(), q.y(), a, b};
+  // The distance has at most four stationary points on the circle of t, but near the tips
+  // of a thin ellipse the far side is almost as close as the near one: refine every local
+  // minimum of a 32-node grid and keep the best, not just the best node.
+  double fg[kGrid], gg[kGrid];
+  for (int k = 0; k < kGrid; ++k)
+    fg[k] = np.f_cs(grid.c[k], grid.s[k]), gg[k] = np.g_cs(grid.c[k], grid.s[k]);
+  double best_t = 0.0, best_f = std::numeric_limits<double>::infinity();
+  for (int k = 0; k < kGrid; ++k) {
+    const int km = (k + kGrid - 1) % kGrid, kp = (k + 1) % kGrid;
+    if (fg[k] > fg[km] || fg[k] > fg[kp]) continue;
+    double t;
+    bool stationary = false;
+    if (gg[km] <= 0.0 && gg[kp] >= 0.0)
+      t = np.bracketed(kStep * (k - 1), kStep * (k + 1));
+    else
+      t = np.descend(kStep * k, &stationary);
+    const double v = np.f(t);
     if (v < best_f) best_f = v, best_t = t;
   }
-  const double d2 = b * b - a * a;
-  for (int it = 0; it < 12; ++it) {
-    const double s = std::sin(best_t), co = std::cos(best_t);
-    const double g = d2 * s * co + a * x * s - b * y * co;  // (1/2) df/dt
-    const double h = d2 * (co * co - s * s) + a * x * co + b * y * s;
-    if (!(h > 0.0)) break;  // not locally convex: keep the grid value
-    const double t_new = best_t - g / h;
-    const double v = f(t_new);
-    if (!(v <= best_f)) break;
-    const bool small = std::abs(t_new - best_t) < 1e-14;
-    best_t = t_new, best_f = v;
-    if (small) break;
-  }
   return best_t;
+}
+
+double nearest_latent_angle_from(const Eigen::Vector2d& p, const Eigen::Vector2d& c, double a,
+                                 double b, double phi, double t_start) {
+  const Eigen::Vector2d q = rotation(phi).transpose() * (p - c);
+  const NearestPoint np{q.x(), q.y(), a, b};
+  bool stationary = false;
+  const double t = np.descend(t_start, &stationary);
+  if (stationary) return t;
+  return nearest_latent_angle(p, c, a, b, phi);
 }
 
 double ellipse_distance(const Eigen::Vector2d& p, const Eigen::Vector2d& c, double a, double b,
@@ -58,6 +138,88 @@ double mad_scale(std::vector<double> d) {
   const auto mid = d.begin() + static_cast<std::ptrdiff_t>(d.size() / 2);
   std::nth_element(d.begin(), mid, d.end());
   return 1.4826 * *mid;
+}
+
+namespace {
+
+double median_of(std::vector<double> v) {
+  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
+  std::nth_element(v.begin(), mid, v.end());
+  return *mid;
+}
+
+// Sampson distance |Q| / |grad Q| of p to the ellipse Q = (x/a)^2 + (y/b)^2 - 1 (local frame).
+double sampson_distance(const Eigen::Vector2d& p, const EllipseGuess& g) {
+  const Eigen::Vector2d l = rotation(g.phi).transpose() * (p - g.center);
+  const double ia2 = 1.0 / (g.a * g.a), ib2 = 1.0 / (g.b * g.b);
+  const double Q = l.x() * l.x() * ia2 + l.y() * l.y() * ib2 - 1.0;
+  const double gx = 2.0 * l.x() * ia2, gy = 2.0 * l.y() * ib2;
+  return std::abs(Q) / std::max(std::hypot(gx, gy), 1e-300);
+}
+
+}  // namespace
+
+EllipseGuess robust_guess(const std::vector<Eigen::Vector2d>& q, const std::vector<double>& theta,
+                          bool use_theta, std::uint64_t seed, bool* used_theta) {
+  // 200 subsets: with 20% outliers a clean 5-subset comes up with probability 0.33 per draw,
+  // so all 200 fail with probability 1e-35; each costs a few microseconds.
+  constexpr int kTrials = 200;
+  const std::size_t n = q.size();
+  std::mt19937_64 rng(seed);
+  std::vector<std::size_t> idx(n);
+  for (std::size_t i = 0; i < n; ++i) idx[i] = i;
+  auto draw = [&](std::size_t k) {
+    for (std::size_t j = 0; j < k; ++j) {
+      std::uniform_int_distribution<std::size_t> u(j, n - 1);
+      std::swap(idx[j], idx[u(rng)]);
+    }
+  };
+  const bool affine = use_theta && theta.size() == n && n >= 3;
+  double best = std::numeric_limits<double>::infinity();
+  EllipseGuess best_g;
+  std::vector<double> d(n);
+  if (affine) {
+    AffineFit best_a;
+    for (int trial = 0; trial < kTrials; ++trial) {
+      draw(3);
+      std::vector<Eigen::Vector2d> sp = {q[idx[0]], q[idx[1]], q[idx[2]]};
+      std::vector<double> st = {theta[idx[0]], theta[idx[1]], theta[idx[2]]};
+      const AffineFit af = fit_affine(sp, st);
+      if (!af.ok) continue;
+      for (std::size_t i = 0; i < n; ++i) {
+        const double r = deg_to_rad(theta[i]);
+        d[i] = (af.center + af.M * Eigen::Vector2d(std::cos(r), std::sin(r)) - q[i]).norm();
+      }
+      const double med = median_of(d);
+      if (med < best) best = med, best_a = af;
+    }
+    best_g = ellipse_guess_from_affine(best_a, theta);
+    if (best_g.ok) {
+      *used_theta = true;
+      return best_g;
+    }
+  }
+  *used_theta = false;
+  if (n >= 5) {
+    best = std::numeric_limits<double>::infinity();
+    for (int trial = 0; trial < kTrials; ++trial) {
+      draw(5);
+      std::vector<Eigen::Vector2d> sp;
+      for (int j = 0; j < 5; ++j) sp.push_back(q[idx[static_cast<std::size_t>(j)]]);
+      EllipseGuess g = ellipse_guess_algebraic(sp);
+      if (!g.ok || !(g.b > 0.0)) continue;
+      for (std::size_t i = 0; i < n; ++i) d[i] = sampson_distance(q[i], g);
+      const double med = median_of(d);
+      if (med < best) best = med, best_g = g;
+    }
+    if (best_g.ok) {
+      best_g.t.clear();
+      for (const auto& p : q)
+        best_g.t.push_back(nearest_latent_angle(p, best_g.center, best_g.a, best_g.b, best_g.phi));
+      return best_g;
+    }
+  }
+  return best_guess(q, theta, false, used_theta);  // collinear points: principal axes
 }
 
 }  // namespace fit_detail

@@ -21,6 +21,11 @@ namespace rendulic {
 
 enum class FitShape { kEllipse, kLine, kCircle, kAuto };
 enum class FitLoss { kNone, kHuber, kCauchy };
+// Two equivalent formulations of the orthogonal-distance ellipse fit (docs/fitting.md):
+// kExactDistance solves the nearest point inside each residual (variable projection, 5
+// unknowns); kLatentAngles gives Ceres one latent angle per point (n + 5 unknowns). Same
+// optimum; the first is faster, the second is the independent check of the tests.
+enum class FitMethod { kExactDistance, kLatentAngles };
 
 // "ellipse", "line", "circle", "auto"; and back (InputError on an unknown name).
 std::string to_string(FitShape shape);
@@ -40,6 +45,7 @@ struct FitOptions {
   // Use the probe directions for the initial guess when the envelope has them.
   bool use_theta = true;
   bool compute_covariance = true;
+  FitMethod method = FitMethod::kExactDistance;
   // Shape selection: the ellipse is kept over the line when the bootstrap p-value of the
   // statistic SSR_line / SSR_ellipse is below alpha.
   double selection_alpha = 0.01;

@@ -1,0 +1,38 @@
+// Envelope fits in results files (interfaces.md "Results file", groups
+// /states/<label>/envelopes/<name>/fit_stress and fit_fabric): attributes shape, center[2],
+// semi_axes[2], inclination_deg (absent for a circle: undefined), rms, and center_stderr,
+// semi_axes_stderr, inclination_deg_stderr where defined; plus n_points, loss, loss_scale,
+// converged, selection (why this shape) and line_p_value when a test was made. Written and
+// read through core's ResultsWriter / ResultsReader.
+#pragma once
+
+#include <filesystem>
+#include <string>
+
+#include "rendulic/core/results.hpp"
+#include "rendulic/probes/envelope.hpp"
+#include "rendulic/probes/envelope_fit.hpp"
+
+namespace rendulic {
+
+void write_envelope_fit(ResultsWriter& out, const std::string& group, const EnvelopeFit& fit);
+// InputError naming the group if it lacks shape, center or semi_axes. Residuals are not
+// stored: the result has rms but empty residuals.
+EnvelopeFit read_envelope_fit(const ResultsReader& in, const std::string& group);
+
+// The envelope stored at `group` (theta_deg, strain, amplitude) with `pairs` ("stress_star"
+// or "fabric") as the response.
+Envelope read_envelope(const ResultsReader& in, const std::string& group, const std::string& pairs);
+
+// Fits the stress_star and fabric pairs of every /states/*/envelopes/* of a results file
+// and writes fit_stress and fit_fabric (atomically, via ResultsWriter::update). An envelope
+// that cannot be fitted (e.g. no fabric change at all) gets shape "none" and an attribute
+// "error" with the reason instead of a fit. Returns the number of fits written.
+struct FitAllSummary {
+  int fitted = 0;
+  int failed = 0;
+};
+FitAllSummary fit_all_envelopes(const std::filesystem::path& results_file,
+                                const FitOptions& options = {});
+
+}  // namespace rendulic

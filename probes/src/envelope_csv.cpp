@@ -1,0 +1,99 @@
+// CSV reader of one envelope (interfaces.md `rendulic fit`); see envelope_csv.hpp.
+#include "rendulic/probes/envelope_csv.hpp"
+
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+#include <vector>
+
+#include "rendulic/core/errors.hpp"
+
+namespace rendulic {
+namespace {
+
+std::string trim(const std::string& s) {
+  const auto b = s.find_first_not_of(" \t\r\n");
+  if (b == std::string::npos) return "";
+  const auto e = s.find_last_not_of(" \t\r\n");
+  std::string t = s.substr(b, e - b + 1);
+  if (t.size() >= 2 && t.front() == '"' && t.back() == '"') t = t.substr(1, t.size() - 2);
+  return t;
+}
+
+std::vector<std::string> split(const std::string& line) {
+  std::vector<std::string> out;
+  std::string field;
+  std::istringstream in(line);
+  while (std::getline(in, field, ',')) out.push_back(trim(field));
+  if (!line.empty() && line.back() == ',') out.emplace_back();
+  return out;
+}
+
+}  // namespace
+
+Envelope parse_envelope_csv(const std::string& text, const std::string& name) {
+  std::istringstream in(text);
+  std::string line;
+  int line_no = 0;
+  std::vector<std::string> header;
+  int ix = -1, iy = -1, it = -1;
+  Envelope env;
+  while (std::getline(in, line)) {
+    ++line_no;
+    const std::string t = trim(line);
+    if (t.empty() || t[0] == '#') continue;
+    const std::vector<std::string> fields = split(line);
+    const std::string where = name + ":" + std::to_string(line_no);
+    if (header.empty()) {
+      header = fields;
+      for (std::size_t k = 0; k < header.size(); ++k) {
+        for (std::size_t j = 0; j < k; ++j)
+          if (header[j] == header[k] && !header[k].empty())
+            throw InputError(where + ": column '" + header[k] + "' appears twice");
+        const int kk = static_cast<int>(k);
+        if (header[k] == "x") ix = kk;
+        if (header[k] == "y") iy = kk;
+        if (header[k] == "theta_deg") it = kk;
+      }
+      if (ix < 0 || iy < 0)
+        throw InputError(where + ": the header must name columns 'x' and 'y' (got '" + t + "')");
+      continue;
+    }
+    if (fields.size() != header.size())
+      throw InputError(where + ": expected " + std::to_string(header.size()) + " fields, got " +
+                       std::to_string(fields.size()));
+    auto number = [&](int col) {
+      const std::string& f = fields[static_cast<std::size_t>(col)];
+      const std::string& cname = header[static_cast<std::size_t>(col)];
+      if (f.empty()) throw InputError(where + ": column '" + cname + "' is empty");
+      char* end = nullptr;
+      errno = 0;
+      const double v = std::strtod(f.c_str(), &end);
+      if (end != f.c_str() + f.size())
+        throw InputError(where + ": column '" + cname + "': '" + f + "' is not a number");
+      if (!std::isfinite(v) || errno == ERANGE)
+        throw InputError(where + ": column '" + cname + "': '" + f + "' is not finite");
+      return v;
+    };
+    env.response.emplace_back(number(ix), number(iy));
+    if (it >= 0) env.theta_deg.push_back(number(it));
+  }
+  if (header.empty()) throw InputError(name + ": empty file (no header line)");
+  if (env.response.empty()) throw InputError(name + ": no data rows after the header");
+  return env;
+}
+
+Envelope read_envelope_csv(const std::filesystem::path& path) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec))
+    throw InputError(path.string() + ": no such file");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path.string() + ": cannot be read");
+  std::ostringstream text;
+  text << in.rdbuf();
+  return parse_envelope_csv(text.str(), path.string());
+}
+
+}  // namespace rendulic

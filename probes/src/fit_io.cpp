@@ -1,0 +1,137 @@
+// Envelope fits as HDF5 attributes (interfaces.md "Results file"); see fit_io.hpp.
+#include "rendulic/probes/fit_io.hpp"
+
+#include <cmath>
+#include <vector>
+
+#include "rendulic/core/conventions.hpp"
+#include "rendulic/core/errors.hpp"
+
+namespace rendulic {
+
+void write_envelope_fit(ResultsWriter& out, const std::string& g, const EnvelopeFit& f) {
+  out.attr(g, "shape", to_string(f.shape));
+  out.attr(g, "center", std::vector<double>{f.center.x(), f.center.y()});
+  out.attr(g, "semi_axes", std::vector<double>{f.a, f.b});
+  if (f.inclination_deg) out.attr(g, "inclination_deg", *f.inclination_deg);
+  out.attr(g, "rms", f.rms);
+  out.attr(g, "n_points", static_cast<std::int64_t>(f.n_points));
+  out.attr(g, "loss", to_string(f.loss));
+  out.attr(g, "loss_scale", f.loss_scale);
+  out.attr(g, "converged", static_cast<std::int64_t>(f.converged ? 1 : 0));
+  out.attr(g, "selection", f.selection_note);
+  if (f.line_p_value) out.attr(g, "line_p_value", *f.line_p_value);
+  if (f.has_stderr) {
+    out.attr(g, "center_stderr", std::vector<double>{f.center_stderr.x(), f.center_stderr.y()});
+    out.attr(g, "semi_axes_stderr", std::vector<double>{f.a_stderr, f.b_stderr});
+    if (f.inclination_stderr_deg) out.attr(g, "inclination_deg_stderr", *f.inclination_stderr_deg);
+  }
+}
+
+EnvelopeFit read_envelope_fit(const ResultsReader& in, const std::string& g) {
+  for (const char* key : {"shape", "center", "semi_axes", "rms"})
+    if (!in.has_attr(g, key))
+      throw InputError(in.path().string() + ": " + g + " has no fit attribute '" + key + "'");
+  EnvelopeFit f;
+  const std::string shape = in.attr_string(g, "shape");
+  if (shape == "auto") throw InputError(in.path().string() + ": " + g + " has shape 'auto'");
+  f.shape = fit_shape_from_string(shape);
+  const auto c = in.attr_doubles(g, "center");
+  const auto s = in.attr_doubles(g, "semi_axes");
+  if (c.size() != 2 || s.size() != 2)
+    throw InputError(in.path().string() + ": " + g + " center/semi_axes must have 2 values");
+  f.center = {c[0], c[1]};
+  f.a = s[0], f.b = s[1];
+  if (in.has_attr(g, "inclination_deg")) f.inclination_deg = in.attr_double(g, "inclination_deg");
+  f.rms = in.attr_double(g, "rms");
+  if (in.has_attr(g, "n_points")) f.n_points = static_cast<int>(in.attr_int(g, "n_points"));
+  if (in.has_attr(g, "loss")) f.loss = fit_loss_from_string(in.attr_string(g, "loss"));
+  if (in.has_attr(g, "loss_scale")) f.loss_scale = in.attr_double(g, "loss_scale");
+  if (in.has_attr(g, "converged")) f.converged = in.attr_int(g, "converged") != 0;
+  if (in.has_attr(g, "selection")) f.selection_note = in.attr_string(g, "selection");
+  if (in.has_attr(g, "line_p_value")) f.line_p_value = in.attr_double(g, "line_p_value");
+  if (in.has_attr(g, "center_stderr") && in.has_attr(g, "semi_axes_stderr")) {
+    const auto cs = in.attr_doubles(g, "center_stderr");
+    const auto ss = in.attr_doubles(g, "semi_axes_stderr");
+    if (cs.size() == 2 && ss.size() == 2) {
+      f.has_stderr = true;
+      f.center_stderr = {cs[0], cs[1]};
+      f.a_stderr = ss[0], f.b_stderr = ss[1];
+      f.covariance(0, 0) = cs[0] * cs[0];
+      f.covariance(1, 1) = cs[1] * cs[1];
+      f.covariance(2, 2) = ss[0] * ss[0];
+      f.covariance(3, 3) = ss[1] * ss[1];
+    }
+    if (in.has_attr(g, "inclination_deg_stderr")) {
+      f.inclination_stderr_deg = in.attr_double(g, "inclination_deg_stderr");
+      const double r = deg_to_rad(*f.inclination_stderr_deg);
+      f.covariance(4, 4) = r * r;
+    }
+  }
+  return f;
+}
+
+Envelope read_envelope(const ResultsReader& in, const std::string& g, const std::string& pairs) {
+  Envelope env;
+  if (!in.exists(g + "/" + pairs))
+    throw InputError(in.path().string() + ": " + g + " has no dataset '" + pairs + "'");
+  env.response = in.read_pairs(g + "/" + pairs);
+  if (in.exists(g + "/theta_deg")) env.theta_deg = in.read_vector(g + "/theta_deg");
+  if (in.exists(g + "/strain")) env.strain = in.read_pairs(g + "/strain");
+  if (in.has_attr(g, "amplitude")) env.amplitude = in.attr_double(g, "amplitude");
+  std::string why;
+  if (!env.IsValid(&why)) throw InputError(in.path().string() + ": " + g + ": " + why);
+  return env;
+}
+
+FitAllSummary fit_all_envelopes(const std::filesystem::path& file, const FitOptions& options) {
+  struct Pending {
+    std::string group;
+    EnvelopeFit fit;
+    std::string error;
+  };
+  std::vector<Pending> todo;
+  {
+    // Read and fit everything first: the reader must be closed before the update opens the
+    // file for writing.
+    ResultsReader in(file);
+    if (!in.exists("/states")) return {};
+    for (const auto& label : in.children("/states")) {
+      const std::string eg = "/states/" + label + "/envelopes";
+      if (!in.exists(eg)) continue;
+      for (const auto& name : in.children(eg)) {
+        const std::string g = eg + "/" + name;
+        for (const auto& [pairs, fit_name] :
+             {std::pair<std::string, std::string>{"stress_star", "fit_stress"},
+              {"fabric", "fit_fabric"}}) {
+          if (!in.exists(g + "/" + pairs)) continue;
+          Pending p;
+          p.group = g + "/" + fit_name;
+          try {
+            p.fit = fit_envelope(read_envelope(in, g, pairs), options);
+          } catch (const InputError& e) {
+            p.error = e.what();
+          }
+          todo.push_back(std::move(p));
+        }
+      }
+    }
+  }
+  FitAllSummary summary;
+  if (todo.empty()) return summary;
+  ResultsWriter out = ResultsWriter::update(file);
+  for (const auto& p : todo) {
+    if (p.error.empty()) {
+      write_envelope_fit(out, p.group, p.fit);
+      ++summary.fitted;
+    } else {
+      out.attr(p.group, "shape", "none");
+      out.attr(p.group, "error", p.error);
+      ++summary.failed;
+    }
+  }
+  out.commit();
+  return summary;
+}
+
+}  // namespace rendulic
