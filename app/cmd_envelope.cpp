@@ -1,14 +1,137 @@
-// `rendulic envelope` (interfaces.md): envelope predicted by a constitutive model. Lands with
-// issue 6.
+// `rendulic envelope` (interfaces.md "Command line"; issue 6 item 3): the response envelope a
+// constitutive model predicts at a given state, over the DEM probe set (physics.md section 5).
+// Parameters and state come from small TOML files (models/material_io.hpp); `--json` prints
+// theta_deg, strain, stress (Pa) and fabric as Rendulic pairs, plus the driver's error report.
+#include <cstdio>
+#include <iostream>
+#include <memory>
+#include <sstream>
+#include <string>
+
 #include "commands.hpp"
 #include "rendulic/core/errors.hpp"
+#include "rendulic/models/envelope.hpp"
+#include "rendulic/models/material_io.hpp"
 
 namespace rendulic::app {
-Subcommand add_envelope(CLI::App& parent) {
-  auto* sub = parent.add_subcommand("envelope", "Envelope predicted by a constitutive model");
-  sub->allow_extras();
-  return {sub, [] () -> int {
-            throw NotAvailable("envelope: constitutive models have not landed yet (issue 6)");
-          }};
+namespace {
+
+struct EnvelopeCli {
+  std::string model;
+  std::string params;
+  std::string state;
+  double amplitude = 0.0;
+  int directions = 36;
+  bool json = false;
+  std::string method = "integrated";
+  std::string scheme = "modified-euler";
+  double tolerance = models::StepOptions{}.tolerance;
+  int substeps = 1;
+};
+
+std::string num(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.17g", v);
+  return buf;
 }
+
+std::string pairs(const Eigen::Matrix<double, Eigen::Dynamic, 2>& m) {
+  std::string s = "[";
+  for (int i = 0; i < m.rows(); ++i)
+    s += (i ? ", [" : "[") + num(m(i, 0)) + ", " + num(m(i, 1)) + "]";
+  return s + "]";
+}
+
+int run_envelope(const EnvelopeCli& o) {
+  auto law = models::make_law(o.model);
+  if (!law) {
+    std::string names;
+    for (const auto& n : models::law_names()) names += (names.empty() ? "" : ", ") + n;
+    throw InputError("--model: unknown model '" + o.model + "' (known: " + names + ")");
+  }
+  if (!o.params.empty()) models::load_parameters_toml(o.params, law.get());
+  const models::MaterialState state = models::load_state_toml(o.state, *law);
+
+  models::EnvelopeOptions opt;
+  opt.amplitude = o.amplitude;
+  opt.directions = o.directions;
+  opt.method =
+      o.method == "rate" ? models::EnvelopeMethod::kRate : models::EnvelopeMethod::kIntegrated;
+  opt.step.scheme =
+      o.scheme == "explicit" ? models::Scheme::kExplicitEuler : models::Scheme::kModifiedEuler;
+  opt.step.tolerance = o.tolerance;
+  opt.step.fixed_substeps = o.substeps;
+  std::string why;
+  if (!opt.IsValid(&why)) throw InputError("envelope options: " + why);
+  const models::ModelEnvelope env = models::model_envelope(*law, state, opt);
+  if (!env.success)
+    throw InputError("envelope of " + o.model + " at " + o.state + ": " + env.reason);
+  if (!env.within_tolerance)
+    std::cerr << "rendulic: warning: explicit probes exceeded the tolerance " << o.tolerance
+              << " (largest local error estimate " << env.max_error_estimate
+              << "); use --scheme modified-euler\n";
+
+  if (o.json) {
+    std::ostringstream os;
+    os << "{\"model\": \"" << law->name() << "\", \"amplitude\": " << num(o.amplitude)
+       << ", \"method\": \"" << o.method << "\", \"scheme\": \"" << o.scheme
+       << "\", \"tolerance\": " << num(o.tolerance)
+       << ", \"max_error_estimate\": " << num(env.max_error_estimate)
+       << ", \"within_tolerance\": " << (env.within_tolerance ? "true" : "false")
+       << ", \"theta_deg\": [";
+    for (int i = 0; i < env.theta_deg.size(); ++i) os << (i ? ", " : "") << num(env.theta_deg(i));
+    os << "], \"strain\": " << pairs(env.strain) << ", \"stress\": " << pairs(env.stress)
+       << ", \"fabric\": " << pairs(env.fabric) << "}\n";
+    std::cout << os.str();
+    return 0;
+  }
+  std::printf("# %s envelope, |d_eps| = %g, %d directions, %s (%s, tolerance %g)\n",
+              std::string(law->name()).c_str(), o.amplitude, o.directions, o.method.c_str(),
+              o.scheme.c_str(), o.tolerance);
+  std::printf("# Rendulic pairs (sqrt2 lateral, axial); stress in Pa\n");
+  std::printf("%10s %14s %14s %16s %16s %14s %14s\n", "theta_deg", "strain_x", "strain_y",
+              "stress_x", "stress_y", "fabric_x", "fabric_y");
+  for (int i = 0; i < env.theta_deg.size(); ++i)
+    std::printf("%10.4f %14.6e %14.6e %16.8e %16.8e %14.6e %14.6e\n", env.theta_deg(i),
+                env.strain(i, 0), env.strain(i, 1), env.stress(i, 0), env.stress(i, 1),
+                env.fabric(i, 0), env.fabric(i, 1));
+  return 0;
+}
+
+}  // namespace
+
+Subcommand add_envelope(CLI::App& parent) {
+  auto opts = std::make_shared<EnvelopeCli>();
+  auto* sub = parent.add_subcommand("envelope", "Envelope predicted by a constitutive model");
+  std::string names;
+  for (const auto& n : models::law_names()) names += (names.empty() ? "" : ", ") + n;
+  sub->add_option("--model", opts->model, "Constitutive law: " + names)->required();
+  sub->add_option("--params", opts->params,
+                  "TOML file of parameters (keys = the law's parameter names; missing keys keep "
+                  "their defaults)");
+  sub->add_option("--state", opts->state,
+                  "TOML file of the state: stress (3x3, Pa), fabric (3x3), volume_fraction")
+      ->required();
+  sub->add_option("--amplitude", opts->amplitude, "Probe amplitude |d_eps| (Frobenius norm)")
+      ->required();
+  sub->add_option("--directions", opts->directions, "Number of probe directions")
+      ->capture_default_str();
+  sub->add_flag("--json", opts->json, "Print one JSON object");
+  sub->add_option("--method", opts->method,
+                  "integrated: each probe integrated by the driver; rate: one evaluation of the "
+                  "rate law (the exact incremental envelope)")
+      ->check(CLI::IsMember({"integrated", "rate"}))
+      ->capture_default_str();
+  sub->add_option("--scheme", opts->scheme,
+                  "modified-euler (error controlled) or explicit (fixed substeps; reports when "
+                  "its error estimate exceeds the tolerance)")
+      ->check(CLI::IsMember({"modified-euler", "explicit"}))
+      ->capture_default_str();
+  sub->add_option("--tolerance", opts->tolerance, "Local relative error tolerance per substep")
+      ->capture_default_str();
+  sub->add_option("--substeps", opts->substeps, "Substeps of the explicit scheme")
+      ->capture_default_str();
+  return {sub, [opts]() -> int { return run_envelope(*opts); }};
+}
+
 }  // namespace rendulic::app

@@ -177,14 +177,28 @@ StepResult integrate_adaptive(const Law& law, const MaterialState& start,
     // elastic and the plastic rate across the kink.
     const double f0 = law.yield_function(y);
     if (tr.ok && f0 < -kYieldSurfaceBand && std::isfinite(f0) && law.yield_function(tr.yh) > 0.0) {
-      double lo = 0.0, hi = 1.0;
-      while (hi - lo > 1e-13) {
-        const double mid = 0.5 * (lo + hi);
-        const Trial tm = trial(mid * dt);
-        if (tm.ok && law.yield_function(tm.yh) <= 0.0)
-          lo = mid;
-        else
-          hi = mid;
+      // Illinois (modified regula falsi) on f(c) = yield_function(trial(c dt)), bracketing
+      // f(lo) <= 0 < f(hi); it stops once the inside end is within the surface band, which is
+      // what the law needs to see the next substep as plastic loading.
+      double lo = 0.0, hi = 1.0, f_lo = f0, f_hi = law.yield_function(tr.yh);
+      int side = 0;
+      for (int it = 0; it < 100 && hi - lo > 1e-15; ++it) {
+        double c = lo - f_lo * (hi - lo) / (f_hi - f_lo);
+        if (!(c > lo && c < hi)) c = 0.5 * (lo + hi);
+        const Trial tc = trial(c * dt);
+        const double fc = tc.ok ? law.yield_function(tc.yh) : 1.0;
+        if (fc <= 0.0) {
+          lo = c;
+          f_lo = fc;
+          if (fc >= -kYieldSurfaceBand) break;
+          if (side == -1) f_hi *= 0.5;
+          side = -1;
+        } else {
+          hi = c;
+          f_hi = fc;
+          if (side == 1) f_lo *= 0.5;
+          side = 1;
+        }
       }
       // lo = 0 means the state was already within rounding of the surface: step just past it.
       dt *= lo > 0.0 ? lo : hi;

@@ -44,7 +44,7 @@ ModelEnvelope model_envelope(const Law& law, const MaterialState& state,
     } else {
       const StepResult res = integrate(law, state, de, options.step);
       if (!res.success) {
-        env.reason = "probe theta = " + std::to_string(env.theta_deg(i)) + " deg: " + res.reason;
+        env.reason = "probe theta = " + format_g(env.theta_deg(i)) + " deg: " + res.reason;
         return env;
       }
       env.d_stress[i] = res.end.stress - state.stress;
@@ -54,8 +54,7 @@ ModelEnvelope model_envelope(const Law& law, const MaterialState& state,
       env.total_substeps += res.substeps;
     }
     if (!env.d_stress[i].allFinite() || !env.d_fabric[i].allFinite()) {
-      env.reason =
-          "probe theta = " + std::to_string(env.theta_deg(i)) + " deg: non-finite response";
+      env.reason = "probe theta = " + format_g(env.theta_deg(i)) + " deg: non-finite response";
       return env;
     }
     env.strain.row(i) = rendulic_pair(de).transpose();
@@ -64,6 +63,16 @@ ModelEnvelope model_envelope(const Law& law, const MaterialState& state,
   }
   env.success = true;
   return env;
+}
+
+Eigen::Matrix2d rendulic_tangent(const Law& law, const MaterialState& state, double theta_deg) {
+  const Matrix6d t = law.tangent(state, probe_strain(theta_deg, 1.0));
+  Eigen::Matrix2d d;
+  for (int j = 0; j < 2; ++j) {
+    const Eigen::Matrix3d e = from_rendulic_pair(Eigen::Vector2d::Unit(j));
+    d.col(j) = rendulic_pair(from_mandel(Vector6d(t * to_mandel(e))));
+  }
+  return d;
 }
 
 }  // namespace rendulic::models

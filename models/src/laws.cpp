@@ -1,6 +1,7 @@
 // Parameter tables (names, units, defaults, bounds) of the four laws, the Law base methods and
 // the registry (law.hpp; defaults and sources are discussed in docs/models.md).
 #include <cmath>
+#include <cstdio>
 #include <limits>
 
 #include "rendulic/models/elastic_laws.hpp"
@@ -9,6 +10,14 @@
 #include "rendulic/models/law_model.hpp"
 
 namespace rendulic::models {
+namespace {
+// Numbers in messages: shortest readable form (1e+13, not 10000000000000.000000).
+inline std::string fmt_g(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%g", v);
+  return buf;
+}
+}  // namespace
 
 // Elastic defaults are of the order of the frictionless DEM of physics.md at nu = 0.82
 // (k* = k / 2<r> = 5e10 Pa; B/k* = 0.4, G/k* = 0.05: narrow envelopes, seed section 4); they
@@ -94,9 +103,8 @@ bool Law::set_parameters(const std::vector<double>& values, std::string* why) {
     const double v = values[i];
     if (!std::isfinite(v) || v < info[i].lower || v > info[i].upper) {
       if (why)
-        *why = "parameter " + info[i].name + " = " + std::to_string(v) +
-               " is outside its bounds [" + std::to_string(info[i].lower) + ", " +
-               std::to_string(info[i].upper) + "]";
+        *why = "parameter " + info[i].name + " = " + fmt_g(v) + " is outside its bounds [" +
+               fmt_g(info[i].lower) + ", " + fmt_g(info[i].upper) + "]";
       return false;
     }
   }
@@ -142,6 +150,8 @@ MaterialState Law::make_state(const Eigen::Matrix3d& stress, const Eigen::Matrix
   s.internal = initial_internal(stress, fabric);
   return s;
 }
+
+std::string format_g(double v) { return fmt_g(v); }
 
 std::vector<std::string> law_names() {
   return {std::string(IsotropicElastic::kName), std::string(AnisotropicElastic::kName),

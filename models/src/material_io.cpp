@@ -4,11 +4,19 @@
 #include <toml++/toml.h>
 
 #include <cmath>
+#include <cstdio>
 
 #include "rendulic/core/errors.hpp"
 
 namespace rendulic::models {
 namespace {
+
+// Numbers in messages: shortest readable form (1e+13, not 10000000000000.000000).
+inline std::string fmt_g(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%g", v);
+  return buf;
+}
 
 toml::table parse(const std::string& path) {
   try {
@@ -63,9 +71,9 @@ void load_parameters_toml(const std::string& path, Law* law) {
     const double v = number(node, key, path);
     const ParameterInfo& info = law->parameter_info()[i];
     if (v < info.lower || v > info.upper)
-      throw InputError(path + ": parameter '" + key + "' = " + std::to_string(v) +
-                       " is outside its bounds [" + std::to_string(info.lower) + ", " +
-                       std::to_string(info.upper) + "] " + info.unit);
+      throw InputError(path + ": parameter '" + key + "' = " + fmt_g(v) +
+                       " is outside its bounds [" + fmt_g(info.lower) + ", " + fmt_g(info.upper) +
+                       "] " + info.unit);
     values[i] = v;
   }
   std::string why;

@@ -117,7 +117,7 @@ struct ElastoplasticFabric {
     if (s.stress.trace() > 0.0) return true;
     if (why)
       *why = "elastoplastic_fabric needs P > 0 (its yield function uses sigma^D / P), got P = " +
-             std::to_string(s.stress.trace() / 3.0) + " Pa";
+             format_g(s.stress.trace() / 3.0) + " Pa";
     return false;
   }
 

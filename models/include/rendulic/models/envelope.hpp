@@ -41,4 +41,11 @@ struct ModelEnvelope {
 ModelEnvelope model_envelope(const Law& law, const MaterialState& state,
                              const EnvelopeOptions& options = {});
 
+// The 2x2 map from Rendulic strain pairs to Rendulic stress pairs given by the law's tangent at
+// `state` for probes near the direction theta_deg (axisymmetric probes; the tangent of a
+// rate-independent law depends on the direction only). For the elastic laws this is the
+// Rendulic stiffness whose (iso, dev) form is [[3B, sqrt3 A], [sqrt3 A, 2G]] (models.md
+// "Calibration"); rotate with core's rendulic_to_iso_dev() R as R D R^T.
+Eigen::Matrix2d rendulic_tangent(const Law& law, const MaterialState& state, double theta_deg);
+
 }  // namespace rendulic::models

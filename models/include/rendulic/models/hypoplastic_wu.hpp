@@ -59,8 +59,8 @@ struct HypoplasticWu {
   static bool admissible(const double*, const MaterialState& s, std::string* why) {
     if (s.stress.trace() > 0.0) return true;
     if (why)
-      *why = "hypoplastic_wu needs tr(sigma) > 0 (compression), got " +
-             std::to_string(s.stress.trace()) + " Pa";
+      *why = "hypoplastic_wu needs tr(sigma) > 0 (compression), got " + format_g(s.stress.trace()) +
+             " Pa";
     return false;
   }
   static void correct(const double*, MaterialState*, bool) {}

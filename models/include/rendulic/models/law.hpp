@@ -108,6 +108,9 @@ class Law {
   std::vector<double> params_;
 };
 
+// Numbers in messages, shortest readable form ("%g").
+std::string format_g(double v);
+
 // Names accepted by make_law: isotropic_elastic, anisotropic_elastic, hypoplastic_wu,
 // elastoplastic_fabric.
 std::vector<std::string> law_names();

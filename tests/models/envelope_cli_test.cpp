@@ -1,0 +1,187 @@
+// Tests of `rendulic envelope` (interfaces.md; issue 6 item 3) run as a user would, through
+// the built executable: the JSON contract (keys, Pa, Rendulic pairs equal to the library's
+// envelope) and exit code 2 with a one-line reason naming the culprit on bad input.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <vector>
+
+#include "rendulic/models/envelope.hpp"
+#include "rendulic/models/material_io.hpp"
+
+namespace rendulic::models {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct CliRun {
+  int code;
+  std::string out, err;
+};
+
+fs::path scratch() {
+  const fs::path d = fs::path(RENDULIC_TEST_TMP) / "models_envelope_cli";
+  fs::create_directories(d);
+  return d;
+}
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+CliRun rendulic(const std::string& args) {
+  const fs::path d = scratch();
+  const std::string cmd = std::string(RENDULIC_EXE) + " " + args + " >" + (d / "out").string() +
+                          " 2>" + (d / "err").string();
+  const int status = std::system(cmd.c_str());
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(d / "out"), slurp(d / "err")};
+}
+
+std::string data(const std::string& name) {
+  return std::string(RENDULIC_SOURCE_DIR) + "/data/models/" + name;
+}
+
+fs::path write(const std::string& name, const std::string& text) {
+  const fs::path p = scratch() / name;
+  std::ofstream(p) << text;
+  return p;
+}
+
+// The numbers of the JSON array following "key": (a flat read of a nested array).
+std::vector<double> numbers_of(const std::string& json, const std::string& key) {
+  const size_t at = json.find("\"" + key + "\": [");
+  EXPECT_NE(at, std::string::npos) << key;
+  std::vector<double> v;
+  if (at == std::string::npos) return v;
+  size_t i = json.find('[', at);
+  int depth = 0;
+  for (; i < json.size(); ++i) {
+    const char c = json[i];
+    if (c == '[')
+      ++depth;
+    else if (c == ']') {
+      if (--depth == 0) break;
+    } else if (c == '-' || std::isdigit(static_cast<unsigned char>(c))) {
+      char* end = nullptr;
+      v.push_back(std::strtod(json.c_str() + i, &end));
+      i = static_cast<size_t>(end - json.c_str()) - 1;
+    }
+  }
+  return v;
+}
+
+TEST(EnvelopeCli, JsonMatchesTheLibraryEnvelope) {
+  const CliRun r = rendulic(
+      "envelope --model elastoplastic_fabric --params " + data("elastoplastic_fabric_params.toml") +
+      " --state " + data("anisotropic_state.toml") + " --amplitude 2e-3 --directions 12 --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  for (const char* key : {"theta_deg", "strain", "stress", "fabric"})
+    EXPECT_NE(r.out.find(std::string("\"") + key + "\": ["), std::string::npos) << key;
+  auto law = make_law("elastoplastic_fabric");
+  load_parameters_toml(data("elastoplastic_fabric_params.toml"), law.get());
+  const MaterialState s = load_state_toml(data("anisotropic_state.toml"), *law);
+  EnvelopeOptions o;
+  o.amplitude = 2e-3;
+  o.directions = 12;
+  const ModelEnvelope env = model_envelope(*law, s, o);
+  ASSERT_TRUE(env.success);
+  const std::vector<double> theta = numbers_of(r.out, "theta_deg");
+  const std::vector<double> strain = numbers_of(r.out, "strain");
+  const std::vector<double> stress = numbers_of(r.out, "stress");
+  const std::vector<double> fabric = numbers_of(r.out, "fabric");
+  ASSERT_EQ(theta.size(), 12u);
+  ASSERT_EQ(stress.size(), 24u);
+  ASSERT_EQ(fabric.size(), 24u);
+  for (int i = 0; i < 12; ++i) {
+    EXPECT_EQ(theta[i], env.theta_deg(i));
+    for (int c = 0; c < 2; ++c) {
+      // %.17g round-trips doubles exactly.
+      EXPECT_EQ(strain[2 * i + c], env.strain(i, c));
+      EXPECT_EQ(stress[2 * i + c], env.stress(i, c));  // Pa
+      EXPECT_EQ(fabric[2 * i + c], env.fabric(i, c));
+    }
+  }
+}
+
+TEST(EnvelopeCli, TableOutputAndDefaults) {
+  const CliRun r = rendulic("envelope --model isotropic_elastic --state " +
+                            data("isotropic_state.toml") + " --amplitude 5e-5");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("theta_deg"), std::string::npos);
+  EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 3 + 36);
+}
+
+TEST(EnvelopeCli, ExplicitSchemeSaysWhenItExceedsTheTolerance) {
+  const CliRun r =
+      rendulic("envelope --model elastoplastic_fabric --state " + data("anisotropic_state.toml") +
+               " --amplitude 2e-3 --scheme explicit --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("exceeded the tolerance"), std::string::npos) << r.err;
+  EXPECT_NE(r.out.find("\"within_tolerance\": false"), std::string::npos);
+}
+
+void expect_input_error(const std::string& args, const std::vector<std::string>& mentions) {
+  const CliRun r = rendulic(args);
+  EXPECT_EQ(r.code, 2) << args << "\n" << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;  // one line
+  for (const auto& m : mentions) EXPECT_NE(r.err.find(m), std::string::npos) << r.err;
+}
+
+TEST(EnvelopeCli, BadInputExitsTwoNamingTheCulprit) {
+  const std::string state = " --state " + data("isotropic_state.toml") + " --amplitude 5e-5";
+  const fs::path unknown = write("unknown.toml", "B = 1e10\nkappa = 3\n");
+  expect_input_error("envelope --model anisotropic_elastic --params " + unknown.string() + state,
+                     {"kappa", unknown.string()});
+  const fs::path bounds = write("bounds.toml", "G = -1.0\n");
+  expect_input_error("envelope --model anisotropic_elastic --params " + bounds.string() + state,
+                     {"'G'", "bounds", bounds.string()});
+  const fs::path text = write("text.toml", "B = \"big\"\n");
+  expect_input_error("envelope --model anisotropic_elastic --params " + text.string() + state,
+                     {"'B'", text.string()});
+  const fs::path broken = write("broken.toml", "B = = 3\n");
+  expect_input_error("envelope --model anisotropic_elastic --params " + broken.string() + state,
+                     {broken.string()});
+  const fs::path no_stress = write("no_stress.toml", "volume_fraction = 0.8\n");
+  expect_input_error(
+      "envelope --model isotropic_elastic --amplitude 5e-5 --state " + no_stress.string(),
+      {"stress", no_stress.string()});
+  const fs::path shape = write("shape.toml", "stress = [[1.0, 0.0], [0.0, 1.0]]\n");
+  expect_input_error(
+      "envelope --model isotropic_elastic --amplitude 5e-5 --state " + shape.string(),
+      {"3x3", shape.string()});
+  const fs::path asym =
+      write("asym.toml", "stress = [[1.0, 2.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]\n");
+  expect_input_error("envelope --model isotropic_elastic --amplitude 5e-5 --state " + asym.string(),
+                     {"symmetric", asym.string()});
+  const fs::path extra = write("extra.toml",
+                               "stress = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], "
+                               "[0.0, 0.0, 1.0]]\ntemperature = 3\n");
+  expect_input_error(
+      "envelope --model isotropic_elastic --amplitude 5e-5 --state " + extra.string(),
+      {"temperature", extra.string()});
+  expect_input_error("envelope --model cam_clay" + state, {"cam_clay"});
+  expect_input_error("envelope --model isotropic_elastic --state " + data("isotropic_state.toml") +
+                         " --amplitude -1",
+                     {"amplitude"});
+  expect_input_error(
+      "envelope --model isotropic_elastic --state /nonexistent/s.toml --amplitude 1e-4",
+      {"/nonexistent/s.toml"});
+  // A state where the law is undefined (hypoplasticity in tension).
+  const fs::path tension = write("tension.toml",
+                                 "stress = [[-1.0e5, 0.0, 0.0], [0.0, -1.0e5, "
+                                 "0.0], [0.0, 0.0, -1.0e5]]\n");
+  expect_input_error("envelope --model hypoplastic_wu --amplitude 1e-4 --state " + tension.string(),
+                     {"tr(sigma)", tension.string()});
+}
+
+}  // namespace
+}  // namespace rendulic::models
