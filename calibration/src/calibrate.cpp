@@ -150,8 +150,8 @@ CalibrationSummary calibrate(const CalibrationData& data, const CalibrationOptio
     values[i] = v;
   }
   ObjectiveOptions oo = options.objective;
-  const bool elastic_law = options.model == "isotropic_elastic" ||
-                           options.model == "anisotropic_elastic";
+  const bool elastic_law =
+      options.model == "isotropic_elastic" || options.model == "anisotropic_elastic";
   bool dropped = false;
   if (elastic_law && options.elastic_laws_use_elastic_data_only) {
     dropped = (oo.path && !data.path.empty()) || has_plastic;
@@ -160,10 +160,10 @@ CalibrationSummary calibrate(const CalibrationData& data, const CalibrationOptio
   }
   const bool use_path = oo.path && !data.path.empty();
   const std::vector<std::string> free =
-      options.free.empty() ? default_free_parameters(options.model,
-                                                     static_cast<int>(out.fitted_states.size()),
-                                                     use_path, has_plastic)
-                           : options.free;
+      options.free.empty()
+          ? default_free_parameters(options.model, static_cast<int>(out.fitted_states.size()),
+                                    use_path, has_plastic)
+          : options.free;
   ParameterSpace space(*law, values, free, options.bounds);
   out.free_mask.assign(out.param_names.size(), false);
   for (const auto& f : space.free()) out.free_mask[f.index] = true;

@@ -83,8 +83,8 @@ bool ObjectiveOptions::IsValid(std::string* why) const {
     if (why) *why = m;
     return false;
   };
-  for (double w : {weight_stress, weight_fabric, weight_features, weight_path_stress,
-                   weight_path_fabric})
+  for (double w :
+       {weight_stress, weight_fabric, weight_features, weight_path_stress, weight_path_fabric})
     if (!(w >= 0.0) || !std::isfinite(w)) return fail("block weights must be finite and >= 0");
   if (!envelope_points && !envelope_features && !path)
     return fail("at least one of envelope_points, envelope_features, path must be on");
@@ -359,13 +359,13 @@ double rms_norm(const std::vector<Eigen::Vector2d>& v) {
 Objective::Objective(std::string law_name, const CalibrationData& data,
                      const std::vector<std::string>& states, ParameterSpace space,
                      const ObjectiveOptions& options)
-    : impl_(std::make_unique<Impl>(Impl{law_name, std::move(space), options, {}, {}, {}, {}, {},
-                                        0, false, nullptr})) {
+    : impl_(std::make_unique<Impl>(
+          Impl{law_name, std::move(space), options, {}, {}, {}, {}, {}, 0, false, nullptr})) {
   std::string why;
   if (!options.IsValid(&why)) throw InputError("calibration objective: " + why);
   Impl& o = *impl_;
-  const bool law_fabric =
-      detail::dispatch_law(law_name, [](auto tag) { return detail::kHasFabric<typename decltype(tag)::type>; });
+  const bool law_fabric = detail::dispatch_law(
+      law_name, [](auto tag) { return detail::kHasFabric<typename decltype(tag)::type>; });
   int offset = 0;
   auto add_block = [&](const std::string& st, const std::string& kind, const std::string& env,
                        int size, double scale, double weight, bool integrated) {
@@ -389,8 +389,9 @@ Objective::Objective(std::string law_name, const CalibrationData& data,
                      (options.prediction == Prediction::kAuto && !env.elastic());
       const int m = env.size();
       t.stress_scale = rms_norm(env.stress);
-      if (!(t.stress_scale > 0.0)) throw InputError("state '" + label + "' envelope '" +
-                                                    env.name + "': all stress responses are zero");
+      if (!(t.stress_scale > 0.0))
+        throw InputError("state '" + label + "' envelope '" + env.name +
+                         "': all stress responses are zero");
       t.fabric_scale = env.has_fabric() ? rms_norm(env.fabric) : 0.0;
       bool used = false;
       if (options.envelope_points && options.weight_stress > 0.0) {
@@ -418,7 +419,8 @@ Objective::Objective(std::string law_name, const CalibrationData& data,
         t.features_offset = add_block(label, "features", env.name, 6, t.stress_scale,
                                       options.weight_features, t.integrated);
         used = true;
-        if (options.weight_fabric > 0.0 && law_fabric && t.fabric_scale > options.fabric_scale_min) {
+        if (options.weight_fabric > 0.0 && law_fabric &&
+            t.fabric_scale > options.fabric_scale_min) {
           for (int c = 0; c < 2; ++c)
             for (int k = 0; k < 3; ++k) {
               double f = 0.0;
@@ -427,10 +429,9 @@ Objective::Objective(std::string law_name, const CalibrationData& data,
             }
           t.fabric_features_w =
               std::sqrt(options.weight_features * options.weight_fabric / 3.0) / t.fabric_scale;
-          t.fabric_features_offset = add_block(label, "fabric_features", env.name, 6,
-                                               t.fabric_scale,
-                                               options.weight_features * options.weight_fabric,
-                                               t.integrated);
+          t.fabric_features_offset =
+              add_block(label, "fabric_features", env.name, 6, t.fabric_scale,
+                        options.weight_features * options.weight_fabric, t.integrated);
         }
       }
       if (used) {
@@ -508,9 +509,8 @@ bool Objective::jacobian(const double* z, Eigen::VectorXd* r, Eigen::MatrixXd* J
 EnvelopeData Objective::predict_envelope(const std::vector<double>& p, const StateData& state,
                                          const EnvelopeData& probes, bool* ok) const {
   EnvelopeData out;
-  const bool integrated =
-      impl_->options.prediction == Prediction::kIntegrated ||
-      (impl_->options.prediction == Prediction::kAuto && !probes.elastic());
+  const bool integrated = impl_->options.prediction == Prediction::kIntegrated ||
+                          (impl_->options.prediction == Prediction::kAuto && !probes.elastic());
   *ok = impl_->kernel->envelope(p.data(), state, probes, integrated, &out);
   return out;
 }

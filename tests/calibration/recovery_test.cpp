@@ -16,13 +16,11 @@ namespace {
 using testing::law_with;
 
 // Largest relative recovery error, also printed (the numbers quoted in docs/calibration.md).
-double max_relative_error(const CalibrationSummary& s, const models::Law& truth,
-                          const char* what) {
+double max_relative_error(const CalibrationSummary& s, const models::Law& truth, const char* what) {
   double worst = 0.0;
   for (std::size_t k = 0; k < s.fit.names.size(); ++k)
     worst = std::max(worst, std::abs(s.fit.values[k] / truth.parameter(s.fit.names[k]) - 1.0));
-  std::cout << what << ": max relative recovery error " << worst << ", " << s.fit.seconds
-            << " s\n";
+  std::cout << what << ": max relative recovery error " << worst << ", " << s.fit.seconds << " s\n";
   return worst;
 }
 
@@ -31,8 +29,8 @@ double max_relative_error(const CalibrationSummary& s, const models::Law& truth,
 constexpr double kNoiseless = 1e-6;
 
 const std::vector<std::pair<std::string, double>> kTruth = {
-    {"B", 2.2e10}, {"G", 3.0e9}, {"beta_A", 0.8}, {"n_p", 0.5}, {"p_ref", 1.8e9},
-    {"a_G", 2.0},  {"c_F", 4.0}};
+    {"B", 2.2e10},    {"G", 3.0e9}, {"beta_A", 0.8}, {"n_p", 0.5},
+    {"p_ref", 1.8e9}, {"a_G", 2.0}, {"c_F", 4.0}};
 
 CalibrationOptions aniso_options() {
   CalibrationOptions o;
@@ -64,8 +62,8 @@ TEST(Recovery, AnisotropicElasticNoiseless) {
 }
 
 TEST(Recovery, HypoplasticNoiseless) {
-  const auto law = law_with("hypoplastic_wu", {{"c1", -90.0}, {"c2", -800.0}, {"c3", -700.0},
-                                                {"c4", 1000.0}});
+  const auto law =
+      law_with("hypoplastic_wu", {{"c1", -90.0}, {"c2", -800.0}, {"c3", -700.0}, {"c4", 1000.0}});
   testing::SyntheticSpec spec;
   spec.elastic_amplitude = 5e-5;  // rate envelopes: L : d_eps + N |d_eps| exactly
   const CalibrationData d = testing::synthetic_data(*law, spec);
@@ -180,9 +178,13 @@ namespace {
 // An elastic law on data with elasto-plastic envelopes: fitted to the elastic ones only, and
 // the output says so; the elasto-plastic envelopes are still predicted for the report.
 TEST(Recovery, ElasticLawIgnoresPlasticEnvelopesAndSaysSo) {
-  const auto law = law_with("elastoplastic_fabric", {{"B", 2.2e10}, {"G", 3e9}, {"beta_A", 0.8},
-                                                      {"c_F", 4.0}, {"p_ref", 1.8e9},
-                                                      {"M_ss", 0.45}, {"beta_s", 40.0}});
+  const auto law = law_with("elastoplastic_fabric", {{"B", 2.2e10},
+                                                     {"G", 3e9},
+                                                     {"beta_A", 0.8},
+                                                     {"c_F", 4.0},
+                                                     {"p_ref", 1.8e9},
+                                                     {"M_ss", 0.45},
+                                                     {"beta_s", 40.0}});
   testing::SyntheticSpec spec;
   spec.directions = 12;
   spec.plastic_amplitude = 2e-3;
@@ -192,7 +194,8 @@ TEST(Recovery, ElasticLawIgnoresPlasticEnvelopesAndSaysSo) {
   o.values = {{"p_ref", 1.8e9}};
   const CalibrationSummary s = calibrate(d, o);
   bool noted = false;
-  for (const auto& w : s.warnings) noted = noted || w.find("elastic envelopes only") != std::string::npos;
+  for (const auto& w : s.warnings)
+    noted = noted || w.find("elastic envelopes only") != std::string::npos;
   EXPECT_TRUE(noted);
   for (const auto& b : s.blocks) EXPECT_EQ(b.envelope, "elastic");
   EXPECT_EQ(s.fit.jacobian, "autodiff");

@@ -25,8 +25,8 @@ namespace rendulic::calibration {
 
 struct CalibrationOptions {
   std::string model;
-  std::vector<std::string> holdout;  // states predicted, not fitted
-  std::vector<std::string> free;     // empty: default_free_parameters()
+  std::vector<std::string> holdout;      // states predicted, not fitted
+  std::vector<std::string> free;         // empty: default_free_parameters()
   std::map<std::string, double> values;  // start values of free / values of fixed parameters
   std::map<std::string, std::pair<double, double>> bounds;  // search boxes of free parameters
   bool level_one_start = true;  // start (and p_ref) from the per-state numbers

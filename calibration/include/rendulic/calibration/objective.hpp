@@ -38,9 +38,9 @@ namespace rendulic::calibration {
 
 struct FreeParameter {
   std::string name;
-  int index = 0;        // in the law's parameter_info()
-  bool log = false;     // z = log(p) when true, z = p otherwise
-  double lower = 0.0;   // search bounds (physical units)
+  int index = 0;       // in the law's parameter_info()
+  bool log = false;    // z = log(p) when true, z = p otherwise
+  double lower = 0.0;  // search bounds (physical units)
   double upper = 0.0;
 };
 
@@ -118,7 +118,7 @@ struct ResidualBlock {
   std::string envelope;
   int offset = 0;
   int size = 0;
-  double scale = 1.0;   // data scale (Pa for stress, 1 for fabric)
+  double scale = 1.0;  // data scale (Pa for stress, 1 for fabric)
   double weight = 1.0;
   bool integrated = false;
 };
