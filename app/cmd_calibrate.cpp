@@ -5,14 +5,14 @@
 // /calibration/<model> in the results file through ResultsWriter::update (atomic: the file is
 // replaced only once the new content is complete). Any rendulic/1 file qualifies, including
 // envelopes from another DEM code converted to the schema.
+#include <unistd.h>
+
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <memory>
 #include <sstream>
-
-#include <unistd.h>
 
 #include "commands.hpp"
 #include "rendulic/calibration/calibrate.hpp"
@@ -99,11 +99,11 @@ int run_calibrate(const CalibrateArgs& a) {
   // that we may replace. A read-only file or folder is still calibrated, just not written to.
   const std::filesystem::path rp(a.results);
   const std::filesystem::path folder = rp.has_parent_path() ? rp.parent_path() : ".";
-  const bool writable = ::access(a.results.c_str(), W_OK) == 0 &&
-                        ::access(folder.c_str(), W_OK) == 0;
+  const bool writable =
+      ::access(a.results.c_str(), W_OK) == 0 && ::access(folder.c_str(), W_OK) == 0;
   if (!a.no_write && !writable)
-    std::cerr << "rendulic: " << a.results
-              << " is read-only: /calibration/" << a.model << " not written\n";
+    std::cerr << "rendulic: " << a.results << " is read-only: /calibration/" << a.model
+              << " not written\n";
   if (!a.no_write && writable) {
     ResultsWriter w = ResultsWriter::update(a.results);
     write_calibration(w, summary);
@@ -124,13 +124,13 @@ Subcommand add_calibrate(CLI::App& parent) {
   auto* sub = parent.add_subcommand(
       "calibrate", "Fit a constitutive model to the envelopes and path of a results file");
   auto args = std::make_shared<CalibrateArgs>();
-  sub->add_option("--results", args->results, "Results file (HDF5, schema rendulic/1)")
-      ->required();
+  sub->add_option("--results", args->results, "Results file (HDF5, schema rendulic/1)")->required();
   sub->add_option("--model", args->model,
                   "Model: isotropic_elastic, anisotropic_elastic, hypoplastic_wu, "
                   "elastoplastic_fabric")
       ->required();
-  sub->add_option("--states", args->states, "States to use, comma separated (default: all with envelopes)")
+  sub->add_option("--states", args->states,
+                  "States to use, comma separated (default: all with envelopes)")
       ->delimiter(',');
   sub->add_option("--out", args->out, "Write the JSON here (default: print it)");
   sub->add_option("--holdout", args->holdout,

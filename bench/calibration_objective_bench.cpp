@@ -13,8 +13,8 @@ using namespace rendulic;
 using namespace rendulic::calibration;
 
 const std::vector<std::pair<std::string, double>> kAniso = {
-    {"B", 2.2e10}, {"G", 3e9}, {"beta_A", 0.8}, {"n_p", 0.5}, {"p_ref", 1.8e9}, {"a_G", 2.0},
-    {"c_F", 4.0}};
+    {"B", 2.2e10},    {"G", 3e9},   {"beta_A", 0.8}, {"n_p", 0.5},
+    {"p_ref", 1.8e9}, {"a_G", 2.0}, {"c_F", 4.0}};
 
 struct Fixture {
   std::unique_ptr<models::Law> law;
@@ -26,6 +26,11 @@ struct Fixture {
 Fixture make(const std::string& model, bool plastic) {
   Fixture f;
   f.law = testing::law_with(model, kAniso);
+  std::string why;
+  // A steady stress ratio above every state's (0.33 at most), so that hardening is positive.
+  if (plastic &&
+      !(f.law->set_parameter("M_ss", 0.45, &why) && f.law->set_parameter("beta_s", 40.0, &why)))
+    throw std::runtime_error(why);
   testing::SyntheticSpec spec;
   if (plastic) spec.plastic_amplitude = 2e-3;
   f.data = testing::synthetic_data(*f.law, spec);

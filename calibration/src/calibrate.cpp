@@ -149,22 +149,35 @@ CalibrationSummary calibrate(const CalibrationData& data, const CalibrationOptio
       throw InputError("calibrate: value of '" + name + "' outside its bounds");
     values[i] = v;
   }
-  const bool use_path = options.objective.path && !data.path.empty();
+  ObjectiveOptions oo = options.objective;
+  const bool elastic_law =
+      options.model == "isotropic_elastic" || options.model == "anisotropic_elastic";
+  bool dropped = false;
+  if (elastic_law && options.elastic_laws_use_elastic_data_only) {
+    dropped = (oo.path && !data.path.empty()) || has_plastic;
+    oo.path = false;
+    oo.plastic_envelopes = false;
+  }
+  const bool use_path = oo.path && !data.path.empty();
   const std::vector<std::string> free =
-      options.free.empty() ? default_free_parameters(options.model,
-                                                     static_cast<int>(out.fitted_states.size()),
-                                                     use_path, has_plastic)
-                           : options.free;
+      options.free.empty()
+          ? default_free_parameters(options.model, static_cast<int>(out.fitted_states.size()),
+                                    use_path, has_plastic)
+          : options.free;
   ParameterSpace space(*law, values, free, options.bounds);
   out.free_mask.assign(out.param_names.size(), false);
   for (const auto& f : space.free()) out.free_mask[f.index] = true;
 
   // Level 2.
-  const Objective objective(options.model, data, out.fitted_states, space, options.objective);
+  const Objective objective(options.model, data, out.fitted_states, space, oo);
   out.blocks = objective.blocks();
   const std::vector<double> z0 = space.to_z(space.base());
   out.fit = solve(objective, z0, options.solver);
   out.warnings = out.fit.uncertainty.warnings;
+  if (dropped)
+    out.warnings.push_back("note: " + options.model +
+                           " is elastic: fitted to the elastic envelopes only (the main path and "
+                           "the elasto-plastic envelopes are outside what it can describe)");
   if (!out.fit.converged)
     out.warnings.push_back("the optimiser did not report convergence: " + out.fit.report);
 
@@ -177,7 +190,7 @@ CalibrationSummary calibrate(const CalibrationData& data, const CalibrationOptio
   std::vector<double> rh;
   std::vector<ResidualBlock> hb;
   if (!out.held_out_states.empty()) {
-    ObjectiveOptions ho = options.objective;
+    ObjectiveOptions ho = oo;
     ho.path = false;
     const Objective held(options.model, data, out.held_out_states, space, ho);
     hb = held.blocks();

@@ -83,8 +83,8 @@ bool ObjectiveOptions::IsValid(std::string* why) const {
     if (why) *why = m;
     return false;
   };
-  for (double w : {weight_stress, weight_fabric, weight_features, weight_path_stress,
-                   weight_path_fabric})
+  for (double w :
+       {weight_stress, weight_fabric, weight_features, weight_path_stress, weight_path_fabric})
     if (!(w >= 0.0) || !std::isfinite(w)) return fail("block weights must be finite and >= 0");
   if (!envelope_points && !envelope_features && !path)
     return fail("at least one of envelope_points, envelope_features, path must be on");
@@ -128,11 +128,12 @@ struct EnvTask {
   int state = 0;  // index into Impl::states
   EnvelopeData env;
   bool integrated = false;
-  int stress_offset = -1, fabric_offset = -1, features_offset = -1;
+  int stress_offset = -1, fabric_offset = -1, features_offset = -1, fabric_features_offset = -1;
   double stress_scale = 1.0, fabric_scale = 1.0;
   double stress_w = 0.0, fabric_w = 0.0, features_w = 0.0;  // sqrt(weight / n) / scale
+  double fabric_features_w = 0.0;
   Eigen::Matrix<double, 3, Eigen::Dynamic> projection;
-  Eigen::Matrix<double, 3, 2> data_features;
+  Eigen::Matrix<double, 3, 2> data_features, data_fabric_features;
 };
 
 struct PathTask {
@@ -196,6 +197,14 @@ class Kernel final : public KernelBase {
             T f = T(0);
             for (int i = 0; i < m; ++i) f += T(t.projection(k, i)) * ps[i](c);
             r[t.features_offset + 3 * c + k] = t.features_w * (f - T(t.data_features(k, c)));
+          }
+      if (t.fabric_features_offset >= 0)
+        for (int c = 0; c < 2; ++c)
+          for (int k = 0; k < 3; ++k) {
+            T f = T(0);
+            for (int i = 0; i < m; ++i) f += T(t.projection(k, i)) * pf[i](c);
+            r[t.fabric_features_offset + 3 * c + k] =
+                t.fabric_features_w * (f - T(t.data_fabric_features(k, c)));
           }
     }
     if (o_->path_task.active) {
@@ -350,13 +359,13 @@ double rms_norm(const std::vector<Eigen::Vector2d>& v) {
 Objective::Objective(std::string law_name, const CalibrationData& data,
                      const std::vector<std::string>& states, ParameterSpace space,
                      const ObjectiveOptions& options)
-    : impl_(std::make_unique<Impl>(Impl{law_name, std::move(space), options, {}, {}, {}, {}, {},
-                                        0, false, nullptr})) {
+    : impl_(std::make_unique<Impl>(
+          Impl{law_name, std::move(space), options, {}, {}, {}, {}, {}, 0, false, nullptr})) {
   std::string why;
   if (!options.IsValid(&why)) throw InputError("calibration objective: " + why);
   Impl& o = *impl_;
-  const bool law_fabric =
-      detail::dispatch_law(law_name, [](auto tag) { return detail::kHasFabric<typename decltype(tag)::type>; });
+  const bool law_fabric = detail::dispatch_law(
+      law_name, [](auto tag) { return detail::kHasFabric<typename decltype(tag)::type>; });
   int offset = 0;
   auto add_block = [&](const std::string& st, const std::string& kind, const std::string& env,
                        int size, double scale, double weight, bool integrated) {
@@ -372,6 +381,7 @@ Objective::Objective(std::string law_name, const CalibrationData& data,
     const int si = static_cast<int>(o.states.size()) - 1;
     for (const auto& env : s->envelopes) {
       if (!env.IsValid(&why)) throw InputError("state '" + label + "': " + why);
+      if (env.elastic() ? !options.elastic_envelopes : !options.plastic_envelopes) continue;
       EnvTask t;
       t.state = si;
       t.env = env;
@@ -379,8 +389,9 @@ Objective::Objective(std::string law_name, const CalibrationData& data,
                      (options.prediction == Prediction::kAuto && !env.elastic());
       const int m = env.size();
       t.stress_scale = rms_norm(env.stress);
-      if (!(t.stress_scale > 0.0)) throw InputError("state '" + label + "' envelope '" +
-                                                    env.name + "': all stress responses are zero");
+      if (!(t.stress_scale > 0.0))
+        throw InputError("state '" + label + "' envelope '" + env.name +
+                         "': all stress responses are zero");
       t.fabric_scale = env.has_fabric() ? rms_norm(env.fabric) : 0.0;
       bool used = false;
       if (options.envelope_points && options.weight_stress > 0.0) {
@@ -408,6 +419,20 @@ Objective::Objective(std::string law_name, const CalibrationData& data,
         t.features_offset = add_block(label, "features", env.name, 6, t.stress_scale,
                                       options.weight_features, t.integrated);
         used = true;
+        if (options.weight_fabric > 0.0 && law_fabric &&
+            t.fabric_scale > options.fabric_scale_min) {
+          for (int c = 0; c < 2; ++c)
+            for (int k = 0; k < 3; ++k) {
+              double f = 0.0;
+              for (int i = 0; i < m; ++i) f += t.projection(k, i) * env.fabric[i](c);
+              t.data_fabric_features(k, c) = f;
+            }
+          t.fabric_features_w =
+              std::sqrt(options.weight_features * options.weight_fabric / 3.0) / t.fabric_scale;
+          t.fabric_features_offset =
+              add_block(label, "fabric_features", env.name, 6, t.fabric_scale,
+                        options.weight_features * options.weight_fabric, t.integrated);
+        }
       }
       if (used) {
         all_rate = all_rate && !t.integrated;
@@ -484,9 +509,8 @@ bool Objective::jacobian(const double* z, Eigen::VectorXd* r, Eigen::MatrixXd* J
 EnvelopeData Objective::predict_envelope(const std::vector<double>& p, const StateData& state,
                                          const EnvelopeData& probes, bool* ok) const {
   EnvelopeData out;
-  const bool integrated =
-      impl_->options.prediction == Prediction::kIntegrated ||
-      (impl_->options.prediction == Prediction::kAuto && !probes.elastic());
+  const bool integrated = impl_->options.prediction == Prediction::kIntegrated ||
+                          (impl_->options.prediction == Prediction::kAuto && !probes.elastic());
   *ok = impl_->kernel->envelope(p.data(), state, probes, integrated, &out);
   return out;
 }

@@ -19,10 +19,18 @@ std::string str(const std::string& s) {
   std::string o = "\"";
   for (char c : s) {
     switch (c) {
-      case '"': o += "\\\""; break;
-      case '\\': o += "\\\\"; break;
-      case '\n': o += "\\n"; break;
-      case '\t': o += "\\t"; break;
+      case '"':
+        o += "\\\"";
+        break;
+      case '\\':
+        o += "\\\\";
+        break;
+      case '\n':
+        o += "\\n";
+        break;
+      case '\t':
+        o += "\\t";
+        break;
       default:
         if (static_cast<unsigned char>(c) < 0x20) {
           char b[8];
@@ -82,11 +90,12 @@ std::string to_json(const CalibrationSummary& s) {
       o << (b ? ", " : "") << num(f.correlation(a, b));
     o << "]";
   }
-  o << "]},\n  \"objective\": " << num(f.cost) << ",\n  \"converged\": "
-    << (f.converged ? "true" : "false") << ",\n  \"backend\": " << str(f.backend)
-    << ",\n  \"jacobian\": " << str(f.jacobian) << ",\n  \"evaluations\": " << f.evaluations
-    << ",\n  \"seconds\": " << num(f.seconds) << ",\n  \"n_residuals\": "
-    << f.uncertainty.n_residuals << ",\n  \"rank\": " << f.uncertainty.rank
+  o << "]},\n  \"objective\": " << num(f.cost)
+    << ",\n  \"converged\": " << (f.converged ? "true" : "false")
+    << ",\n  \"backend\": " << str(f.backend) << ",\n  \"jacobian\": " << str(f.jacobian)
+    << ",\n  \"evaluations\": " << f.evaluations << ",\n  \"seconds\": " << num(f.seconds)
+    << ",\n  \"n_residuals\": " << f.uncertainty.n_residuals
+    << ",\n  \"rank\": " << f.uncertainty.rank
     << ",\n  \"condition_number\": " << num(f.uncertainty.condition_number)
     << ",\n  \"fitted_misfit\": " << num(s.fitted_misfit)
     << ",\n  \"held_out_misfit\": " << (s.held_out_misfit ? num(*s.held_out_misfit) : "null")
@@ -102,9 +111,10 @@ std::string to_json(const CalibrationSummary& s) {
   o << "],\n  \"per_state\": {";
   for (std::size_t k = 0; k < s.states.size(); ++k) {
     const StateSummary& st = s.states[k];
-    o << (k ? "," : "") << "\n    " << str(st.label) << ": {\"held_out\": "
-      << (st.held_out ? "true" : "false") << ", \"pressure\": " << num(st.pressure)
-      << ", \"F_dev\": " << num(st.f_dev) << ", \"eps_dev\": " << num(st.eps_dev)
+    o << (k ? "," : "") << "\n    " << str(st.label)
+      << ": {\"held_out\": " << (st.held_out ? "true" : "false")
+      << ", \"pressure\": " << num(st.pressure) << ", \"F_dev\": " << num(st.f_dev)
+      << ", \"eps_dev\": " << num(st.eps_dev)
       << ", \"volume_fraction\": " << num(st.volume_fraction)
       << ", \"misfit\": " << (st.misfit >= 0 ? num(st.misfit) : "null");
     if (st.has_elastic) o << ", " << stiffness_json(st.elastic);
@@ -117,7 +127,8 @@ std::string to_json(const CalibrationSummary& s) {
           << ", \"A\": " << num(st.model_elastic.A);
         first = false;
       }
-      if (st.model_plastic.ok) o << (first ? "" : ", ") << "\"plastic\": " << plastic_json(st.model_plastic);
+      if (st.model_plastic.ok)
+        o << (first ? "" : ", ") << "\"plastic\": " << plastic_json(st.model_plastic);
       o << "}";
     }
     o << "}";

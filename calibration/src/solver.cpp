@@ -1,11 +1,10 @@
 // Ceres and NLopt back ends (solver.hpp; docs/calibration.md "Back ends").
 #include "rendulic/calibration/solver.hpp"
 
-#include <nlopt.hpp>
-
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <nlopt.hpp>
 #include <random>
 #include <sstream>
 
@@ -15,10 +14,14 @@ namespace rendulic::calibration {
 
 std::string to_string(Backend b) {
   switch (b) {
-    case Backend::kCeres: return "ceres";
-    case Backend::kMultiStart: return "multistart";
-    case Backend::kGlobal: return "global";
-    case Backend::kLocalNlopt: return "bobyqa";
+    case Backend::kCeres:
+      return "ceres";
+    case Backend::kMultiStart:
+      return "multistart";
+    case Backend::kGlobal:
+      return "global";
+    case Backend::kLocalNlopt:
+      return "bobyqa";
   }
   return "?";
 }
@@ -187,7 +190,8 @@ FitResult solve(const Objective& obj, const std::vector<double>& z0, const Solve
     for (int s = 0; s < starts; ++s) {
       std::vector<double> zs = z0;
       if (s > 0)
-        for (int k = 0; k < p; ++k) zs[k] = sp.z_lower(k) + unif(rng) * (sp.z_upper(k) - sp.z_lower(k));
+        for (int k = 0; k < p; ++k)
+          zs[k] = sp.z_lower(k) + unif(rng) * (sp.z_upper(k) - sp.z_lower(k));
       const CeresRun run = run_ceres(obj, zs, o);
       out.evaluations += run.iterations;
       rep << "ceres start " << s << ": cost " << run.cost << " after " << run.iterations
@@ -213,8 +217,8 @@ FitResult solve(const Objective& obj, const std::vector<double>& z0, const Solve
           << ", best cost " << c.best << " after " << c.evaluations << " evaluations. ";
     }
     const int before = c.evaluations;
-    rep << run_nlopt(nlopt::LN_BOBYQA, &c, &u, o.local_evaluations, o) << ", best cost "
-        << c.best << " after " << c.evaluations - before << " evaluations. ";
+    rep << run_nlopt(nlopt::LN_BOBYQA, &c, &u, o.local_evaluations, o) << ", best cost " << c.best
+        << " after " << c.evaluations - before << " evaluations. ";
     out.evaluations += c.evaluations;
     z = c.z_of(u);
     cost = c.best;
@@ -247,8 +251,7 @@ FitResult solve(const Objective& obj, const std::vector<double>& z0, const Solve
       d(k) = sp.dp_dz(k, z[k]);
     }
     out.uncertainty = estimate_uncertainty(J, r, out.names, pv, d, o.identifiability);
-    for (int k = 0; k < p; ++k)
-      out.stderr_.push_back(std::abs(d(k)) * out.uncertainty.stderr_z(k));
+    for (int k = 0; k < p; ++k) out.stderr_.push_back(std::abs(d(k)) * out.uncertainty.stderr_z(k));
     out.correlation = out.uncertainty.correlation;
   } else {
     out.converged = false;

@@ -64,8 +64,8 @@ fs::path make_results_file(const std::string& name) {
 }
 
 int run(const std::string& args, const fs::path& out) {
-  const std::string cmd = std::string(RENDULIC_EXE) + " calibrate " + args + " > " +
-                          out.string() + " 2>&1";
+  const std::string cmd =
+      std::string(RENDULIC_EXE) + " calibrate " + args + " > " + out.string() + " 2>&1";
   const int rc = std::system(cmd.c_str());
   return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
 }
@@ -81,12 +81,17 @@ TEST(CalibrateCli, WritesJsonAndCalibrationGroup) {
   const fs::path file = make_results_file("ok.h5");
   const fs::path json = file.parent_path() / "ok.json";
   const fs::path log = file.parent_path() / "ok.log";
-  ASSERT_EQ(run("--results " + file.string() + " --model anisotropic_elastic --states s0,s1,s3 "
-                "--holdout s2 --out " + json.string(), log), 0) << slurp(log);
+  ASSERT_EQ(run("--results " + file.string() +
+                    " --model anisotropic_elastic --states s0,s1,s3 "
+                    "--holdout s2 --out " +
+                    json.string(),
+                log),
+            0)
+      << slurp(log);
   const std::string j = slurp(json);
   for (const char* key : {"\"model\": \"anisotropic_elastic\"", "\"params\"", "\"stderr\"",
-                          "\"correlation\"", "\"per_state\"", "\"s0\"", "\"s2\"", "\"B\"",
-                          "\"G\"", "\"A\"", "\"held_out_misfit\"", "\"converged\": true"})
+                          "\"correlation\"", "\"per_state\"", "\"s0\"", "\"s2\"", "\"B\"", "\"G\"",
+                          "\"A\"", "\"held_out_misfit\"", "\"converged\": true"})
     EXPECT_NE(j.find(key), std::string::npos) << key << "\n" << j;
   EXPECT_EQ(j.find("nan"), std::string::npos);
   const ResultsReader r(file);
@@ -109,11 +114,12 @@ TEST(CalibrateCli, BadInputExitsTwoAndLeavesTheFileUntouched) {
   const fs::path log = file.parent_path() / "bad.log";
   EXPECT_EQ(run("--results " + file.string() + " --model no_such_law", log), 2);
   EXPECT_NE(slurp(log).find("no_such_law"), std::string::npos);
-  EXPECT_EQ(run("--results " + file.string() + " --model anisotropic_elastic --states s0,zz",
-                log), 2);
+  EXPECT_EQ(run("--results " + file.string() + " --model anisotropic_elastic --states s0,zz", log),
+            2);
   EXPECT_NE(slurp(log).find("zz"), std::string::npos);
-  EXPECT_EQ(run("--results " + file.string() + " --model anisotropic_elastic --states no_envelopes",
-                log), 2);
+  EXPECT_EQ(
+      run("--results " + file.string() + " --model anisotropic_elastic --states no_envelopes", log),
+      2);
   EXPECT_NE(slurp(log).find("no envelopes"), std::string::npos);
   EXPECT_EQ(run("--results " + file.string() + " --model anisotropic_elastic --free B,nope", log),
             2);
@@ -144,7 +150,7 @@ TEST(CalibrateCli, LoaderReadsAFileStillBeingWritten) {
     const std::string g = "/states/" + l;
     w.write(g + "/stress", r.read_tensor(g + "/stress"));
     w.write(g + "/fabric", r.exists(g + "/fabric") ? r.read_tensor(g + "/fabric")
-                                                    : Eigen::Matrix3d(Eigen::Matrix3d::Zero()));
+                                                   : Eigen::Matrix3d(Eigen::Matrix3d::Zero()));
     if (!r.exists(g + "/envelopes")) continue;
     for (const auto& e : r.children(g + "/envelopes")) {
       const std::string eg = g + "/envelopes/" + e;

@@ -43,9 +43,8 @@ TEST(Identifiability, OnePressureCannotSeparateBFromNp) {
   const auto law = law_with("anisotropic_elastic", {{"B", 2e10}, {"n_p", 0.5}, {"p_ref", 1e9}});
   testing::SyntheticSpec spec;
   // Same pressure (2 GPa) at every state, different anisotropy.
-  spec.states = {{"a", 2.0e9, 2.0e9, 1.8, 1.8},
-                 {"b", 1.6e9, 2.2e9, 1.6, 1.9},
-                 {"c", 1.4e9, 2.3e9, 1.4, 2.0}};
+  spec.states = {
+      {"a", 2.0e9, 2.0e9, 1.8, 1.8}, {"b", 1.6e9, 2.2e9, 1.6, 1.9}, {"c", 1.4e9, 2.3e9, 1.4, 2.0}};
   spec.noise = {0.005, 2};
   const CalibrationData d = testing::synthetic_data(*law, spec);
   CalibrationOptions o;

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <iostream>
 
 #include "rendulic/calibration/calibrate.hpp"
 #include "synthetic.hpp"
@@ -14,13 +15,22 @@ namespace {
 
 using testing::law_with;
 
+// Largest relative recovery error, also printed (the numbers quoted in docs/calibration.md).
+double max_relative_error(const CalibrationSummary& s, const models::Law& truth, const char* what) {
+  double worst = 0.0;
+  for (std::size_t k = 0; k < s.fit.names.size(); ++k)
+    worst = std::max(worst, std::abs(s.fit.values[k] / truth.parameter(s.fit.names[k]) - 1.0));
+  std::cout << what << ": max relative recovery error " << worst << ", " << s.fit.seconds << " s\n";
+  return worst;
+}
+
 // Noiseless data, exact model: the optimum is the truth, and Ceres with tolerances 1e-15 gets
 // there to ~1e-10; the issue asks for 1e-6 relative.
 constexpr double kNoiseless = 1e-6;
 
 const std::vector<std::pair<std::string, double>> kTruth = {
-    {"B", 2.2e10}, {"G", 3.0e9}, {"beta_A", 0.8}, {"n_p", 0.5}, {"p_ref", 1.8e9},
-    {"a_G", 2.0},  {"c_F", 4.0}};
+    {"B", 2.2e10},    {"G", 3.0e9}, {"beta_A", 0.8}, {"n_p", 0.5},
+    {"p_ref", 1.8e9}, {"a_G", 2.0}, {"c_F", 4.0}};
 
 CalibrationOptions aniso_options() {
   CalibrationOptions o;
@@ -36,6 +46,7 @@ TEST(Recovery, AnisotropicElasticNoiseless) {
   ASSERT_TRUE(s.fit.converged) << s.fit.report;
   EXPECT_EQ(s.fit.jacobian, "autodiff");
   ASSERT_EQ(s.fit.names.size(), 6u);  // B, G, beta_A, c_F, n_p, a_G (4 states)
+  EXPECT_LT(max_relative_error(s, *law, "anisotropic_elastic noiseless"), kNoiseless);
   for (std::size_t k = 0; k < s.fit.names.size(); ++k)
     EXPECT_NEAR(s.fit.values[k] / law->parameter(s.fit.names[k]), 1.0, kNoiseless)
         << s.fit.names[k];
@@ -51,8 +62,8 @@ TEST(Recovery, AnisotropicElasticNoiseless) {
 }
 
 TEST(Recovery, HypoplasticNoiseless) {
-  const auto law = law_with("hypoplastic_wu", {{"c1", -90.0}, {"c2", -800.0}, {"c3", -700.0},
-                                                {"c4", 1000.0}});
+  const auto law =
+      law_with("hypoplastic_wu", {{"c1", -90.0}, {"c2", -800.0}, {"c3", -700.0}, {"c4", 1000.0}});
   testing::SyntheticSpec spec;
   spec.elastic_amplitude = 5e-5;  // rate envelopes: L : d_eps + N |d_eps| exactly
   const CalibrationData d = testing::synthetic_data(*law, spec);
@@ -60,6 +71,7 @@ TEST(Recovery, HypoplasticNoiseless) {
   o.model = "hypoplastic_wu";
   const CalibrationSummary s = calibrate(d, o);
   ASSERT_TRUE(s.fit.converged) << s.fit.report;
+  EXPECT_LT(max_relative_error(s, *law, "hypoplastic_wu noiseless"), kNoiseless);
   for (std::size_t k = 0; k < s.fit.names.size(); ++k)
     EXPECT_NEAR(s.fit.values[k] / law->parameter(s.fit.names[k]), 1.0, kNoiseless)
         << s.fit.names[k];
@@ -155,6 +167,41 @@ TEST(Recovery, HeldOutStateIsPredicted) {
   const CalibrationSummary si = calibrate(d, iso);
   ASSERT_TRUE(si.held_out_misfit.has_value());
   EXPECT_GT(*si.held_out_misfit, 1e-2);
+}
+
+}  // namespace
+}  // namespace rendulic::calibration
+
+namespace rendulic::calibration {
+namespace {
+
+// An elastic law on data with elasto-plastic envelopes: fitted to the elastic ones only, and
+// the output says so; the elasto-plastic envelopes are still predicted for the report.
+TEST(Recovery, ElasticLawIgnoresPlasticEnvelopesAndSaysSo) {
+  const auto law = law_with("elastoplastic_fabric", {{"B", 2.2e10},
+                                                     {"G", 3e9},
+                                                     {"beta_A", 0.8},
+                                                     {"c_F", 4.0},
+                                                     {"p_ref", 1.8e9},
+                                                     {"M_ss", 0.45},
+                                                     {"beta_s", 40.0}});
+  testing::SyntheticSpec spec;
+  spec.directions = 12;
+  spec.plastic_amplitude = 2e-3;
+  const CalibrationData d = testing::synthetic_data(*law, spec);
+  CalibrationOptions o;
+  o.model = "anisotropic_elastic";
+  o.values = {{"p_ref", 1.8e9}};
+  const CalibrationSummary s = calibrate(d, o);
+  bool noted = false;
+  for (const auto& w : s.warnings)
+    noted = noted || w.find("elastic envelopes only") != std::string::npos;
+  EXPECT_TRUE(noted);
+  for (const auto& b : s.blocks) EXPECT_EQ(b.envelope, "elastic");
+  EXPECT_EQ(s.fit.jacobian, "autodiff");
+  // The elastic part of the elasto-plastic law is the anisotropic law: recovered exactly.
+  EXPECT_NEAR(s.fit.values[0] / 2.2e10, 1.0, 1e-6);
+  EXPECT_TRUE(s.states[1].model_plastic.ok);
 }
 
 }  // namespace

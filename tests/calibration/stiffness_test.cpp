@@ -3,13 +3,15 @@
 // 35.26 deg), the anisotropic law's A = beta_A F_dev B and tilt (1/2) atan2(2 sqrt3 A, 3B - 2G),
 // an independent estimator (probes/ fit_affine), the hypoplastic centre shift N |d_eps|, and
 // the reported standard errors against the scatter of repeated noisy fits.
+#include "rendulic/calibration/stiffness.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 
-#include "rendulic/calibration/stiffness.hpp"
 #include "rendulic/models/hypoplastic_wu.hpp"
 #include "rendulic/probes/envelope_fit.hpp"
+#include "rendulic/probes/features.hpp"
 #include "synthetic.hpp"
 
 namespace rendulic::calibration {
@@ -30,8 +32,8 @@ models::MaterialState state_of(const models::Law& law, double p_ax, double p_lat
 TEST(Stiffness, IsotropicLawGivesTheClosedFormEllipse) {
   const auto law = law_with("isotropic_elastic", {{"K", 2e10}, {"G", 3e9}});
   std::mt19937 rng(1);
-  const EnvelopeData e = testing::envelope_of(*law, state_of(*law, 1e9, 1e9, 1.8, 1.8), "el",
-                                              5e-5, 36, models::EnvelopeMethod::kRate, {}, &rng);
+  const EnvelopeData e = testing::envelope_of(*law, state_of(*law, 1e9, 1e9, 1.8, 1.8), "el", 5e-5,
+                                              36, models::EnvelopeMethod::kRate, {}, &rng);
   const RendulicStiffness s = fit_rendulic_stiffness(e);
   ASSERT_TRUE(s.ok) << s.note;
   EXPECT_NEAR(s.B / 2e10, 1.0, kExact);
@@ -49,8 +51,8 @@ TEST(Stiffness, AnisotropicLawGivesAAndTheTilt) {
   const auto law = law_with("anisotropic_elastic", {{"B", B}, {"G", G}, {"beta_A", beta_a}});
   const models::MaterialState st = state_of(*law, 1.3e9, 1.9e9, 1.4, 2.0);
   std::mt19937 rng(1);
-  const EnvelopeData e = testing::envelope_of(*law, st, "el", 5e-5, 36,
-                                              models::EnvelopeMethod::kRate, {}, &rng);
+  const EnvelopeData e =
+      testing::envelope_of(*law, st, "el", 5e-5, 36, models::EnvelopeMethod::kRate, {}, &rng);
   const RendulicStiffness s = fit_rendulic_stiffness(e);
   ASSERT_TRUE(s.ok);
   const double f_dev = signed_deviator(st.fabric);
@@ -66,6 +68,17 @@ TEST(Stiffness, AnisotropicLawGivesAAndTheTilt) {
   const AffineFit af = fit_affine(e.stress, e.theta_deg);
   ASSERT_TRUE(af.ok);
   EXPECT_LT((af.M / e.amplitude - s.rendulic_matrix()).norm(), kExact * s.rendulic_matrix().norm());
+  // And the symmetric fit of probes/ features.hpp (c + D e, D symmetric).
+  Envelope pe;
+  pe.response = e.stress;
+  pe.strain = e.strain;
+  pe.theta_deg = e.theta_deg;
+  pe.amplitude = e.amplitude;
+  const rendulic::RendulicStiffness ps = rendulic::fit_rendulic_stiffness(pe);
+  EXPECT_LT((ps.D - s.rendulic_matrix()).norm(), kExact * s.rendulic_matrix().norm());
+  // And the law's own tangent (models/ rendulic_tangent), no envelope involved.
+  const Eigen::Matrix2d t = models::rendulic_tangent(*law, st, 0.0);
+  EXPECT_LT((t - s.rendulic_matrix()).norm(), kExact * s.rendulic_matrix().norm());
 }
 
 TEST(Stiffness, StandardErrorsMatchTheScatterOfNoisyFits) {
@@ -92,14 +105,14 @@ TEST(Stiffness, HypoplasticCentreShiftIsNTimesTheAmplitude) {
   const models::MaterialState st = state_of(*law, 1.2e6, 2e6, 0, 0);
   std::mt19937 rng(1);
   const double amp = 2e-3;
-  const EnvelopeData e = testing::envelope_of(*law, st, "pl", amp, 36,
-                                              models::EnvelopeMethod::kRate, {}, &rng);
+  const EnvelopeData e =
+      testing::envelope_of(*law, st, "pl", amp, 36, models::EnvelopeMethod::kRate, {}, &rng);
   const PlasticFeatures f = plastic_features(e);
   ASSERT_TRUE(f.ok) << f.note;
   // The rate envelope is L : d_eps + N |d_eps|: an ellipse centred at N |d_eps| exactly.
-  const Eigen::Vector2d expected =
-      rendulic_pair(models::HypoplasticWu::nonlinear_term(law->parameters().data(),
-                                                          Eigen::Matrix3d(st.stress))) * amp;
+  const Eigen::Vector2d expected = rendulic_pair(models::HypoplasticWu::nonlinear_term(
+                                       law->parameters().data(), Eigen::Matrix3d(st.stress))) *
+                                   amp;
   EXPECT_LT((f.shift - expected).norm(), 1e-9 * f.a);
   EXPECT_GT(f.shift_ratio, 0.0);
   EXPECT_LE(f.thinning, 1.0);

@@ -87,9 +87,8 @@ inline CalibrationData synthetic_data(const models::Law& law, const SyntheticSpe
     st.fabric = Eigen::Vector3d(s.f_ax, s.f_lat, s.f_lat).asDiagonal();
     st.volume_fraction = 0.8;
     const models::MaterialState ms = law.make_state(st.stress, st.fabric, st.volume_fraction);
-    st.envelopes.push_back(envelope_of(law, ms, "elastic", spec.elastic_amplitude,
-                                       spec.directions, models::EnvelopeMethod::kRate, spec.noise,
-                                       &rng));
+    st.envelopes.push_back(envelope_of(law, ms, "elastic", spec.elastic_amplitude, spec.directions,
+                                       models::EnvelopeMethod::kRate, spec.noise, &rng));
     if (spec.plastic_amplitude > 0.0)
       st.envelopes.push_back(envelope_of(law, ms, "plastic", spec.plastic_amplitude,
                                          spec.directions, models::EnvelopeMethod::kIntegrated,

@@ -25,11 +25,15 @@ namespace rendulic::calibration {
 
 struct CalibrationOptions {
   std::string model;
-  std::vector<std::string> holdout;  // states predicted, not fitted
-  std::vector<std::string> free;     // empty: default_free_parameters()
+  std::vector<std::string> holdout;      // states predicted, not fitted
+  std::vector<std::string> free;         // empty: default_free_parameters()
   std::map<std::string, double> values;  // start values of free / values of fixed parameters
   std::map<std::string, std::pair<double, double>> bounds;  // search boxes of free parameters
   bool level_one_start = true;  // start (and p_ref) from the per-state numbers
+  // Elastic laws (isotropic_elastic, anisotropic_elastic) cannot describe the shift of
+  // elasto-plastic envelopes or the non-linear main path; by default they are fitted to the
+  // elastic envelopes only (a note in the warnings says so). false: use what `objective` says.
+  bool elastic_laws_use_elastic_data_only = true;
   ObjectiveOptions objective;
   SolverOptions solver;
   bool IsValid(std::string* why) const;

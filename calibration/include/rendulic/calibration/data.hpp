@@ -51,7 +51,7 @@ struct StateData {
 
 // The main path, subsampled; row 0 is the start state of the model path.
 struct PathData {
-  std::vector<double> eps_dev;  // signed (physics.md 3), relative to row 0 after loading
+  std::vector<double> eps_dev;          // signed (physics.md 3), relative to row 0 after loading
   std::vector<Eigen::Matrix3d> stress;  // Pa
   std::vector<Eigen::Matrix3d> fabric;
   double volume_fraction = 0.0;  // at row 0
@@ -59,7 +59,7 @@ struct PathData {
 };
 
 struct CalibrationData {
-  std::string source;  // file name or "synthetic"
+  std::string source;   // file name or "synthetic"
   double k_star = 0.0;  // Pa; 0 when not from a file
   std::vector<StateData> states;
   PathData path;

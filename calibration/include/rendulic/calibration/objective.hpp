@@ -4,7 +4,8 @@
 //     d_sigma (and, as a separate block, of d_F) for every probe direction;
 //   - envelope features: the six numbers (centre c, matrix M) of the affine envelope
 //     R(theta) = c + M u(theta) (probes/ fit_affine), which carry the ellipse's axes,
-//     inclination and shift; a projection of the points that ignores non-elliptic scatter;
+//     inclination and shift; a projection of the points that ignores non-elliptic scatter
+//     (for stress, and for fabric as "fabric_features" with weight_features * weight_fabric);
 //   - the main path: predicted minus measured (iso, dev) pairs of stress and of fabric at the
 //     measured eps_dev, from the undrained axisymmetric path of the law.
 // Normalisation: every block is divided by its data scale (the rms norm of its measured pairs)
@@ -37,9 +38,9 @@ namespace rendulic::calibration {
 
 struct FreeParameter {
   std::string name;
-  int index = 0;        // in the law's parameter_info()
-  bool log = false;     // z = log(p) when true, z = p otherwise
-  double lower = 0.0;   // search bounds (physical units)
+  int index = 0;       // in the law's parameter_info()
+  bool log = false;    // z = log(p) when true, z = p otherwise
+  double lower = 0.0;  // search bounds (physical units)
   double upper = 0.0;
 };
 
@@ -84,6 +85,9 @@ struct ObjectiveOptions {
   bool envelope_points = true;
   bool envelope_features = false;
   bool path = true;  // used when the data has a path
+  // Which envelopes enter: elastic ones (amplitude < 1e-4) and larger, elasto-plastic ones.
+  bool elastic_envelopes = true;
+  bool plastic_envelopes = true;
   // Block weights (see the file comment); 0 drops a block.
   double weight_stress = 1.0;
   double weight_fabric = 1.0;
@@ -114,7 +118,7 @@ struct ResidualBlock {
   std::string envelope;
   int offset = 0;
   int size = 0;
-  double scale = 1.0;   // data scale (Pa for stress, 1 for fabric)
+  double scale = 1.0;  // data scale (Pa for stress, 1 for fabric)
   double weight = 1.0;
   bool integrated = false;
 };

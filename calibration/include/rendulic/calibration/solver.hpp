@@ -50,8 +50,8 @@ struct FitResult {
   std::vector<double> params;      // the law's full parameter vector
   Eigen::MatrixXd correlation;
   Uncertainty uncertainty;
-  double cost = 0.0;   // 0.5 |r|^2 at the optimum
-  double rms = 0.0;    // sqrt(|r|^2 / n): normalised rms misfit (1 = data-scale misfit)
+  double cost = 0.0;  // 0.5 |r|^2 at the optimum
+  double rms = 0.0;   // sqrt(|r|^2 / n): normalised rms misfit (1 = data-scale misfit)
   bool converged = false;
   std::string backend;
   std::string jacobian;  // "autodiff" or "numeric (central differences)"

@@ -17,13 +17,13 @@ namespace rendulic::calibration {
 
 struct RendulicStiffness {
   bool ok = false;
-  std::string note;  // why not ok, or a caution (e.g. a large centre)
+  std::string note;                  // why not ok, or a caution (e.g. a large centre)
   double B = 0.0, G = 0.0, A = 0.0;  // Pa
   // 1-sigma standard errors from s^2 (X^T X)^-1, s^2 the residual variance; zero for exact data.
   double B_stderr = 0.0, G_stderr = 0.0, A_stderr = 0.0;
   Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();  // of (B, G, A)
-  Eigen::Vector2d center = Eigen::Vector2d::Zero();       // Pa, Rendulic frame (0 if not fitted)
-  double rms = 0.0;  // Pa, rms of the residual components
+  Eigen::Vector2d center = Eigen::Vector2d::Zero();      // Pa, Rendulic frame (0 if not fitted)
+  double rms = 0.0;                                      // Pa, rms of the residual components
   int n_points = 0;
   // The ellipse this stiffness draws at the envelope's amplitude (physics.md 6: semi-axes are
   // singular values of D times |d_eps|; inclination of the major axis in the Rendulic frame).
@@ -48,9 +48,9 @@ struct PlasticFeatures {
   double amplitude = 0.0;
   Eigen::Vector2d shift = Eigen::Vector2d::Zero();  // Pa: centre of the stress envelope
   double a = 0.0, b = 0.0, inclination_deg = 0.0;   // Pa, Pa, deg of the stress envelope
-  double thinning = 0.0;       // b / a of the stress envelope
-  double shift_ratio = 0.0;    // |shift| / a
-  double rms = 0.0;            // Pa, rms residual of the affine fit (non-ellipticity)
+  double thinning = 0.0;                            // b / a of the stress envelope
+  double shift_ratio = 0.0;                         // |shift| / a
+  double rms = 0.0;  // Pa, rms residual of the affine fit (non-ellipticity)
   Eigen::Vector2d fabric_shift = Eigen::Vector2d::Zero();
   double fabric_a = 0.0, fabric_b = 0.0, fabric_inclination_deg = 0.0;
 };
