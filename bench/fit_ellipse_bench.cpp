@@ -47,6 +47,11 @@ FitOptions shape(FitShape s, bool cov = true, FitLoss loss = FitLoss::kNone) {
 void BM_Ellipse36(benchmark::State& st) {
   run(st, make(0.3, 0.01, false), shape(FitShape::kEllipse));
 }
+void BM_Ellipse36Latent(benchmark::State& st) {
+  FitOptions o = shape(FitShape::kEllipse);
+  o.method = FitMethod::kLatentAngles;
+  run(st, make(0.3, 0.01, false), o);
+}
 void BM_Ellipse36NoCov(benchmark::State& st) {
   run(st, make(0.3, 0.01, false), shape(FitShape::kEllipse, false));
 }
@@ -71,6 +76,7 @@ void BM_Auto36Line(benchmark::State& st) {
 }
 
 BENCHMARK(BM_Ellipse36)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_Ellipse36Latent)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_Ellipse36NoCov)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_Ellipse36Theta)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_Ellipse36Thin)->Unit(benchmark::kMicrosecond);

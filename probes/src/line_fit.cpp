@@ -80,6 +80,10 @@ EnvelopeFit fit_line(const Envelope& env, const FitOptions& options) {
   std::vector<std::size_t> in;
   for (std::size_t i = 0; i < n; ++i)
     if (w[i] >= 0.5) in.push_back(i);
+  if (in.size() < 2) {  // the loss discounts (almost) everything: no basis for a choice
+    in.clear();
+    for (std::size_t i = 0; i < n; ++i) in.push_back(i);
+  }
 
   double wsum = 0.0, whh = 0.0;
   for (std::size_t i = 0; i < n; ++i) wsum += w[i], whh += w[i] * tls.h[i] * tls.h[i];
