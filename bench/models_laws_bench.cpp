@@ -14,7 +14,8 @@ const char* const kLaws[] = {"isotropic_elastic", "anisotropic_elastic", "hypopl
 
 MaterialState state_for(const Law& law) {
   if (law.name() == "hypoplastic_wu")
-    return law.make_state(Eigen::Vector3d(1.0e5, 1.2e5, 1.2e5).asDiagonal(), {}, 0.6);
+    return law.make_state(Eigen::Vector3d(1.0e5, 1.2e5, 1.2e5).asDiagonal(),
+                          Eigen::Matrix3d::Zero(), 0.6);
   return law.make_state(Eigen::Vector3d(1.7e9, 2.2e9, 2.2e9).asDiagonal(),
                         Eigen::Vector3d(1.6, 2.2, 2.2).asDiagonal(), 0.82);
 }

@@ -169,6 +169,7 @@ StepResult integrate_adaptive(const Law& law, const MaterialState& start,
       tr.ok = law.admissible(tr.yh, nullptr);
       tr.plastic = r1.plastic;
       tr.err = error_estimate(r1, r2, tr.yh, o.stress_floor);
+      tr.ok = tr.ok && std::isfinite(tr.err);
       return tr;
     };
     Trial tr = trial(dt);
@@ -274,6 +275,12 @@ StepResult integrate(const Law& law, const MaterialState& start, const Eigen::Ma
   }
   if (!d_eps.allFinite()) {
     res.reason = "non-finite strain increment";
+    res.end = start;
+    return res;
+  }
+  if (!start.stress.allFinite() || !start.fabric.allFinite() || !start.internal.allFinite() ||
+      !std::isfinite(start.volume_fraction)) {
+    res.reason = "non-finite start state (stress, fabric or internal variables)";
     res.end = start;
     return res;
   }

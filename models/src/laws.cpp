@@ -29,6 +29,8 @@ const std::vector<ParameterInfo>& IsotropicElastic::parameter_info() {
       {"n_p", "1", 0.0, 0.0, 1.0, "pressure exponent: moduli scale with (P/p_ref)^n_p"},
       {"p_ref", "Pa", 1e9, 1.0, 1e12, "reference pressure of the moduli"},
       {"c_F", "1", 5.0, 0.0, 1e3, "d tr(F) / d eps_v: isotropic fabric growth"},
+      {"n_nu", "1", 0.0, 0.0, 50.0, "volume-fraction exponent: moduli scale with (nu/nu_ref)^n_nu"},
+      {"nu_ref", "1", 0.82, 0.3, 0.95, "reference volume fraction of the moduli"},
   };
   return info;
 }
@@ -46,6 +48,8 @@ const std::vector<ParameterInfo>& AnisotropicElastic::parameter_info() {
       {"p_ref", "Pa", 1e9, 1.0, 1e12, "reference pressure of the moduli"},
       {"a_G", "1", 0.0, 0.0, 1e3, "shear softening by anisotropy: G / (1 + a_G F^D:F^D)"},
       {"c_F", "1", 5.0, 0.0, 1e3, "d tr(F) / d eps_v: isotropic fabric growth"},
+      {"n_nu", "1", 0.0, 0.0, 50.0, "volume-fraction exponent: B, G scale with (nu/nu_ref)^n_nu"},
+      {"nu_ref", "1", 0.82, 0.3, 0.95, "reference volume fraction of the moduli"},
   };
   return info;
 }

@@ -136,7 +136,8 @@ TEST(Driver, ErrorControlAcrossTheElastoplasticKink) {
 
 TEST(Driver, MixedControlUniaxialStressMatchesClosedForm) {
   auto law = make_law("isotropic_elastic");
-  const MaterialState s = law->make_state(Eigen::Matrix3d::Identity() * 1e6, {}, 0.64);
+  const MaterialState s =
+      law->make_state(Eigen::Matrix3d::Identity() * 1e6, Eigen::Matrix3d::Zero(), 0.64);
   MixedControl c;
   c.stress_controlled = {false, true, true, true, true, true};
   c.strain_increment(0) = 1e-4;
@@ -179,6 +180,11 @@ TEST(Driver, FailuresAreReasonsNotExceptions) {
   const StepResult r = integrate(*law, s, probe_strain(0.0, 1e-3));
   EXPECT_FALSE(r.success);
   EXPECT_NE(r.reason.find("tr(sigma)"), std::string::npos) << r.reason;
+  MaterialState nan_state = sand_state(*law);
+  nan_state.fabric(0, 0) = std::nan("");
+  const StepResult n = integrate(*law, nan_state, probe_strain(0.0, 1e-3));
+  EXPECT_FALSE(n.success);
+  EXPECT_NE(n.reason.find("non-finite"), std::string::npos) << n.reason;
   StepOptions bad;
   bad.tolerance = -1.0;
   const StepResult b = integrate(*law, sand_state(*law), probe_strain(0.0, 1e-3), bad);

@@ -35,7 +35,8 @@ ModelEnvelope run(const Law& law, const MaterialState& s, double amplitude,
 
 TEST(Envelope, UsesTheDemProbeSet) {
   auto law = make_law("isotropic_elastic");
-  const MaterialState s = law->make_state(Eigen::Matrix3d::Identity() * 1e9, {}, 0.82);
+  const MaterialState s =
+      law->make_state(Eigen::Matrix3d::Identity() * 1e9, Eigen::Matrix3d::Zero(), 0.82);
   const ModelEnvelope env = run(*law, s, 5e-5);
   ASSERT_EQ(env.theta_deg.size(), 36);
   const Eigen::VectorXd dirs = probe_directions_deg(36);
@@ -128,7 +129,8 @@ TEST(Envelope, HypoplasticIsTheShiftedClosedFormEllipseScalingWithAmplitude) {
   auto law = make_law("hypoplastic_wu");
   const double p = 1e5;
   const double c1 = law->parameter("c1"), c2 = law->parameter("c2"), c3 = law->parameter("c3");
-  const MaterialState s = law->make_state(Eigen::Matrix3d::Identity() * p, {}, 0.6);
+  const MaterialState s =
+      law->make_state(Eigen::Matrix3d::Identity() * p, Eigen::Matrix3d::Zero(), 0.6);
   for (double amp : {1e-5, 3e-5}) {
     const ModelEnvelope env = run(*law, s, amp, EnvelopeMethod::kRate);
     const auto e = ellipse_of(env.strain, env.stress);
@@ -143,7 +145,8 @@ TEST(Envelope, HypoplasticIsTheShiftedClosedFormEllipseScalingWithAmplitude) {
   }
   // An anisotropic stress: still exactly an affine image of the probe circle (an ellipse), its
   // centre shifted by N |d_eps|, and both scale linearly with the amplitude.
-  const MaterialState t = law->make_state(Eigen::Vector3d(2 * p, p, p).asDiagonal(), {}, 0.6);
+  const MaterialState t =
+      law->make_state(Eigen::Vector3d(2 * p, p, p).asDiagonal(), Eigen::Matrix3d::Zero(), 0.6);
   const auto e1 = ellipse_of(run(*law, t, 1e-5, EnvelopeMethod::kRate).strain,
                              run(*law, t, 1e-5, EnvelopeMethod::kRate).stress);
   const auto e3 = ellipse_of(run(*law, t, 3e-5, EnvelopeMethod::kRate).strain,

@@ -177,7 +177,7 @@ TEST(Laws, AutodiffThroughTemplatedLawsMatchesAnalyticTangent) {
 // step 1e-6, agreement 1e-6 covers truncation ~1e-12 and rounding ~1e-10 relative).
 template <class M>
 void expect_parameter_jacobian(const Law& law, const MaterialState& s, const Eigen::Matrix3d& de) {
-  constexpr int kN = 8;
+  constexpr int kN = 16;
   using J = ceres::Jet<double, kN>;
   const std::vector<double>& p0 = law.parameters();
   ASSERT_LE(p0.size(), static_cast<size_t>(kN));
@@ -187,6 +187,7 @@ void expect_parameter_jacobian(const Law& law, const MaterialState& s, const Eig
   sj.stress = s.stress.cast<J>();
   sj.fabric = s.fabric.cast<J>();
   sj.internal = s.internal.cast<J>();
+  sj.volume_fraction = J(s.volume_fraction);
   const Mat3<J> dej = de.cast<J>();
   const Vec6<J> ds = mandel_of<J>(M::template rate<J>(p.data(), sj, dej).d_stress);
   for (size_t k = 0; k < p0.size(); ++k) {
@@ -211,16 +212,39 @@ TEST(Laws, ParameterDerivativesThroughJetsMatchFiniteDifferences) {
   s.stress = test_stress(1e9);
   s.fabric = test_fabric();
   const Eigen::Matrix3d de = 1e-4 * test_strain();
+  s.volume_fraction = 0.8;
   auto iso = make_law("isotropic_elastic");
   std::string why;
   ASSERT_TRUE(iso->set_parameter("n_p", 0.4, &why));
+  ASSERT_TRUE(iso->set_parameter("n_nu", 3.0, &why));
   expect_parameter_jacobian<IsotropicElastic>(*iso, s, de);
   auto ani = make_law("anisotropic_elastic");
   ASSERT_TRUE(ani->set_parameter("n_p", 0.4, &why));
   ASSERT_TRUE(ani->set_parameter("a_G", 2.0, &why));
+  ASSERT_TRUE(ani->set_parameter("n_nu", 3.0, &why));
   expect_parameter_jacobian<AnisotropicElastic>(*ani, s, de);
   auto hyp = make_law("hypoplastic_wu");
   expect_parameter_jacobian<HypoplasticWu>(*hyp, s, de);
+}
+
+TEST(Laws, StateDependenceOfModuliIsTheDocumentedOne) {
+  auto law = make_law("anisotropic_elastic");
+  std::string why;
+  ASSERT_TRUE(law->set_parameters({1e10, 2e9, 0.0, 0.5, 1e9, 2.0, 5.0, 3.0, 0.82}, &why)) << why;
+  const Eigen::Matrix3d fabric = Eigen::Vector3d(1.6, 2.2, 2.2).asDiagonal();
+  const MaterialState s = law->make_state(Eigen::Matrix3d::Identity() * 4e9, fabric, 0.8);
+  const double factor = std::sqrt(4.0) * std::pow(0.8 / 0.82, 3.0);
+  const double b = 1e10 * factor;
+  const double g = 2e9 * factor / (1.0 + 2.0 * deviator(fabric).squaredNorm());
+  const Eigen::Matrix3d iso = Eigen::Matrix3d::Identity() * 1e-5;
+  EXPECT_NEAR(law->rate(s, iso).d_stress.trace() / 3.0, b * 3e-5, 1e-12 * b * 3e-5);
+  const Eigen::Matrix3d shear = probe_strain(kDevCompressionDeg, 1e-5);
+  EXPECT_NEAR(signed_deviator(law->rate(s, shear).d_stress), 2 * g * signed_deviator(shear),
+              1e-12 * 2 * g * 1e-5);
+  // Without a volume fraction in the state (nu = 0) the factor is 1, never 0 or NaN.
+  MaterialState no_nu = s;
+  no_nu.volume_fraction = 0.0;
+  EXPECT_NEAR(law->rate(no_nu, iso).d_stress.trace() / 3.0, 1e10 * 2.0 * 3e-5, 1e-12 * 1e10);
 }
 
 TEST(Laws, AnisotropicTensorFormReducesToPinnedScalarForm) {
@@ -261,7 +285,8 @@ TEST(Laws, HypoplasticIsRateIndependentAndStressHomogeneous) {
   s2.stress *= 7.0;
   EXPECT_LE((law->rate(s2, de).d_stress - 7.0 * r1).norm(), 1e-12 * 7.0 * r1.norm());
   // Loading isotropic compression is softer than unloading (incremental non-linearity).
-  const MaterialState iso = law->make_state(1e5 * Eigen::Matrix3d::Identity(), {}, 0.6);
+  const MaterialState iso =
+      law->make_state(1e5 * Eigen::Matrix3d::Identity(), Eigen::Matrix3d::Zero(), 0.6);
   const Eigen::Matrix3d c = 1e-4 * Eigen::Matrix3d::Identity();
   const double k_load = law->rate(iso, c).d_stress.trace();
   const double k_unload = -law->rate(iso, Eigen::Matrix3d(-c)).d_stress.trace();

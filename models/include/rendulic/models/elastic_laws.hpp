@@ -4,7 +4,8 @@
 //   d_sigma = B tr(d_eps) I + 2G d_eps^D + beta_A B [ (F^D : d_eps) I + F^D tr(d_eps) ],
 // which on axisymmetric states gives dP = B d_eps_v + A d_eps_dev,
 // d_sigma_dev = A d_eps_v + 2G d_eps_dev with A = beta_A F_dev B.
-// State dependence (documented in docs/models.md): B and G scale with (P/p_ref)^n_p, and G is
+// State dependence (documented in docs/models.md): B and G scale with (P/p_ref)^n_p and with
+// (nu/nu_ref)^n_nu, and G is
 // divided by (1 + a_G F^D:F^D) (shear stiffness falls as fabric anisotropy grows, seed paper
 // section 4.1). With the defaults n_p = 0, a_G = 0 the moduli are constants and the pinned
 // form holds literally. Fabric: d_F = c_F tr(d_eps) F / tr(F) (no deviatoric fabric change in
@@ -15,6 +16,7 @@
 #include <cmath>
 #include <limits>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "rendulic/models/law.hpp"
@@ -27,10 +29,26 @@ namespace detail {
 template <typename T>
 T pressure_factor(const Mat3<T>& stress, const T& n_p, const T& p_ref) {
   using std::pow;
+  // pow is most of a rate evaluation; skip it for doubles at the default exponent 0 (not for
+  // Jets: d/dn x^n at n = 0 is ln x, which calibration needs).
+  if constexpr (std::is_same_v<T, double>) {
+    if (n_p == 0.0) return 1.0;
+  }
   T p = trace(stress) / T(3);
   const T p_floor = T(1e-6) * p_ref;
   if (p < p_floor) p = p_floor;
   return pow(p / p_ref, n_p);
+}
+
+// (nu / nu_ref)^n_nu where the state carries a volume fraction; 1 where it does not (nu = 0).
+template <typename T>
+T volume_factor(const T& nu, const T& n_nu, const T& nu_ref) {
+  using std::pow;
+  if (!(nu > T(0))) return T(1);
+  if constexpr (std::is_same_v<T, double>) {
+    if (n_nu == 0.0) return 1.0;
+  }
+  return pow(nu / nu_ref, n_nu);
 }
 
 // Elastic fabric increment c_F tr(d_eps) F / tr(F); an empty fabric grows isotropically.
@@ -66,13 +84,14 @@ inline Matrix6d anisotropic_matrix(double b, double g, double beta_a,
 // Family 1: d_sigma = K tr(d_eps) I + 2 G d_eps^D, K and G times (P/p_ref)^n_p.
 struct IsotropicElastic {
   static constexpr std::string_view kName = "isotropic_elastic";
-  enum : int { kK, kG, kNp, kPref, kCf, kCount };
+  enum : int { kK, kG, kNp, kPref, kCf, kNnu, kNuRef, kCount };
   static const std::vector<ParameterInfo>& parameter_info();
   static const std::vector<std::string>& internal_names();
 
   template <typename T>
   static void moduli(const T* p, const StateT<T>& s, T* k, T* g) {
-    const T factor = detail::pressure_factor(s.stress, p[kNp], p[kPref]);
+    const T factor = detail::pressure_factor(s.stress, p[kNp], p[kPref]) *
+                     detail::volume_factor(s.volume_fraction, p[kNnu], p[kNuRef]);
     *k = p[kK] * factor;
     *g = p[kG] * factor;
   }
@@ -104,14 +123,15 @@ struct IsotropicElastic {
 // Family 2 (Kumar, Luding, Magnanimo 2014), see the file comment.
 struct AnisotropicElastic {
   static constexpr std::string_view kName = "anisotropic_elastic";
-  enum : int { kB, kG, kBetaA, kNp, kPref, kAg, kCf, kCount };
+  enum : int { kB, kG, kBetaA, kNp, kPref, kAg, kCf, kNnu, kNuRef, kCount };
   static const std::vector<ParameterInfo>& parameter_info();
   static const std::vector<std::string>& internal_names();
 
   // Effective B and G at the state (the "documented state dependence").
   template <typename T>
   static void moduli(const T* p, const StateT<T>& s, T* b, T* g) {
-    const T factor = detail::pressure_factor(s.stress, p[kNp], p[kPref]);
+    const T factor = detail::pressure_factor(s.stress, p[kNp], p[kPref]) *
+                     detail::volume_factor(s.volume_fraction, p[kNnu], p[kNuRef]);
     const Mat3<T> f_dev = dev(s.fabric);
     *b = p[kB] * factor;
     *g = p[kG] * factor / (T(1) + p[kAg] * ddot(f_dev, f_dev));

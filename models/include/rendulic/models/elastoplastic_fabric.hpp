@@ -1,7 +1,7 @@
 // Family 4 of models.md: an elasto-plastic rate law with fabric evolution, in the spirit of
 // Imole et al. (2013) and Kumar et al. (2014). Our own minimal design, documented in
 // docs/models.md:
-// - elastic part: the anisotropic_elastic operator (same first seven parameters);
+// - elastic part: the anisotropic_elastic operator (same first nine parameters);
 // - stress ratio r = sigma^D / P; an elastic domain |r - alpha| <= m of small radius m
 //   around a back ratio alpha (internal variables: alpha in Mandel form), so that small
 //   probes are elastic and large ones are not;
@@ -30,8 +30,26 @@ namespace rendulic::models {
 
 struct ElastoplasticFabric {
   static constexpr std::string_view kName = "elastoplastic_fabric";
-  // The first seven indices coincide with AnisotropicElastic's (its moduli() is reused).
-  enum : int { kB, kG, kBetaA, kNp, kPref, kAg, kCf, kM, kMss, kBetaS, kBetaF, kFmax, kCount };
+  // The first nine indices coincide with AnisotropicElastic's (its moduli() is reused).
+  enum : int {
+    kB,
+    kG,
+    kBetaA,
+    kNp,
+    kPref,
+    kAg,
+    kCf,
+    kNnu,
+    kNuRef,
+    kM,
+    kMss,
+    kBetaS,
+    kBetaF,
+    kFmax,
+    kCount
+  };
+  static_assert(int{kNuRef} == int{AnisotropicElastic::kNuRef} &&
+                int{kM} == int{AnisotropicElastic::kCount});
   static const std::vector<ParameterInfo>& parameter_info();
   static const std::vector<std::string>& internal_names();
 
