@@ -24,7 +24,7 @@ bool EnvelopeData::IsValid(std::string* why) const {
   for (std::size_t i = 0; i < m; ++i) {
     if (!stress[i].allFinite() || !strain[i].allFinite() || !std::isfinite(theta_deg[i]) ||
         (!fabric.empty() && !fabric[i].allFinite()))
-      return fail("non-finite value in probe " + std::to_string(i));
+      return fail(std::string("non-finite value in probe ") + std::to_string(i));
   }
   return true;
 }

@@ -44,7 +44,11 @@ std::string str(const std::string& s) {
   return o + "\"";
 }
 
-std::string pair(const Eigen::Vector2d& v) { return "[" + num(v(0)) + ", " + num(v(1)) + "]"; }
+std::string pair(const Eigen::Vector2d& v) {
+  std::string s = "[";
+  s.append(num(v(0))).append(", ").append(num(v(1))).append("]");
+  return s;
+}
 
 std::string stiffness_json(const RendulicStiffness& s) {
   std::ostringstream o;

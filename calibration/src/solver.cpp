@@ -156,9 +156,9 @@ std::string run_nlopt(nlopt::algorithm alg, NloptContext* c, std::vector<double>
   double f = 0.0;
   try {
     const nlopt::result res = opt.optimize(*u, f);
-    msg = "nlopt " + std::string(opt.get_algorithm_name()) + " result " + std::to_string(res);
+    msg = std::string("nlopt ") + opt.get_algorithm_name() + " result " + std::to_string(res);
   } catch (const std::exception& e) {
-    msg = "nlopt " + std::string(opt.get_algorithm_name()) + " stopped: " + e.what();
+    msg = std::string("nlopt ") + opt.get_algorithm_name() + " stopped: " + e.what();
   }
   if (!c->best_u.empty()) *u = c->best_u;
   (void)o;

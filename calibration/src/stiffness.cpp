@@ -60,8 +60,8 @@ RendulicStiffness fit_rendulic_stiffness(const EnvelopeData& env, const Stiffnes
   }
   const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(X);
   if (qr.rank() < k) {
-    out.note = "probe directions do not determine B, G, A (rank " + std::to_string(qr.rank()) +
-               " < " + std::to_string(k) + ")";
+    out.note = std::string("probe directions do not determine B, G, A (rank ") +
+               std::to_string(qr.rank()) + " < " + std::to_string(k) + ")";
     return out;
   }
   const Eigen::VectorXd x = qr.solve(y);
@@ -86,7 +86,7 @@ RendulicStiffness fit_rendulic_stiffness(const EnvelopeData& env, const Stiffnes
   // An elastic envelope should be centred: a centre beyond 5% of the minor axis says the
   // probes were not in the linear range (or the state was not relaxed).
   if (out.center.norm() > 0.05 * std::max(out.b, 1e-300))
-    out.note = "centre " + std::to_string(out.center.norm()) +
+    out.note = std::string("centre ") + std::to_string(out.center.norm()) +
                " Pa is more than 5% of the minor semi-axis: envelope not purely elastic?";
   return out;
 }

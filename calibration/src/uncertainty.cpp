@@ -69,7 +69,7 @@ Uncertainty estimate_uncertainty(const Eigen::MatrixXd& J, const Eigen::VectorXd
     u.warnings.push_back(w.str());
   }
   if (u.dof <= 0) {
-    u.warnings.push_back("no residual degrees of freedom (" + std::to_string(n) +
+    u.warnings.push_back(std::string("no residual degrees of freedom (") + std::to_string(n) +
                          " residuals for " + std::to_string(k) +
                          " parameters): standard errors undefined");
     return u;
