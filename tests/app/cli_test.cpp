@@ -96,15 +96,16 @@ TEST(Cli, BadOverrideExits2NamingTheKey) {
   }
 }
 
-TEST(Cli, StageNotLandedIsRefusedBeforeWriting) {
-  const fs::path d = fresh_dir("not_landed");
+TEST(Cli, StageFailingMidRunLeavesNoResultsFile) {
+  // The calibration stage needs states; alone it fails after the results file was opened.
+  const fs::path d = fresh_dir("mid_run");
   const fs::path scen = write_file(d / "s.toml", "[run]\nstages = [\"calibration\"]\n");
   const CmdResult r = rendulic("run " + scen.string() + " --out " + (d / "out").string());
-  // Until issue 7 lands this stage is refused; once it has, this test must be updated.
-  if (r.code != 0) {
-    EXPECT_EQ(r.code, 2);
-    EXPECT_NE(r.out.find("has not landed"), std::string::npos) << r.out;
-    EXPECT_FALSE(fs::exists(d / "out"));
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_EQ(lines(r.out), 1) << r.out;
+  EXPECT_FALSE(fs::exists(d / "out" / "results.h5"));
+  if (fs::exists(d / "out")) {
+    EXPECT_TRUE(fs::is_empty(d / "out")) << "no temporary left behind";
   }
 }
 
