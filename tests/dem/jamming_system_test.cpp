@@ -42,10 +42,13 @@ TEST(Jamming, SlowlyCompressedW3PackingJamsNearSeedValueWithIsostaticCoordinatio
     const Measures m = s.measure();
     if (m.pressure_star > kJammedP) {
       nu_c = m.volume_fraction;
-      // just above jamming: one more step
-      c.target_nu = nu + 0.004;
+      // Just above jamming, relaxed strictly: C* of a mechanically stable packing.
+      c.target_nu = nu + 0.006;
       compress_isotropic(s, c);
-      relax(s, r);
+      RelaxOptions strict;
+      strict.kinetic_to_elastic = 1e-7;
+      strict.time_cap = 5e-4;
+      relax(s, strict);
       c_star = s.measure().coordination_nonrattler;
     }
   }
@@ -54,8 +57,9 @@ TEST(Jamming, SlowlyCompressedW3PackingJamsNearSeedValueWithIsostaticCoordinatio
   RecordProperty("c_star", std::to_string(c_star));
   EXPECT_GE(nu_c, 0.65);
   EXPECT_LE(nu_c, 0.67);
-  // Isostatic: C* -> 6 at jamming; 0.004 above it and with 500 particles, within 0.5.
-  EXPECT_NEAR(c_star, 6.0, 0.5);
+  // Isostatic: C* -> 6 at jamming and grows like sqrt(nu - nu_c) above it; 0.006 above it,
+  // with 500 particles (fluctuations of a few tenths), within 0.6 of 6.
+  EXPECT_NEAR(c_star, 6.0, 0.6);
 }
 
 }  // namespace
