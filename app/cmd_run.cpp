@@ -48,6 +48,7 @@ Subcommand add_run(CLI::App& parent) {
             run_pipeline(scenario, out, ctx);
             out.commit();
             if (!o->quiet) std::cerr << "rendulic: wrote " << out.final_path().string() << "\n";
+            run_post_commit(scenario, out.final_path(), ctx);
             return 0;
           }};
 }

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <filesystem>
 #include <functional>
 
 #include "rendulic/core/scenario.hpp"
@@ -24,6 +25,9 @@ Subcommand add_bench(CLI::App& parent);
 Subcommand add_inspect(CLI::App& parent);
 Subcommand add_plot(CLI::App& parent);
 Subcommand add_keys(CLI::App& parent);
+
+// Draws the figures of a results file into out_dir (cmd_plot.cpp); used by the report stage.
+int plot_results(const std::filesystem::path& file, const std::filesystem::path& out_dir);
 
 // Every scenario key of every module (app/schema.cpp).
 const ScenarioSchema& scenario_schema();

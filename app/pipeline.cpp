@@ -2,27 +2,51 @@
 // land; the names and their order are fixed by physics.md section 4 and issue 8.
 #include "pipeline.hpp"
 
+#include <chrono>
 #include <functional>
+#include <iostream>
 #include <string>
 #include <vector>
 
+#include "report.hpp"
 #include "rendulic/core/errors.hpp"
 
 namespace rendulic::app {
+
+// DEM stages (app/stages_dem.cpp, issue 3).
+void stage_prepare(const Scenario&, ResultsWriter&, const RunContext&);
+void stage_isotropic(const Scenario&, ResultsWriter&, const RunContext&);
+void stage_path(const Scenario&, ResultsWriter&, const RunContext&);
+void stage_states(const Scenario&, ResultsWriter&, const RunContext&);
+
 namespace {
 
 using StageFn = std::function<void(const Scenario&, ResultsWriter&, const RunContext&)>;
+using PostFn = std::function<void(const Scenario&, const std::filesystem::path&, const RunContext&)>;
 struct Stage {
   const char* name;
   const char* issue;  // where it lands, for the NotAvailable message
   StageFn run;        // empty: not landed yet
+  PostFn post;        // runs on the committed file instead (the report reads what was written)
 };
+
+void report_stage(const Scenario& scenario, const std::filesystem::path& results,
+                  const RunContext& ctx) {
+  const auto path = write_report(results, scenario.get_bool("report.figures"));
+  if (!ctx.quiet) std::cerr << "rendulic: wrote " << path.string() << "\n";
+}
 
 const std::vector<Stage>& stages() {
   static const std::vector<Stage> table = {
-      {"prepare", "3", {}},      {"isotropic", "3", {}}, {"path", "3", {}},
-      {"states", "3", {}},       {"probes", "4", {}},    {"linear_response", "4", {}},
-      {"fits", "5", {}},         {"calibration", "7", {}}, {"report", "8", {}},
+      {"prepare", "3", stage_prepare},
+      {"isotropic", "3", stage_isotropic},
+      {"path", "3", stage_path},
+      {"states", "3", stage_states},
+      {"probes", "4", {}},
+      {"linear_response", "4", {}},
+      {"fits", "5", {}},
+      {"calibration", "7", {}},
+      {"report", "8", {}, report_stage},
   };
   return table;
 }
@@ -52,6 +76,12 @@ void register_run_keys(ScenarioSchema& schema) {
               .help = "Stages to run, executed in the fixed order prepare, isotropic, path, "
                       "states, probes, linear_response, fits, calibration, report.",
               .choices = names});
+  schema.add({.path = "report.figures",
+              .type = KeyType::kBool,
+              .default_value = true,
+              .unit = "-",
+              .help = "Draw the figures (PNG and SVG) next to report.md; needs python3-matplotlib "
+                      "and python3-h5py."});
   schema.add({.path = "run.description",
               .type = KeyType::kString,
               .default_value = std::string{},
@@ -61,14 +91,26 @@ void register_run_keys(ScenarioSchema& schema) {
 
 void check_stages_available(const Scenario& scenario) {
   for (const auto& s : stages())
-    if (requested(scenario, s.name) && !s.run)
+    if (requested(scenario, s.name) && !s.run && !s.post)
       throw NotAvailable(std::string("run: stage '") + s.name + "' has not landed yet (issue " +
                          s.issue + "); remove it from run.stages");
 }
 
 void run_pipeline(const Scenario& scenario, ResultsWriter& out, const RunContext& ctx) {
+  for (const auto& s : stages()) {
+    if (!requested(scenario, s.name) || !s.run) continue;
+    const auto t0 = std::chrono::steady_clock::now();
+    s.run(scenario, out, ctx);
+    const double secs =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    out.attr("/timings", s.name, secs);  // wall seconds, reported in report.md
+  }
+}
+
+void run_post_commit(const Scenario& scenario, const std::filesystem::path& results,
+                     const RunContext& ctx) {
   for (const auto& s : stages())
-    if (requested(scenario, s.name)) s.run(scenario, out, ctx);
+    if (requested(scenario, s.name) && s.post) s.post(scenario, results, ctx);
 }
 
 }  // namespace rendulic::app

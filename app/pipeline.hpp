@@ -21,7 +21,11 @@ struct RunContext {
 void register_run_keys(ScenarioSchema& schema);
 // NotAvailable naming the first requested stage that has not landed.
 void check_stages_available(const Scenario& scenario);
-// Runs every requested stage, in order, writing into `out`.
+// Runs every requested stage, in order, writing into `out`; wall time per stage goes to the
+// attributes of /timings.
 void run_pipeline(const Scenario& scenario, ResultsWriter& out, const RunContext& ctx);
+// Stages that read the committed results file (the report), run after commit().
+void run_post_commit(const Scenario& scenario, const std::filesystem::path& results,
+                     const RunContext& ctx);
 
 }  // namespace rendulic::app

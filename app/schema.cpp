@@ -2,6 +2,7 @@
 // knows which modules contribute keys; each module declares its keys next to its options.
 #include "commands.hpp"
 #include "pipeline.hpp"
+#include "rendulic/dem/scenario_keys.hpp"
 
 namespace rendulic::app {
 
@@ -9,6 +10,7 @@ const ScenarioSchema& scenario_schema() {
   static const ScenarioSchema schema = [] {
     ScenarioSchema s;
     register_run_keys(s);
+    dem::register_dem_keys(s);
     return s;
   }();
   return schema;

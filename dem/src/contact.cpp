@@ -58,8 +58,9 @@ double stability_limit(const Material& m) {
 void check_time_step(const Material& m, double factor, const std::string& key) {
   const double tc = contact_time(m.contact(), smallest_reduced_mass(m));
   if (!std::isfinite(tc))
-    throw InputError(key + ": the smallest pair is overdamped (gamma too large for k), no "
-                           "contact time to derive a time step from");
+    throw InputError(key +
+                     ": the smallest pair is overdamped (gamma too large for k), no "
+                     "contact time to derive a time step from");
   const double dt = factor * tc;
   const double limit = stability_limit(m);
   if (!(factor > 0) || !(dt < limit)) {

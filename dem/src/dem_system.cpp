@@ -4,6 +4,8 @@
 // rounding per pair.
 #include "rendulic/dem/dem_system.hpp"
 
+#include <omp.h>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -126,51 +128,85 @@ void DemSystem::compute_forces(const double* __restrict vx, const double* __rest
   const std::uint8_t* __restrict code = list_.shift_code.data();
   double* __restrict sd = stress_scratch_.data();
 
-#pragma omp parallel for schedule(static) if (n > kSerialBelow)
-  for (std::size_t i = 0; i < n; ++i) {
-    const double xi = x[i], yi = y[i], zi = z[i];
-    const double vxi = vx[i], vyi = vy[i], vzi = vz[i], ri = rad[i];
-    double fx = 0, fy = 0, fz = 0, sxx = 0, syy = 0, szz = 0;
-    for (std::int64_t e = off[i]; e < off[i + 1]; ++e) {
-      const std::int32_t j = idx[e];
-      const std::uint8_t c = code[e];
-      const double dx = xi - x[j] + tx[c];
-      const double dy = yi - y[j] + ty[c];
-      const double dz = zi - z[j] + tz[c];
-      const double R = ri + rad[j];
-      const double r2 = dx * dx + dy * dy + dz * dz;
-      if (r2 >= R * R) continue;
-      const double d = std::sqrt(r2);
-      const double inv = 1.0 / d;
-      const double nx = dx * inv, ny = dy * inv, nz = dz * inv;
-      // True relative velocity: peculiar part plus the affine part D l.
-      const double ddot =
-          -(nx * (vxi - vx[j] + Dx * dx) + ny * (vyi - vy[j] + Dy * dy) + nz * (vzi - vz[j] + Dz * dz));
-      const double fn = k * (R - d) + gamma * ddot;
-      fx += fn * nx;
-      fy += fn * ny;
-      fz += fn * nz;
+  // Half list: each pair once, its force added to i and subtracted from j. Threads scatter
+  // into private buffers that are summed in thread order: deterministic for a given thread
+  // count (and pair forces are exact opposites, so momentum is conserved to round-off).
+  const int threads = n > kSerialBelow ? omp_get_max_threads() : 1;
+  const std::size_t stride = 3 * n;
+  if (force_buffer_.size() < static_cast<std::size_t>(threads) * stride)
+    force_buffer_.resize(static_cast<std::size_t>(threads) * stride);
+  double* const buffers = force_buffer_.data();
+
+#pragma omp parallel num_threads(threads) if (threads > 1)
+  {
+    double* __restrict bx = buffers + static_cast<std::size_t>(omp_get_thread_num()) * stride;
+    double* __restrict by = bx + n;
+    double* __restrict bz = by + n;
+    std::fill(bx, bx + stride, 0.0);
+#pragma omp for schedule(static)
+    for (std::size_t i = 0; i < n; ++i) {
+      const double xi = x[i], yi = y[i], zi = z[i];
+      const double vxi = vx[i], vyi = vy[i], vzi = vz[i], ri = rad[i];
+      double fx = 0, fy = 0, fz = 0, sxx = 0, syy = 0, szz = 0;
+      for (std::int64_t e = off[i]; e < off[i + 1]; ++e) {
+        const std::int32_t j = idx[e];
+        const std::uint8_t c = code[e];
+        const double dx = xi - x[j] + tx[c];
+        const double dy = yi - y[j] + ty[c];
+        const double dz = zi - z[j] + tz[c];
+        const double R = ri + rad[j];
+        const double r2 = dx * dx + dy * dy + dz * dz;
+        if (r2 >= R * R) continue;
+        const double d = std::sqrt(r2);
+        const double inv = 1.0 / d;
+        const double nx = dx * inv, ny = dy * inv, nz = dz * inv;
+        // True relative velocity: peculiar part plus the affine part D l.
+        const double ddot = -(nx * (vxi - vx[j] + Dx * dx) + ny * (vyi - vy[j] + Dy * dy) +
+                              nz * (vzi - vz[j] + Dz * dz));
+        const double fn = k * (R - d) + gamma * ddot;
+        const double gx = fn * nx, gy = fn * ny, gz = fn * nz;
+        fx += gx;
+        fy += gy;
+        fz += gz;
+        bx[j] -= gx;
+        by[j] -= gy;
+        bz[j] -= gz;
+        if constexpr (kStress) {
+          sxx += dx * gx;
+          syy += dy * gy;
+          szz += dz * gz;
+        }
+      }
+      bx[i] += fx;
+      by[i] += fy;
+      bz[i] += fz;
       if constexpr (kStress) {
-        sxx += dx * fn * nx;
-        syy += dy * fn * ny;
-        szz += dz * fn * nz;
+        sd[3 * i] = sxx;
+        sd[3 * i + 1] = syy;
+        sd[3 * i + 2] = szz;
       }
     }
-    fxo[i] = fx - gamma_b * vxi;
-    fyo[i] = fy - gamma_b * vyi;
-    fzo[i] = fz - gamma_b * vzi;
-    if constexpr (kStress) {
-      sd[3 * i] = sxx;
-      sd[3 * i + 1] = syy;
-      sd[3 * i + 2] = szz;
+    // (implicit barrier: every buffer is complete)
+#pragma omp for schedule(static)
+    for (std::size_t i = 0; i < n; ++i) {
+      double fx = 0, fy = 0, fz = 0;
+      for (int t = 0; t < threads; ++t) {
+        const double* b = buffers + static_cast<std::size_t>(t) * stride;
+        fx += b[i];
+        fy += b[n + i];
+        fz += b[2 * n + i];
+      }
+      fxo[i] = fx - gamma_b * vx[i];
+      fyo[i] = fy - gamma_b * vy[i];
+      fzo[i] = fz - gamma_b * vz[i];
     }
   }
   if constexpr (kStress) {
-    // Serial sum in particle order: independent of the thread count. Each pair was seen from
-    // both ends, hence the 1/2.
+    // Serial sum in particle order: independent of the thread count.
     Eigen::Vector3d s = Eigen::Vector3d::Zero();
-    for (std::size_t i = 0; i < n; ++i) s += Eigen::Vector3d(sd[3 * i], sd[3 * i + 1], sd[3 * i + 2]);
-    last_stress_diag_ = 0.5 * s / cell_.volume();
+    for (std::size_t i = 0; i < n; ++i)
+      s += Eigen::Vector3d(sd[3 * i], sd[3 * i + 1], sd[3 * i + 2]);
+    last_stress_diag_ = s / cell_.volume();
   }
 }
 
@@ -224,7 +260,8 @@ void DemSystem::step_impl(const Eigen::Vector3d& D) {
     wx[i] = vxi + hm * fx[i];
     wy[i] = vyi + hm * fy[i];
     wz[i] = vzi + hm * fz[i];
-    const double xi = sx * (x[i] + dt * vxi), yi = sy * (y[i] + dt * vyi), zi = sz * (z[i] + dt * vzi);
+    const double xi = sx * (x[i] + dt * vxi), yi = sy * (y[i] + dt * vyi),
+                 zi = sz * (z[i] + dt * vzi);
     x[i] = xi;
     y[i] = yi;
     z[i] = zi;
@@ -270,19 +307,19 @@ std::vector<Contact> DemSystem::contacts() const {
   for (std::size_t i = 0; i < n; ++i) {
     for (std::int64_t e = list_.offset[i]; e < list_.offset[i + 1]; ++e) {
       const std::int32_t j = list_.index[e];
-      if (static_cast<std::size_t>(j) < i) continue;
       const Eigen::Vector3d l = p_.position(i) - p_.position(j) +
                                 NeighborList::shift(list_.shift_code[e]).cwiseProduct(L);
       const double R = p_.radius[i] + p_.radius[j];
       const double d = l.norm();
       if (d >= R) continue;
       const Eigen::Vector3d nrm = l / d;
-      const Eigen::Vector3d vrel =
-          p_.velocity(i) - p_.velocity(j) + last_D_.cwiseProduct(l);
+      const Eigen::Vector3d vrel = p_.velocity(i) - p_.velocity(j) + last_D_.cwiseProduct(l);
       Contact c;
-      c.i = static_cast<std::int32_t>(i);
-      c.j = j;
-      c.branch = l;
+      // Reported with i < j (the list stores each pair once, in either order).
+      const bool swap = static_cast<std::size_t>(j) < i;
+      c.i = swap ? j : static_cast<std::int32_t>(i);
+      c.j = swap ? static_cast<std::int32_t>(i) : j;
+      c.branch = swap ? Eigen::Vector3d(-l) : l;
       c.overlap = R - d;
       c.force = k * c.overlap + gamma * (-nrm.dot(vrel));
       out.push_back(c);
@@ -293,7 +330,8 @@ std::vector<Contact> DemSystem::contacts() const {
 
 Eigen::Matrix3d DemSystem::stress() const {
   Eigen::Matrix3d s = Eigen::Matrix3d::Zero();
-  for (const Contact& c : contacts()) s += c.force / c.branch.norm() * c.branch * c.branch.transpose();
+  for (const Contact& c : contacts())
+    s += c.force / c.branch.norm() * c.branch * c.branch.transpose();
   return s / cell_.volume();
 }
 
@@ -379,8 +417,9 @@ Measures DemSystem::measure() const {
   m.coordination_nonrattler = n_keep ? 2.0 * static_cast<double>(m_keep) / n_keep : 0.0;
   m.rattler_fraction = 1.0 - static_cast<double>(n_keep) / static_cast<double>(n);
   m.kinetic_energy = kinetic_energy();
-  m.kinetic_to_elastic = m.elastic_energy > 0 ? m.kinetic_energy / m.elastic_energy
-                         : (m.kinetic_energy > 0 ? std::numeric_limits<double>::infinity() : 0.0);
+  m.kinetic_to_elastic =
+      m.elastic_energy > 0 ? m.kinetic_energy / m.elastic_energy
+                           : (m.kinetic_energy > 0 ? std::numeric_limits<double>::infinity() : 0.0);
   m.strain_rate = last_D_.cwiseAbs().maxCoeff();
   const Material& mat = options_.material;
   if (m.strain_rate == 0)
@@ -389,8 +428,7 @@ Measures DemSystem::measure() const {
     m.inertial_number = m.strain_rate * 2.0 * mat.r_mean * std::sqrt(mat.density / m.pressure);
   else
     m.inertial_number = std::numeric_limits<double>::infinity();
-  if (!std::isfinite(m.kinetic_energy) || !std::isfinite(m.elastic_energy) ||
-      !m.stress.allFinite())
+  if (!std::isfinite(m.kinetic_energy) || !std::isfinite(m.elastic_energy) || !m.stress.allFinite())
     throw std::runtime_error("DEM integration diverged (non-finite energy or stress) at t = " +
                              std::to_string(time_) + " s");
   return m;

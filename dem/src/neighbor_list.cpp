@@ -1,6 +1,8 @@
 // Cell-list construction of the full Verlet list and its rebuild rule (see neighbor_list.hpp).
 #include "rendulic/dem/neighbor_list.hpp"
 
+#include <omp.h>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -24,8 +26,7 @@ void for_candidates(std::size_t i, const Particles& p, const Eigen::Vector3d& L,
                     const std::vector<std::int32_t>& bin_members, bool brute, Visit&& visit) {
   const std::size_t n = p.size();
   if (brute) {
-    for (std::size_t j = 0; j < n; ++j) {
-      if (j == i) continue;
+    for (std::size_t j = i + 1; j < n; ++j) {
       const int sx = -static_cast<int>(std::lround((p.x[i] - p.x[j]) / L[0]));
       const int sy = -static_cast<int>(std::lround((p.y[i] - p.y[j]) / L[1]));
       const int sz = -static_cast<int>(std::lround((p.z[i] - p.z[j]) / L[2]));
@@ -35,9 +36,14 @@ void for_candidates(std::size_t i, const Particles& p, const Eigen::Vector3d& L,
   }
   const int b = bin_of[i];
   const int bx = b % nb[0], by = (b / nb[0]) % nb[1], bz = b / (nb[0] * nb[1]);
+  // Half stencil: the own bin (partners of higher index) and the 13 "forward" bins, so that
+  // each pair is met once (nb >= 3 on every axis makes the 27 bins distinct).
   for (int dz = -1; dz <= 1; ++dz)
     for (int dy = -1; dy <= 1; ++dy)
       for (int dx = -1; dx <= 1; ++dx) {
+        const bool own = dx == 0 && dy == 0 && dz == 0;
+        const bool forward = dz > 0 || (dz == 0 && (dy > 0 || (dy == 0 && dx > 0)));
+        if (!own && !forward) continue;
         int cx = bx + dx, cy = by + dy, cz = bz + dz;
         // A partner in a wrapped bin is seen through its image: l = x_i - x_j + s L.
         int sx = 0, sy = 0, sz = 0;
@@ -51,7 +57,7 @@ void for_candidates(std::size_t i, const Particles& p, const Eigen::Vector3d& L,
         const std::uint8_t code = encode(sx, sy, sz);
         for (std::int64_t k = bin_start[c]; k < bin_start[c + 1]; ++k) {
           const std::int32_t j = bin_members[k];
-          if (static_cast<std::size_t>(j) != i) visit(j, code);
+          if (!own || static_cast<std::size_t>(j) > i) visit(j, code);
         }
       }
 }
@@ -111,37 +117,48 @@ void NeighborList::build(const Particles& p, const Eigen::Vector3d& L, double sk
     return dx * dx + dy * dy + dz * dz < rc * rc;
   };
 
+  // One pass: each thread appends its (contiguous, static) range of particles to its own
+  // arrays, which are then concatenated in thread order.
+  const int threads = n > 256 ? omp_get_max_threads() : 1;
+  std::vector<std::vector<std::int32_t>> tj(threads);
+  std::vector<std::vector<std::uint8_t>> tc(threads);
+  std::vector<std::size_t> first(threads, n);
   std::vector<std::int64_t> count(n + 1, 0);
-#pragma omp parallel for schedule(static) if (n > 256)
-  for (std::size_t i = 0; i < n; ++i) {
-    std::int64_t c = 0;
-    for_candidates(i, p, L, nb, bin_of, bin_start, bin_members, brute,
-                   [&](std::int32_t j, std::uint8_t code) { c += within(i, j, code); });
-    count[i + 1] = c;
+#pragma omp parallel num_threads(threads) if (threads > 1)
+  {
+    const int t = omp_get_thread_num();
+    auto& J = tj[t];
+    auto& C = tc[t];
+    J.reserve(8 * n / threads + 16);
+    C.reserve(8 * n / threads + 16);
+#pragma omp for schedule(static)
+    for (std::size_t i = 0; i < n; ++i) {
+      first[t] = std::min(first[t], i);
+      const std::size_t s = J.size();
+      for_candidates(i, p, L, nb, bin_of, bin_start, bin_members, brute,
+                     [&](std::int32_t j, std::uint8_t code) {
+                       if (within(i, j, code)) {
+                         J.push_back(j);
+                         C.push_back(code);
+                       }
+                     });
+      // Ascending partner index: friendlier memory access in the force loop.
+      for (std::size_t a = s + 1; a < J.size(); ++a)
+        for (std::size_t c = a; c > s && J[c - 1] > J[c]; --c) {
+          std::swap(J[c - 1], J[c]);
+          std::swap(C[c - 1], C[c]);
+        }
+      count[i + 1] = static_cast<std::int64_t>(J.size() - s);
+    }
   }
   offset.assign(n + 1, 0);
   std::partial_sum(count.begin(), count.end(), offset.begin());
   index.resize(offset[n]);
   shift_code.resize(offset[n]);
-#pragma omp parallel for schedule(static) if (n > 256)
-  for (std::size_t i = 0; i < n; ++i) {
-    std::int64_t k = offset[i];
-    for_candidates(i, p, L, nb, bin_of, bin_start, bin_members, brute,
-                   [&](std::int32_t j, std::uint8_t code) {
-                     if (within(i, j, code)) {
-                       index[k] = j;
-                       shift_code[k] = code;
-                       ++k;
-                     }
-                   });
-    // Ascending partner index: friendlier memory access in the force loop, and an order that
-    // does not depend on the bin layout.
-    const std::int64_t b = offset[i], e = offset[i + 1];
-    for (std::int64_t a = b + 1; a < e; ++a)
-      for (std::int64_t c = a; c > b && index[c - 1] > index[c]; --c) {
-        std::swap(index[c - 1], index[c]);
-        std::swap(shift_code[c - 1], shift_code[c]);
-      }
+  for (int t = 0; t < threads; ++t) {
+    if (tj[t].empty()) continue;
+    std::copy(tj[t].begin(), tj[t].end(), index.begin() + offset[first[t]]);
+    std::copy(tc[t].begin(), tc[t].end(), shift_code.begin() + offset[first[t]]);
   }
   ++builds_;
 }

@@ -98,9 +98,9 @@ TEST(Cli, BadOverrideExits2NamingTheKey) {
 
 TEST(Cli, StageNotLandedIsRefusedBeforeWriting) {
   const fs::path d = fresh_dir("not_landed");
-  const fs::path scen = write_file(d / "s.toml", "[run]\nstages = [\"report\"]\n");
+  const fs::path scen = write_file(d / "s.toml", "[run]\nstages = [\"calibration\"]\n");
   const CmdResult r = rendulic("run " + scen.string() + " --out " + (d / "out").string());
-  // Until issue 8 lands this stage is refused; once it has, this test must be updated.
+  // Until issue 7 lands this stage is refused; once it has, this test must be updated.
   if (r.code != 0) {
     EXPECT_EQ(r.code, 2);
     EXPECT_NE(r.out.find("has not landed"), std::string::npos) << r.out;

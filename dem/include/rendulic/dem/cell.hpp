@@ -26,8 +26,8 @@ struct PeriodicCell {
 struct AxisControl {
   enum class Mode { kStrainRate, kStress };
   Mode mode = Mode::kStrainRate;
-  double rate = 0.0;          // kStrainRate: D_aa, 1/s (positive = extension)
-  double target_stress = 0;   // kStress: sigma_aa to hold, Pa (compression positive)
+  double rate = 0.0;         // kStrainRate: D_aa, 1/s (positive = extension)
+  double target_stress = 0;  // kStress: sigma_aa to hold, Pa (compression positive)
 };
 
 // Servo settings. For a stress-controlled axis: D_aa = gain * (sigma_aa - target) / k*,

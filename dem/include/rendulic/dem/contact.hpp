@@ -22,12 +22,12 @@ struct NormalContact {
 
 // Material of the seed study (physics.md section 1), SI units.
 struct Material {
-  double k = 1e8;          // normal stiffness, kg/s^2
-  double gamma = 1.0;      // contact viscosity, kg/s
-  double gamma_b = 0.1;    // background damping on the peculiar velocity, kg/s
-  double density = 2000;   // kg/m^3
-  double r_mean = 1e-3;    // m
-  double w = 3.0;          // r_max / r_min
+  double k = 1e8;         // normal stiffness, kg/s^2
+  double gamma = 1.0;     // contact viscosity, kg/s
+  double gamma_b = 0.1;   // background damping on the peculiar velocity, kg/s
+  double density = 2000;  // kg/m^3
+  double r_mean = 1e-3;   // m
+  double w = 3.0;         // r_max / r_min
   double r_min() const { return 2.0 * r_mean / (1.0 + w); }
   double r_max() const { return w * r_min(); }
   // k* = k / (2 <r>): the stress scale of sigma* (seed paper section 2.2).

@@ -16,9 +16,11 @@
 // forces they are O(D t_c) ~ 1e-6 at the rates of this mission. The conservative part is the
 // symplectic Verlet scheme; the dissipative part is explicit with a second-order predictor.
 //
-// Parallel (OpenMP) over particles with a full neighbour list: every force is a per-particle
-// gather in a fixed order, every reduction is serial or order-free (max), so results are
-// identical for any thread count and bit-identical on restart (see State).
+// Parallel (OpenMP) over particles with a half neighbour list: each thread accumulates pair
+// forces into its own buffer, and the buffers are summed in thread order; every other
+// reduction is serial or order-free (max). Results are therefore deterministic for a given
+// thread count and bit-identical on restart (see State); different thread counts agree to
+// round-off.
 #pragma once
 
 #include <Eigen/Dense>
@@ -37,7 +39,7 @@ namespace rendulic::dem {
 struct SystemOptions {
   Material material{};
   double dt_factor = 1.0 / 50.0;  // dt = dt_factor * t_c of the smallest pair
-  double skin = 0.1;              // Verlet skin in units of <r>
+  double skin = 0.3;              // Verlet skin in units of <r>
   bool IsValid(std::string* why) const;
 };
 
@@ -71,8 +73,8 @@ class DemSystem {
 
   Measures measure() const;
   std::vector<Contact> contacts() const;
-  Eigen::Matrix3d stress() const;   // eq. 1, Pa
-  Eigen::Matrix3d fabric() const;   // eq. 2
+  Eigen::Matrix3d stress() const;  // eq. 1, Pa
+  Eigen::Matrix3d fabric() const;  // eq. 2
   double kinetic_energy() const;
   double elastic_energy() const;
   double volume_fraction() const { return solid_volume_ / cell_.volume(); }
@@ -119,7 +121,10 @@ class DemSystem {
   Eigen::Vector3d last_D_ = Eigen::Vector3d::Zero();
   Eigen::Vector3d last_stress_diag_ = Eigen::Vector3d::Zero();
   std::vector<double> stress_scratch_;
-  std::vector<double> wx_, wy_, wz_;  // predicted velocities of the dissipative forces  // per-particle diagonal stress (servo steps)
+  std::vector<double> wx_, wy_, wz_;
+  std::vector<double>
+      force_buffer_;  // per-thread force accumulators (half list)  // predicted velocities of the
+                      // dissipative forces  // per-particle diagonal stress (servo steps)
 };
 
 }  // namespace rendulic::dem

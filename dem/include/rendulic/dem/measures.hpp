@@ -11,22 +11,22 @@
 namespace rendulic::dem {
 
 struct Measures {
-  double time = 0;                                    // s
-  Eigen::Matrix3d stress = Eigen::Matrix3d::Zero();   // Pa, compression positive (eq. 1)
+  double time = 0;                                        // s
+  Eigen::Matrix3d stress = Eigen::Matrix3d::Zero();       // Pa, compression positive (eq. 1)
   Eigen::Matrix3d stress_star = Eigen::Matrix3d::Zero();  // stress / k*
-  Eigen::Matrix3d fabric = Eigen::Matrix3d::Zero();   // eq. 2 (all contacts)
-  Eigen::Matrix3d strain = Eigen::Matrix3d::Zero();   // epsilon = -E (log strain)
-  double pressure = 0;        // Pa
-  double pressure_star = 0;   // P / k*
-  double eps_v = 0;           // -tr(E)
-  double eps_dev = 0;         // signed sqrt(2 J2) of -E
+  Eigen::Matrix3d fabric = Eigen::Matrix3d::Zero();       // eq. 2 (all contacts)
+  Eigen::Matrix3d strain = Eigen::Matrix3d::Zero();       // epsilon = -E (log strain)
+  double pressure = 0;                                    // Pa
+  double pressure_star = 0;                               // P / k*
+  double eps_v = 0;                                       // -tr(E)
+  double eps_dev = 0;                                     // signed sqrt(2 J2) of -E
   double volume_fraction = 0;
   std::int64_t contacts = 0;
-  double coordination = 0;              // C = 2M/N
-  double coordination_nonrattler = 0;   // C* over non-rattlers (0 when all are rattlers)
+  double coordination = 0;             // C = 2M/N
+  double coordination_nonrattler = 0;  // C* over non-rattlers (0 when all are rattlers)
   double rattler_fraction = 0;
-  double kinetic_energy = 0;  // J, of the peculiar velocities
-  double elastic_energy = 0;  // J, sum k delta^2 / 2
+  double kinetic_energy = 0;      // J, of the peculiar velocities
+  double elastic_energy = 0;      // J, sum k delta^2 / 2
   double kinetic_to_elastic = 0;  // +inf when there is kinetic but no elastic energy
   double inertial_number = 0;     // rate 2<r> sqrt(rho / P); +inf when P <= 0 and rate > 0
   double strain_rate = 0;         // max_a |D_aa| of the last step, 1/s
@@ -36,8 +36,8 @@ struct Measures {
 struct Contact {
   std::int32_t i = 0, j = 0;
   Eigen::Vector3d branch = Eigen::Vector3d::Zero();  // l = x_i - x_j (minimum image), m
-  double overlap = 0;                                 // m
-  double force = 0;                                   // normal force on i along l/|l|, N
+  double overlap = 0;                                // m
+  double force = 0;                                  // normal force on i along l/|l|, N
 };
 
 // Iterative rattler removal: true for particles that keep at least `min_contacts` contacts

@@ -1,10 +1,9 @@
 // Neighbour search for strongly polydisperse packings (w = 3), physics.md section 1 and issue 3
-// item 4. A full Verlet list (each pair stored for both particles, so forces are gathered per
-// particle without atomics: deterministic for any thread count) built from a cell list whose
-// bins are at least the largest interaction range 2 r_max + skin wide. Each entry keeps the
-// periodic image (a shift code) of its pair at build time; positions are not wrapped between
-// builds, and since the affine remap scales positions and cell lengths alike, the stored image
-// stays the right one until the next build.
+// item 4. A half Verlet list (each pair once, found through a half stencil of bins; the force
+// loop adds the pair force to both ends) built from a cell list whose bins are at least the largest
+// interaction range 2 r_max + skin wide. Each entry keeps the periodic image (a shift code) of its
+// pair at build time; positions are not wrapped between builds, and since the affine remap scales
+// positions and cell lengths alike, the stored image stays the right one until the next build.
 //
 // Rebuild rule. At build time every pair with |l| < r_i + r_j + skin is listed. Later the cell
 // is scaled by S = diag(L / L_build) and particle i has moved non-affinely by

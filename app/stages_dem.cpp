@@ -1,0 +1,279 @@
+// The DEM stages of `rendulic run` (physics.md section 4; interfaces.md results schema):
+//   prepare   -> /material, /preparation : random gas, compression to nu0, relaxation
+//   isotropic -> /isotropic : loading nu0 -> nu_max (>= 50 samples), relaxation at nu_max
+//   path      -> /path      : constant-volume axisymmetric extension, snapshots in memory
+//   states    -> /states/<label> : each snapshot relaxed at fixed cell, stored with a
+//                checkpoint that restarts bit-identically (same build, same thread count)
+// The stages of one run share the live system through one DemRunSession (a process holds one
+// run); later stages (probe campaigns) reach it through dem_run_session(). Progress (stage,
+// %, ETA) goes to stderr only when stderr is a terminal and --quiet is off.
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <map>
+#include <optional>
+#include <string>
+
+#include "pipeline.hpp"
+#include "rendulic/core/conventions.hpp"
+#include "rendulic/core/errors.hpp"
+#include "rendulic/dem/protocols.hpp"
+#include "rendulic/dem/scenario_keys.hpp"
+
+namespace rendulic::app {
+
+// Live DEM state shared by the stages of one run.
+struct DemRunSession {
+  std::optional<dem::DemSystem> system;   // after prepare / isotropic / path
+  std::vector<dem::DemSystem> snapshots;  // taken on the path, in states.labels order
+  std::vector<std::pair<std::string, dem::DemSystem>> relaxed;  // after states
+  std::optional<dem::DemRunOptions> options;
+};
+
+DemRunSession& dem_run_session() {
+  static DemRunSession session;
+  return session;
+}
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// One status line on stderr, rewritten in place at most 5 times a second.
+class Progress {
+ public:
+  Progress(const RunContext& ctx, std::string stage)
+      : on_(!ctx.quiet && isatty(STDERR_FILENO)), stage_(std::move(stage)), start_(Clock::now()) {}
+  ~Progress() {
+    if (on_ && printed_) std::fprintf(stderr, "\r\033[K");
+  }
+  void task(std::string name) { task_ = std::move(name); }
+  void operator()(double fraction) {
+    if (!on_) return;
+    const auto now = Clock::now();
+    if (printed_ && now - last_ < std::chrono::milliseconds(200)) return;
+    last_ = now;
+    printed_ = true;
+    const double el = std::chrono::duration<double>(now - task_start_).count();
+    const double f = std::clamp(fraction, 0.0, 1.0);
+    char eta[32] = "?";
+    if (f > 1e-3) std::snprintf(eta, sizeof eta, "%.0fs", el * (1 - f) / f);
+    std::fprintf(stderr, "\r\033[K[%s] %s %5.1f%%  ETA %s", stage_.c_str(), task_.c_str(), 100 * f,
+                 eta);
+    std::fflush(stderr);
+  }
+  void start_task(std::string name) {
+    task(std::move(name));
+    task_start_ = Clock::now();
+  }
+  double elapsed() const { return std::chrono::duration<double>(Clock::now() - start_).count(); }
+  dem::ProgressFn fn() {
+    return [this](double f) { (*this)(f); };
+  }
+
+ private:
+  bool on_;
+  bool printed_ = false;
+  std::string stage_, task_;
+  Clock::time_point start_, last_{}, task_start_ = Clock::now();
+};
+
+void write_relax(ResultsWriter& out, const std::string& group, const std::string& prefix,
+                 const dem::RelaxSummary& r) {
+  out.attr(group, prefix + "relax_time", r.time);
+  out.attr(group, prefix + "relax_ratio", r.ratio);
+  out.attr(group, prefix + "relax_converged", std::int64_t{r.converged});
+}
+
+void warn_cap(const RunContext& ctx, const std::string& what, const dem::RelaxSummary& r) {
+  if (!r.converged && !ctx.quiet)
+    std::cerr << "rendulic: warning: relaxation " << what << " hit its time cap (" << r.time
+              << " s) at kinetic/elastic " << r.ratio << "\n";
+}
+
+Eigen::MatrixXd as_matrix(const std::vector<double>& x, const std::vector<double>& y,
+                          const std::vector<double>& z) {
+  Eigen::MatrixXd m(static_cast<Eigen::Index>(x.size()), 3);
+  for (std::size_t i = 0; i < x.size(); ++i)
+    m.row(static_cast<Eigen::Index>(i)) << x[i], y[i], z[i];
+  return m;
+}
+
+dem::DemSystem& live_system(const char* stage) {
+  auto& s = dem_run_session();
+  if (!s.system)
+    throw InputError(std::string("run: stage '") + stage +
+                     "' needs the stages before it "
+                     "(prepare, isotropic, path) in run.stages");
+  return *s.system;
+}
+
+}  // namespace
+
+void stage_prepare(const Scenario& sc, ResultsWriter& out, const RunContext& ctx) {
+  auto& session = dem_run_session();
+  session = DemRunSession{};
+  session.options = dem::dem_options_from_scenario(sc);
+  const dem::DemRunOptions& o = *session.options;
+  const dem::Material& m = o.system.material;
+  Progress progress(ctx, "prepare");
+
+  out.attr("/material", "k", m.k);
+  out.attr("/material", "gamma", m.gamma);
+  out.attr("/material", "gamma_b", m.gamma_b);
+  out.attr("/material", "density", m.density);
+  out.attr("/material", "r_mean", m.r_mean);
+  out.attr("/material", "w", m.w);
+  out.attr("/material", "k_star", m.k_star());
+  out.attr("/material", "dt", dem::time_step(m, o.system.dt_factor));
+  out.attr("/material", "dt_factor", o.system.dt_factor);
+  out.attr("/material", "n_particles", static_cast<std::int64_t>(o.gas.n_particles));
+
+  progress.start_task("gas");
+  dem::SystemOptions prep = o.system;
+  prep.material.gamma_b = o.prepare_gamma_b;
+  dem::check_time_step(prep.material, prep.dt_factor, "preparation.gamma_b");
+  dem::DemSystem sys =
+      dem::make_gas(prep, o.gas, static_cast<std::uint64_t>(sc.get_int("run.seed")));
+  if (o.mix_time > 0) {
+    const auto n = static_cast<std::int64_t>(std::ceil(o.mix_time / sys.dt()));
+    for (std::int64_t k = 0; k < n; ++k) {
+      sys.step(Eigen::Vector3d::Zero());
+      if (k % 256 == 0) progress(double(k) / n);
+    }
+  }
+  progress.start_task("compress to nu0");
+  const dem::CompressSummary c = dem::compress_isotropic(sys, o.prepare, {}, progress.fn());
+  progress.start_task("relax at nu0");
+  const dem::RelaxSummary r = dem::relax(sys, o.relax, progress.fn());
+  warn_cap(ctx, "at nu0", r);
+  const dem::Measures me = sys.measure();
+  out.attr("/preparation", "nu0", me.volume_fraction);
+  out.attr("/preparation", "pressure_star", me.pressure_star);
+  out.attr("/preparation", "coordination", me.coordination);
+  out.attr("/preparation", "compression_time", c.time);
+  write_relax(out, "/preparation", "", r);
+  out.attr("/preparation", "steps", sys.steps());
+  out.attr("/preparation", "gamma_b", o.prepare_gamma_b);
+  out.attr("/preparation", "wall_time_s", progress.elapsed());
+  // Later stages run with the material's own background damping.
+  session.system = dem::DemSystem::restore(sys.save(), o.system);
+}
+
+void stage_isotropic(const Scenario&, ResultsWriter& out, const RunContext& ctx) {
+  dem::DemSystem& sys = live_system("isotropic");
+  const dem::DemRunOptions& o = *dem_run_session().options;
+  Progress progress(ctx, "isotropic");
+  const std::int64_t steps0 = sys.steps();
+  auto row = [&](const dem::Measures& m) {
+    out.append("/isotropic/time", m.time);
+    out.append("/isotropic/volume_fraction", m.volume_fraction);
+    out.append("/isotropic/pressure", m.pressure);
+    out.append("/isotropic/pressure_star", m.pressure_star);
+    out.append("/isotropic/coordination", m.coordination);
+    out.append("/isotropic/coordination_nonrattler", m.coordination_nonrattler);
+    out.append("/isotropic/rattler_fraction", m.rattler_fraction);
+    out.append("/isotropic/stress", m.stress);
+    out.append("/isotropic/fabric", m.fabric);
+    out.append("/isotropic/kinetic_energy", m.kinetic_energy);
+    out.append("/isotropic/elastic_energy", m.elastic_energy);
+    out.append("/isotropic/inertial_number", m.inertial_number);
+  };
+  progress.start_task("loading to nu_max");
+  const dem::CompressSummary c = dem::compress_isotropic(sys, o.loading, row, progress.fn());
+  progress.start_task("relax at nu_max");
+  const dem::RelaxSummary r = dem::relax(sys, o.relax, progress.fn());
+  warn_cap(ctx, "at nu_max", r);
+  const dem::Measures me = sys.measure();
+  out.attr("/isotropic", "max_inertial_number", c.max_inertial_number);
+  out.attr("/isotropic", "relaxed_pressure_star", me.pressure_star);
+  out.attr("/isotropic", "relaxed_coordination", me.coordination);
+  out.attr("/isotropic", "relaxed_coordination_nonrattler", me.coordination_nonrattler);
+  write_relax(out, "/isotropic", "", r);
+  out.attr("/isotropic", "steps", sys.steps() - steps0);
+  out.attr("/isotropic", "wall_time_s", progress.elapsed());
+}
+
+void stage_path(const Scenario&, ResultsWriter& out, const RunContext& ctx) {
+  dem::DemSystem& sys = live_system("path");
+  auto& session = dem_run_session();
+  const dem::DemRunOptions& o = *session.options;
+  Progress progress(ctx, "path");
+  progress.start_task("undrained extension");
+  const std::int64_t steps0 = sys.steps();
+  auto row = [&](const dem::Measures& m) {
+    out.append("/path/time", m.time);
+    out.append("/path/strain", m.strain);
+    out.append("/path/eps_v", m.eps_v);
+    out.append("/path/eps_dev", m.eps_dev);
+    out.append("/path/stress", m.stress);
+    out.append("/path/stress_star", m.stress_star);
+    out.append("/path/fabric", m.fabric);
+    out.append("/path/volume_fraction", m.volume_fraction);
+    out.append("/path/coordination", m.coordination);
+    out.append("/path/coordination_nonrattler", m.coordination_nonrattler);
+    out.append("/path/kinetic_energy", m.kinetic_energy);
+    out.append("/path/elastic_energy", m.elastic_energy);
+    out.append("/path/inertial_number", m.inertial_number);
+  };
+  dem::PathSummary p = dem::undrained_extension(sys, o.path, row, progress.fn());
+  out.attr("/path", "rate", o.path.rate);
+  out.attr("/path", "max_inertial_number", p.max_inertial_number);
+  out.attr("/path", "steps", sys.steps() - steps0);
+  out.attr("/path", "wall_time_s", progress.elapsed());
+  session.snapshots = std::move(p.snapshots);
+}
+
+void stage_states(const Scenario&, ResultsWriter& out, const RunContext& ctx) {
+  auto& session = dem_run_session();
+  if (session.snapshots.empty())
+    throw InputError("run: stage 'states' needs the stage 'path' in run.stages");
+  const dem::DemRunOptions& o = *session.options;
+  Progress progress(ctx, "states");
+  session.relaxed.clear();
+  for (std::size_t k = 0; k < session.snapshots.size(); ++k) {
+    const std::string& label = o.state_labels[k];
+    const std::string g = "/states/" + label;
+    dem::DemSystem sys = session.snapshots[k];
+    progress.start_task(label + " (" + std::to_string(k + 1) + "/" +
+                        std::to_string(session.snapshots.size()) + ")");
+    const dem::RelaxSummary r = dem::relax(sys, o.state_relax, progress.fn());
+    warn_cap(ctx, "of state " + label, r);
+    const dem::Measures m = sys.measure();
+    out.attr(g, "eps_dev", m.eps_dev);
+    out.attr(g, "volume_fraction", m.volume_fraction);
+    out.attr(g, "pressure_star", m.pressure_star);
+    out.attr(g, "coordination", m.coordination);
+    out.attr(g, "coordination_nonrattler", m.coordination_nonrattler);
+    out.attr(g, "rattler_fraction", m.rattler_fraction);
+    out.attr(g, "kinetic_to_elastic", m.kinetic_to_elastic);
+    write_relax(out, g, "", r);
+    const dem::Particles& p = sys.particles();
+    out.write(g + "/positions", as_matrix(p.x, p.y, p.z));
+    out.write(g + "/radii", p.radius);
+    out.write(g + "/cell_lengths",
+              std::vector<double>(sys.cell().lengths.data(), sys.cell().lengths.data() + 3));
+    out.write(g + "/stress", m.stress);
+    out.write(g + "/fabric", m.fabric);
+    // Checkpoint: everything DemSystem::restore() needs for a bit-identical continuation.
+    const dem::State st = sys.save();
+    const std::string cp = g + "/checkpoint";
+    out.write(cp + "/velocities", as_matrix(p.vx, p.vy, p.vz));
+    out.write(cp + "/forces", as_matrix(p.fx, p.fy, p.fz));
+    out.write(cp + "/reference_positions", as_matrix(st.ref_x, st.ref_y, st.ref_z));
+    out.write(cp + "/reference_cell_lengths",
+              std::vector<double>(st.ref_lengths.data(), st.ref_lengths.data() + 3));
+    out.write(cp + "/strain_E", std::vector<double>(st.strain_E.data(), st.strain_E.data() + 3));
+    out.write(cp + "/last_D", std::vector<double>(st.last_D.data(), st.last_D.data() + 3));
+    out.attr(cp, "time", st.time);
+    out.attr(cp, "steps", st.steps);
+    session.relaxed.emplace_back(label, std::move(sys));
+  }
+  out.attr("/states", "wall_time_s", progress.elapsed());
+}
+
+}  // namespace rendulic::app

@@ -1,0 +1,75 @@
+// Google Benchmarks of the DEM hot path (issue 3 item 9): the NormalContact kernel alone, and
+// whole steps (contact loop + integrator + list upkeep) on standard states, reported as ns per
+// particle-step. The whole-pipeline command is `rendulic bench` (docs/performance.md).
+#include <benchmark/benchmark.h>
+#include <omp.h>
+
+#include <map>
+#include <vector>
+
+#include "rendulic/dem/protocols.hpp"
+
+namespace rendulic::dem {
+namespace {
+
+void BM_NormalContactKernel(benchmark::State& state) {
+  const NormalContact c{1e8, 1.0};
+  std::vector<double> delta(4096), rate(4096);
+  Rng rng(1);
+  for (std::size_t i = 0; i < delta.size(); ++i) {
+    delta[i] = rng.uniform(0, 1e-5);
+    rate[i] = rng.uniform(-1e-2, 1e-2);
+  }
+  for (auto _ : state) {
+    double sum = 0;
+    for (std::size_t i = 0; i < delta.size(); ++i) sum += c.force(delta[i], rate[i]);
+    benchmark::DoNotOptimize(sum);
+  }
+  state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(delta.size()));
+}
+BENCHMARK(BM_NormalContactKernel);
+
+// A packing of n particles at volume fraction nu, prepared as `rendulic bench` does (fast,
+// overdamped compression, then relaxed), and switched to the seed material.
+DemSystem packing(std::size_t n, double nu) {
+  SystemOptions fast;
+  fast.material.gamma_b = 10.0;
+  GasOptions g;
+  g.n_particles = n;
+  g.velocity = 0;
+  DemSystem s = make_gas(fast, g, 1);
+  CompressOptions c;
+  c.target_nu = nu;
+  c.rate_max = c.rate_min = 3000;
+  compress_isotropic(s, c);
+  RelaxOptions r;
+  r.time_cap = 2e-5;
+  relax(s, r);
+  return DemSystem::restore(s.save(), SystemOptions{});
+}
+
+void BM_Step(benchmark::State& state) {
+  const double nu = state.range(0) / 100.0;
+  const int threads = static_cast<int>(state.range(1));
+  const std::size_t n = static_cast<std::size_t>(state.range(2));
+  static std::map<std::pair<std::size_t, int>, DemSystem> cache;
+  const auto key = std::pair{n, static_cast<int>(state.range(0))};
+  if (!cache.count(key)) cache.emplace(key, packing(n, nu));
+  DemSystem s = cache.at(key);
+  omp_set_num_threads(threads);
+  const Eigen::Vector3d D(400.0, -200.0, -200.0);  // strain-controlled extension
+  for (auto _ : state) s.step(D);
+  // items_per_second = particle-steps per second: ns per particle-step = 1e9 / items_per_second.
+  state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(n));
+}
+// Args: volume fraction (percent), threads, particles.
+BENCHMARK(BM_Step)
+    ->Args({64, 1, 9261})
+    ->Args({82, 1, 9261})
+    ->Args({64, 2, 9261})
+    ->Args({82, 2, 9261})
+    ->Unit(benchmark::kMicrosecond)
+    ->UseRealTime();
+
+}  // namespace
+}  // namespace rendulic::dem

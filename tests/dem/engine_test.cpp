@@ -1,0 +1,209 @@
+// Engine invariants with closed forms (physics.md sections 1-3, issue 3 tests): stress, fabric
+// and coordination of a lattice with known forces; affine deformation of a non-touching
+// lattice creates no forces; volume conserved on a constant-volume path; momentum
+// conservation; rattler removal; bit-identical restart; thread-count independence.
+#include <gtest/gtest.h>
+#include <omp.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "dem_helpers.hpp"
+#include "rendulic/core/conventions.hpp"
+#include "rendulic/core/errors.hpp"
+
+namespace rendulic::dem {
+namespace {
+
+// Unit tests run on one thread: the build machine is shared, and a spinning second thread
+// only adds noise. Thread independence has its own test below.
+const bool kOneThread = (omp_set_num_threads(1), true);
+
+// Simple cubic lattice of n^3 equal spheres of radius r and spacing a, at rest.
+DemSystem lattice(int n, double r, double a, const Material& mat) {
+  Particles p;
+  p.resize(static_cast<std::size_t>(n) * n * n);
+  std::size_t i = 0;
+  for (int kz = 0; kz < n; ++kz)
+    for (int ky = 0; ky < n; ++ky)
+      for (int kx = 0; kx < n; ++kx, ++i) {
+        p.x[i] = (kx + 0.5) * a;
+        p.y[i] = (ky + 0.5) * a;
+        p.z[i] = (kz + 0.5) * a;
+        p.radius[i] = r;
+        p.inv_mass[i] = 1.0 / mat.sphere_mass(r);
+      }
+  SystemOptions o;
+  o.material = mat;
+  return DemSystem(p, PeriodicCell{Eigen::Vector3d::Constant(n * a)}, o);
+}
+
+TEST(Engine, StressFabricCoordinationOfLatticeWithKnownForces) {
+  Material mat;
+  const double r = 1e-3, delta = 2e-6, a = 2 * r - delta;
+  const int n = 5;
+  DemSystem s = lattice(n, r, a, mat);
+  const Measures m = s.measure();
+  // Every particle has 6 contacts of force k delta and branch length a: sigma_aa = k delta / a^2.
+  const double expect = mat.k * delta / (a * a);
+  constexpr double kRel = 1e-12;  // round-off of a few hundred summed terms
+  for (int d = 0; d < 3; ++d) EXPECT_NEAR(m.stress(d, d), expect, kRel * expect);
+  EXPECT_NEAR((m.stress - m.stress.diagonal().asDiagonal().toDenseMatrix()).norm(), 0,
+              kRel * expect);
+  EXPECT_NEAR(m.pressure_star, expect / mat.k_star(), kRel * expect / mat.k_star());
+  // Fabric: 2 contacts per axis per particle, weighted by V_p / V: F_aa = 2 nu.
+  const double nu = s.volume_fraction();
+  for (int d = 0; d < 3; ++d) EXPECT_NEAR(m.fabric(d, d), 2 * nu, 1e-12);
+  EXPECT_EQ(m.contacts, 3 * n * n * n);
+  EXPECT_DOUBLE_EQ(m.coordination, 6.0);
+  EXPECT_DOUBLE_EQ(m.coordination_nonrattler, 6.0);
+  EXPECT_DOUBLE_EQ(m.rattler_fraction, 0.0);
+  EXPECT_NEAR(m.elastic_energy, 3 * n * n * n * 0.5 * mat.k * delta * delta,
+              1e-12 * m.elastic_energy);
+  EXPECT_DOUBLE_EQ(m.kinetic_energy, 0.0);
+  // The fast per-step stress (servo) agrees with eq. 1.
+  for (int d = 0; d < 3; ++d) EXPECT_NEAR(s.last_stress_diag()[d], expect, kRel * expect);
+  // Forces balance on a perfect lattice.
+  for (std::size_t i = 0; i < s.particles().size(); ++i)
+    EXPECT_NEAR(std::abs(s.particles().fx[i]), 0, 1e-9 * mat.k * delta);
+}
+
+TEST(Engine, AffineDeformationOfNonTouchingLatticeCreatesNoForces) {
+  Material mat;
+  const double r = 1e-3, a = 2.6e-3;
+  DemSystem s = lattice(5, r, a, mat);
+  const Particles p0 = s.particles();
+  // Compress x by 10 %, extend y and z: gaps stay open (a * 0.9 > 2r).
+  const Eigen::Vector3d D(-2000.0, 1500.0, 500.0);
+  const std::int64_t n = static_cast<std::int64_t>(std::log(0.9) / (-2000.0 * s.dt()));
+  s.advance(n, D);
+  const Eigen::Vector3d S = s.cell().lengths / (5 * a);
+  const auto& p = s.particles();
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    EXPECT_EQ(p.fx[i], 0.0);
+    EXPECT_EQ(p.fy[i], 0.0);
+    EXPECT_EQ(p.fz[i], 0.0);
+    EXPECT_EQ(p.vx[i], 0.0);
+    // Positions follow the cell exactly (round-off of n products only).
+    EXPECT_NEAR(p.x[i], S[0] * p0.x[i], 1e-12 * a);
+    EXPECT_NEAR(p.y[i], S[1] * p0.y[i], 1e-12 * a);
+    EXPECT_NEAR(p.z[i], S[2] * p0.z[i], 1e-12 * a);
+  }
+  EXPECT_EQ(s.measure().contacts, 0);
+  // A product of n ~ 1e4 factors exp(D dt) against one exp: n round-offs of 1e-16.
+  EXPECT_NEAR(S[0], std::exp(-2000.0 * n * s.dt()), 1e-11);
+}
+
+TEST(Engine, VolumeConservedOnConstantVolumePath) {
+  SystemOptions o;
+  GasOptions g;
+  g.n_particles = 300;
+  g.volume_fraction = 0.3;
+  DemSystem s = make_gas(o, g, 7);
+  const double V0 = s.cell().volume();
+  for (int k = 0; k < 5000; ++k) s.step(Eigen::Vector3d(2000.0, -1000.0, -1000.0));
+  // exp(D dt) per axis: the trace-free rate leaves only round-off (~1e-16 per step).
+  EXPECT_NEAR(s.cell().volume() / V0 - 1.0, 0.0, 1e-9);
+  EXPECT_NEAR(s.strain_E().sum(), 0.0, 1e-12);
+  const Measures m = s.measure();
+  EXPECT_NEAR(m.eps_v, 0.0, 1e-12);
+  // -eps_dev = sqrt(3/2) E_xx on this path; E_xx = rate * t.
+  EXPECT_NEAR(-m.eps_dev, std::sqrt(1.5) * 2000.0 * s.time(), 1e-12);
+}
+
+TEST(Engine, MomentumConservedWithContactDamping) {
+  SystemOptions o;
+  o.material.gamma_b = 0;  // background damping is an external force by design
+  GasOptions g;
+  g.n_particles = 400;
+  g.volume_fraction = 0.35;
+  g.velocity = 20;
+  DemSystem s = make_gas(o, g, 11);
+  auto momentum = [&] {
+    Eigen::Vector3d P = Eigen::Vector3d::Zero();
+    double scale = 0;
+    const auto& p = s.particles();
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      P += p.mass(i) * p.velocity(i);
+      scale += p.mass(i) * p.velocity(i).norm();
+    }
+    return std::pair{P, scale};
+  };
+  const auto [P0, scale] = momentum();
+  s.advance(3000, Eigen::Vector3d::Zero());
+  EXPECT_GT(s.measure().contacts, -1);
+  const auto [P1, scale1] = momentum();
+  // Pair forces are applied as exact opposites; only the order of the per-particle sums
+  // rounds: 1e-13 of the momentum scale.
+  EXPECT_LT((P1 - P0).norm(), 1e-13 * scale);
+  EXPECT_LT(scale1, scale);  // collisions dissipated energy, so something happened
+}
+
+TEST(Engine, RattlersRemovedIteratively) {
+  // A chain: particle 0 has 4 contacts (1..4), which have 1 contact each: all rattlers once
+  // they are gone, 0 loses its contacts too. A K5 clique (5..9) keeps 4 contacts each.
+  std::vector<Contact> cs;
+  auto add = [&](int i, int j) {
+    Contact c;
+    c.i = i;
+    c.j = j;
+    cs.push_back(c);
+  };
+  for (int j = 1; j <= 4; ++j) add(0, j);
+  for (int i = 5; i <= 9; ++i)
+    for (int j = i + 1; j <= 9; ++j) add(i, j);
+  const std::vector<bool> keep = non_rattlers(10, cs);
+  for (int i = 0; i <= 4; ++i) EXPECT_FALSE(keep[i]) << i;
+  for (int i = 5; i <= 9; ++i) EXPECT_TRUE(keep[i]) << i;
+}
+
+std::vector<double> flat(const Particles& p) {
+  std::vector<double> v;
+  for (const auto* a : {&p.x, &p.y, &p.z, &p.vx, &p.vy, &p.vz, &p.fx, &p.fy, &p.fz})
+    v.insert(v.end(), a->begin(), a->end());
+  return v;
+}
+
+TEST(Engine, RestartIsBitIdentical) {
+  SystemOptions o;
+  GasOptions g;
+  g.n_particles = 400;
+  g.volume_fraction = 0.35;
+  DemSystem a = make_gas(o, g, 3);
+  const Eigen::Vector3d D = Eigen::Vector3d::Constant(-3000.0);
+  a.advance(1500, D);
+  const State saved = a.save();
+  a.advance(1500, D);
+  DemSystem b = DemSystem::restore(saved, o);
+  b.advance(1500, D);
+  EXPECT_GT(a.list_builds(), 1);                        // the list was rebuilt along the way
+  EXPECT_EQ(flat(a.particles()), flat(b.particles()));  // exact, not near
+  EXPECT_EQ(a.cell().lengths, b.cell().lengths);
+  EXPECT_EQ(a.time(), b.time());
+}
+
+TEST(Engine, CellTooSmallForOneImageIsRefused) {
+  Material mat;
+  EXPECT_THROW(lattice(2, 1e-3, 2.1e-3, mat), InputError);
+}
+
+TEST(Engine, StressServoHoldsLateralStress) {
+  // Drained triaxial control on a compressed lattice: lateral axes servo to a target below
+  // the current stress and must get there (cell extends laterally).
+  Material mat;
+  const double r = 1e-3, delta = 4e-6, a = 2 * r - delta;
+  DemSystem s = lattice(4, r, a, mat);
+  const double s0 = mat.k * delta / (a * a);
+  CellControl c = CellControl::drained_triaxial(0.0, 0.5 * s0);
+  c.servo.gain = 1e5;
+  for (int k = 0; k < 10000; ++k) s.step(c);
+  const Eigen::Matrix3d sig = s.stress();
+  // The lattice's lateral stiffness is K = k/a ~ k*, so the error decays at the rate
+  // gain K / k* = 1e5 1/s: 10000 steps (4.6e-5 s) are 4.6 time constants, leaving 1 %.
+  EXPECT_NEAR(sig(1, 1), 0.5 * s0, 0.02 * s0);
+  EXPECT_NEAR(sig(2, 2), 0.5 * s0, 0.02 * s0);
+  EXPECT_NEAR(s.cell().lengths[0], 4 * a, 1e-15);  // axial axis held (rate 0)
+}
+
+}  // namespace
+}  // namespace rendulic::dem
