@@ -136,6 +136,11 @@ Envelope dynamic_envelope(const DemSystem& state, double amplitude,
 #pragma omp parallel for schedule(dynamic, 1) num_threads(team_size(options))
   for (int p = 0; p < m; ++p) {
     try {
+      // The engine's own parallel loops run serially inside a probe (this task's ICV only):
+      // its force sums are then the same whatever the campaign's team size, so the envelope
+      // is bitwise independent of the thread count (also when a team of 1 would otherwise
+      // let the engine's inner region go parallel).
+      omp_set_num_threads(1);
       DemSystem sys = state;
       const Eigen::Matrix3d d_eps = probe_strain(theta_deg[p], amplitude);
       load_steps[p] = impose_strain_increment(sys, d_eps.diagonal(), rate);

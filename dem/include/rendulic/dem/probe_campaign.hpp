@@ -10,9 +10,9 @@
 //    is an affine step x -> exp(-d_eps) x followed by FIRE to the force tolerance;
 //  - linear_response: the exact small-strain response of the contact network
 //    (linear_response.hpp), no dynamics.
-// Probes are independent: they run in parallel over an OpenMP team (each on its own copy, the
-// engine's inner loops then serial), and every probe's result is a function of the state and
-// its direction alone, so the envelope is identical whatever the thread count.
+// Probes are independent: they run in parallel over an OpenMP team, each on its own copy with
+// the engine's inner loops forced serial, so every probe's result is a function of the state
+// and its direction alone and the envelope is bitwise identical whatever the thread count.
 #pragma once
 
 #include <string>
