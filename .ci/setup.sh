@@ -9,7 +9,7 @@ cd "$(dirname "$0")/.."
 
 pkgs=(g++ make cmake pkg-config git ca-certificates
       libeigen3-dev libceres-dev libgoogle-glog-dev libgflags-dev
-      libnlopt-dev libnlopt-cxx-dev libhdf5-dev hdf5-tools
+      libnlopt-dev libnlopt-cxx-dev libhdf5-dev hdf5-tools libsuitesparse-dev
       libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev libtomlplusplus-dev
       python3 python3-matplotlib python3-h5py python3-numpy)
 if [ "${RENDULIC_MPI:-OFF}" = "ON" ]; then pkgs+=(libopenmpi-dev openmpi-bin); fi
