@@ -9,33 +9,15 @@
 #include <filesystem>
 #include <fstream>
 
+#include "cli_runner.hpp"
 #include "rendulic/core/results.hpp"
 
 namespace {
 namespace fs = std::filesystem;
 
-struct CmdResult {
-  int code;
-  std::string out;  // stdout and stderr together
-};
-
-CmdResult rendulic(const std::string& args) {
-  const std::string cmd = std::string(RENDULIC_EXE) + " " + args + " 2>&1";
-  CmdResult r{-1, {}};
-  FILE* p = popen(cmd.c_str(), "r");
-  std::array<char, 4096> buf{};
-  while (fgets(buf.data(), buf.size(), p)) r.out += buf.data();
-  const int status = pclose(p);
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
-}
-
-fs::path fresh_dir(const std::string& name) {
-  const fs::path d = fs::path(RENDULIC_TEST_TMP) / "app_cli" / name;
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
-}
+using CmdResult = rendulic::testing::CliResult;
+CmdResult rendulic(const std::string& args) { return rendulic::testing::run_rendulic(args); }
+fs::path fresh_dir(const std::string& name) { return rendulic::testing::fresh_dir("app_cli/" + name); }
 
 fs::path write_file(const fs::path& p, const std::string& text) {
   std::ofstream(p) << text;

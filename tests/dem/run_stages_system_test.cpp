@@ -3,6 +3,8 @@
 // documented datasets; the stored checkpoint restores a state whose measures reproduce the
 // stored stress bit for bit; every bad DEM scenario value exits 2 and writes nothing.
 #include <gtest/gtest.h>
+
+#include "cli_runner.hpp"
 #include <sys/wait.h>
 
 #include <array>
@@ -17,28 +19,9 @@ namespace rendulic::dem {
 namespace {
 namespace fs = std::filesystem;
 
-struct CmdResult {
-  int code;
-  std::string out;
-};
-
-CmdResult rendulic(const std::string& args) {
-  const std::string cmd = std::string(RENDULIC_EXE) + " " + args + " 2>&1";
-  CmdResult r{-1, {}};
-  FILE* p = popen(cmd.c_str(), "r");
-  std::array<char, 4096> buf{};
-  while (fgets(buf.data(), buf.size(), p)) r.out += buf.data();
-  const int status = pclose(p);
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
-}
-
-fs::path fresh_dir(const std::string& name) {
-  const fs::path d = fs::path(RENDULIC_TEST_TMP) / "dem_run" / name;
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
-}
+using CmdResult = rendulic::testing::CliResult;
+CmdResult rendulic(const std::string& args) { return rendulic::testing::run_rendulic(args); }
+fs::path fresh_dir(const std::string& name) { return rendulic::testing::fresh_dir("dem_run/" + name); }
 
 // quick.toml's physics on 250 particles with fast rates: a structural test, not a physical one.
 std::string tiny_overrides() {

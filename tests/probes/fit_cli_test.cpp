@@ -11,32 +11,16 @@
 #include <fstream>
 #include <sstream>
 
+#include "cli_runner.hpp"
 #include "synthetic.hpp"
 
 namespace rendulic {
 namespace {
 namespace fs = std::filesystem;
 
-struct CmdResult {
-  int code;
-  std::string out;  // stdout
-  std::string err;  // stderr
-};
-
+using CmdResult = rendulic::testing::CliResult;
 CmdResult run_fit(const std::string& args) {
-  const fs::path err = fs::path(RENDULIC_TEST_TMP) / "probes_cli" / "stderr.txt";
-  const std::string cmd = std::string(RENDULIC_EXE) + " fit " + args + " 2>" + err.string();
-  CmdResult r{-1, {}, {}};
-  FILE* p = popen(cmd.c_str(), "r");
-  std::array<char, 4096> buf{};
-  while (fgets(buf.data(), buf.size(), p)) r.out += buf.data();
-  const int status = pclose(p);
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  std::ifstream e(err);
-  std::stringstream ss;
-  ss << e.rdbuf();
-  r.err = ss.str();
-  return r;
+  return rendulic::testing::run_rendulic("fit " + args, /*merge_stderr=*/false);
 }
 
 fs::path dir() {

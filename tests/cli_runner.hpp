@@ -1,0 +1,61 @@
+// Test support shared by the tests that run the real `rendulic` binary: run it with arguments
+// and capture the exit code, stdout and stderr; make a fresh scratch folder. One runner so
+// every CLI test judges exit codes and messages the same way.
+#pragma once
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <array>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+namespace rendulic::testing {
+
+struct CliResult {
+  int code = -1;
+  std::string out;  // stdout, and stderr too when merged
+  std::string err;  // stderr when not merged
+};
+
+// Runs `rendulic ARGS`; with merge_stderr the one-line errors land in `out`.
+inline CliResult run_rendulic(const std::string& args, bool merge_stderr = true) {
+  CliResult r;
+  std::string err_file;
+  std::string cmd = std::string(RENDULIC_EXE) + " " + args;
+  if (merge_stderr) {
+    cmd += " 2>&1";
+  } else {
+    char tmpl[] = "/tmp/rendulic-test-stderr-XXXXXX";
+    const int fd = mkstemp(tmpl);
+    if (fd >= 0) close(fd);
+    err_file = tmpl;
+    cmd += " 2>" + err_file;
+  }
+  FILE* p = popen(cmd.c_str(), "r");
+  std::array<char, 4096> buf{};
+  while (fgets(buf.data(), buf.size(), p)) r.out += buf.data();
+  const int status = pclose(p);
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  if (!err_file.empty()) {
+    std::stringstream ss;
+    ss << std::ifstream(err_file).rdbuf();
+    r.err = ss.str();
+    std::filesystem::remove(err_file);
+  }
+  return r;
+}
+
+// An empty folder RENDULIC_TEST_TMP/name (removed and recreated).
+inline std::filesystem::path fresh_dir(const std::string& name) {
+  const std::filesystem::path d = std::filesystem::path(RENDULIC_TEST_TMP) / name;
+  std::filesystem::remove_all(d);
+  std::filesystem::create_directories(d);
+  return d;
+}
+
+}  // namespace rendulic::testing
