@@ -135,12 +135,24 @@ TEST(Conventions, RendulicAndMandelRoundTrips) {
   }
 }
 
-TEST(Conventions, ProbeDirectionsAreEquallySpaced) {
+TEST(Conventions, ProbeDirectionsAreEquallySpacedAndHoldTheSpecialDirections) {
   const Eigen::VectorXd d = probe_directions_deg(36);
   ASSERT_EQ(d.size(), 36);
-  EXPECT_DOUBLE_EQ(d(0), 0.0);
-  EXPECT_NEAR(d(1), 10.0, kTight);
-  EXPECT_NEAR(d(35), 350.0, kTight);
+  EXPECT_DOUBLE_EQ(d(0), kIsoCompressionDeg);
+  EXPECT_NEAR(d(1) - d(0), 10.0, kTight);
+  for (int i = 0; i < 36; ++i) {
+    EXPECT_GE(d(i), 0.0);
+    EXPECT_LT(d(i), 360.0);
+  }
+  for (int m : {4, 8, 24, 36}) {
+    const Eigen::VectorXd dm = probe_directions_deg(m);
+    for (double special : {kIsoCompressionDeg, kDevCompressionDeg, kIsoExtensionDeg,
+                           kDevExtensionDeg}) {
+      double best = 360;
+      for (int i = 0; i < m; ++i) best = std::min(best, std::abs(dm(i) - special));
+      EXPECT_LT(best, 1e-9) << "M = " << m << " misses " << special;
+    }
+  }
 }
 
 }  // namespace

@@ -99,9 +99,14 @@ inline double probe_direction_deg(const Eigen::Vector2d& strain_pair) {
   double deg = rad_to_deg(std::atan2(strain_pair.y(), strain_pair.x()));
   return deg < 0.0 ? deg + 360.0 : deg;
 }
-// M equally spaced directions starting at 0 deg.
+// M equally spaced directions starting at isotropic compression (35.26 deg), wrapped into
+// [0, 360): whenever M is a multiple of 4 the set holds the isotropic and the deviatoric
+// (constant-volume) directions of physics.md section 5 exactly, so the seed's special points
+// of Figs. 3-6 are probes, not interpolations.
 inline Eigen::VectorXd probe_directions_deg(int m) {
-  return Eigen::VectorXd::LinSpaced(m, 0.0, 360.0 * (m - 1) / m);
+  Eigen::VectorXd d(m);
+  for (int i = 0; i < m; ++i) d(i) = std::fmod(kIsoCompressionDeg + 360.0 * i / m, 360.0);
+  return d;
 }
 
 // Mandel form of a symmetric tensor and back.

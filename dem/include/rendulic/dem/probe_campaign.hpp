@@ -29,7 +29,7 @@
 namespace rendulic::dem {
 
 struct ProbeOptions {
-  int directions = 36;                            // equally spaced from 0 deg
+  int directions = 36;                            // equally spaced from 35.26 deg
   std::vector<double> amplitudes = {5e-5, 2e-3};  // |d_eps|, Frobenius
   // Loading rate of the largest strain component: from the inertial number
   // I = rate 2<r> sqrt(rho / P) at the state's pressure, unless `rate` > 0 fixes it (1/s).
@@ -44,7 +44,7 @@ struct ProbeOptions {
   bool IsValid(std::string* why) const;
 };
 
-// The probe directions: M equally spaced angles from 0 deg (core probe_directions_deg).
+// The probe directions: M equally spaced angles from 35.26 deg (core probe_directions_deg).
 std::vector<double> probe_directions(int m);
 // The loading rate for a state (1/s).
 double probe_rate(const DemSystem& state, const ProbeOptions& options);
