@@ -167,8 +167,12 @@ CalibrationData load_calibration_data(const std::filesystem::path& file,
     s.eps_dev = r.has_attr(g, "eps_dev") ? r.attr_double(g, "eps_dev") : 0.0;
     if (!s.stress.allFinite() || !s.fabric.allFinite())
       throw InputError(name + ": state '" + l + "' has non-finite stress or fabric");
-    for (const auto& e : r.children(g + "/envelopes"))
+    for (const auto& e : r.children(g + "/envelopes")) {
+      // An envelope that could not be measured (e.g. no linear response of an unstable
+      // network) carries only an `error` attribute: there is nothing to fit.
+      if (r.has_attr(g + "/envelopes/" + e, "error")) continue;
       s.envelopes.push_back(read_envelope(r, g + "/envelopes/" + e, e, data.k_star));
+    }
     data.states.push_back(std::move(s));
   }
   if (options.load_path && r.exists("/path/eps_dev") && r.exists("/path/stress") &&

@@ -117,21 +117,65 @@ Eigen::Matrix3d exp_sym(const Eigen::Matrix3d& a) {
          eig.eigenvectors().transpose();
 }
 
+// Per-probe results that every probe method reports the same way.
+struct ProbeOutcome {
+  Eigen::Matrix3d d_stress, d_fabric;
+  std::pair<double, double> changes, backbone_changes;  // contacts (opened, closed)
+};
+
+// No exception may leave a parallel region: probes record their errors, the first is thrown
+// after the loop.
+void rethrow_first(const std::vector<std::string>& errors, const std::string& method) {
+  for (const std::string& e : errors) {
+    if (!e.empty()) throw std::runtime_error(method + " probe: " + e);
+  }
+}
+
+// The envelope of a campaign with the contact-change diagnostics common to the methods; the
+// caller adds its own diagnostics and attributes.
+Envelope assemble_envelope(const std::string& method, double amplitude, double k_star,
+                           const std::vector<double>& theta_deg,
+                           const std::vector<ProbeOutcome>& outcomes) {
+  Envelope env;
+  env.method = method;
+  env.amplitude = amplitude;
+  env.k_star = k_star;
+  auto& diag = env.diagnostics;
+  for (std::size_t p = 0; p < outcomes.size(); ++p) {
+    const ProbeOutcome& o = outcomes[p];
+    env.add(theta_deg[p], probe_strain(theta_deg[p], amplitude), o.d_stress, o.d_fabric);
+    diag["contacts_opened"].push_back(o.changes.first);
+    diag["contacts_closed"].push_back(o.changes.second);
+    diag["backbone_contacts_opened"].push_back(o.backbone_changes.first);
+    diag["backbone_contacts_closed"].push_back(o.backbone_changes.second);
+  }
+  return env;
+}
+
 }  // namespace
 
-Envelope dynamic_envelope(const DemSystem& state, double amplitude,
+Envelope dynamic_envelope(const DemSystem& given, double amplitude,
                           const std::vector<double>& theta_deg, const ProbeOptions& options) {
   check(options, amplitude, theta_deg);
+  // The common reference is the given state relaxed to the probes' own criterion: otherwise
+  // every probe also records the reference's continuing relaxation (from the states' looser
+  // threshold down to the probes'), which shows up as a spurious centre shift of the elastic
+  // envelope and a spurious deviatoric fabric change. Serial, like the probes, so that the
+  // envelope does not depend on the thread count.
+  DemSystem state = given;
+  const int saved_threads = omp_get_max_threads();
+  omp_set_num_threads(1);
+  const RelaxSummary reference = relax(state, options.relax);
+  omp_set_num_threads(saved_threads);
   const double rate = probe_rate(state, options);
   const Measures before = state.measure();
   const std::vector<Contact> contacts_before = state.contacts();
   const std::vector<std::uint64_t> keys_before = contact_keys(contacts_before);
   const std::vector<bool> backbone = non_rattlers(state.particles().size(), contacts_before);
   const int m = static_cast<int>(theta_deg.size());
-  std::vector<Measures> after(m);
+  std::vector<ProbeOutcome> outcomes(m);
   std::vector<RelaxSummary> relaxed(m);
   std::vector<std::int64_t> load_steps(m);
-  std::vector<std::pair<double, double>> changes(m), backbone_changes(m);
   std::vector<std::string> errors(m);
 #pragma omp parallel for schedule(dynamic, 1) num_threads(team_size(options))
   for (int p = 0; p < m; ++p) {
@@ -145,30 +189,20 @@ Envelope dynamic_envelope(const DemSystem& state, double amplitude,
       const Eigen::Matrix3d d_eps = probe_strain(theta_deg[p], amplitude);
       load_steps[p] = impose_strain_increment(sys, d_eps.diagonal(), rate);
       relaxed[p] = relax(sys, options.relax);
-      after[p] = sys.measure();
+      const Measures after = sys.measure();
       const std::vector<std::uint64_t> keys_after = contact_keys(sys.contacts());
-      changes[p] = contact_changes(keys_before, keys_after);
-      backbone_changes[p] =
-          contact_changes(among(keys_before, backbone), among(keys_after, backbone));
-    } catch (const std::exception& e) {  // no exception may leave a parallel region
+      outcomes[p] = {after.stress - before.stress, after.fabric - before.fabric,
+                     contact_changes(keys_before, keys_after),
+                     contact_changes(among(keys_before, backbone), among(keys_after, backbone))};
+    } catch (const std::exception& e) {
       errors[p] = e.what();
     }
   }
-  for (const std::string& e : errors) {
-    if (!e.empty()) throw std::runtime_error("dynamic probe: " + e);
-  }
-  Envelope env;
-  env.method = "dynamic";
-  env.amplitude = amplitude;
-  env.k_star = state.material().k_star();
+  rethrow_first(errors, "dynamic");
+  Envelope env =
+      assemble_envelope("dynamic", amplitude, state.material().k_star(), theta_deg, outcomes);
   auto& diag = env.diagnostics;
   for (int p = 0; p < m; ++p) {
-    env.add(theta_deg[p], probe_strain(theta_deg[p], amplitude), after[p].stress - before.stress,
-            after[p].fabric - before.fabric);
-    diag["contacts_opened"].push_back(changes[p].first);
-    diag["contacts_closed"].push_back(changes[p].second);
-    diag["backbone_contacts_opened"].push_back(backbone_changes[p].first);
-    diag["backbone_contacts_closed"].push_back(backbone_changes[p].second);
     diag["load_steps"].push_back(static_cast<double>(load_steps[p]));
     diag["relax_steps"].push_back(static_cast<double>(relaxed[p].steps));
     diag["relax_time"].push_back(relaxed[p].time);
@@ -182,7 +216,9 @@ Envelope dynamic_envelope(const DemSystem& state, double amplitude,
   env.attributes["relax_kinetic_to_elastic"] = options.relax.kinetic_to_elastic;
   env.attributes["relax_time_cap"] = options.relax.time_cap;
   env.attributes["dt"] = state.dt();
+  env.attributes["kinetic_to_elastic_given"] = relax_ratio(given);
   env.attributes["kinetic_to_elastic_before"] = relax_ratio(state);
+  env.attributes["reference_relax_steps"] = static_cast<double>(reference.steps);
   return env;
 }
 
@@ -225,9 +261,8 @@ Envelope minimisation_envelope(const DemSystem& state, double amplitude,
     backbone = non_rattlers(ref.size(), cs);
   }
   const int m = static_cast<int>(theta_deg.size());
-  std::vector<StressFabric> after(m);
+  std::vector<ProbeOutcome> outcomes(m);
   std::vector<MinimiseSummary> summaries(m);
-  std::vector<std::pair<double, double>> changes(m), backbone_changes(m);
   std::vector<std::string> errors(m);
 #pragma omp parallel for schedule(dynamic, 1) num_threads(team_size(options))
   for (int p = 0; p < m; ++p) {
@@ -237,31 +272,21 @@ Envelope minimisation_envelope(const DemSystem& state, double amplitude,
       probe.positions = probe.positions * f.transpose();
       probe.cell = f * probe.cell;
       summaries[p] = minimise_energy(probe, mo);
-      after[p] = measure_stress_fabric(probe, mo.k, nullptr, min_overlap);
+      const StressFabric after = measure_stress_fabric(probe, mo.k, nullptr, min_overlap);
       const std::vector<std::uint64_t> keys_after =
           contact_keys(find_pairs(probe, 0.0), min_overlap);
-      changes[p] = contact_changes(keys_before, keys_after);
-      backbone_changes[p] =
-          contact_changes(among(keys_before, backbone), among(keys_after, backbone));
+      outcomes[p] = {after.stress - before.stress, after.fabric - before.fabric,
+                     contact_changes(keys_before, keys_after),
+                     contact_changes(among(keys_before, backbone), among(keys_after, backbone))};
     } catch (const std::exception& e) {
       errors[p] = e.what();
     }
   }
-  for (const std::string& e : errors) {
-    if (!e.empty()) throw std::runtime_error("minimisation probe: " + e);
-  }
-  Envelope env;
-  env.method = "minimisation";
-  env.amplitude = amplitude;
-  env.k_star = state.material().k_star();
+  rethrow_first(errors, "minimisation");
+  Envelope env =
+      assemble_envelope("minimisation", amplitude, state.material().k_star(), theta_deg, outcomes);
   auto& diag = env.diagnostics;
   for (int p = 0; p < m; ++p) {
-    env.add(theta_deg[p], probe_strain(theta_deg[p], amplitude), after[p].stress - before.stress,
-            after[p].fabric - before.fabric);
-    diag["contacts_opened"].push_back(changes[p].first);
-    diag["contacts_closed"].push_back(changes[p].second);
-    diag["backbone_contacts_opened"].push_back(backbone_changes[p].first);
-    diag["backbone_contacts_closed"].push_back(backbone_changes[p].second);
     diag["iterations"].push_back(static_cast<double>(summaries[p].iterations));
     diag["max_force"].push_back(summaries[p].max_force);
     diag["converged"].push_back(summaries[p].converged ? 1.0 : 0.0);
@@ -278,10 +303,28 @@ Envelope linear_response_envelope(const DemSystem& state, double amplitude,
   check(options, amplitude, theta_deg);
   LinearResponseOptions lo = options.linear;
   lo.k = state.material().k;
-  const LinearResponse lr = linear_response(packing_of(state), lo);
+  PackingData packing = packing_of(state);
+  LinearResponse lr = linear_response(packing, lo);
+  bool minimised_first = false;
+  if (!lr.ok) {
+    // A dynamically relaxed state (E_kin / E_el below a threshold) is near, not at, its
+    // energy minimum; the residual forces enter the geometric term and can make the Hessian
+    // indefinite. The linear response is defined at mechanical equilibrium, so bring the
+    // packing there (FIRE, as the minimisation probes do) and try once more.
+    MinimiseOptions mo = options.minimise;
+    mo.k = lo.k;
+    const MinimiseSummary ms = minimise_energy(packing, mo);
+    if (!ms.converged)
+      throw std::runtime_error(lr.message + "; minimising first did not converge (" +
+                               ms.message + ")");
+    lr = linear_response(packing, lo);
+    minimised_first = true;
+  }
   if (response) *response = lr;
   if (!lr.ok) throw std::runtime_error(lr.message);
-  return linear_response_envelope(lr, theta_deg, amplitude, state.material().k_star());
+  Envelope env = linear_response_envelope(lr, theta_deg, amplitude, state.material().k_star());
+  env.attributes["minimised_first"] = minimised_first ? 1.0 : 0.0;
+  return env;
 }
 
 std::string envelope_name(const std::string& method, double amplitude) {
@@ -333,7 +376,7 @@ void register_probe_keys(ScenarioSchema& schema) {
   s.type = KeyType::kInt;
   s.default_value = std::int64_t{d.directions};
   s.unit = "-";
-  s.help = "Number of probe directions, equally spaced in the Rendulic plane from 0 deg.";
+  s.help = "Number of probe directions, equally spaced in the Rendulic plane from 35.26 deg (isotropic compression); a multiple of 4 includes the isotropic and deviatoric directions.";
   s.min = 3;
   s.max = 3600;
   schema.add(s);
