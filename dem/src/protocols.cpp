@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 #include <sstream>
 
@@ -150,16 +151,25 @@ RelaxSummary relax(DemSystem& sys, const RelaxOptions& options, const ProgressFn
   RelaxSummary s;
   const double t0 = sys.time();
   const Eigen::Vector3d still = Eigen::Vector3d::Zero();
+  // Converged only when the kinetic energy is below the threshold AND decaying, after at
+  // least one check interval. Right after a slow strain increment the kinetic energy is still
+  // tiny (the loading lasts a few hundred steps, far less than the non-affine relaxation), so
+  // the ratio alone would stop at once and the probe would record an almost affine, too stiff
+  // response; the relaxation peak that follows must be waited out first.
   s.ratio = relax_ratio(sys);
-  while (!(s.ratio < options.kinetic_to_elastic)) {
+  double previous = std::numeric_limits<double>::infinity();
+  bool first = true;
+  while (first || !(s.ratio < options.kinetic_to_elastic && s.ratio <= previous)) {
     if (sys.time() - t0 >= options.time_cap) break;
+    first = false;
+    previous = s.ratio;
     sys.advance(options.check_every, still);
     s.steps += options.check_every;
     s.ratio = relax_ratio(sys);
     if (!std::isfinite(s.ratio)) (void)sys.measure();  // throws with a clear message
     if (progress) progress(std::min(1.0, (sys.time() - t0) / options.time_cap));
   }
-  s.converged = s.ratio < options.kinetic_to_elastic;
+  s.converged = s.ratio < options.kinetic_to_elastic && s.ratio <= previous;
   s.time = sys.time() - t0;
   if (progress) progress(1.0);
   return s;
