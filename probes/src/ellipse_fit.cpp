@@ -392,6 +392,23 @@ void check_points(const Envelope& env, int min_points, const char* what) {
                      " points, got " + std::to_string(env.size()));
 }
 
+// Residuals, rms and solver outcome of a curve fit, scaled back from normalized units by L;
+// shared by the circle and ellipse results.
+void fill_outcome(const CurveFit& f, double L, const FitOptions& options, bool used_theta,
+                  EnvelopeFit* out) {
+  double ssr = 0.0;
+  for (double d : f.d) {
+    out->residuals.push_back(L * d);
+    ssr += L * L * d * d;
+  }
+  out->rms = std::sqrt(ssr / static_cast<double>(f.d.size()));
+  out->loss = options.loss;
+  out->loss_scale = L * f.loss_scale;
+  out->converged = f.converged;
+  out->iterations = f.iterations;
+  out->used_theta = used_theta;
+}
+
 // Fills the common members from a circle solution (normalized units -> data units).
 EnvelopeFit circle_result(const fit_detail::Normalized& nz, const CurveFit& f,
                           const FitOptions& options, bool used_theta) {
@@ -401,17 +418,7 @@ EnvelopeFit circle_result(const fit_detail::Normalized& nz, const CurveFit& f,
   const double L = nz.scale;
   out.center = nz.origin + L * Eigen::Vector2d(f.params[0], f.params[1]);
   out.a = out.b = L * std::abs(f.params[2]);
-  double ssr = 0.0;
-  for (double d : f.d) {
-    out.residuals.push_back(L * d);
-    ssr += L * L * d * d;
-  }
-  out.rms = std::sqrt(ssr / static_cast<double>(f.d.size()));
-  out.loss = options.loss;
-  out.loss_scale = L * f.loss_scale;
-  out.converged = f.converged;
-  out.iterations = f.iterations;
-  out.used_theta = used_theta;
+  fill_outcome(f, L, options, used_theta, &out);
   if (f.cov_ok) {
     const Eigen::Matrix3d c3 = f.cov_unit * (f.sigma * f.sigma * L * L);
     out.has_stderr = true;
@@ -494,17 +501,7 @@ EnvelopeFit fit_ellipse(const Envelope& env, const FitOptions& options) {
   out.a = L * a;
   out.b = L * b;
   out.inclination_deg = rad_to_deg(phi);
-  double ssr = 0.0;
-  for (double d : f.d) {
-    out.residuals.push_back(L * d);
-    ssr += L * L * d * d;
-  }
-  out.rms = std::sqrt(ssr / static_cast<double>(f.d.size()));
-  out.loss = options.loss;
-  out.loss_scale = L * f.loss_scale;
-  out.converged = f.converged;
-  out.iterations = f.iterations;
-  out.used_theta = used_theta;
+  fill_outcome(f, L, options, used_theta, &out);
   out.selection_note = "ellipse requested";
 
   // A circle has no inclination: a - b within circle_z standard errors (or exactly equal to
