@@ -100,30 +100,10 @@ void register_fit_keys(ScenarioSchema& s) {
 }
 
 void stage_fits(const Scenario& sc, ResultsWriter& out, const RunContext& ctx) {
-  const FitOptions stress_opts = fit_options(sc, "stress"), fabric_opts = fit_options(sc, "fabric");
-  const ResultsReader in(out.temporary_path());
-  int fitted = 0, failed = 0;
-  for (const auto& label : in.children("/states")) {
-    const std::string envs = "/states/" + label + "/envelopes";
-    for (const auto& name : in.children(envs)) {
-      const std::string g = envs + "/" + name;
-      for (const auto& [pairs, fit_group, opts] :
-           {std::tuple{"stress_star", "fit_stress", stress_opts},
-            std::tuple{"fabric", "fit_fabric", fabric_opts}}) {
-        try {
-          const Envelope env = read_envelope(in, g, pairs);
-          write_envelope_fit(out, g + "/" + fit_group, fit_envelope(env, opts));
-          ++fitted;
-        } catch (const InputError& e) {  // degenerate envelope: say so in the file
-          out.attr(g + "/" + fit_group, "shape", "none");
-          out.attr(g + "/" + fit_group, "error", std::string(e.what()));
-          ++failed;
-        }
-      }
-    }
-  }
+  const FitAllSummary s = fit_envelopes(ResultsReader(out.temporary_path()), out,
+                                        fit_options(sc, "stress"), fit_options(sc, "fabric"));
   if (!ctx.quiet)
-    std::cerr << "rendulic: fits: " << fitted << " fitted, " << failed << " not fittable\n";
+    std::cerr << "rendulic: fits: " << s.fitted << " fitted, " << s.failed << " not fittable\n";
 }
 
 }  // namespace rendulic::app

@@ -2,6 +2,8 @@
 #include "rendulic/probes/fit_io.hpp"
 
 #include <cmath>
+#include <string>
+#include <tuple>
 #include <vector>
 
 #include "rendulic/core/conventions.hpp"
@@ -84,53 +86,40 @@ Envelope read_envelope(const ResultsReader& in, const std::string& g, const std:
   return env;
 }
 
-FitAllSummary fit_all_envelopes(const std::filesystem::path& file, const FitOptions& options) {
-  struct Pending {
-    std::string group;
-    EnvelopeFit fit;
-    std::string error;
-  };
-  std::vector<Pending> todo;
-  {
-    // Read and fit everything first: the reader must be closed before the update opens the
-    // file for writing.
-    ResultsReader in(file);
-    if (!in.exists("/states")) return {};
-    for (const auto& label : in.children("/states")) {
-      const std::string eg = "/states/" + label + "/envelopes";
-      if (!in.exists(eg)) continue;
-      for (const auto& name : in.children(eg)) {
-        const std::string g = eg + "/" + name;
-        for (const auto& [pairs, fit_name] :
-             {std::pair<std::string, std::string>{"stress_star", "fit_stress"},
-              {"fabric", "fit_fabric"}}) {
-          if (!in.exists(g + "/" + pairs)) continue;
-          Pending p;
-          p.group = g + "/" + fit_name;
-          try {
-            p.fit = fit_envelope(read_envelope(in, g, pairs), options);
-          } catch (const InputError& e) {
-            p.error = e.what();
-          }
-          todo.push_back(std::move(p));
+FitAllSummary fit_envelopes(const ResultsReader& in, ResultsWriter& out,
+                            const FitOptions& stress_options, const FitOptions& fabric_options) {
+  FitAllSummary summary;
+  if (!in.exists("/states")) return summary;
+  for (const auto& label : in.children("/states")) {
+    const std::string eg = "/states/" + label + "/envelopes";
+    if (!in.exists(eg)) continue;
+    for (const auto& name : in.children(eg)) {
+      const std::string g = eg + "/" + name;
+      for (const auto& [pairs, fit_name, options] :
+           {std::tuple<std::string, std::string, const FitOptions&>{"stress_star", "fit_stress",
+                                                                    stress_options},
+            {"fabric", "fit_fabric", fabric_options}}) {
+        if (!in.exists(g + "/" + pairs)) continue;  // nothing measured (its `error` says why)
+        try {
+          write_envelope_fit(out, g + "/" + fit_name,
+                             fit_envelope(read_envelope(in, g, pairs), options));
+          ++summary.fitted;
+        } catch (const InputError& e) {  // degenerate envelope: say so in the file
+          out.attr(g + "/" + fit_name, "shape", "none");
+          out.attr(g + "/" + fit_name, "error", std::string(e.what()));
+          ++summary.failed;
         }
       }
     }
   }
-  FitAllSummary summary;
-  if (todo.empty()) return summary;
+  return summary;
+}
+
+FitAllSummary fit_all_envelopes(const std::filesystem::path& file, const FitOptions& options) {
+  // The update works on a copy of the file, so the reader of the original can stay open.
   ResultsWriter out = ResultsWriter::update(file);
-  for (const auto& p : todo) {
-    if (p.error.empty()) {
-      write_envelope_fit(out, p.group, p.fit);
-      ++summary.fitted;
-    } else {
-      out.attr(p.group, "shape", "none");
-      out.attr(p.group, "error", p.error);
-      ++summary.failed;
-    }
-  }
-  out.commit();
+  const FitAllSummary summary = fit_envelopes(ResultsReader(file), out, options, options);
+  if (summary.fitted + summary.failed > 0) out.commit();  // else the copy is dropped
   return summary;
 }
 

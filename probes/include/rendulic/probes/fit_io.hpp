@@ -32,6 +32,11 @@ struct FitAllSummary {
   int fitted = 0;
   int failed = 0;
 };
+// The same over a reader and a writer that are already open (the run's `fits` stage reads the
+// writer's temporary file): every envelope's stress_star and fabric pairs are fitted with their
+// own options; pairs that were never measured are skipped.
+FitAllSummary fit_envelopes(const ResultsReader& in, ResultsWriter& out,
+                            const FitOptions& stress_options, const FitOptions& fabric_options);
 FitAllSummary fit_all_envelopes(const std::filesystem::path& results_file,
                                 const FitOptions& options = {});
 
