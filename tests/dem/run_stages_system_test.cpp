@@ -29,7 +29,7 @@ std::string tiny_overrides() {
   return " --quiet --threads 1 --set dem.n_particles=250 --set preparation.rate=10000"
          " --set relax.time_cap=1e-5 --set isotropic.rate_max=5000 --set isotropic.rate_min=5000"
          " --set isotropic.samples=50 --set path.rate=5000 --set path.samples=20"
-         " --set states.time_cap=1e-5";
+         " --set states.time_cap=1e-5 --set calibration.model=anisotropic_elastic";
 }
 
 TEST(RunStages, TinyScenarioWritesTheInterfacesSchema) {
