@@ -637,32 +637,39 @@ void write_sweep_h5(const SweepSummary& s, ResultsWriter& out) {
   };
   out.attr(g, "breaks", join(s.breaks));
   out.attr(g, "recommendations", join(s.recommendations));
+  // Named numbers as attributes of one group.
+  auto put = [&out](const std::string& group,
+                    std::initializer_list<std::pair<const char*, double>> values) {
+    for (const auto& [k, v] : values) out.attr(group, k, v);
+  };
   for (const SweepState& st : s.states) {
     const std::string sg = g + "/states/n" + std::to_string(st.n_particles);
     out.attr(sg, "n_particles", std::int64_t{st.n_particles});
-    out.attr(sg, "volume_fraction", st.volume_fraction);
-    out.attr(sg, "pressure_star", st.pressure_star);
-    out.attr(sg, "eps_dev", st.eps_dev);
-    out.attr(sg, "coordination", st.coordination);
-    out.attr(sg, "prepare_wall_s", st.prepare_wall_s);
-    out.attr(sg, "prepare_cpu_s", st.prepare_cpu_s);
-    out.attr(sg, "ref_major", st.ref_major);
-    out.attr(sg, "ref_minor", st.ref_minor);
-    out.attr(sg, "ref_inclination_deg", st.ref_inclination_deg);
+    put(sg, {{"volume_fraction", st.volume_fraction},
+             {"pressure_star", st.pressure_star},
+             {"eps_dev", st.eps_dev},
+             {"coordination", st.coordination},
+             {"prepare_wall_s", st.prepare_wall_s},
+             {"prepare_cpu_s", st.prepare_cpu_s},
+             {"ref_major", st.ref_major},
+             {"ref_minor", st.ref_minor},
+             {"ref_inclination_deg", st.ref_inclination_deg}});
   }
   for (std::size_t i = 0; i < s.points.size(); ++i) {
     const SweepPoint& p = s.points[i];
     char name[32];
     std::snprintf(name, sizeof name, "/points/p%03zu", i);
     const std::string pg = g + name;
-    out.attr(pg, "factor", p.factor);
-    out.attr(pg, "value", p.value);
-    out.attr(pg, "method", p.method);
-    out.attr(pg, "envelope", p.envelope);
-    out.attr(pg, "status", p.status);
-    out.attr(pg, "note", p.note);
+    for (const auto& [k, v] : {std::pair<const char*, const std::string&>{"factor", p.factor},
+                               {"method", p.method},
+                               {"envelope", p.envelope},
+                               {"status", p.status},
+                               {"note", p.note}})
+      out.attr(pg, k, v);
     out.attr(pg, "n_particles", std::int64_t{p.n_particles});
-    for (const auto& [k, v] : std::vector<std::pair<const char*, double>>{
+    out.attr(pg, "meets_target", std::int64_t{p.meets_target});
+    out.attr(pg, "pareto", std::int64_t{p.pareto});
+    put(pg, {{"value", p.value},
              {"dt_factor", p.dt_factor},
              {"inertial_number", p.inertial_number},
              {"relax_kinetic_to_elastic", p.relax},
@@ -671,22 +678,17 @@ void write_sweep_h5(const SweepSummary& s, ResultsWriter& out) {
              {"cpu_s", p.cpu_s},
              {"steps_per_probe", p.steps_per_probe},
              {"reference_relax_steps", p.reference_relax_steps},
-             {"converged_fraction", p.converged_fraction}})
-      out.attr(pg, k, v);
-    out.attr(pg, "meets_target", std::int64_t{p.meets_target});
-    out.attr(pg, "pareto", std::int64_t{p.pareto});
+             {"converged_fraction", p.converged_fraction}});
     if (p.status != "ok") continue;  // no numbers where there is no envelope
-    for (const auto& [k, v] :
-         std::vector<std::pair<const char*, double>>{{"error", p.error},
-                                                     {"error_rms", p.error_rms},
-                                                     {"major", p.major},
-                                                     {"minor", p.minor},
-                                                     {"inclination_deg", p.inclination_deg},
-                                                     {"err_major", p.err_major},
-                                                     {"err_minor", p.err_minor},
-                                                     {"err_inclination_deg", p.err_inclination_deg},
-                                                     {"err_center", p.err_center}})
-      out.attr(pg, k, v);
+    put(pg, {{"error", p.error},
+             {"error_rms", p.error_rms},
+             {"major", p.major},
+             {"minor", p.minor},
+             {"inclination_deg", p.inclination_deg},
+             {"err_major", p.err_major},
+             {"err_minor", p.err_minor},
+             {"err_inclination_deg", p.err_inclination_deg},
+             {"err_center", p.err_center}});
     out.attr(pg, "center", std::vector<double>{p.center_x, p.center_y});
     out.write(pg + "/theta_deg", p.theta_deg);
     std::vector<Eigen::Vector2d> pairs;
