@@ -163,10 +163,11 @@ void write_calibration(ResultsWriter& out, const CalibrationSummary& s) {
   out.attr(g, "held_out_states", held);
   out.write(g + "/params", f.params);
   // stderr over every parameter: 0 for fixed ones (not estimated), +inf for undetermined.
+  // Matched by name: the free parameters are not listed in the law's order.
   std::vector<double> se(s.param_names.size(), 0.0);
-  std::size_t k = 0;
-  for (std::size_t i = 0; i < s.param_names.size(); ++i)
-    if (s.free_mask[i]) se[i] = f.stderr_[k++];
+  for (std::size_t k = 0; k < f.names.size() && k < f.stderr_.size(); ++k)
+    for (std::size_t i = 0; i < s.param_names.size(); ++i)
+      if (s.param_names[i] == f.names[k]) se[i] = f.stderr_[k];
   out.write(g + "/stderr", se);
   out.write(g + "/correlation", Eigen::MatrixXd(f.correlation));
   for (const auto& st : s.states) {
