@@ -128,8 +128,10 @@ class DemSystem {
   void pack_positions();
   void note_list_built();  // after every build: the longest row, the packed positions
   void partition_rows(int threads);
+  // Forces at the current positions from the velocities in vel4_; then, if half_kick != 0,
+  // v += half_kick F / m (the closing half kick of a step).
   template <bool kStress>
-  void compute_forces();
+  void compute_forces(double half_kick);
   template <bool kStress>
   void step_impl(const Eigen::Vector3d& D);
 
