@@ -105,7 +105,7 @@ CalibrationSummary calibrate(const CalibrationData& data, const CalibrationOptio
   };
   bool has_plastic = false;
   if (options.level_one_start) {
-    std::vector<double> bs, gs, ps;
+    std::vector<double> bs, gs, ps, b_over_p;
     double num = 0.0, den = 0.0, cf_num = 0.0, cf_den = 0.0;
     for (const auto& st : level1) {
       if (st.held_out) continue;
@@ -113,6 +113,7 @@ CalibrationSummary calibrate(const CalibrationData& data, const CalibrationOptio
       ps.push_back(st.pressure);
       if (!st.has_elastic) continue;
       bs.push_back(st.elastic.B);
+      if (st.pressure > 0.0) b_over_p.push_back(st.elastic.B / st.pressure);
       gs.push_back(st.elastic.G);
       // A = beta_A F_dev B (models.md family 2): least squares through the origin.
       num += st.elastic.A * st.f_dev * st.elastic.B;
@@ -137,6 +138,20 @@ CalibrationSummary calibrate(const CalibrationData& data, const CalibrationOptio
       set("G", median(gs));
     }
     if (den > 0.0) set("beta_A", num / den);
+    // hypoplastic_wu has no stiffness parameter: its bulk modulus at p I is -(c1 + c2/3) p.
+    // The published constants (a sand at kPa) can be ~100x stiffer, relative to p, than a
+    // packing; started there, the first 2e-3 probe already drives tr(sigma) negative. Scale all
+    // four together to the measured B/p: the same law shape, the data's stiffness.
+    const int ic1 = law->parameter_index("c1"), ic2 = law->parameter_index("c2");
+    if (ic1 >= 0 && ic2 >= 0 && !b_over_p.empty()) {
+      const double b_wu = -(values[ic1] + values[ic2] / 3.0);
+      const double scale = b_wu > 0.0 ? median(b_over_p) / b_wu : 0.0;
+      if (scale > 0.0 && std::isfinite(scale))
+        for (const char* c : {"c1", "c2", "c3", "c4"}) {
+          const int i = law->parameter_index(c);
+          if (i >= 0) set(c, scale * values[i]);
+        }
+    }
     if (cf_den > 0.0 && cf_num > 0.0) set("c_F", cf_num / cf_den);
   } else {
     for (const auto& st : level1) has_plastic = has_plastic || (!st.held_out && st.has_plastic);
