@@ -2,6 +2,8 @@
 // the weighting and normalisation are documented in docs/calibration.md "Objectives").
 #include "rendulic/calibration/objective.hpp"
 
+#include <omp.h>
+
 #include <algorithm>
 #include <cmath>
 #include <set>
@@ -178,8 +180,38 @@ class Kernel final : public KernelBase {
     o_->space.full(z, p);
     double pd[M::kCount];
     for (int i = 0; i < M::kCount; ++i) pd[i] = value_of(p[i]);
+    const int n_tasks = static_cast<int>(o_->tasks.size());
+    bool ok = true;
+    if constexpr (std::is_same_v<T, double>) {
+      // Integrated laws (numeric Jacobians): every probe and the path is an independent
+      // integration writing its own residuals, so tasks run in parallel, the path first (the
+      // longest). The residuals do not depend on the thread count.
+      const int n = n_tasks + (o_->path_task.active ? 1 : 0);
+      int all = 1;
+#pragma omp parallel for schedule(dynamic) reduction(min : all) if (n > 1 && !omp_in_parallel())
+      for (int k = 0; k < n; ++k) {
+        const bool path = o_->path_task.active && k == 0;
+        const int t = o_->path_task.active ? k - 1 : k;
+        all =
+            std::min(all, (path ? path_residuals(pd, r) : task_residuals<T>(t, p, pd, r)) ? 1 : 0);
+      }
+      ok = all == 1;
+    } else {
+      for (int t = 0; t < n_tasks && ok; ++t) ok = task_residuals<T>(t, p, pd, r);
+      if (ok && o_->path_task.active) return false;  // path: double only
+    }
+    if (!ok) return false;
+    for (int i = 0; i < o_->n_residuals; ++i)
+      if (!std::isfinite(value_of(r[i]))) return false;
+    return true;
+  }
+
+  // Residuals of one envelope task.
+  template <typename T>
+  bool task_residuals(int index, const T* p, const double* pd, T* r) const {
+    const EnvTask& t = o_->tasks[static_cast<std::size_t>(index)];
     std::vector<Eigen::Matrix<T, 2, 1>> ps, pf;
-    for (const EnvTask& t : o_->tasks) {
+    {
       const StateData& s = o_->states[t.state];
       if (!predict<T>(p, pd, s, t.env, t.integrated, &ps, &pf)) return false;
       const int m = t.env.size();
@@ -207,15 +239,6 @@ class Kernel final : public KernelBase {
                 t.fabric_features_w * (f - T(t.data_fabric_features(k, c)));
           }
     }
-    if (o_->path_task.active) {
-      if constexpr (std::is_same_v<T, double>) {
-        if (!path_residuals(pd, r)) return false;
-      } else {
-        return false;
-      }
-    }
-    for (int i = 0; i < o_->n_residuals; ++i)
-      if (!std::isfinite(value_of(r[i]))) return false;
     return true;
   }
 
