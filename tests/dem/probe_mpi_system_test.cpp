@@ -21,10 +21,13 @@ namespace fs = std::filesystem;
 using rendulic::testing::CliResult;
 
 // `timeout` turns a hang into a failure (exit 124) instead of a stuck suite; the bound is
-// far above the seconds these runs take.
+// far above the seconds these runs take. CI runs as root in a container: hence
+// --allow-run-as-root, and no single-copy (ptrace-based) shared-memory transfers, which
+// containers without CAP_SYS_PTRACE refuse.
 std::string mpirun(int ranks) {
-  return "timeout 300 mpirun --allow-run-as-root --oversubscribe -np " + std::to_string(ranks) +
-         " " + RENDULIC_EXE;
+  return "OMPI_MCA_btl_vader_single_copy_mechanism=none timeout 300 mpirun --allow-run-as-root "
+         "--oversubscribe -np " +
+         std::to_string(ranks) + " " + RENDULIC_EXE;
 }
 
 // quick.toml's physics on 250 particles, one state, eight directions, both probe methods and
