@@ -209,6 +209,81 @@ def fig7_trends(f, out, written, notes):
     save(fig, out, "fig7_features", written)
 
 
+FACTOR_STYLE = {"dt_factor": ("o", "tab:blue"), "dt_factor_tight": ("o", "tab:cyan"),
+                "n_particles": ("s", "tab:green"), "inertial_number": ("^", "tab:orange"),
+                "relax": ("D", "tab:purple"), "method": ("*", "tab:red")}
+METHOD_MARKER = {"dynamic": "*", "minimisation": "P", "linear_response": "X"}
+ERROR_FLOOR = 1e-6  # the reference itself has error 0: drawn on the floor
+
+
+def draw_sweep_points(ax, rows):
+    """One marker and colour per factor (per method for the method points), value labels;
+    filled markers meet the accuracy target."""
+    for factor, (marker, colour) in FACTOR_STYLE.items():
+        pts = [r for r in rows if r["factor"] == factor]
+        if not pts:
+            continue
+        for r in pts:
+            err = max(float(r["error"]), ERROR_FLOOR)
+            m = METHOD_MARKER[r["method"]] if factor == "method" else marker
+            ax.plot(float(r["cpu_s"]), err, m, color=colour, ms=8 if factor == "method" else 6,
+                    mfc=colour if r["meets_target"] else "none")
+            label = r["method"] if factor == "method" else f"{float(r['value']):g}"
+            ax.annotate(label, (float(r["cpu_s"]), err), fontsize=6, xytext=(3, 3),
+                        textcoords="offset points", color=colour)
+        ax.plot([], [], marker, color=colour, label=factor)
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("CPU time of the envelope [s]")
+
+
+def fig_pareto(f, out, written, notes):
+    """Speed versus accuracy (rendulic sweep): envelope error against CPU time, log-log."""
+    g = f["sweep"]
+    rows = []
+    for name in sorted(g["points"]):
+        p = g["points"][name]
+        rows.append({k: attr(p, k) for k in p.attrs})
+    ok = [r for r in rows if r["status"] == "ok" and r["envelope"] == "elastic"]
+    if not ok:
+        notes.append("Pareto chart: no elastic point with status ok")
+        return
+    plastic = [r for r in rows if r["status"] == "ok" and r["envelope"] == "plastic"]
+    fig, axes = plt.subplots(1, 2 if plastic else 1, figsize=(15 if plastic else 8.5, 6),
+                             squeeze=False)
+    ax = axes[0][0]
+    draw_sweep_points(ax, ok)
+    front = sorted((float(r["cpu_s"]), max(float(r["error"]), ERROR_FLOOR))
+                   for r in ok if r["pareto"])
+    if front:
+        ax.step([x for x, _ in front], [y for _, y in front], where="post", color="0.4",
+                lw=1, ls="--", label="Pareto front")
+    target = float(attr(g, "target"))
+    ax.axhline(target, color="tab:red", lw=0.8, ls=":", label=f"target {target:g}")
+    # Settings that could not run, listed at the top edge with the reason.
+    bad = [r for r in rows if r["status"] != "ok"]
+    for i, r in enumerate(bad):
+        ax.annotate(f"{r['factor']} = {float(r['value']):g}: {r['status']}",
+                    xy=(0.01, 0.98 - 0.035 * i), xycoords="axes fraction", fontsize=7,
+                    color="tab:red", va="top")
+    ax.set_ylabel(r"max$_\theta$ $|\delta\sigma^* - \delta\sigma^*_{ref}|$ / $a_{ref}$")
+    ax.legend(fontsize=7, loc="upper right")
+    ax.set_title("Elastic envelope against the linear response (filled: meets the target; "
+                 f"the reference itself at {ERROR_FLOOR:g}, off the front)", fontsize=8)
+    if plastic:
+        bx = axes[0][1]
+        draw_sweep_points(bx, plastic)
+        bx.set_ylabel("error against the minimisation envelope")
+        bx.legend(fontsize=7, loc="upper right")
+        bx.set_title("Elasto-plastic envelope, |d eps| = "
+                     f"{float(attr(g, 'plastic_amplitude')):g}", fontsize=8)
+    breaks = [b for b in str(attr(g, "breaks", "")).split("\n") if b]
+    if breaks:
+        fig.text(0.01, -0.01, "\n".join(b if len(b) < 170 else b[:167] + "..." for b in breaks),
+                 fontsize=6, va="top", ha="left")
+    save(fig, out, "pareto", written)
+
+
 def main():
     if len(sys.argv) != 3:
         print("usage: plot.py FILE.h5 OUTDIR", file=sys.stderr)
@@ -227,6 +302,8 @@ def main():
         ("Fig. 7", lambda f: fig7_trends(f, out, written, notes)),
     ]
     with h5py.File(path, "r") as f:
+        if "sweep" in f:  # a sweep file (rendulic sweep) has the Pareto chart only
+            figures = [("Pareto chart", lambda f: fig_pareto(f, out, written, notes))]
         for name, draw in figures:
             try:
                 draw(f)

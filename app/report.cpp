@@ -205,8 +205,8 @@ std::vector<Claim> evaluate_claims(const ResultsReader& r) {
             "", ""};
     std::vector<double> ra, rb;
     if (all(el))
-      for (auto* e : el) ra.push_back(e->stress.a / el[0]->stress.a),
-                         rb.push_back(e->stress.b / el[0]->stress.b);
+      for (auto* e : el)
+        ra.push_back(e->stress.a / el[0]->stress.a), rb.push_back(e->stress.b / el[0]->stress.b);
     bool ok = false;
     if (ra.size() >= 2) {
       double dev = 0;
@@ -235,8 +235,9 @@ std::vector<Claim> evaluate_claims(const ResultsReader& r) {
             "", ""};
     std::vector<double> shift, thin;
     if (all(pl))
-      for (auto* e : pl) shift.push_back(e->stress.center.norm() / e->stress.a),
-                         thin.push_back(e->stress.b / e->stress.a);
+      for (auto* e : pl)
+        shift.push_back(e->stress.center.norm() / e->stress.a),
+            thin.push_back(e->stress.b / e->stress.a);
     bool ok = false;
     if (!shift.empty() && all(el)) {
       ok = thin.back() < 0.1;
@@ -254,8 +255,8 @@ std::vector<Claim> evaluate_claims(const ResultsReader& r) {
             "", ""};
     std::vector<double> ratio, inc;
     if (all(pl))
-      for (auto* e : pl) ratio.push_back(dev_to_iso_extent(e->fabric_pairs)),
-                         inc.push_back(e->fabric.incl);
+      for (auto* e : pl)
+        ratio.push_back(dev_to_iso_extent(e->fabric_pairs)), inc.push_back(e->fabric.incl);
     bool ok = false;
     if (!ratio.empty() && all(el)) {
       ok = std::abs(inc.back() - kIsoCompressionDeg) < 10.0;
@@ -292,12 +293,11 @@ std::vector<Claim> evaluate_claims(const ResultsReader& r) {
         const bool fxx = f.back()(0, 0) < f[0](0, 0);
         const bool flat = f.back()(1, 1) > f[0](1, 1) && f.back()(2, 2) > f[0](2, 2);
         ok = xx_dip && lat_rise && asymptote && fxx && flat;
-        c.measured = "sigma*_xx: " + fmt(s[0](0, 0)) + " -> min " + fmt(s[imin](0, 0)) +
-                     " -> " + fmt(s.back()(0, 0)) + "; sigma*_lat: " + fmt(lat0) + " -> " +
-                     fmt(latn) + " (first/last fifth rise " + fmt(latq - lat0) + " / " +
-                     fmt(latn - latm) + "); F_xx " + fmt(f[0](0, 0)) + " -> " +
-                     fmt(f.back()(0, 0)) + ", F_yy " + fmt(f[0](1, 1)) + " -> " +
-                     fmt(f.back()(1, 1));
+        c.measured = "sigma*_xx: " + fmt(s[0](0, 0)) + " -> min " + fmt(s[imin](0, 0)) + " -> " +
+                     fmt(s.back()(0, 0)) + "; sigma*_lat: " + fmt(lat0) + " -> " + fmt(latn) +
+                     " (first/last fifth rise " + fmt(latq - lat0) + " / " + fmt(latn - latm) +
+                     "); F_xx " + fmt(f[0](0, 0)) + " -> " + fmt(f.back()(0, 0)) + ", F_yy " +
+                     fmt(f[0](1, 1)) + " -> " + fmt(f.back()(1, 1));
       }
     }
     c.verdict = verdict(measured, ok);
@@ -332,6 +332,35 @@ std::string report_markdown(const ResultsReader& r, const std::vector<Claim>& cl
        << " | **" << c.verdict << "** |\n";
   md << "\nVerdicts use the dynamic-probe envelopes where present (the seed's method), else "
         "minimisation, else linear response (elastic only).\n";
+  if (r.exists("/calibration")) {
+    md << "\n## Calibration (models.md)\n\n"
+       << "| model | converged | objective | fitted misfit | held-out misfit | parameters "
+          "(+- standard error) |\n|---|---|---|---|---|---|\n";
+    for (const std::string& m : r.children("/calibration")) {
+      const std::string g = "/calibration/" + m;
+      md << "| " << m << " | ";
+      if (r.has_attr(g, "error")) {
+        md << "no | - | - | - | failed: " << r.attr_string(g, "error") << " |\n";
+        continue;
+      }
+      md << (r.attr_int(g, "converged") ? "yes" : "no") << " | "
+         << fmt(r.attr_double(g, "objective")) << " | " << fmt(r.attr_double(g, "fitted_misfit"))
+         << " | "
+         << (r.has_attr(g, "held_out_misfit") ? fmt(r.attr_double(g, "held_out_misfit")) : "-")
+         << " | ";
+      const std::vector<double> p = r.read_vector(g + "/params");
+      const std::vector<double> se = r.read_vector(g + "/stderr");
+      std::stringstream names(r.attr_string(g, "param_names"));
+      std::string name;
+      for (std::size_t i = 0; i < p.size() && std::getline(names, name, ','); ++i)
+        md << (i ? ", " : "") << name << " = " << fmt(p[i])
+           << (i < se.size() && se[i] > 0 ? " +- " + fmt(se[i]) : "");
+      md << " |\n";
+    }
+    md << "\nA standard error of inf marks a parameter the data do not determine; fixed "
+          "parameters show none. Warnings per model are in the results file "
+          "(/calibration/<model> attribute `warnings`).\n";
+  }
   if (!figures.empty()) {
     md << "\n## Figures\n\n";
     for (const auto& f : figures)

@@ -260,6 +260,7 @@ void stage_states(const Scenario&, ResultsWriter& out, const RunContext& ctx) {
     out.write(cp + "/reference_positions", as_matrix(st.ref_x, st.ref_y, st.ref_z));
     out.write(cp + "/reference_cell_lengths",
               std::vector<double>(st.ref_lengths.data(), st.ref_lengths.data() + 3));
+    out.write(cp + "/reference_half_skins", st.ref_half_skin);
     out.write(cp + "/strain_E", std::vector<double>(st.strain_E.data(), st.strain_E.data() + 3));
     out.write(cp + "/last_D", std::vector<double>(st.last_D.data(), st.last_D.data() + 3));
     out.attr(cp, "time", st.time);

@@ -1,12 +1,16 @@
 // The DEM engine's step, forces and measures (physics.md sections 1-3; scheme in
-// dem_system.hpp). The contact loop is the hot path: a per-particle gather over the full
-// neighbour list, with the periodic image taken from a 27-entry shift table rather than a
-// rounding per pair.
+// dem_system.hpp). The contact loop is the hot path: a per-particle gather over the half
+// neighbour list from packed records (position + radius, velocity, force accumulator: three
+// cache lines per partner), with the periodic image taken from a 27-entry shift table rather
+// than a rounding per pair. Measured alternatives that lost (docs/performance.md): a
+// branch-free first pass that compacts the touching pairs, and an AVX-512 gather version of
+// the pair loop; rows are ~9 entries long, too short for either to pay.
 #include "rendulic/dem/dem_system.hpp"
 
 #include <omp.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -67,7 +71,12 @@ DemSystem DemSystem::restore(const State& s, const SystemOptions& options) {
   ref.x = s.ref_x;
   ref.y = s.ref_y;
   ref.z = s.ref_z;
-  d.list_.build(ref, s.ref_lengths, options.skin * options.material.r_mean);
+  const double skin = options.skin * options.material.r_mean;
+  if (s.ref_half_skin.empty())
+    d.list_.build(ref, s.ref_lengths, skin);
+  else
+    d.list_.build(ref, s.ref_lengths, skin, s.ref_half_skin);
+  d.note_list_built();
   return d;
 }
 
@@ -83,13 +92,31 @@ State DemSystem::save() const {
   s.ref_y = list_.ref_y();
   s.ref_z = list_.ref_z();
   s.ref_lengths = list_.ref_lengths();
+  s.ref_half_skin = list_.half_skins();
   return s;
 }
 
 void DemSystem::rebuild_list() {
   const Eigen::Vector3d L = cell_.lengths;
   const std::size_t n = p_.size();
+  const double skin = options_.skin * options_.material.r_mean;
   double* pos[3] = {p_.x.data(), p_.y.data(), p_.z.data()};
+  // Non-affine displacements of the interval that ends here choose the next skins.
+  std::vector<double> u;
+  if (list_.ref_x().size() == n) {
+    u.resize(n);
+    const std::vector<double>* ref[3] = {&list_.ref_x(), &list_.ref_y(), &list_.ref_z()};
+    const Eigen::Vector3d S = L.cwiseQuotient(list_.ref_lengths());
+#pragma omp parallel for schedule(static) if (n > kSerialBelow)
+    for (std::size_t i = 0; i < n; ++i) {
+      double u2 = 0;
+      for (int a = 0; a < 3; ++a) {
+        const double d = pos[a][i] - S[a] * (*ref[a])[i];
+        u2 += d * d;
+      }
+      u[i] = std::sqrt(u2);
+    }
+  }
 #pragma omp parallel for schedule(static) if (n > kSerialBelow)
   for (std::size_t i = 0; i < n; ++i)
     for (int a = 0; a < 3; ++a) {
@@ -98,12 +125,56 @@ void DemSystem::rebuild_list() {
       if (q < 0) q = 0;
       pos[a][i] = q;
     }
-  list_.build(p_, L, options_.skin * options_.material.r_mean);
+  list_.build(p_, L, skin, choose_half_skins(u, p_.radius, skin));
+  note_list_built();
+}
+
+void DemSystem::note_list_built() { pack_positions(); }
+
+void DemSystem::pack_positions() {
+  const std::size_t n = p_.size();
+  if (pos4_.size() != 4 * n) pos4_.assign(4 * n, 0.0);
+  double* __restrict q = pos4_.data();
+#pragma omp parallel for schedule(static) if (n > kSerialBelow)
+  for (std::size_t i = 0; i < n; ++i) {
+    q[4 * i] = p_.x[i];
+    q[4 * i + 1] = p_.y[i];
+    q[4 * i + 2] = p_.z[i];
+    q[4 * i + 3] = p_.radius[i];
+  }
+}
+
+void DemSystem::partition_rows(int threads) {
+  // Contiguous row ranges of equal list length (the work), and for each thread the partners
+  // outside its range: particles are numbered along the bins, so a range is a slab of the cell
+  // and its foreign partners sit on the slab's two faces only.
+  const std::size_t n = p_.size();
+  const std::int64_t total = list_.offset[n];
+  parts_.assign(static_cast<std::size_t>(threads), {});
+  std::size_t i = 0;
+  for (int t = 0; t < threads; ++t) {
+    RowPart& part = parts_[static_cast<std::size_t>(t)];
+    part.lo = i;
+    const std::int64_t target = total * (t + 1) / threads;
+    while (i < n && (t == threads - 1 || list_.offset[i + 1] <= target)) ++i;
+    part.hi = t == threads - 1 ? n : i;
+    i = part.hi;
+  }
+  for (RowPart& part : parts_) {
+    part.foreign.clear();
+    for (std::size_t r = part.lo; r < part.hi; ++r)
+      for (std::int64_t e = list_.offset[r]; e < list_.offset[r + 1]; ++e) {
+        const std::size_t j = static_cast<std::size_t>(list_.index[e]);
+        if (j < part.lo || j >= part.hi) part.foreign.push_back(static_cast<std::int32_t>(j));
+      }
+    std::sort(part.foreign.begin(), part.foreign.end());
+    part.foreign.erase(std::unique(part.foreign.begin(), part.foreign.end()), part.foreign.end());
+  }
+  parts_builds_ = list_.builds();
 }
 
 template <bool kStress>
-void DemSystem::compute_forces(const double* __restrict vx, const double* __restrict vy,
-                               const double* __restrict vz) {
+void DemSystem::compute_forces() {
   const std::size_t n = p_.size();
   const Eigen::Vector3d L = cell_.lengths;
   double tx[27], ty[27], tz[27];
@@ -116,10 +187,13 @@ void DemSystem::compute_forces(const double* __restrict vx, const double* __rest
   const double k = options_.material.k, gamma = options_.material.gamma;
   const double gamma_b = options_.material.gamma_b;
   const double Dx = last_D_[0], Dy = last_D_[1], Dz = last_D_[2];
-  const double* __restrict x = p_.x.data();
-  const double* __restrict y = p_.y.data();
-  const double* __restrict z = p_.z.data();
-  const double* __restrict rad = p_.radius.data();
+  const int threads = n > kSerialBelow ? omp_get_max_threads() : 1;
+  if (parts_builds_ != list_.builds() || parts_.size() != static_cast<std::size_t>(threads))
+    partition_rows(threads);
+  const std::size_t stride = 4 * n;
+  if (acc4_.size() < threads * stride) acc4_.assign(threads * stride, 0.0);
+  const double* __restrict P = pos4_.data();
+  const double* __restrict W = vel4_.data();
   double* __restrict fxo = p_.fx.data();
   double* __restrict fyo = p_.fy.data();
   double* __restrict fzo = p_.fz.data();
@@ -128,77 +202,83 @@ void DemSystem::compute_forces(const double* __restrict vx, const double* __rest
   const std::uint8_t* __restrict code = list_.shift_code.data();
   double* __restrict sd = stress_scratch_.data();
 
-  // Half list: each pair once, its force added to i and subtracted from j. Threads scatter
-  // into private buffers that are summed in thread order: deterministic for a given thread
-  // count (and pair forces are exact opposites, so momentum is conserved to round-off).
-  const int threads = n > kSerialBelow ? omp_get_max_threads() : 1;
-  const std::size_t stride = 3 * n;
-  if (force_buffer_.size() < static_cast<std::size_t>(threads) * stride)
-    force_buffer_.resize(static_cast<std::size_t>(threads) * stride);
-  double* const buffers = force_buffer_.data();
-
+  // Half list: each pair once, its force added to i and subtracted from j. Each thread owns a
+  // range of rows and scatters into its own accumulator; of that accumulator only its range and
+  // its foreign partners (outside the range) are ever written, so only they are cleared, and
+  // the owner of a range adds the others' foreign parts in thread order. Deterministic for a
+  // given thread count, no full-size clear or sum per thread, and pair forces are exact
+  // opposites (momentum conserved to round-off).
 #pragma omp parallel num_threads(threads) if (threads > 1)
   {
-    double* __restrict bx = buffers + static_cast<std::size_t>(omp_get_thread_num()) * stride;
-    double* __restrict by = bx + n;
-    double* __restrict bz = by + n;
-    std::fill(bx, bx + stride, 0.0);
-#pragma omp for schedule(static)
-    for (std::size_t i = 0; i < n; ++i) {
-      const double xi = x[i], yi = y[i], zi = z[i];
-      const double vxi = vx[i], vyi = vy[i], vzi = vz[i], ri = rad[i];
+    const int t = omp_get_thread_num();
+    const RowPart& part = parts_[static_cast<std::size_t>(t)];
+    const std::size_t lo = part.lo, hi = part.hi;
+    double* __restrict A = acc4_.data() + static_cast<std::size_t>(t) * stride;
+    std::fill(A + 4 * lo, A + 4 * hi, 0.0);
+    for (const std::int32_t j : part.foreign)
+      std::fill_n(A + 4 * static_cast<std::size_t>(j), 3, 0.0);
+    for (std::size_t i = lo; i < hi; ++i) {
+      const double xi = P[4 * i], yi = P[4 * i + 1], zi = P[4 * i + 2], ri = P[4 * i + 3];
+      const double vxi = W[4 * i], vyi = W[4 * i + 1], vzi = W[4 * i + 2];
       double fx = 0, fy = 0, fz = 0, sxx = 0, syy = 0, szz = 0;
       for (std::int64_t e = off[i]; e < off[i + 1]; ++e) {
-        const std::int32_t j = idx[e];
+        const std::size_t j = 4 * static_cast<std::size_t>(idx[e]);
         const std::uint8_t c = code[e];
-        const double dx = xi - x[j] + tx[c];
-        const double dy = yi - y[j] + ty[c];
-        const double dz = zi - z[j] + tz[c];
-        const double R = ri + rad[j];
+        const double dx = xi - P[j] + tx[c];
+        const double dy = yi - P[j + 1] + ty[c];
+        const double dz = zi - P[j + 2] + tz[c];
+        const double R = ri + P[j + 3];
         const double r2 = dx * dx + dy * dy + dz * dz;
         if (r2 >= R * R) continue;
         const double d = std::sqrt(r2);
         const double inv = 1.0 / d;
         const double nx = dx * inv, ny = dy * inv, nz = dz * inv;
         // True relative velocity: peculiar part plus the affine part D l.
-        const double ddot = -(nx * (vxi - vx[j] + Dx * dx) + ny * (vyi - vy[j] + Dy * dy) +
-                              nz * (vzi - vz[j] + Dz * dz));
+        const double ddot = -(nx * (vxi - W[j] + Dx * dx) + ny * (vyi - W[j + 1] + Dy * dy) +
+                              nz * (vzi - W[j + 2] + Dz * dz));
         const double fn = k * (R - d) + gamma * ddot;
         const double gx = fn * nx, gy = fn * ny, gz = fn * nz;
         fx += gx;
         fy += gy;
         fz += gz;
-        bx[j] -= gx;
-        by[j] -= gy;
-        bz[j] -= gz;
+        A[j] -= gx;
+        A[j + 1] -= gy;
+        A[j + 2] -= gz;
         if constexpr (kStress) {
           sxx += dx * gx;
           syy += dy * gy;
           szz += dz * gz;
         }
       }
-      bx[i] += fx;
-      by[i] += fy;
-      bz[i] += fz;
+      A[4 * i] += fx;
+      A[4 * i + 1] += fy;
+      A[4 * i + 2] += fz;
       if constexpr (kStress) {
         sd[3 * i] = sxx;
         sd[3 * i + 1] = syy;
         sd[3 * i + 2] = szz;
       }
     }
-    // (implicit barrier: every buffer is complete)
-#pragma omp for schedule(static)
-    for (std::size_t i = 0; i < n; ++i) {
-      double fx = 0, fy = 0, fz = 0;
-      for (int t = 0; t < threads; ++t) {
-        const double* b = buffers + static_cast<std::size_t>(t) * stride;
-        fx += b[i];
-        fy += b[n + i];
-        fz += b[2 * n + i];
+    if (threads > 1) {
+#pragma omp barrier
+      // Foreign contributions to this range, in thread order.
+      for (int u = 0; u < threads; ++u) {
+        if (u == t) continue;
+        const std::vector<std::int32_t>& f = parts_[static_cast<std::size_t>(u)].foreign;
+        const double* B = acc4_.data() + static_cast<std::size_t>(u) * stride;
+        for (auto it = std::lower_bound(f.begin(), f.end(), static_cast<std::int32_t>(lo));
+             it != f.end() && static_cast<std::size_t>(*it) < hi; ++it) {
+          const std::size_t j = 4 * static_cast<std::size_t>(*it);
+          A[j] += B[j];
+          A[j + 1] += B[j + 1];
+          A[j + 2] += B[j + 2];
+        }
       }
-      fxo[i] = fx - gamma_b * vx[i];
-      fyo[i] = fy - gamma_b * vy[i];
-      fzo[i] = fz - gamma_b * vz[i];
+    }
+    for (std::size_t i = lo; i < hi; ++i) {
+      fxo[i] = A[4 * i] - gamma_b * W[4 * i];
+      fyo[i] = A[4 * i + 1] - gamma_b * W[4 * i + 1];
+      fzo[i] = A[4 * i + 2] - gamma_b * W[4 * i + 2];
     }
   }
   if constexpr (kStress) {
@@ -210,7 +290,17 @@ void DemSystem::compute_forces(const double* __restrict vx, const double* __rest
   }
 }
 
-void DemSystem::refresh_forces() { compute_forces<true>(p_.vx.data(), p_.vy.data(), p_.vz.data()); }
+void DemSystem::refresh_forces() {
+  const std::size_t n = p_.size();
+  pack_positions();
+  if (vel4_.size() != 4 * n) vel4_.assign(4 * n, 0.0);
+  for (std::size_t i = 0; i < n; ++i) {
+    vel4_[4 * i] = p_.vx[i];
+    vel4_[4 * i + 1] = p_.vy[i];
+    vel4_[4 * i + 2] = p_.vz[i];
+  }
+  compute_forces<true>();
+}
 
 void DemSystem::zero_velocities() {
   std::fill(p_.vx.begin(), p_.vx.end(), 0.0);
@@ -228,6 +318,7 @@ void DemSystem::step_impl(const Eigen::Vector3d& D) {
   const Eigen::Vector3d s = (D * dt).array().exp();
   const Eigen::Vector3d L = cell_.lengths.cwiseProduct(s);
   const Eigen::Vector3d sref = L.cwiseQuotient(list_.ref_lengths());
+  const double s_min = list_.s_min(L);
   const double sx = s[0], sy = s[1], sz = s[2];
   const double rx = sref[0], ry = sref[1], rz = sref[2];
   double* __restrict x = p_.x.data();
@@ -243,37 +334,63 @@ void DemSystem::step_impl(const Eigen::Vector3d& D) {
   const double* __restrict ax = list_.ref_x().data();
   const double* __restrict ay = list_.ref_y().data();
   const double* __restrict az = list_.ref_z().data();
-  const std::size_t nw = n;
-  if (wx_.size() != nw) wx_.resize(nw), wy_.resize(nw), wz_.resize(nw);
-  double* __restrict wx = wx_.data();
-  double* __restrict wy = wy_.data();
-  double* __restrict wz = wz_.data();
-  double u2max = 0;
-#pragma omp parallel for schedule(static) reduction(max : u2max) if (n > kSerialBelow)
-  for (std::size_t i = 0; i < n; ++i) {
-    const double hm = h * im[i];
-    const double vxi = vx[i] + hm * fx[i], vyi = vy[i] + hm * fy[i], vzi = vz[i] + hm * fz[i];
-    vx[i] = vxi;
-    vy[i] = vyi;
-    vz[i] = vzi;
-    // Predicted v(t+dt) = v(t) + dt a(t), second-order accurate, for the dissipative forces.
-    wx[i] = vxi + hm * fx[i];
-    wy[i] = vyi + hm * fy[i];
-    wz[i] = vzi + hm * fz[i];
-    const double xi = sx * (x[i] + dt * vxi), yi = sy * (y[i] + dt * vyi),
-                 zi = sz * (z[i] + dt * vzi);
-    x[i] = xi;
-    y[i] = yi;
-    z[i] = zi;
-    const double ux = xi - rx * ax[i], uy = yi - ry * ay[i], uz = zi - rz * az[i];
-    u2max = std::max(u2max, ux * ux + uy * uy + uz * uz);
+  const double* __restrict hs = list_.half_skins().data();
+  if (vel4_.size() != 4 * n) vel4_.assign(4 * n, 0.0);
+  if (pos4_.size() != 4 * n) pack_positions();
+  double* __restrict W = vel4_.data();
+  double* __restrict P = pos4_.data();
+  // The two largest excesses e_i = u_i - s_min h_i (rebuild rule of neighbor_list.hpp), per
+  // thread, then merged: the pair of values is independent of the order of the merge.
+  const int threads = n > kSerialBelow ? omp_get_max_threads() : 1;
+  std::vector<std::array<double, 2>> top(threads, {-1e300, -1e300});
+#pragma omp parallel num_threads(threads) if (threads > 1)
+  {
+    double e1 = -1e300, e2 = -1e300;
+#pragma omp for schedule(static)
+    for (std::size_t i = 0; i < n; ++i) {
+      const double hm = h * im[i];
+      const double vxi = vx[i] + hm * fx[i], vyi = vy[i] + hm * fy[i], vzi = vz[i] + hm * fz[i];
+      vx[i] = vxi;
+      vy[i] = vyi;
+      vz[i] = vzi;
+      // Predicted v(t+dt) = v(t) + dt a(t), second-order accurate, for the dissipative forces.
+      W[4 * i] = vxi + hm * fx[i];
+      W[4 * i + 1] = vyi + hm * fy[i];
+      W[4 * i + 2] = vzi + hm * fz[i];
+      const double xi = sx * (x[i] + dt * vxi), yi = sy * (y[i] + dt * vyi),
+                   zi = sz * (z[i] + dt * vzi);
+      x[i] = xi;
+      y[i] = yi;
+      z[i] = zi;
+      P[4 * i] = xi;
+      P[4 * i + 1] = yi;
+      P[4 * i + 2] = zi;
+      const double ux = xi - rx * ax[i], uy = yi - ry * ay[i], uz = zi - rz * az[i];
+      const double e = std::sqrt(ux * ux + uy * uy + uz * uz) - s_min * hs[i];
+      if (e > e2) {
+        if (e > e1)
+          e2 = e1, e1 = e;
+        else
+          e2 = e;
+      }
+    }
+    top[omp_get_thread_num()] = {e1, e2};
   }
+  double e1 = -1e300, e2 = -1e300;
+  for (const auto& [a, b] : top)
+    for (double e : {a, b})
+      if (e > e2) {
+        if (e > e1)
+          e2 = e1, e1 = e;
+        else
+          e2 = e;
+      }
   cell_.lengths = L;
   strain_E_ += D * dt;
   time_ += dt;
   last_D_ = D;
-  if (list_.must_rebuild(std::sqrt(u2max), L)) rebuild_list();
-  compute_forces<kStress>(wx, wy, wz);
+  if (list_.must_rebuild(e1, e2, L)) rebuild_list();
+  compute_forces<kStress>();
 #pragma omp parallel for schedule(static) if (n > kSerialBelow)
   for (std::size_t i = 0; i < n; ++i) {
     const double hm = h * im[i];

@@ -1,4 +1,5 @@
-// Cell-list construction of the full Verlet list and its rebuild rule (see neighbor_list.hpp).
+// Cell-list construction of the half Verlet list with per-particle skins, its rebuild rule and
+// the choice of the skins (see neighbor_list.hpp).
 #include "rendulic/dem/neighbor_list.hpp"
 
 #include <omp.h>
@@ -8,6 +9,7 @@
 #include <cmath>
 #include <numeric>
 #include <sstream>
+#include <stdexcept>
 
 #include "rendulic/core/errors.hpp"
 
@@ -18,7 +20,8 @@ std::uint8_t encode(int sx, int sy, int sz) {
   return static_cast<std::uint8_t>((sx + 1) + 3 * (sy + 1) + 9 * (sz + 1));
 }
 
-// Calls visit(j, code) for every candidate partner of i (j != i), in a fixed order.
+// Calls visit(j, code, ox, oy, oz) for every candidate partner of i (j != i), in a fixed order;
+// (ox, oy, oz) = s L is the image offset of the code.
 template <class Visit>
 void for_candidates(std::size_t i, const Particles& p, const Eigen::Vector3d& L,
                     const std::array<int, 3>& nb, const std::vector<int>& bin_of,
@@ -30,7 +33,7 @@ void for_candidates(std::size_t i, const Particles& p, const Eigen::Vector3d& L,
       const int sx = -static_cast<int>(std::lround((p.x[i] - p.x[j]) / L[0]));
       const int sy = -static_cast<int>(std::lround((p.y[i] - p.y[j]) / L[1]));
       const int sz = -static_cast<int>(std::lround((p.z[i] - p.z[j]) / L[2]));
-      visit(static_cast<std::int32_t>(j), encode(sx, sy, sz));
+      visit(static_cast<std::int32_t>(j), encode(sx, sy, sz), sx * L[0], sy * L[1], sz * L[2]);
     }
     return;
   }
@@ -55,9 +58,10 @@ void for_candidates(std::size_t i, const Particles& p, const Eigen::Vector3d& L,
         if (cz >= nb[2]) cz -= nb[2], sz = -1;
         const int c = cx + nb[0] * (cy + nb[1] * cz);
         const std::uint8_t code = encode(sx, sy, sz);
+        const double ox = sx * L[0], oy = sy * L[1], oz = sz * L[2];
         for (std::int64_t k = bin_start[c]; k < bin_start[c + 1]; ++k) {
           const std::int32_t j = bin_members[k];
-          if (!own || static_cast<std::size_t>(j) > i) visit(j, code);
+          if (!own || static_cast<std::size_t>(j) > i) visit(j, code, ox, oy, oz);
         }
       }
 }
@@ -65,9 +69,21 @@ void for_candidates(std::size_t i, const Particles& p, const Eigen::Vector3d& L,
 }  // namespace
 
 void NeighborList::build(const Particles& p, const Eigen::Vector3d& L, double skin) {
+  build(p, L, skin, std::vector<double>(p.size(), 0.5 * skin));
+}
+
+void NeighborList::build(const Particles& p, const Eigen::Vector3d& L, double skin,
+                         std::vector<double> half_skins) {
   const std::size_t n = p.size();
   r_max_ = n ? *std::max_element(p.radius.begin(), p.radius.end()) : 0.0;
   skin_ = skin;
+  if (half_skins.size() != n)
+    throw std::invalid_argument("NeighborList::build: one half skin per particle");
+  for (std::size_t i = 0; i < n; ++i)
+    if (!(half_skins[i] >= 0.5 * skin * (1 - 1e-12) &&
+          p.radius[i] + half_skins[i] <= (r_max_ + 0.5 * skin) * (1 + 1e-12)))
+      throw std::invalid_argument("NeighborList::build: half skin out of its bounds");
+  half_skin_ = std::move(half_skins);
   const double cutoff = 2.0 * r_max_ + skin;
   for (int a = 0; a < 3; ++a)
     if (!(L[a] > 2.0 * cutoff)) {
@@ -108,14 +124,10 @@ void NeighborList::build(const Particles& p, const Eigen::Vector3d& L, double sk
       bin_members[fill[bin_of[i]]++] = static_cast<std::int32_t>(i);
   }
 
-  auto within = [&](std::size_t i, std::int32_t j, std::uint8_t code) {
-    const Eigen::Vector3d s = shift(code);
-    const double dx = p.x[i] - p.x[j] + s[0] * L[0];
-    const double dy = p.y[i] - p.y[j] + s[1] * L[1];
-    const double dz = p.z[i] - p.z[j] + s[2] * L[2];
-    const double rc = p.radius[i] + p.radius[j] + skin;
-    return dx * dx + dy * dy + dz * dz < rc * rc;
-  };
+  // Packed (x, y, z, r + h): a candidate costs one cache line, not five arrays.
+  std::vector<std::array<double, 4>> q4(n);
+#pragma omp parallel for schedule(static) if (n > 256)
+  for (std::size_t i = 0; i < n; ++i) q4[i] = {p.x[i], p.y[i], p.z[i], p.radius[i] + half_skin_[i]};
 
   // One pass: each thread appends its (contiguous, static) range of particles to its own
   // arrays, which are then concatenated in thread order.
@@ -135,9 +147,13 @@ void NeighborList::build(const Particles& p, const Eigen::Vector3d& L, double sk
     for (std::size_t i = 0; i < n; ++i) {
       first[t] = std::min(first[t], i);
       const std::size_t s = J.size();
+      const std::array<double, 4> qi = q4[i];
       for_candidates(i, p, L, nb, bin_of, bin_start, bin_members, brute,
-                     [&](std::int32_t j, std::uint8_t code) {
-                       if (within(i, j, code)) {
+                     [&](std::int32_t j, std::uint8_t code, double ox, double oy, double oz) {
+                       const std::array<double, 4>& qj = q4[static_cast<std::size_t>(j)];
+                       const double dx = qi[0] - qj[0] + ox, dy = qi[1] - qj[1] + oy,
+                                    dz = qi[2] - qj[2] + oz, rc = qi[3] + qj[3];
+                       if (dx * dx + dy * dy + dz * dz < rc * rc) {
                          J.push_back(j);
                          C.push_back(code);
                        }
@@ -163,10 +179,28 @@ void NeighborList::build(const Particles& p, const Eigen::Vector3d& L, double sk
   ++builds_;
 }
 
-bool NeighborList::must_rebuild(double u_max, const Eigen::Vector3d& L) const {
-  const double s_min = (L.array() / ref_lengths_.array()).minCoeff();
-  const double shrink = std::max(0.0, 1.0 - s_min) * 2.0 * r_max_;
-  return 2.0 * u_max + shrink >= s_min * skin_;
+bool NeighborList::must_rebuild(double e1, double e2, const Eigen::Vector3d& L) const {
+  const double shrink = std::max(0.0, 1.0 - s_min(L)) * 2.0 * r_max_;
+  return e1 + e2 + shrink >= 0.0;
+}
+
+std::vector<double> choose_half_skins(const std::vector<double>& u,
+                                      const std::vector<double>& radius, double skin) {
+  const std::size_t n = radius.size();
+  const double h0 = 0.5 * skin;
+  std::vector<double> h(n, h0);
+  if (u.size() != n || n < 20) return h;
+  std::vector<double> sorted = u;
+  const auto q = sorted.begin() + static_cast<std::ptrdiff_t>(0.95 * static_cast<double>(n));
+  std::nth_element(sorted.begin(), q, sorted.end());
+  const double u_ref = *q;
+  if (!(u_ref > 0) || !std::isfinite(u_ref)) return h;
+  const double r_max = *std::max_element(radius.begin(), radius.end());
+  for (std::size_t i = 0; i < n; ++i) {
+    const double cap = std::max(h0, std::min(kMaxSkinRatio * h0, r_max + h0 - radius[i]));
+    h[i] = std::clamp(h0 * u[i] / u_ref, h0, cap);
+  }
+  return h;
 }
 
 }  // namespace rendulic::dem

@@ -3,8 +3,6 @@
 // documented datasets; the stored checkpoint restores a state whose measures reproduce the
 // stored stress bit for bit; every bad DEM scenario value exits 2 and writes nothing.
 #include <gtest/gtest.h>
-
-#include "cli_runner.hpp"
 #include <sys/wait.h>
 
 #include <array>
@@ -12,6 +10,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "cli_runner.hpp"
 #include "rendulic/core/results.hpp"
 #include "rendulic/dem/protocols.hpp"
 
@@ -21,14 +20,16 @@ namespace fs = std::filesystem;
 
 using CmdResult = rendulic::testing::CliResult;
 CmdResult rendulic(const std::string& args) { return rendulic::testing::run_rendulic(args); }
-fs::path fresh_dir(const std::string& name) { return rendulic::testing::fresh_dir("dem_run/" + name); }
+fs::path fresh_dir(const std::string& name) {
+  return rendulic::testing::fresh_dir("dem_run/" + name);
+}
 
 // quick.toml's physics on 250 particles with fast rates: a structural test, not a physical one.
 std::string tiny_overrides() {
   return " --quiet --threads 1 --set dem.n_particles=250 --set preparation.rate=10000"
          " --set relax.time_cap=1e-5 --set isotropic.rate_max=5000 --set isotropic.rate_min=5000"
          " --set isotropic.samples=50 --set path.rate=5000 --set path.samples=20"
-         " --set states.time_cap=1e-5";
+         " --set states.time_cap=1e-5 --set calibration.model=anisotropic_elastic";
 }
 
 TEST(RunStages, TinyScenarioWritesTheInterfacesSchema) {
@@ -103,6 +104,7 @@ TEST(RunStages, TinyScenarioWritesTheInterfacesSchema) {
   };
   st.lengths = vec3(g + "/cell_lengths");
   st.ref_lengths = vec3(g + "/checkpoint/reference_cell_lengths");
+  st.ref_half_skin = f.read_vector(g + "/checkpoint/reference_half_skins");
   st.strain_E = vec3(g + "/checkpoint/strain_E");
   st.last_D = vec3(g + "/checkpoint/last_D");
   st.time = f.attr_double(g + "/checkpoint", "time");

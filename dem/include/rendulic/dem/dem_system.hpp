@@ -16,15 +16,18 @@
 // forces they are O(D t_c) ~ 1e-6 at the rates of this mission. The conservative part is the
 // symplectic Verlet scheme; the dissipative part is explicit with a second-order predictor.
 //
-// Parallel (OpenMP) over particles with a half neighbour list: each thread accumulates pair
-// forces into its own buffer, and the buffers are summed in thread order; every other
-// reduction is serial or order-free (max). Results are therefore deterministic for a given
+// Parallel (OpenMP) over particles with a half neighbour list: each thread owns a contiguous
+// range of rows (equal list length) and accumulates pair forces into its own buffer, of which
+// only its range and its few partners outside it are touched; the owner of a range adds the
+// other threads' contributions in thread order. Every other reduction is serial or order-free
+// (max). Results are therefore deterministic for a given
 // thread count and bit-identical on restart (see State); different thread counts agree to
 // round-off.
 #pragma once
 
 #include <Eigen/Dense>
 #include <cstdint>
+#include <new>
 #include <string>
 #include <vector>
 
@@ -35,6 +38,21 @@
 #include "rendulic/dem/particles.hpp"
 
 namespace rendulic::dem {
+
+// 64-byte aligned doubles: packed 4-double records then never straddle a cache line.
+template <class T>
+struct CacheAlignedAllocator {
+  using value_type = T;
+  CacheAlignedAllocator() = default;
+  template <class U>
+  CacheAlignedAllocator(const CacheAlignedAllocator<U>&) {}
+  T* allocate(std::size_t n) {
+    return static_cast<T*>(::operator new (n * sizeof(T), std::align_val_t{64}));
+  }
+  void deallocate(T* p, std::size_t) { ::operator delete (p, std::align_val_t{64}); }
+  bool operator==(const CacheAlignedAllocator&) const { return true; }
+};
+using AlignedVector = std::vector<double, CacheAlignedAllocator<double>>;
 
 struct SystemOptions {
   Material material{};
@@ -55,6 +73,8 @@ struct State {
   std::int64_t steps = 0;
   std::vector<double> ref_x, ref_y, ref_z;
   Eigen::Vector3d ref_lengths = Eigen::Vector3d::Ones();
+  // Per-particle half skins of the list (neighbor_list.hpp); empty means skin / 2 for all.
+  std::vector<double> ref_half_skin;
 };
 
 class DemSystem {
@@ -104,8 +124,12 @@ class DemSystem {
  private:
   DemSystem() = default;
   void rebuild_list();
+  // Copies positions and radii into the packed array the force loop gathers from.
+  void pack_positions();
+  void note_list_built();  // after every build: the longest row, the packed positions
+  void partition_rows(int threads);
   template <bool kStress>
-  void compute_forces(const double* vx, const double* vy, const double* vz);
+  void compute_forces();
   template <bool kStress>
   void step_impl(const Eigen::Vector3d& D);
 
@@ -120,11 +144,19 @@ class DemSystem {
   Eigen::Vector3d strain_E_ = Eigen::Vector3d::Zero();
   Eigen::Vector3d last_D_ = Eigen::Vector3d::Zero();
   Eigen::Vector3d last_stress_diag_ = Eigen::Vector3d::Zero();
-  std::vector<double> stress_scratch_;
-  std::vector<double> wx_, wy_, wz_;
-  std::vector<double>
-      force_buffer_;  // per-thread force accumulators (half list)  // predicted velocities of the
-                      // dissipative forces  // per-particle diagonal stress (servo steps)
+  std::vector<double> stress_scratch_;  // per-particle diagonal stress (servo steps)
+  // The force loop gathers partner j's data at random: packed, one partner costs three cache
+  // lines (position + radius, velocity, force buffer) instead of ten separate arrays.
+  AlignedVector pos4_;  // x, y, z, radius per particle
+  AlignedVector vel4_;  // velocities of the dissipative forces (x, y, z, unused)
+  AlignedVector acc4_;  // per-thread pair-force accumulators (x, y, z, unused)
+  // A thread's rows of the list and the partners outside them (compute_forces).
+  struct RowPart {
+    std::size_t lo = 0, hi = 0;
+    std::vector<std::int32_t> foreign;  // sorted partner indices outside [lo, hi)
+  };
+  std::vector<RowPart> parts_;
+  std::int64_t parts_builds_ = -1;  // list build the partition belongs to
 };
 
 }  // namespace rendulic::dem

@@ -1,15 +1,24 @@
 // Neighbour search for strongly polydisperse packings (w = 3), physics.md section 1 and issue 3
 // item 4. A half Verlet list (each pair once, found through a half stencil of bins; the force
 // loop adds the pair force to both ends) built from a cell list whose bins are at least the largest
-// interaction range 2 r_max + skin wide. Each entry keeps the periodic image (a shift code) of its
-// pair at build time; positions are not wrapped between builds, and since the affine remap scales
-// positions and cell lengths alike, the stored image stays the right one until the next build.
+// interaction range max_i 2 (r_i + h_i) wide. Each entry keeps the periodic image (a shift code) of
+// its pair at build time; positions are not wrapped between builds, and since the affine remap
+// scales positions and cell lengths alike, the stored image stays the right one until the next
+// build.
 //
-// Rebuild rule. At build time every pair with |l| < r_i + r_j + skin is listed. Later the cell
-// is scaled by S = diag(L / L_build) and particle i has moved non-affinely by
-// u_i = x_i - S x_i(build). An unlisted pair then has |l'| >= s_min (R + skin) - 2 u_max with
-// s_min = min_a S_aa, R = r_i + r_j <= 2 r_max. No contact is missed while
-// 2 u_max + (1 - s_min) 2 r_max < s_min skin, which is the test of must_rebuild().
+// Per-particle skins. Particle i carries a half skin h_i >= skin / 2, and a pair is listed when
+// |l| < r_i + r_j + h_i + h_j. At nu = 0.82 under loading a few particles (rattlers, small
+// spheres in loose cages) move ten times farther between builds than the median one, and with
+// one common skin they alone set the rebuild interval. Here a particle that moved far during
+// the last interval gets a wider skin for the next one (see choose_half_skins), capped so that
+// r_i + h_i never exceeds r_max + skin / 2: the bins, and hence the cost of a build, stay those
+// of the common skin. The skins change only the cost, never the forces: the rule below is exact.
+//
+// Rebuild rule. Later the cell is scaled by S = diag(L / L_build) and particle i has moved
+// non-affinely by u_i = x_i - S x_i(build). An unlisted pair then has
+// |l'| >= s_min (R + h_i + h_j) - u_i - u_j with s_min = min_a S_aa and R = r_i + r_j <= 2 r_max,
+// so no contact is missed while e_i + e_j < -(1 - s_min) 2 r_max for every pair, e_i =
+// u_i - s_min h_i. must_rebuild() tests the sum of the two largest e_i against that bound.
 #pragma once
 
 #include <Eigen/Dense>
@@ -22,22 +31,31 @@ namespace rendulic::dem {
 
 class NeighborList {
  public:
-  // Builds from positions that lie inside [0, L) on every axis. Throws InputError if the cell
-  // is too small for one periodic image per pair (L_a <= 2 (2 r_max + skin)).
+  // Builds from positions that lie inside [0, L) on every axis, every half skin skin / 2.
+  // Throws InputError if the cell is too small for one periodic image per pair
+  // (L_a <= 2 (2 r_max + skin)).
   void build(const Particles& p, const Eigen::Vector3d& lengths, double skin);
+  // The same with per-particle half skins (each >= skin / 2 and r_i + h_i <= r_max + skin / 2).
+  void build(const Particles& p, const Eigen::Vector3d& lengths, double skin,
+             std::vector<double> half_skins);
 
   // Reference state of the last build (for the rebuild rule and for bit-identical restarts).
   const std::vector<double>& ref_x() const { return ref_x_; }
   const std::vector<double>& ref_y() const { return ref_y_; }
   const std::vector<double>& ref_z() const { return ref_z_; }
   const Eigen::Vector3d& ref_lengths() const { return ref_lengths_; }
+  const std::vector<double>& half_skins() const { return half_skin_; }
   double skin() const { return skin_; }
   double r_max() const { return r_max_; }
   std::int64_t builds() const { return builds_; }
 
-  // True when the list may miss a contact (see the rule above); u_max is the largest
-  // non-affine displacement since the build.
-  bool must_rebuild(double u_max, const Eigen::Vector3d& lengths) const;
+  // s_min = min_a L_a / L_build,a: the e_i of the rebuild rule are u_i - s_min h_i.
+  double s_min(const Eigen::Vector3d& lengths) const {
+    return (lengths.array() / ref_lengths_.array()).minCoeff();
+  }
+  // True when the list may miss a contact (see the rule above); e1 >= e2 are the two largest
+  // excesses e_i = u_i - s_min h_i.
+  bool must_rebuild(double e1, double e2, const Eigen::Vector3d& lengths) const;
 
   // CSR: neighbours of i are entries [offset[i], offset[i+1]).
   std::vector<std::int64_t> offset;
@@ -49,11 +67,18 @@ class NeighborList {
   }
 
  private:
-  std::vector<double> ref_x_, ref_y_, ref_z_;
+  std::vector<double> ref_x_, ref_y_, ref_z_, half_skin_;
   Eigen::Vector3d ref_lengths_ = Eigen::Vector3d::Ones();
   double skin_ = 0.0;
   double r_max_ = 0.0;
   std::int64_t builds_ = 0;
 };
+
+// Half skins for the next list from the non-affine displacements u of the interval that just
+// ended: h_i = h0 clamp(u_i / u_ref, 1, ...) with h0 = skin / 2 and u_ref the displacement of the
+// 95th percentile, capped at kMaxSkinRatio h0 and at r_max + h0 - r_i (bins unchanged).
+inline constexpr double kMaxSkinRatio = 4.0;
+std::vector<double> choose_half_skins(const std::vector<double>& u,
+                                      const std::vector<double>& radius, double skin);
 
 }  // namespace rendulic::dem
