@@ -38,9 +38,10 @@ void io(A& a, Particles& p) {
 }
 template <class A>
 void io(A& a, State& s) {
-  auto& [particles, lengths, strain_E, last_D, time, steps, ref_x, ref_y, ref_z, ref_lengths] = s;
+  auto& [particles, lengths, strain_E, last_D, time, steps, ref_x, ref_y, ref_z, ref_lengths,
+         ref_half_skin] = s;
   a(particles), a(lengths), a(strain_E), a(last_D), a(time), a(steps);
-  a(ref_x), a(ref_y), a(ref_z), a(ref_lengths);
+  a(ref_x), a(ref_y), a(ref_z), a(ref_lengths), a(ref_half_skin);
 }
 template <class A>
 void io(A& a, Material& m) {
