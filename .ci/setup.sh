@@ -3,7 +3,9 @@
 # packages (as root, or through sudo), then configures and builds rendulic in ./build.
 # Idempotent: a second call installs nothing and only rebuilds what changed.
 # Environment: BUILD_DIR (default build), BUILD_TYPE (default Release), JOBS (default nproc),
-# RENDULIC_MPI=ON to build with OpenMPI, CI set -> warnings are errors.
+# RENDULIC_MPI (default ON: installs OpenMPI and builds with it, so that CI runs the
+# across-ranks tests; OFF builds without MPI and installs no MPI package), CI set -> warnings
+# are errors.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -12,7 +14,8 @@ pkgs=(g++ make cmake pkg-config git ca-certificates
       libnlopt-dev libnlopt-cxx-dev libhdf5-dev hdf5-tools libsuitesparse-dev
       libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev libtomlplusplus-dev
       python3 python3-matplotlib python3-h5py python3-numpy)
-if [ "${RENDULIC_MPI:-OFF}" = "ON" ]; then pkgs+=(libopenmpi-dev openmpi-bin); fi
+mpi=${RENDULIC_MPI:-ON}
+if [ "$mpi" = "ON" ]; then pkgs+=(libopenmpi-dev openmpi-bin); fi
 
 missing=()
 for p in "${pkgs[@]}"; do
@@ -28,5 +31,5 @@ fi
 
 build_dir=${BUILD_DIR:-build}
 cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE="${BUILD_TYPE:-Release}" \
-      -DRENDULIC_MPI="${RENDULIC_MPI:-OFF}" >/dev/null
+      -DRENDULIC_MPI="$mpi" >/dev/null
 cmake --build "$build_dir" -j "${JOBS:-$(nproc)}"

@@ -2,6 +2,9 @@
 // Validation happens in full before anything touches the disk: a bad scenario or override
 // exits 2 and writes nothing. The results file is written under a temporary name and renamed
 // to DIR/results.h5 only when every stage succeeded.
+// Under `mpirun -np K` (a build with RENDULIC_MPI) rank 0 runs all of this and alone prints and
+// writes; ranks 1..K-1 only compute their share of the probe campaigns (probe_mpi.hpp) and are
+// released when rank 0 returns or throws.
 #include <omp.h>
 
 #include <iostream>
@@ -11,6 +14,7 @@
 #include "pipeline.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/results.hpp"
+#include "rendulic/dem/probe_mpi.hpp"
 
 namespace rendulic::app {
 namespace {
@@ -25,7 +29,11 @@ struct RunOptions {
 
 Subcommand add_run(CLI::App& parent) {
   auto o = std::make_shared<RunOptions>();
-  auto* sub = parent.add_subcommand("run", "Run the stages of a scenario; writes DIR/results.h5");
+  auto* sub = parent.add_subcommand(
+      "run",
+      "Run the stages of a scenario; writes DIR/results.h5. In a build with MPI, `mpirun -np K "
+      "rendulic run ...` shares the probe campaigns among K ranks (same results as one process; "
+      "give --threads cores/K)");
   sub->add_option("scenario", o->scenario, "scenario file (TOML)")->required();
   sub->add_option("--out", o->out, "output folder")->capture_default_str();
   sub->add_option("--set", o->sets, "override a scenario key by its dotted path: a.b=value")
@@ -34,6 +42,13 @@ Subcommand add_run(CLI::App& parent) {
       ->check(CLI::NonNegativeNumber);
   sub->add_flag("--quiet", o->quiet, "no progress display");
   return {sub, [o]() -> int {
+            // Before anything else, so that the workers never parse, print or write.
+            dem::MpiSession mpi;
+            if (mpi.rank() != 0) {
+              if (o->threads > 0) omp_set_num_threads(o->threads);
+              mpi.serve();
+              return 0;
+            }
             Scenario scenario = Scenario::from_file(o->scenario, scenario_schema());
             for (const auto& s : o->sets) scenario.apply_override(s);
             check_stages_available(scenario);
@@ -45,6 +60,8 @@ Subcommand add_run(CLI::App& parent) {
             out.attr("/", "scenario", scenario.to_toml());
             out.attr("/", "scenario_file", o->scenario);
             RunContext ctx{out_dir, o->threads, o->quiet};
+            if (mpi.size() > 1 && !o->quiet)
+              std::cerr << "rendulic: " << mpi.size() << " MPI ranks share the probe campaigns\n";
             run_pipeline(scenario, out, ctx);
             out.commit();
             if (!o->quiet) std::cerr << "rendulic: wrote " << out.final_path().string() << "\n";

@@ -22,11 +22,11 @@ struct CliResult {
   std::string err;  // stderr when not merged
 };
 
-// Runs `rendulic ARGS`; with merge_stderr the one-line errors land in `out`.
-inline CliResult run_rendulic(const std::string& args, bool merge_stderr = true) {
+// Runs a shell command line (e.g. `mpirun ... rendulic ...`); with merge_stderr its stderr
+// lands in `out`.
+inline CliResult run_command(std::string cmd, bool merge_stderr = true) {
   CliResult r;
   std::string err_file;
-  std::string cmd = std::string(RENDULIC_EXE) + " " + args;
   if (merge_stderr) {
     cmd += " 2>&1";
   } else {
@@ -48,6 +48,11 @@ inline CliResult run_rendulic(const std::string& args, bool merge_stderr = true)
     std::filesystem::remove(err_file);
   }
   return r;
+}
+
+// Runs `rendulic ARGS`; with merge_stderr the one-line errors land in `out`.
+inline CliResult run_rendulic(const std::string& args, bool merge_stderr = true) {
+  return run_command(std::string(RENDULIC_EXE) + " " + args, merge_stderr);
 }
 
 // An empty folder RENDULIC_TEST_TMP/name (removed and recreated).

@@ -13,6 +13,7 @@
 #include "rendulic/core/conventions.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/dem/envelope_io.hpp"
+#include "rendulic/dem/probe_mpi.hpp"
 
 namespace rendulic::dem {
 
@@ -131,18 +132,28 @@ void rethrow_first(const std::vector<std::string>& errors, const std::string& me
   }
 }
 
-// The envelope of a campaign with the contact-change diagnostics common to the methods; the
-// caller adds its own diagnostics and attributes.
+ProbeOutcome outcome_of(const Eigen::Matrix3d& d_stress, const Eigen::Matrix3d& d_fabric,
+                        const std::vector<std::uint64_t>& keys_before,
+                        const std::vector<std::uint64_t>& keys_after,
+                        const std::vector<bool>& backbone) {
+  return {d_stress, d_fabric, contact_changes(keys_before, keys_after),
+          contact_changes(among(keys_before, backbone), among(keys_after, backbone))};
+}
+
+// The envelope of a campaign with the contact-change diagnostics common to the methods, from
+// the per-probe records (each with its ProbeOutcome `outcome`); the caller adds its own
+// diagnostics and attributes.
+template <class Record>
 Envelope assemble_envelope(const std::string& method, double amplitude, double k_star,
                            const std::vector<double>& theta_deg,
-                           const std::vector<ProbeOutcome>& outcomes) {
+                           const std::vector<Record>& records) {
   Envelope env;
   env.method = method;
   env.amplitude = amplitude;
   env.k_star = k_star;
   auto& diag = env.diagnostics;
-  for (std::size_t p = 0; p < outcomes.size(); ++p) {
-    const ProbeOutcome& o = outcomes[p];
+  for (std::size_t p = 0; p < records.size(); ++p) {
+    const ProbeOutcome& o = records[p].outcome;
     env.add(theta_deg[p], probe_strain(theta_deg[p], amplitude), o.d_stress, o.d_fabric);
     diag["contacts_opened"].push_back(o.changes.first);
     diag["contacts_closed"].push_back(o.changes.second);
@@ -154,8 +165,102 @@ Envelope assemble_envelope(const std::string& method, double amplitude, double k
 
 }  // namespace
 
-Envelope dynamic_envelope(const DemSystem& given, double amplitude,
-                          const std::vector<double>& theta_deg, const ProbeOptions& options) {
+// Archive functions of what a probe reports, for the records that travel from MPI workers to
+// rank 0 (probe_mpi.hpp); found by argument-dependent lookup, so each sits in its type's
+// namespace. The structured bindings fail to compile when a member is added and not sent.
+template <class A>
+void io(A& a, RelaxSummary& s) {
+  auto& [time, steps, ratio, converged] = s;
+  a(time), a(steps), a(ratio), a(converged);
+}
+template <class A>
+void io(A& a, MinimiseSummary& s) {
+  auto& [converged, iterations, pair_rebuilds, max_force, mean_contact_force, elastic_energy,
+         message] = s;
+  a(converged), a(iterations), a(pair_rebuilds), a(max_force), a(mean_contact_force);
+  a(elastic_energy), a(message);
+}
+
+namespace {
+
+template <class A>
+void io(A& a, ProbeOutcome& o) {
+  auto& [d_stress, d_fabric, changes, backbone_changes] = o;
+  a(d_stress), a(d_fabric), a(changes.first), a(changes.second);
+  a(backbone_changes.first), a(backbone_changes.second);
+}
+
+// What one probe of each method reports (ProbeOutcome plus the method's own diagnostics).
+struct DynamicProbe {
+  ProbeOutcome outcome;
+  RelaxSummary relaxed;
+  std::int64_t load_steps = 0;
+};
+template <class A>
+void io(A& a, DynamicProbe& r) {
+  a(r.outcome), a(r.relaxed), a(r.load_steps);
+}
+struct MinimisationProbe {
+  ProbeOutcome outcome;
+  MinimiseSummary summary;
+};
+template <class A>
+void io(A& a, MinimisationProbe& r) {
+  a(r.outcome), a(r.summary);
+}
+
+// The probes of one envelope: this process's share of them (all of them on a single
+// process, see probe_mpi.hpp) over its OpenMP team, one probe per task, each with
+// compute(p). With MPI ranks the workers' records are sent to rank 0, which then holds every
+// record in direction order. Returns false on a worker (nothing left to assemble there).
+template <class Record, class Compute>
+bool compute_probes(detail::ProbeTaskScope& scope, const ProbeOptions& options,
+                    const std::string& method, std::vector<Record>& records, Compute&& compute) {
+  const int m = static_cast<int>(records.size());
+  const ProbeShare share = scope.share();
+  std::vector<int> mine;
+  for (int p = 0; p < m; ++p)
+    if (share.owns(p)) mine.push_back(p);
+  const int n = static_cast<int>(mine.size());
+  std::vector<std::string> errors(m);
+#pragma omp parallel for schedule(dynamic, 1) num_threads(team_size(options))
+  for (int q = 0; q < n; ++q) {
+    const int p = mine[q];
+    try {
+      records[p] = compute(p);
+    } catch (const std::exception& e) {
+      errors[p] = e.what();
+    }
+  }
+  if (share.size > 1) {
+    detail::ByteWriter w;
+    for (int p : mine) w(p), w(errors[p]), w(records[p]);
+    const std::vector<std::vector<char>> replies = scope.exchange(std::move(w.bytes()));
+    if (scope.is_worker()) return false;
+    for (const std::vector<char>& bytes : replies) {
+      detail::ByteReader in(bytes);
+      while (!in.done()) {
+        int p = -1;
+        in(p);
+        if (p < 0 || p >= m || share.owns(p))
+          throw std::runtime_error(method + " probes: a worker sent probe " + std::to_string(p));
+        in(errors[p]), in(records[p]);
+      }
+    }
+  }
+  rethrow_first(errors, method);
+  return true;
+}
+
+}  // namespace
+
+namespace {
+
+// The dynamic envelope; given_is_reference: `given` is the reference already (an MPI worker
+// gets it relaxed from rank 0, so the ranks do not each relax it again).
+Envelope dynamic_envelope_of(const DemSystem& given, double amplitude,
+                             const std::vector<double>& theta_deg, const ProbeOptions& options,
+                             bool given_is_reference) {
   check(options, amplitude, theta_deg);
   // The common reference is the given state relaxed to the probes' own criterion: otherwise
   // every probe also records the reference's continuing relaxation (from the states' looser
@@ -163,51 +268,48 @@ Envelope dynamic_envelope(const DemSystem& given, double amplitude,
   // envelope and a spurious deviatoric fabric change. Serial, like the probes, so that the
   // envelope does not depend on the thread count.
   DemSystem state = given;
-  const int saved_threads = omp_get_max_threads();
-  omp_set_num_threads(1);
-  const RelaxSummary reference = relax(state, options.relax);
-  omp_set_num_threads(saved_threads);
+  RelaxSummary reference;
+  if (!given_is_reference) {
+    const int saved_threads = omp_get_max_threads();
+    omp_set_num_threads(1);
+    reference = relax(state, options.relax);
+    omp_set_num_threads(saved_threads);
+  }
+  detail::ProbeTaskScope scope("dynamic", state, amplitude, theta_deg, options);
   const double rate = probe_rate(state, options);
   const Measures before = state.measure();
   const std::vector<Contact> contacts_before = state.contacts();
   const std::vector<std::uint64_t> keys_before = contact_keys(contacts_before);
   const std::vector<bool> backbone = non_rattlers(state.particles().size(), contacts_before);
   const int m = static_cast<int>(theta_deg.size());
-  std::vector<ProbeOutcome> outcomes(m);
-  std::vector<RelaxSummary> relaxed(m);
-  std::vector<std::int64_t> load_steps(m);
-  std::vector<std::string> errors(m);
-#pragma omp parallel for schedule(dynamic, 1) num_threads(team_size(options))
-  for (int p = 0; p < m; ++p) {
-    try {
-      // The engine's own parallel loops run serially inside a probe (this task's ICV only):
-      // its force sums are then the same whatever the campaign's team size, so the envelope
-      // is bitwise independent of the thread count (also when a team of 1 would otherwise
-      // let the engine's inner region go parallel).
-      omp_set_num_threads(1);
-      DemSystem sys = state;
-      const Eigen::Matrix3d d_eps = probe_strain(theta_deg[p], amplitude);
-      load_steps[p] = impose_strain_increment(sys, d_eps.diagonal(), rate);
-      relaxed[p] = relax(sys, options.relax);
-      const Measures after = sys.measure();
-      const std::vector<std::uint64_t> keys_after = contact_keys(sys.contacts());
-      outcomes[p] = {after.stress - before.stress, after.fabric - before.fabric,
-                     contact_changes(keys_before, keys_after),
-                     contact_changes(among(keys_before, backbone), among(keys_after, backbone))};
-    } catch (const std::exception& e) {
-      errors[p] = e.what();
-    }
-  }
-  rethrow_first(errors, "dynamic");
+  std::vector<DynamicProbe> probes(m);
+  const bool assemble = compute_probes(scope, options, "dynamic", probes, [&](int p) {
+    // The engine's own parallel loops run serially inside a probe (this task's ICV only):
+    // its force sums are then the same whatever the campaign's team size, so the envelope
+    // is bitwise independent of the thread count (also when a team of 1 would otherwise
+    // let the engine's inner region go parallel).
+    omp_set_num_threads(1);
+    DynamicProbe r;
+    DemSystem sys = state;
+    const Eigen::Matrix3d d_eps = probe_strain(theta_deg[p], amplitude);
+    r.load_steps = impose_strain_increment(sys, d_eps.diagonal(), rate);
+    r.relaxed = relax(sys, options.relax);
+    const Measures after = sys.measure();
+    const std::vector<std::uint64_t> keys_after = contact_keys(sys.contacts());
+    r.outcome = outcome_of(after.stress - before.stress, after.fabric - before.fabric, keys_before,
+                           keys_after, backbone);
+    return r;
+  });
+  if (!assemble) return {};
   Envelope env =
-      assemble_envelope("dynamic", amplitude, state.material().k_star(), theta_deg, outcomes);
+      assemble_envelope("dynamic", amplitude, state.material().k_star(), theta_deg, probes);
   auto& diag = env.diagnostics;
-  for (int p = 0; p < m; ++p) {
-    diag["load_steps"].push_back(static_cast<double>(load_steps[p]));
-    diag["relax_steps"].push_back(static_cast<double>(relaxed[p].steps));
-    diag["relax_time"].push_back(relaxed[p].time);
-    diag["kinetic_to_elastic"].push_back(relaxed[p].ratio);
-    diag["relax_converged"].push_back(relaxed[p].converged ? 1.0 : 0.0);
+  for (const DynamicProbe& r : probes) {
+    diag["load_steps"].push_back(static_cast<double>(r.load_steps));
+    diag["relax_steps"].push_back(static_cast<double>(r.relaxed.steps));
+    diag["relax_time"].push_back(r.relaxed.time);
+    diag["kinetic_to_elastic"].push_back(r.relaxed.ratio);
+    diag["relax_converged"].push_back(r.relaxed.converged ? 1.0 : 0.0);
   }
   const Material& mat = state.material();
   env.attributes["rate"] = rate;
@@ -220,6 +322,25 @@ Envelope dynamic_envelope(const DemSystem& given, double amplitude,
   env.attributes["kinetic_to_elastic_before"] = relax_ratio(state);
   env.attributes["reference_relax_steps"] = static_cast<double>(reference.steps);
   return env;
+}
+
+}  // namespace
+
+Envelope dynamic_envelope(const DemSystem& given, double amplitude,
+                          const std::vector<double>& theta_deg, const ProbeOptions& options) {
+  return dynamic_envelope_of(given, amplitude, theta_deg, options, false);
+}
+
+void detail::compute_worker_share(const std::string& method, const DemSystem& state,
+                                  double amplitude, const std::vector<double>& theta_deg,
+                                  const ProbeOptions& options) {
+  if (method == "dynamic") {
+    dynamic_envelope_of(state, amplitude, theta_deg, options, true);
+  } else if (method == "minimisation") {
+    minimisation_envelope(state, amplitude, theta_deg, options);
+  } else {
+    throw std::runtime_error("unknown probe method '" + method + "' sent to an MPI worker");
+  }
 }
 
 PackingData packing_of(const DemSystem& state) {
@@ -237,6 +358,7 @@ PackingData packing_of(const DemSystem& state) {
 Envelope minimisation_envelope(const DemSystem& state, double amplitude,
                                const std::vector<double>& theta_deg, const ProbeOptions& options) {
   check(options, amplitude, theta_deg);
+  detail::ProbeTaskScope scope("minimisation", state, amplitude, theta_deg, options);
   MinimiseOptions mo = options.minimise;
   mo.k = state.material().k;
   PackingData ref = packing_of(state);
@@ -261,35 +383,28 @@ Envelope minimisation_envelope(const DemSystem& state, double amplitude,
     backbone = non_rattlers(ref.size(), cs);
   }
   const int m = static_cast<int>(theta_deg.size());
-  std::vector<ProbeOutcome> outcomes(m);
-  std::vector<MinimiseSummary> summaries(m);
-  std::vector<std::string> errors(m);
-#pragma omp parallel for schedule(dynamic, 1) num_threads(team_size(options))
-  for (int p = 0; p < m; ++p) {
-    try {
-      PackingData probe = ref;
-      const Eigen::Matrix3d f = exp_sym(-probe_strain(theta_deg[p], amplitude));
-      probe.positions = probe.positions * f.transpose();
-      probe.cell = f * probe.cell;
-      summaries[p] = minimise_energy(probe, mo);
-      const StressFabric after = measure_stress_fabric(probe, mo.k, nullptr, min_overlap);
-      const std::vector<std::uint64_t> keys_after =
-          contact_keys(find_pairs(probe, 0.0), min_overlap);
-      outcomes[p] = {after.stress - before.stress, after.fabric - before.fabric,
-                     contact_changes(keys_before, keys_after),
-                     contact_changes(among(keys_before, backbone), among(keys_after, backbone))};
-    } catch (const std::exception& e) {
-      errors[p] = e.what();
-    }
-  }
-  rethrow_first(errors, "minimisation");
+  std::vector<MinimisationProbe> probes(m);
+  const bool assemble = compute_probes(scope, options, "minimisation", probes, [&](int p) {
+    MinimisationProbe r;
+    PackingData probe = ref;
+    const Eigen::Matrix3d f = exp_sym(-probe_strain(theta_deg[p], amplitude));
+    probe.positions = probe.positions * f.transpose();
+    probe.cell = f * probe.cell;
+    r.summary = minimise_energy(probe, mo);
+    const StressFabric after = measure_stress_fabric(probe, mo.k, nullptr, min_overlap);
+    const std::vector<std::uint64_t> keys_after = contact_keys(find_pairs(probe, 0.0), min_overlap);
+    r.outcome = outcome_of(after.stress - before.stress, after.fabric - before.fabric, keys_before,
+                           keys_after, backbone);
+    return r;
+  });
+  if (!assemble) return {};
   Envelope env =
-      assemble_envelope("minimisation", amplitude, state.material().k_star(), theta_deg, outcomes);
+      assemble_envelope("minimisation", amplitude, state.material().k_star(), theta_deg, probes);
   auto& diag = env.diagnostics;
-  for (int p = 0; p < m; ++p) {
-    diag["iterations"].push_back(static_cast<double>(summaries[p].iterations));
-    diag["max_force"].push_back(summaries[p].max_force);
-    diag["converged"].push_back(summaries[p].converged ? 1.0 : 0.0);
+  for (const MinimisationProbe& r : probes) {
+    diag["iterations"].push_back(static_cast<double>(r.summary.iterations));
+    diag["max_force"].push_back(r.summary.max_force);
+    diag["converged"].push_back(r.summary.converged ? 1.0 : 0.0);
   }
   env.attributes["force_tolerance"] = mo.force_tolerance;
   env.attributes["min_overlap"] = min_overlap;
@@ -315,8 +430,8 @@ Envelope linear_response_envelope(const DemSystem& state, double amplitude,
     mo.k = lo.k;
     const MinimiseSummary ms = minimise_energy(packing, mo);
     if (!ms.converged)
-      throw std::runtime_error(lr.message + "; minimising first did not converge (" +
-                               ms.message + ")");
+      throw std::runtime_error(lr.message + "; minimising first did not converge (" + ms.message +
+                               ")");
     lr = linear_response(packing, lo);
     minimised_first = true;
   }
@@ -376,7 +491,9 @@ void register_probe_keys(ScenarioSchema& schema) {
   s.type = KeyType::kInt;
   s.default_value = std::int64_t{d.directions};
   s.unit = "-";
-  s.help = "Number of probe directions, equally spaced in the Rendulic plane from 35.26 deg (isotropic compression); a multiple of 4 includes the isotropic and deviatoric directions.";
+  s.help =
+      "Number of probe directions, equally spaced in the Rendulic plane from 35.26 deg (isotropic "
+      "compression); a multiple of 4 includes the isotropic and deviatoric directions.";
   s.min = 3;
   s.max = 3600;
   schema.add(s);

@@ -13,6 +13,8 @@
 // Probes are independent: they run in parallel over an OpenMP team, each on its own copy with
 // the engine's inner loops forced serial, so every probe's result is a function of the state
 // and its direction alone and the envelope is bitwise identical whatever the thread count.
+// Under `mpirun -np K` the probes of the dynamic and minimisation envelopes are also shared
+// among the ranks (probe_mpi.hpp), with the same envelope bit for bit.
 #pragma once
 
 #include <string>
