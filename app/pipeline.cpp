@@ -8,17 +8,20 @@
 #include <string>
 #include <vector>
 
+#include "rendulic/core/errors.hpp"
+#include "rendulic/dem/probe_campaign.hpp"
+#include "rendulic/dem/scenario_keys.hpp"
 #include "report.hpp"
 #include "stages.hpp"
 #include "stages_calibration.hpp"
-#include "rendulic/core/errors.hpp"
 
 namespace rendulic::app {
 
 namespace {
 
 using StageFn = std::function<void(const Scenario&, ResultsWriter&, const RunContext&)>;
-using PostFn = std::function<void(const Scenario&, const std::filesystem::path&, const RunContext&)>;
+using PostFn =
+    std::function<void(const Scenario&, const std::filesystem::path&, const RunContext&)>;
 struct Stage {
   const char* name;
   const char* issue;  // where it lands, for the NotAvailable message
@@ -34,14 +37,10 @@ void report_stage(const Scenario& scenario, const std::filesystem::path& results
 
 const std::vector<Stage>& stages() {
   static const std::vector<Stage> table = {
-      {"prepare", "3", stage_prepare},
-      {"isotropic", "3", stage_isotropic},
-      {"path", "3", stage_path},
-      {"states", "3", stage_states},
-      {"probes", "4", stage_probes},
-      {"linear_response", "4", stage_linear_response},
-      {"fits", "5", stage_fits},
-      {"calibration", "7", run_calibration_stage},
+      {"prepare", "3", stage_prepare},   {"isotropic", "3", stage_isotropic},
+      {"path", "3", stage_path},         {"states", "3", stage_states},
+      {"probes", "4", stage_probes},     {"linear_response", "4", stage_linear_response},
+      {"fits", "5", stage_fits},         {"calibration", "7", run_calibration_stage},
       {"report", "8", {}, report_stage},
   };
   return table;
@@ -90,6 +89,10 @@ void check_stages_available(const Scenario& scenario) {
     if (requested(scenario, s.name) && !s.run && !s.post)
       throw NotAvailable(std::string("run: stage '") + s.name + "' has not landed yet (issue " +
                          s.issue + "); remove it from run.stages");
+  // Cross-key rules of the DEM and probe stages, before the first (possibly long) stage runs.
+  dem::dem_options_from_scenario(scenario);
+  if (requested(scenario, "probes") || requested(scenario, "linear_response"))
+    dem::probe_options_from(scenario);
 }
 
 void run_pipeline(const Scenario& scenario, ResultsWriter& out, const RunContext& ctx) {

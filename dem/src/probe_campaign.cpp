@@ -14,6 +14,7 @@
 #include "rendulic/core/errors.hpp"
 #include "rendulic/dem/envelope_io.hpp"
 #include "rendulic/dem/probe_mpi.hpp"
+#include "rendulic/dem/scenario_keys.hpp"
 
 namespace rendulic::dem {
 
@@ -30,6 +31,8 @@ bool ProbeOptions::IsValid(std::string* why) const {
   if (!(inertial_number > 0.0) || !(inertial_number <= 1e-2))
     return fail("probes: inertial_number must be in (0, 1e-2]");
   if (!(rate >= 0.0) || !std::isfinite(rate)) return fail("probes: rate must be >= 0");
+  if (!(dt_factor >= 0.0) || !std::isfinite(dt_factor))
+    return fail("probes: dt_factor must be >= 0");
   if (threads < 0) return fail("probes: threads must be >= 0");
   if (!relax.IsValid(why)) return false;
   if (!minimise.IsValid(why)) return false;
@@ -269,6 +272,13 @@ Envelope dynamic_envelope_of(const DemSystem& given, double amplitude,
   // envelope does not depend on the thread count.
   DemSystem state = given;
   RelaxSummary reference;
+  if (!given_is_reference && options.dt_factor > 0.0 &&
+      options.dt_factor != given.options().dt_factor) {
+    SystemOptions so = given.options();
+    so.dt_factor = options.dt_factor;
+    check_time_step(so.material, so.dt_factor, "probes.dt_factor");
+    state = DemSystem::restore(given.save(), so);
+  }
   if (!given_is_reference) {
     const int saved_threads = omp_get_max_threads();
     omp_set_num_threads(1);
@@ -538,6 +548,16 @@ void register_probe_keys(ScenarioSchema& schema) {
   s.min = 0.0;
   schema.add(s);
   s = {};
+  s.path = "probes.dt_factor";
+  s.type = KeyType::kDouble;
+  s.default_value = d.dt_factor;
+  s.unit = "t_c";
+  s.help =
+      "Time step of the dynamic probes as a fraction of the smallest pair's contact "
+      "time; 0 keeps dem.dt_factor. Refused beyond the stability limit.";
+  s.min = 0.0;
+  schema.add(s);
+  s = {};
   s.path = "probes.relax_kinetic_to_elastic";
   s.type = KeyType::kDouble;
   s.default_value = d.relax.kinetic_to_elastic;
@@ -577,6 +597,10 @@ ProbeOptions probe_options_from(const Scenario& scenario) {
   o.amplitudes = scenario.get_doubles("probes.amplitudes");
   o.inertial_number = scenario.get_double("probes.inertial_number");
   o.rate = scenario.get_double("probes.rate");
+  o.dt_factor = scenario.get_double("probes.dt_factor");
+  if (o.dt_factor > 0.0)
+    check_time_step(material_from_scenario(scenario), o.dt_factor,
+                    "probes.dt_factor (" + scenario.origin("probes.dt_factor") + ")");
   o.relax.kinetic_to_elastic = scenario.get_double("probes.relax_kinetic_to_elastic");
   o.relax.time_cap = scenario.get_double("probes.relax_time_cap");
   o.minimise.force_tolerance = scenario.get_double("probes.force_tolerance");

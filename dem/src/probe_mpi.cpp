@@ -70,9 +70,10 @@ void io(A& a, LinearResponseOptions& o) {
 }
 template <class A>
 void io(A& a, ProbeOptions& o) {
-  auto& [directions, amplitudes, inertial_number, rate, relax, minimise, linear, threads] = o;
-  a(directions), a(amplitudes), a(inertial_number), a(rate), a(relax), a(minimise), a(linear);
-  a(threads);
+  auto& [directions, amplitudes, inertial_number, rate, dt_factor, relax, minimise, linear,
+         threads] = o;
+  a(directions), a(amplitudes), a(inertial_number), a(rate), a(dt_factor), a(relax), a(minimise);
+  a(linear), a(threads);
 }
 
 namespace {

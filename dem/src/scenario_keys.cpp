@@ -134,15 +134,21 @@ void register_dem_keys(ScenarioSchema& s) {
             10, true));
 }
 
-DemRunOptions dem_options_from_scenario(const Scenario& sc) {
-  DemRunOptions o;
-  Material& m = o.system.material;
+Material material_from_scenario(const Scenario& sc) {
+  Material m;
   m.k = sc.get_double("material.k");
   m.gamma = sc.get_double("material.gamma");
   m.gamma_b = sc.get_double("material.gamma_b");
   m.density = sc.get_double("material.density");
   m.r_mean = sc.get_double("material.r_mean");
   m.w = sc.get_double("material.w");
+  return m;
+}
+
+DemRunOptions dem_options_from_scenario(const Scenario& sc) {
+  DemRunOptions o;
+  o.system.material = material_from_scenario(sc);
+  const Material& m = o.system.material;
   o.system.dt_factor = sc.get_double("dem.dt_factor");
   o.system.skin = sc.get_double("dem.skin");
   check_time_step(m, o.system.dt_factor, "dem.dt_factor (" + sc.origin("dem.dt_factor") + ")");

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <iostream>
 
+#include "rendulic/core/errors.hpp"
 #include "rendulic/dem/probe_campaign.hpp"
 
 namespace rendulic::dem {
@@ -97,6 +98,26 @@ TEST_F(ProbeCampaign, LinearResponseMinimisationAndDynamicElasticEnvelopesAgree)
   // Quasi-static loading: the inertial number is the requested one.
   EXPECT_NEAR(dynamic.attributes.at("inertial_number"), opt.inertial_number,
               1e-6 * opt.inertial_number);
+}
+
+// probes.dt_factor: the dynamic probes at 0.1 t_c (5x the engine's default step, below the
+// stability bound 0.18) land on the same relaxed states, so the envelope keeps the 1 % of the
+// linear response; a factor beyond the bound is refused, naming the key.
+TEST_F(ProbeCampaign, LargerProbeTimeStepKeepsTheElasticEnvelope) {
+  ProbeOptions opt;
+  opt.dt_factor = 0.1;
+  const std::vector<double> theta = probe_directions(12);
+  const double amp = 5e-5;
+  const Envelope linear = linear_response_envelope(*state_, amp, theta, opt);
+  const Envelope dynamic = dynamic_envelope(*state_, amp, theta, opt);
+  expect_same_ellipse(dynamic, linear, "dynamic (dt 0.1 t_c) vs linear response");
+  opt.dt_factor = 0.5;
+  try {
+    dynamic_envelope(*state_, amp, theta, opt);
+    ADD_FAILURE() << "a time step beyond stability was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("probes.dt_factor"), std::string::npos) << e.what();
+  }
 }
 
 TEST_F(ProbeCampaign, LargeProbesChangeContacts) {

@@ -126,6 +126,7 @@ TEST(RunStages, BadDemValuesExitTwoAndWriteNothing) {
       "dem.n_particles=10",           // too few
       "preparation.nu_gas=0.5",       // random insertion cannot reach it
       "path.rate=0",                  // not a rate
+      "probes.dt_factor=0.5",         // the probes' step beyond the stability limit
   };
   for (std::size_t k = 0; k < bad.size(); ++k) {
     const fs::path out = fresh_dir("bad" + std::to_string(k));

@@ -28,6 +28,8 @@ struct DemRunOptions {
   RelaxOptions state_relax;
 };
 
+// The material.* keys.
+Material material_from_scenario(const Scenario& scenario);
 // Throws InputError naming the key for values that are individually valid but inconsistent.
 DemRunOptions dem_options_from_scenario(const Scenario& scenario);
 
