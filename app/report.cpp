@@ -94,7 +94,9 @@ const EnvInfo* pick(const StateInfo& s, bool elastic) {
   for (const char* method : {"dynamic", "minimisation", "linear_response"}) {
     for (const auto& e : s.envs) {
       const bool kind = elastic ? e.amplitude < kElasticMax : e.amplitude > kPlasticMin;
-      if (kind && e.method == method && e.stress.present) return &e;
+      // A linear response at a plastic amplitude is the elastic one scaled: never plastic data.
+      const bool usable = elastic || std::string(method) != "linear_response";
+      if (kind && usable && e.method == method && e.stress.present) return &e;
     }
   }
   return nullptr;

@@ -92,6 +92,9 @@ class SupernodalLlt : public Eigen::CholmodSupernodalLLT<SparseMatrix, Eigen::Lo
 bool cholmod_solve(const SparseMatrix& hessian, const Eigen::MatrixXd& rhs, Eigen::MatrixXd* u,
                    double* pivot_ratio) {
   SupernodalLlt llt;
+  // An indefinite Hessian is an expected outcome here (the caller minimises and retries, or
+  // records the state as unstable): CHOLMOD's own stderr warning would only alarm the user.
+  llt.cholmod().print = 0;
   llt.compute(hessian);
   if (llt.info() != Eigen::Success) return false;
   *pivot_ratio = llt.pivot_ratio();

@@ -47,6 +47,16 @@ TEST(Report, AbsentDataIsNotMeasured) {
     EXPECT_EQ(c.verdict, "not measured") << c.id;
 }
 
+// A linear response at 2e-3 is the elastic response scaled (the paper run without dynamic
+// probes has only that): the plastic claims are then not measured, not judged on it.
+TEST(Report, LinearResponseIsNeverTakenForPlasticData) {
+  const auto claims =
+      by_id(evaluate_claims(ResultsReader(seed_like("lr_plastic", false, "linear_response"))));
+  EXPECT_EQ(claims.at("C6").verdict, "not measured") << claims.at("C6").measured;
+  EXPECT_EQ(claims.at("C7").verdict, "not measured") << claims.at("C7").measured;
+  EXPECT_EQ(claims.at("C1").verdict, "holds");
+}
+
 TEST(Report, ReportIsWrittenAtomicallyWithTheClaimTable) {
   const fs::path f = seed_like("written", false);
   const fs::path md = write_report(f, /*with_figures=*/false);

@@ -20,8 +20,8 @@ struct Envelope {
 
 // Response = D u + shift for unit strain directions u, D given in the (iso, dev) frame.
 inline Envelope make_envelope(const Eigen::Matrix2d& d_isodev, const Eigen::Vector2d& shift,
-                       const Eigen::Matrix2d& f_isodev, const Eigen::Vector2d& f_shift,
-                       double amplitude) {
+                              const Eigen::Matrix2d& f_isodev, const Eigen::Vector2d& f_shift,
+                              double amplitude) {
   const Eigen::Matrix2d R = rendulic_to_iso_dev();
   const Eigen::Matrix2d D = R.transpose() * d_isodev * R, Df = R.transpose() * f_isodev * R;
   Envelope e;
@@ -38,7 +38,7 @@ inline Envelope make_envelope(const Eigen::Matrix2d& d_isodev, const Eigen::Vect
 
 // Exact ellipse (or line) attributes of an affine image of the unit circle.
 inline void write_fit(ResultsWriter& w, const std::string& g, const Eigen::Matrix2d& map_isodev,
-               const Eigen::Vector2d& center, double amplitude) {
+                      const Eigen::Vector2d& center, double amplitude) {
   const Eigen::Matrix2d R = rendulic_to_iso_dev();
   Eigen::JacobiSVD<Eigen::Matrix2d> svd(R.transpose() * map_isodev * R, Eigen::ComputeFullU);
   const Eigen::Vector2d s = svd.singularValues() * amplitude;
@@ -60,7 +60,9 @@ inline Eigen::Matrix2d stiffness(double B, double G, double A) {
 
 // A seed-like file: bulk constant, shear shrinking, anisotropy growing; plastic envelopes
 // shifted and thinning to a line; fabric: isotropic-only elastic change, deviatoric plastic.
-inline fs::path seed_like(const std::string& name, bool contradict_c1) {
+// plastic_method: the method attribute of the 2e-3 envelopes.
+inline fs::path seed_like(const std::string& name, bool contradict_c1,
+                          const std::string& plastic_method = "dynamic") {
   const fs::path dir = fs::path(RENDULIC_TEST_TMP) / "app_report" / name;
   fs::remove_all(dir);
   const double eps[] = {0.006, 0.021, 0.043, 0.068, 0.32};
@@ -72,7 +74,8 @@ inline fs::path seed_like(const std::string& name, bool contradict_c1) {
     const double xx = 0.05 - 0.03 * (1 - std::exp(-x / 0.02)) + 0.01 * x;
     w.append("/path/eps_dev", -x);
     w.append("/path/stress_star", Eigen::Matrix3d(Eigen::Vector3d(xx, lat, lat).asDiagonal()));
-    const double fx = 0.9 - 0.2 * (1 - std::exp(-x / 0.03)), fl = 0.9 + 0.1 * (1 - std::exp(-x / 0.03));
+    const double fx = 0.9 - 0.2 * (1 - std::exp(-x / 0.03)),
+                 fl = 0.9 + 0.1 * (1 - std::exp(-x / 0.03));
     w.append("/path/fabric", Eigen::Matrix3d(Eigen::Vector3d(fx, fl, fl).asDiagonal()));
   }
   for (int s = 0; s < 5; ++s) {
@@ -82,7 +85,8 @@ inline fs::path seed_like(const std::string& name, bool contradict_c1) {
     const Eigen::Matrix2d De = stiffness(10.0, G, A);
     Eigen::Matrix2d Fe = Eigen::Matrix2d::Zero();
     Fe(0, 0) = 2.0;
-    const Eigen::Vector2d c1shift = contradict_c1 ? Eigen::Vector2d(0, 3e-4) : Eigen::Vector2d(0, 0);
+    const Eigen::Vector2d c1shift =
+        contradict_c1 ? Eigen::Vector2d(0, 3e-4) : Eigen::Vector2d(0, 0);
     Envelope el = make_envelope(De, c1shift, Fe, Eigen::Vector2d::Zero(), 5e-5);
     const std::string e = g + "/envelopes/dynamic_elastic";
     w.attr(e, "method", "dynamic");
@@ -97,7 +101,7 @@ inline fs::path seed_like(const std::string& name, bool contradict_c1) {
     const double Gp = s == 4 ? 0.0 : 0.5 * G / (1 + s);
     const Eigen::Matrix2d Dp = stiffness(10.0, Gp, s == 4 ? 0.0 : A);
     Eigen::Matrix2d Fp;
-    Fp << 2.0, 0.0, 0.0, 0.8;  // plastic: finite deviatoric fabric change
+    Fp << 2.0, 0.0, 0.0, 0.8;              // plastic: finite deviatoric fabric change
     if (s == 4) Fp << 2.0, 0.0, 0.0, 0.0;  // steady state: fabric line along 35.26 deg
     const Eigen::Vector2d shift = rendulic_from_iso_dev(Eigen::Vector2d(0, -2e-3 * (1 + s)));
     Envelope pl = make_envelope(Dp, shift, Fp, Eigen::Vector2d(1e-4, 0), 2e-3);
@@ -105,7 +109,7 @@ inline fs::path seed_like(const std::string& name, bool contradict_c1) {
       for (auto& f : pl.fabric) f += rendulic_from_iso_dev(Eigen::Vector2d(0, 1e-5 * f.norm()));
     }
     const std::string p = g + "/envelopes/dynamic_plastic";
-    w.attr(p, "method", "dynamic");
+    w.attr(p, "method", plastic_method);
     w.attr(p, "amplitude", 2e-3);
     w.write(p + "/theta_deg", pl.theta);
     w.write(p + "/strain", pl.strain);
