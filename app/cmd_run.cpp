@@ -60,6 +60,16 @@ Subcommand add_run(CLI::App& parent) {
             out.attr("/", "scenario", scenario.to_toml());
             out.attr("/", "scenario_file", o->scenario);
             RunContext ctx{out_dir, o->threads, o->quiet};
+            if (!o->quiet) {
+              // Say first what will run, on what, and where it goes (issue 8).
+              std::string plan;
+              for (const auto& st : scenario.get_strings("run.stages"))
+                plan += (plan.empty() ? "" : ", ") + st;
+              std::cerr << "rendulic: " << o->scenario
+                        << ": N = " << scenario.get_int("dem.n_particles") << ", stages " << plan
+                        << "; writing " << (out_dir / "results.h5").string()
+                        << " (quick.toml: ~4 min on 2 idle cores; paper.toml: hours)\n";
+            }
             if (mpi.size() > 1 && !o->quiet)
               std::cerr << "rendulic: " << mpi.size() << " MPI ranks share the probe campaigns\n";
             run_pipeline(scenario, out, ctx);

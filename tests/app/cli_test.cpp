@@ -17,7 +17,9 @@ namespace fs = std::filesystem;
 
 using CmdResult = rendulic::testing::CliResult;
 CmdResult rendulic(const std::string& args) { return rendulic::testing::run_rendulic(args); }
-fs::path fresh_dir(const std::string& name) { return rendulic::testing::fresh_dir("app_cli/" + name); }
+fs::path fresh_dir(const std::string& name) {
+  return rendulic::testing::fresh_dir("app_cli/" + name);
+}
 
 fs::path write_file(const fs::path& p, const std::string& text) {
   std::ofstream(p) << text;
@@ -29,7 +31,8 @@ int lines(const std::string& s) { return static_cast<int>(std::count(s.begin(), 
 TEST(Cli, HelpAndVersionSucceed) {
   EXPECT_EQ(rendulic("--help").code, 0);
   EXPECT_EQ(rendulic("--version").code, 0);
-  for (const char* sub : {"run", "fit", "envelope", "calibrate", "bench", "inspect", "plot", "keys"})
+  for (const char* sub :
+       {"run", "fit", "envelope", "calibrate", "bench", "inspect", "plot", "keys"})
     EXPECT_EQ(rendulic(std::string(sub) + " --help").code, 0) << sub;
 }
 
@@ -70,7 +73,8 @@ TEST(Cli, BadOverrideExits2NamingTheKey) {
   const fs::path scen = write_file(d / "s.toml", "[run]\nstages = []\n");
   const fs::path out = d / "out";
   for (const std::string set : {"run.sed=3", "run.seed=abc", "run.seed=-1", "run.seed"}) {
-    const CmdResult r = rendulic("run " + scen.string() + " --out " + out.string() + " --set " + set);
+    const CmdResult r =
+        rendulic("run " + scen.string() + " --out " + out.string() + " --set " + set);
     EXPECT_EQ(r.code, 2) << set << ": " << r.out;
     EXPECT_NE(r.out.find("--set " + set), std::string::npos) << r.out;
     EXPECT_EQ(lines(r.out), 1) << r.out;
@@ -82,9 +86,14 @@ TEST(Cli, StageFailingMidRunLeavesNoResultsFile) {
   // The calibration stage needs states; alone it fails after the results file was opened.
   const fs::path d = fresh_dir("mid_run");
   const fs::path scen = write_file(d / "s.toml", "[run]\nstages = [\"calibration\"]\n");
-  const CmdResult r = rendulic("run " + scen.string() + " --out " + (d / "out").string());
+  // --quiet: without it the run first prints its plan (one line), then the error.
+  const CmdResult r = rendulic("run " + scen.string() + " --quiet --out " + (d / "out").string());
   EXPECT_EQ(r.code, 2) << r.out;
   EXPECT_EQ(lines(r.out), 1) << r.out;
+  const CmdResult loud = rendulic("run " + scen.string() + " --out " + (d / "out").string());
+  EXPECT_EQ(loud.code, 2) << loud.out;
+  EXPECT_EQ(lines(loud.out), 2) << loud.out;  // the plan, then the one-line error
+  EXPECT_NE(loud.out.find("stages calibration"), std::string::npos) << loud.out;
   EXPECT_FALSE(fs::exists(d / "out" / "results.h5"));
   if (fs::exists(d / "out")) {
     EXPECT_TRUE(fs::is_empty(d / "out")) << "no temporary left behind";
@@ -96,7 +105,8 @@ TEST(Cli, EffectiveScenarioIsStoredAndInspectable) {
   const fs::path scen =
       write_file(d / "s.toml", "[run]\nstages = []\nseed = 5\ndescription = \"cli test\"\n");
   const fs::path out = d / "out";
-  const CmdResult r = rendulic("run " + scen.string() + " --out " + out.string() + " --set run.seed=42");
+  const CmdResult r =
+      rendulic("run " + scen.string() + " --out " + out.string() + " --set run.seed=42");
   ASSERT_EQ(r.code, 0) << r.out;
   rendulic::ResultsReader reader(out / "results.h5");
   EXPECT_EQ(reader.attr_int("/", "seed"), 42);
