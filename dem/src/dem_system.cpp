@@ -23,6 +23,14 @@ namespace rendulic::dem {
 namespace {
 // Below this many particles a parallel region costs more than it saves.
 constexpr std::size_t kSerialBelow = 256;
+
+// e1 >= e2 stay the two largest values seen.
+inline void keep_two_largest(double e, double& e1, double& e2) {
+  if (e > e1)
+    e2 = e1, e1 = e;
+  else if (e > e2)
+    e2 = e;
+}
 }  // namespace
 
 bool SystemOptions::IsValid(std::string* why) const {
@@ -379,25 +387,12 @@ void DemSystem::step_impl(const Eigen::Vector3d& D) {
       P[4 * i + 1] = yi;
       P[4 * i + 2] = zi;
       const double ux = xi - rx * ax[i], uy = yi - ry * ay[i], uz = zi - rz * az[i];
-      const double e = std::sqrt(ux * ux + uy * uy + uz * uz) - s_min * hs[i];
-      if (e > e2) {
-        if (e > e1)
-          e2 = e1, e1 = e;
-        else
-          e2 = e;
-      }
+      keep_two_largest(std::sqrt(ux * ux + uy * uy + uz * uz) - s_min * hs[i], e1, e2);
     }
     top[omp_get_thread_num()] = {e1, e2};
   }
   double e1 = -1e300, e2 = -1e300;
-  for (const auto& [a, b] : top)
-    for (double e : {a, b})
-      if (e > e2) {
-        if (e > e1)
-          e2 = e1, e1 = e;
-        else
-          e2 = e;
-      }
+  for (const auto& [a, b] : top) keep_two_largest(a, e1, e2), keep_two_largest(b, e1, e2);
   cell_.lengths = L;
   strain_E_ += D * dt;
   time_ += dt;
