@@ -4,6 +4,7 @@
 // writes /calibration/<model> through the same writer.
 #include "stages_calibration.hpp"
 
+#include <chrono>
 #include <iostream>
 
 #include "rendulic/calibration/calibrate.hpp"
@@ -70,10 +71,19 @@ void run_calibration_stage(const Scenario& scenario, ResultsWriter& out, const R
       model == "all" ? models::law_names() : std::vector<std::string>{model};
   for (const std::string& m : models) {
     opt.model = m;
+    // Said before and after: one family can take minutes (paper.toml: ~5 min for the
+    // integrated laws), and a silent run looks hung.
+    if (!ctx.quiet) std::cerr << "rendulic: calibrating " << m << std::endl;
+    const auto t0 = std::chrono::steady_clock::now();
     try {
       const CalibrationSummary summary = calibrate(data, opt);
       write_calibration(out, summary);
-      if (!ctx.quiet) std::cout << summary.BriefReport();
+      if (!ctx.quiet) {
+        std::cout << summary.BriefReport() << std::flush;
+        std::cerr << "rendulic: calibrated " << m << " in "
+                  << std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count()
+                  << " s" << std::endl;
+      }
     } catch (const InputError&) {
       throw;
     } catch (const std::exception& e) {
