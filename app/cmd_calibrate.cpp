@@ -27,7 +27,9 @@ namespace {
 struct CalibrateArgs {
   std::string results, model, out, backend = "ceres";
   std::vector<std::string> states, holdout, free, values;
-  bool no_path = false, features = false, no_write = false;
+  bool no_path = false, features = false, no_write = false, progress = false;
+  int max_iterations = calibration::SolverOptions{}.max_iterations;
+  double function_tolerance = calibration::kDemFunctionTolerance;
 };
 
 std::vector<std::string> split_commas(const std::vector<std::string>& in) {
@@ -70,6 +72,9 @@ int run_calibrate(const CalibrateArgs& a) {
   CalibrationOptions opt;
   opt.model = a.model;
   opt.solver.backend = backend_from_string(a.backend);
+  opt.solver.max_iterations = a.max_iterations;
+  opt.solver.function_tolerance = a.function_tolerance;
+  opt.solver.progress = a.progress;
   opt.holdout = split_commas(a.holdout);
   opt.free = split_commas(a.free);
   opt.objective.path = !a.no_path;
@@ -146,6 +151,15 @@ Subcommand add_calibrate(CLI::App& parent) {
   sub->add_flag("--no-path", args->no_path, "Ignore the main path (envelopes only)");
   sub->add_flag("--features", args->features,
                 "Add the envelope-feature objective (centre and affine matrix of each envelope)");
+  sub->add_option("--max-iterations", args->max_iterations,
+                  "Most iterations of the Ceres stage; a fit that reaches it says so")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  sub->add_option("--function-tolerance", args->function_tolerance,
+                  "Ceres stops when an iteration lowers the cost by less than this fraction")
+      ->check(CLI::Range(1e-16, 0.1))
+      ->capture_default_str();
+  sub->add_flag("--progress", args->progress, "Print Ceres's iterations (cost, step) to stdout");
   sub->add_flag("--no-write", args->no_write,
                 "Do not store /calibration/<model> in the results file");
   return {sub, [args]() -> int { return run_calibrate(*args); }};

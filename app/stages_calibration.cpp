@@ -46,6 +46,23 @@ void register_calibration_keys(ScenarioSchema& schema) {
               .default_value = true,
               .unit = "-",
               .help = "Fit the main undrained path together with the envelopes."});
+  schema.add({.path = "calibration.max_iterations",
+              .type = KeyType::kInt,
+              .default_value = std::int64_t{200},
+              .unit = "-",
+              .help = "Most iterations of the Ceres stage per model; a fit that reaches it is "
+                      "reported as not converged.",
+              .min = 1.0,
+              .max = 10000.0});
+  schema.add({.path = "calibration.function_tolerance",
+              .type = KeyType::kDouble,
+              .default_value = calibration::kDemFunctionTolerance,
+              .unit = "-",
+              .help = "Ceres stops when an iteration lowers the cost by less than this "
+                      "fraction; tighter costs time for changes well inside the standard "
+                      "errors (docs/calibration.md).",
+              .min = 1e-16,
+              .max = 0.1});
   schema.add({.path = "calibration.features",
               .type = KeyType::kBool,
               .default_value = false,
@@ -59,6 +76,8 @@ void run_calibration_stage(const Scenario& scenario, ResultsWriter& out, const R
   const std::string model = scenario.get_string("calibration.model");
   opt.holdout = scenario.get_strings("calibration.holdout");
   opt.solver.backend = backend_from_string(scenario.get_string("calibration.backend"));
+  opt.solver.max_iterations = static_cast<int>(scenario.get_int("calibration.max_iterations"));
+  opt.solver.function_tolerance = scenario.get_double("calibration.function_tolerance");
   opt.objective.path = scenario.get_bool("calibration.path");
   opt.objective.envelope_features = scenario.get_bool("calibration.features");
   LoadOptions lo;

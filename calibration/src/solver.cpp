@@ -81,8 +81,8 @@ CeresRun run_ceres(const Objective& obj, std::vector<double> z, const SolverOpti
   so.function_tolerance = o.function_tolerance;
   so.gradient_tolerance = o.gradient_tolerance;
   so.parameter_tolerance = o.parameter_tolerance;
-  so.logging_type = ceres::SILENT;
-  so.minimizer_progress_to_stdout = false;
+  so.logging_type = o.progress ? ceres::PER_MINIMIZER_ITERATION : ceres::SILENT;
+  so.minimizer_progress_to_stdout = o.progress;
   so.num_threads = 1;
   ceres::Solver::Summary summary;
   ceres::Solve(so, &problem, &summary);

@@ -131,9 +131,6 @@ TEST(CalibrateCli, BadInputExitsTwoAndLeavesTheFileUntouched) {
     EXPECT_EQ(e.path().filename().string().find(".tmp"), std::string::npos) << e.path();
 }
 
-}  // namespace
-}  // namespace rendulic::calibration
-
 namespace rendulic::calibration {
 namespace {
 
@@ -166,6 +163,37 @@ TEST(CalibrateCli, LoaderReadsAFileStillBeingWritten) {
   EXPECT_NEAR(d.states[0].envelopes[0].stress[3].norm() /
                   (r.read_pairs("/states/s0/envelopes/elastic/stress_star")[3].norm() * kKStar),
               1.0, 1e-12);
+}
+
+}  // namespace
+}  // namespace rendulic::calibration
+
+// The stopping rule is the user's: an iteration budget that is reached is reported as "not
+// converged" (never passed off as a fit), and a tolerance outside its range is refused.
+TEST(CalibrateCli, IterationBudgetAndToleranceAreHonoured) {
+  const fs::path file = make_results_file("budget.h5");
+  const fs::path json = file.parent_path() / "budget.json";
+  const fs::path log = file.parent_path() / "budget.log";
+  ASSERT_EQ(run("--results " + file.string() +
+                    " --model anisotropic_elastic --no-write --max-iterations 1 "
+                    "--function-tolerance 1e-15 --out " +
+                    json.string(),
+                log),
+            0)
+      << slurp(log);
+  EXPECT_NE(slurp(json).find("\"converged\": false"), std::string::npos) << slurp(json);
+  EXPECT_NE(slurp(log).find("did not report convergence"), std::string::npos) << slurp(log);
+  ASSERT_EQ(run("--results " + file.string() + " --model anisotropic_elastic --no-write --out " +
+                    json.string(),
+                log),
+            0)
+      << slurp(log);
+  EXPECT_NE(slurp(json).find("\"converged\": true"), std::string::npos) << slurp(json);
+  EXPECT_NE(run("--results " + file.string() +
+                    " --model anisotropic_elastic --no-write --function-tolerance 0.5",
+                log),
+            0);
+  EXPECT_NE(slurp(log).find("--function-tolerance"), std::string::npos) << slurp(log);
 }
 
 }  // namespace
