@@ -26,6 +26,7 @@ Subcommand add_inspect(CLI::App& parent);
 Subcommand add_plot(CLI::App& parent);
 Subcommand add_keys(CLI::App& parent);
 Subcommand add_sweep(CLI::App& parent);
+Subcommand add_report(CLI::App& parent);
 
 // Draws the figures of a results file into out_dir (cmd_plot.cpp); used by the report stage.
 int plot_results(const std::filesystem::path& file, const std::filesystem::path& out_dir);

@@ -15,9 +15,9 @@ int main(int argc, char** argv) {
   cli.set_version_flag("--version", std::string("rendulic ") + kVersion + " (" + kGitSha + ")");
   cli.require_subcommand(1);
   std::vector<app::Subcommand> subs = {
-      app::add_run(cli),       app::add_fit(cli),   app::add_envelope(cli),
-      app::add_calibrate(cli), app::add_bench(cli), app::add_inspect(cli),
-      app::add_plot(cli),      app::add_keys(cli),  app::add_sweep(cli)};
+      app::add_run(cli),   app::add_fit(cli),     app::add_envelope(cli), app::add_calibrate(cli),
+      app::add_bench(cli), app::add_inspect(cli), app::add_plot(cli),     app::add_keys(cli),
+      app::add_sweep(cli), app::add_report(cli)};
   try {
     cli.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

@@ -247,6 +247,18 @@ std::vector<Claim> evaluate_claims(const ResultsReader& r) {
         ok = ok && shift[i] > el[i]->stress.center.norm() / el[i]->stress.a;
     }
     c.measured = shift.empty() ? "" : "|centre|/a: " + series(shift) + "; b/a: " + series(thin);
+    // Why it fails when it does: axes per unit strain, plastic over elastic. Near 1 means the
+    // larger probes still responded elastically (no rearrangement softened them).
+    if (!shift.empty() && all(el)) {
+      std::vector<double> a_ratio, b_ratio;
+      for (std::size_t i = 0; i < pl.size(); ++i) {
+        const double s = el[i]->amplitude / pl[i]->amplitude;
+        a_ratio.push_back(pl[i]->stress.a * s / el[i]->stress.a);
+        b_ratio.push_back(pl[i]->stress.b * s / el[i]->stress.b);
+      }
+      c.measured += "; stiffness plastic/elastic, major axis: " + series(a_ratio) +
+                    ", minor axis: " + series(b_ratio);
+    }
     c.verdict = verdict(!shift.empty() && all(el), ok);
     claims.push_back(c);
   }

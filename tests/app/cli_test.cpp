@@ -31,8 +31,8 @@ int lines(const std::string& s) { return static_cast<int>(std::count(s.begin(), 
 TEST(Cli, HelpAndVersionSucceed) {
   EXPECT_EQ(rendulic("--help").code, 0);
   EXPECT_EQ(rendulic("--version").code, 0);
-  for (const char* sub :
-       {"run", "fit", "envelope", "calibrate", "bench", "inspect", "plot", "keys"})
+  for (const char* sub : {"run", "fit", "envelope", "calibrate", "bench", "inspect", "plot", "keys",
+                          "sweep", "report"})
     EXPECT_EQ(rendulic(std::string(sub) + " --help").code, 0) << sub;
 }
 
@@ -130,6 +130,12 @@ TEST(Cli, InspectRefusesFilesThatAreNotOurs) {
   r = rendulic("inspect " + (d / "missing.h5").string());
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.out.find("no such file"), std::string::npos) << r.out;
+  // `report` reads through the same reader: same one-line refusals, and nothing written.
+  r = rendulic("report --no-figures " + txt.string());
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.out.find("not an HDF5 file"), std::string::npos) << r.out;
+  EXPECT_EQ(lines(r.out), 1);
+  EXPECT_FALSE(fs::exists(d / "report.md"));
 }
 
 TEST(Cli, KeysReferenceMatchesTheDocs) {

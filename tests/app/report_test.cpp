@@ -67,5 +67,22 @@ TEST(Report, ReportIsWrittenAtomicallyWithTheClaimTable) {
   EXPECT_FALSE(fs::exists(f.parent_path() / ".report.md.tmp"));
 }
 
+// C6 also says why it fails when it does: the plastic envelope's axes per unit strain over the
+// elastic ones. The seed-like file's plastic map keeps the bulk stiffness and halves the shear
+// stiffness at the first state, and has none left at the steady state.
+double first_number_after(const std::string& text, const std::string& key) {
+  const auto at = text.find(key);
+  return at == std::string::npos ? std::nan("") : std::stod(text.substr(at + key.size()));
+}
+
+TEST(Report, C6ReportsThePlasticOverElasticStiffness) {
+  const auto claims = by_id(evaluate_claims(ResultsReader(seed_like("stiffness", false))));
+  const std::string& m = claims.at("C6").measured;
+  EXPECT_NEAR(first_number_after(m, "major axis: "), 1.0, 0.02) << m;
+  EXPECT_NEAR(first_number_after(m, "minor axis: "), 0.5, 0.03) << m;
+  const std::string minor = m.substr(m.find("minor axis: "));
+  EXPECT_NEAR(std::stod(minor.substr(minor.rfind(", ") + 2)), 0.0, 0.01) << m;
+}
+
 }  // namespace
 }  // namespace rendulic::app

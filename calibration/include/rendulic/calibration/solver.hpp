@@ -45,7 +45,7 @@ struct SolverOptions {
   double function_tolerance = 1e-15;
   double gradient_tolerance = 1e-15;
   double parameter_tolerance = 1e-12;
-  bool polish = true;    // Ceres after the NLopt stages
+  bool polish = true;     // Ceres after the NLopt stages
   bool progress = false;  // Ceres prints one line per iteration (cost, step) to stdout
   IdentifiabilityOptions identifiability;
   bool IsValid(std::string* why) const;
