@@ -52,8 +52,9 @@ int plot_results(const std::filesystem::path& file, const std::filesystem::path&
       break;
     }
   if (python.empty())
-    throw InputError("plot: needs python3 with matplotlib and h5py (bash .ci/setup.sh installs "
-                     "python3-matplotlib and python3-h5py)");
+    throw InputError(
+        "plot: needs python3 with matplotlib and h5py (bash .ci/setup.sh installs "
+        "python3-matplotlib and python3-h5py)");
   char tmpl[] = "/tmp/rendulic-plot-XXXXXX.py";
   const int fd = mkstemps(tmpl, 3);
   if (fd < 0) throw std::runtime_error("plot: cannot create a temporary script");
@@ -61,8 +62,8 @@ int plot_results(const std::filesystem::path& file, const std::filesystem::path&
   { std::ofstream(tmpl) << kPlotScript; }
   const int rc = spawn({python, tmpl, file.string(), out_dir.string()}, false);
   std::filesystem::remove(tmpl);
-  if (rc != 0) throw std::runtime_error("plot: the figure script failed (exit " +
-                                        std::to_string(rc) + ")");
+  if (rc != 0)
+    throw std::runtime_error("plot: the figure script failed (exit " + std::to_string(rc) + ")");
   return 0;
 }
 

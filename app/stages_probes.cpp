@@ -66,8 +66,8 @@ void stage_linear_response(const Scenario& sc, ResultsWriter& out, const RunCont
         out.attr(g, "amplitude", a);
         out.attr(g, "error", std::string(e.what()));
       }
-      std::cerr << "rendulic: warning: no linear response for state " << label << ": "
-                << e.what() << "\n";
+      std::cerr << "rendulic: warning: no linear response for state " << label << ": " << e.what()
+                << "\n";
     }
   }
 }

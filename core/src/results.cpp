@@ -140,8 +140,10 @@ struct ResultsWriter::Impl {
     on_object(object, [&](H5::H5Object& obj) {
       if (obj.attrExists(name)) obj.removeAttr(name);
       H5::Attribute a = obj.createAttribute(name, type, space);
-      if (is_string) a.write(type, *str);
-      else a.write(type, data);
+      if (is_string)
+        a.write(type, *str);
+      else
+        a.write(type, data);
     });
   }
 
@@ -159,7 +161,8 @@ struct ResultsWriter::Impl {
     const int rank = static_cast<int>(row.size()) + 1;
     std::vector<hsize_t> dims(rank), maxdims(rank), chunk(rank);
     dims[0] = 0, maxdims[0] = H5S_UNLIMITED, chunk[0] = kChunkRows;
-    for (std::size_t i = 0; i < row.size(); ++i) dims[i + 1] = maxdims[i + 1] = chunk[i + 1] = row[i];
+    for (std::size_t i = 0; i < row.size(); ++i)
+      dims[i + 1] = maxdims[i + 1] = chunk[i + 1] = row[i];
     auto open_or_create = [&]() -> H5::DataSet {
       if (link_exists(*holder, path)) return holder->openDataSet(path);
       ensure_group(*holder, parent_of(path));
@@ -206,8 +209,9 @@ ResultsWriter::ResultsWriter(const fs::path& final_path) : impl_(std::make_uniqu
   impl_->final_path = final_path;
   std::error_code ec;
   if (!final_path.parent_path().empty()) fs::create_directories(final_path.parent_path(), ec);
-  if (ec) throw InputError(final_path.parent_path().string() + ": cannot create output folder: " +
-                           ec.message());
+  if (ec)
+    throw InputError(final_path.parent_path().string() +
+                     ": cannot create output folder: " + ec.message());
   impl_->tmp_path = temporary_for(final_path);
   impl_->slot = register_temporary(impl_->tmp_path);
   try {
@@ -275,8 +279,7 @@ void ResultsWriter::attr(const std::string& object, const std::string& name, con
 void ResultsWriter::attr(const std::string& object, const std::string& name,
                          const std::vector<double>& value) {
   const hsize_t n = value.size();
-  impl_->write_attr(object, name, H5::PredType::NATIVE_DOUBLE, H5::DataSpace(1, &n),
-                    value.data());
+  impl_->write_attr(object, name, H5::PredType::NATIVE_DOUBLE, H5::DataSpace(1, &n), value.data());
 }
 
 void ResultsWriter::write(const std::string& path, const std::vector<double>& values) {
@@ -329,8 +332,8 @@ void ResultsWriter::commit() {
     fs::remove(impl_->tmp_path);
     unregister_temporary(impl_->slot);
     impl_->committed = true;
-    throw InputError(impl_->final_path.string() + ": cannot move results into place: " +
-                     ec.message());
+    throw InputError(impl_->final_path.string() +
+                     ": cannot move results into place: " + ec.message());
   }
   unregister_temporary(impl_->slot);
   impl_->committed = true;
@@ -531,7 +534,8 @@ std::string attr_text(const H5::Attribute& a) {
   } else if (cls == H5T_INTEGER || cls == H5T_FLOAT) {
     std::vector<double> v(static_cast<std::size_t>(n));
     if (n) a.read(H5::PredType::NATIVE_DOUBLE, v.data());
-    if (n == 1) out << v[0];
+    if (n == 1)
+      out << v[0];
     else {
       out << "[";
       for (hssize_t i = 0; i < std::min<hssize_t>(n, 6); ++i) out << (i ? ", " : "") << v[i];

@@ -5,16 +5,17 @@
 // values and never sees TOML.
 #include "rendulic/core/scenario.hpp"
 
+#include <toml++/toml.h>
+
 #include <algorithm>
-#include <cmath>
 #include <cctype>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
-#include <toml++/toml.h>
 
 #include "rendulic/core/errors.hpp"
 
@@ -23,12 +24,18 @@ namespace {
 
 const char* type_name(KeyType t) {
   switch (t) {
-    case KeyType::kBool: return "boolean";
-    case KeyType::kInt: return "integer";
-    case KeyType::kDouble: return "number";
-    case KeyType::kString: return "string";
-    case KeyType::kDoubleList: return "list of numbers";
-    case KeyType::kStringList: return "list of strings";
+    case KeyType::kBool:
+      return "boolean";
+    case KeyType::kInt:
+      return "integer";
+    case KeyType::kDouble:
+      return "number";
+    case KeyType::kString:
+      return "string";
+    case KeyType::kDoubleList:
+      return "list of numbers";
+    case KeyType::kStringList:
+      return "list of strings";
   }
   return "?";
 }
@@ -60,12 +67,23 @@ std::string quote(const std::string& s) {
   std::string out = "\"";
   for (char c : s) {
     switch (c) {
-      case '"': out += "\\\""; break;
-      case '\\': out += "\\\\"; break;
-      case '\n': out += "\\n"; break;
-      case '\t': out += "\\t"; break;
-      case '\r': out += "\\r"; break;
-      default: out += c;
+      case '"':
+        out += "\\\"";
+        break;
+      case '\\':
+        out += "\\\\";
+        break;
+      case '\n':
+        out += "\\n";
+        break;
+      case '\t':
+        out += "\\t";
+        break;
+      case '\r':
+        out += "\\r";
+        break;
+      default:
+        out += c;
     }
   }
   return out + "\"";
@@ -119,7 +137,8 @@ std::string check_number(const KeySpec& s, double x) {
   const bool above = s.max_open ? !(x < s.max) : x > s.max;
   if (below || above)
     return "value " +
-           (s.type == KeyType::kInt ? std::to_string(static_cast<long long>(x)) : format_double(x)) +
+           (s.type == KeyType::kInt ? std::to_string(static_cast<long long>(x))
+                                    : format_double(x)) +
            " is out of range " + format_range(s);
   return "";
 }
@@ -133,10 +152,14 @@ std::string check_choice(const KeySpec& s, const std::string& x) {
 // Validates a value against its spec; returns the reason or "".
 std::string validate(const KeySpec& s, const ScenarioValue& v) {
   switch (s.type) {
-    case KeyType::kBool: return "";
-    case KeyType::kInt: return check_number(s, static_cast<double>(std::get<std::int64_t>(v)));
-    case KeyType::kDouble: return check_number(s, std::get<double>(v));
-    case KeyType::kString: return check_choice(s, std::get<std::string>(v));
+    case KeyType::kBool:
+      return "";
+    case KeyType::kInt:
+      return check_number(s, static_cast<double>(std::get<std::int64_t>(v)));
+    case KeyType::kDouble:
+      return check_number(s, std::get<double>(v));
+    case KeyType::kString:
+      return check_choice(s, std::get<std::string>(v));
     case KeyType::kDoubleList: {
       const auto& xs = std::get<std::vector<double>>(v);
       if (xs.size() < s.min_size || xs.size() > s.max_size)
@@ -164,12 +187,18 @@ std::string validate(const KeySpec& s, const ScenarioValue& v) {
 // The value type a spec expects; std::nullopt-like failure is reported as a reason string.
 bool holds_type(const KeySpec& s, const ScenarioValue& v) {
   switch (s.type) {
-    case KeyType::kBool: return std::holds_alternative<bool>(v);
-    case KeyType::kInt: return std::holds_alternative<std::int64_t>(v);
-    case KeyType::kDouble: return std::holds_alternative<double>(v);
-    case KeyType::kString: return std::holds_alternative<std::string>(v);
-    case KeyType::kDoubleList: return std::holds_alternative<std::vector<double>>(v);
-    case KeyType::kStringList: return std::holds_alternative<std::vector<std::string>>(v);
+    case KeyType::kBool:
+      return std::holds_alternative<bool>(v);
+    case KeyType::kInt:
+      return std::holds_alternative<std::int64_t>(v);
+    case KeyType::kDouble:
+      return std::holds_alternative<double>(v);
+    case KeyType::kString:
+      return std::holds_alternative<std::string>(v);
+    case KeyType::kDoubleList:
+      return std::holds_alternative<std::vector<double>>(v);
+    case KeyType::kStringList:
+      return std::holds_alternative<std::vector<std::string>>(v);
   }
   return false;
 }
@@ -200,9 +229,12 @@ ScenarioValue convert(const KeySpec& s, const toml::node& n) {
       if (!arr) throw want;
       std::vector<double> xs;
       for (const auto& e : *arr) {
-        if (auto i = e.as_integer()) xs.push_back(static_cast<double>(i->get()));
-        else if (auto d = e.as_floating_point()) xs.push_back(d->get());
-        else throw std::string("expected a list of numbers, found a ") + node_type_name(e);
+        if (auto i = e.as_integer())
+          xs.push_back(static_cast<double>(i->get()));
+        else if (auto d = e.as_floating_point())
+          xs.push_back(d->get());
+        else
+          throw std::string("expected a list of numbers, found a ") + node_type_name(e);
       }
       return xs;
     }
@@ -211,8 +243,10 @@ ScenarioValue convert(const KeySpec& s, const toml::node& n) {
       if (!arr) throw want;
       std::vector<std::string> xs;
       for (const auto& e : *arr) {
-        if (auto str = e.as_string()) xs.push_back(str->get());
-        else throw std::string("expected a list of strings, found a ") + node_type_name(e);
+        if (auto str = e.as_string())
+          xs.push_back(str->get());
+        else
+          throw std::string("expected a list of strings, found a ") + node_type_name(e);
       }
       return xs;
     }
@@ -264,7 +298,8 @@ std::string ScenarioSchema::suggest(std::string_view path) const {
   }
   if (!best.empty()) return best;
   // Same leaf name in another section: a key put in the wrong table.
-  const auto leaf = path.substr(path.rfind('.') == std::string_view::npos ? 0 : path.rfind('.') + 1);
+  const auto leaf =
+      path.substr(path.rfind('.') == std::string_view::npos ? 0 : path.rfind('.') + 1);
   for (const auto& k : keys_)
     if (k.path.size() > leaf.size() && k.path.ends_with("." + std::string(leaf))) return k.path;
   return "";
@@ -334,8 +369,7 @@ Scenario Scenario::from_string(std::string_view text, const std::string& source_
       for (auto&& [key, node] : t) {
         const std::string path =
             prefix.empty() ? std::string(key.str()) : prefix + "." + std::string(key.str());
-        const toml::source_region& loc =
-            node.source().begin.line ? node.source() : key.source();
+        const toml::source_region& loc = node.source().begin.line ? node.source() : key.source();
         if (const KeySpec* spec = schema.find(path)) {
           ScenarioValue v;
           try {
@@ -365,8 +399,7 @@ Scenario Scenario::from_string(std::string_view text, const std::string& source_
 void Scenario::apply_override(std::string_view assignment) {
   const std::string what = "--set " + std::string(assignment);
   const auto eq = assignment.find('=');
-  if (eq == std::string_view::npos || eq == 0)
-    throw InputError(what + ": expected key=value");
+  if (eq == std::string_view::npos || eq == 0) throw InputError(what + ": expected key=value");
   auto trim = [](std::string_view s) {
     while (!s.empty() && std::isspace(static_cast<unsigned char>(s.front()))) s.remove_prefix(1);
     while (!s.empty() && std::isspace(static_cast<unsigned char>(s.back()))) s.remove_suffix(1);

@@ -12,7 +12,8 @@ namespace {
 namespace fs = std::filesystem;
 
 int run(const std::string& args) {
-  const int status = std::system((std::string(RENDULIC_EXE) + " " + args + " >/dev/null 2>&1").c_str());
+  const int status =
+      std::system((std::string(RENDULIC_EXE) + " " + args + " >/dev/null 2>&1").c_str());
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
@@ -20,9 +21,9 @@ TEST(Plot, DrawsEveryFigureOfASeedLikeFile) {
   const fs::path f = rendulic::app::testing::seed_like("plot", false);
   const fs::path out = f.parent_path() / "figs";
   ASSERT_EQ(run("plot " + f.string() + " --out " + out.string()), 0);
-  for (const char* name : {"fig1_path", "fig2_strain_circle", "fig3_elastic_stress",
-                           "fig4_elastic_fabric", "fig5_plastic_stress", "fig6_plastic_fabric",
-                           "fig7_features"})
+  for (const char* name :
+       {"fig1_path", "fig2_strain_circle", "fig3_elastic_stress", "fig4_elastic_fabric",
+        "fig5_plastic_stress", "fig6_plastic_fabric", "fig7_features"})
     for (const char* ext : {".png", ".svg"}) {
       const fs::path p = out / (std::string(name) + ext);
       EXPECT_TRUE(fs::exists(p)) << p;

@@ -84,8 +84,8 @@ TEST(Conventions, InvariantsClosedForms) {
 TEST(Conventions, J2IsHalfTheSumOfSquaredDeviatorEigenvalues) {
   for (int s = 1; s < 20; ++s) {
     const Eigen::Matrix3d q = random_symmetric(s);
-    const Eigen::Vector3d ev = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(deviator(q))
-                                   .eigenvalues();
+    const Eigen::Vector3d ev =
+        Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(deviator(q)).eigenvalues();
     EXPECT_NEAR(j2(q), 0.5 * ev.squaredNorm(), kTight);
     EXPECT_NEAR(j3(q), ev.prod(), kTight);
     EXPECT_NEAR(deviator(q).trace(), 0.0, kTight);
@@ -146,8 +146,8 @@ TEST(Conventions, ProbeDirectionsAreEquallySpacedAndHoldTheSpecialDirections) {
   }
   for (int m : {4, 8, 24, 36}) {
     const Eigen::VectorXd dm = probe_directions_deg(m);
-    for (double special : {kIsoCompressionDeg, kDevCompressionDeg, kIsoExtensionDeg,
-                           kDevExtensionDeg}) {
+    for (double special :
+         {kIsoCompressionDeg, kDevCompressionDeg, kIsoExtensionDeg, kDevExtensionDeg}) {
       double best = 360;
       for (int i = 0; i < m; ++i) best = std::min(best, std::abs(dm(i) - special));
       EXPECT_LT(best, 1e-9) << "M = " << m << " misses " << special;

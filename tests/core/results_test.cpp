@@ -44,8 +44,7 @@ TEST(Results, RoundTripOfEveryKind) {
     w.attr("/", "scenario", std::string("[run]\nseed = 1\n"));
     w.attr("/states/s1", "center", std::vector<double>{0.5, -0.25});
     w.write("/isotropic/pressure", std::vector<double>{1.0, 2.0, 3.0});
-    w.write("/states/s1/envelopes/e/strain",
-            std::vector<Eigen::Vector2d>{{1, 2}, {3, 4}, {5, 6}});
+    w.write("/states/s1/envelopes/e/strain", std::vector<Eigen::Vector2d>{{1, 2}, {3, 4}, {5, 6}});
     w.write("/path/stress", std::vector<Eigen::Matrix3d>{t, 2 * t});
     w.write("/states/s1/stress", t);
     w.write("/states/s1/positions", m);

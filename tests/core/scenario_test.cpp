@@ -12,21 +12,50 @@ namespace {
 
 ScenarioSchema make_schema() {
   ScenarioSchema s;
-  s.add({.path = "run.seed", .type = KeyType::kInt, .default_value = std::int64_t{1},
-         .unit = "-", .help = "seed", .min = 0});
-  s.add({.path = "material.k", .type = KeyType::kDouble, .default_value = 1e8, .unit = "kg/s^2",
-         .help = "normal stiffness", .min = 0, .min_open = true});
-  s.add({.path = "material.w", .type = KeyType::kDouble, .default_value = 3.0, .unit = "-",
-         .help = "polydispersity", .min = 1, .max = 10});
-  s.add({.path = "states.eps_dev", .type = KeyType::kDoubleList,
-         .default_value = std::vector<double>{0.006, 0.32}, .unit = "-", .help = "states",
-         .min = 0, .max = 1, .min_size = 1});
-  s.add({.path = "probes.method", .type = KeyType::kString, .default_value = std::string("dynamic"),
-         .unit = "-", .help = "method", .choices = {"dynamic", "minimisation"}});
-  s.add({.path = "output.report", .type = KeyType::kBool, .default_value = true, .unit = "-",
+  s.add({.path = "run.seed",
+         .type = KeyType::kInt,
+         .default_value = std::int64_t{1},
+         .unit = "-",
+         .help = "seed",
+         .min = 0});
+  s.add({.path = "material.k",
+         .type = KeyType::kDouble,
+         .default_value = 1e8,
+         .unit = "kg/s^2",
+         .help = "normal stiffness",
+         .min = 0,
+         .min_open = true});
+  s.add({.path = "material.w",
+         .type = KeyType::kDouble,
+         .default_value = 3.0,
+         .unit = "-",
+         .help = "polydispersity",
+         .min = 1,
+         .max = 10});
+  s.add({.path = "states.eps_dev",
+         .type = KeyType::kDoubleList,
+         .default_value = std::vector<double>{0.006, 0.32},
+         .unit = "-",
+         .help = "states",
+         .min = 0,
+         .max = 1,
+         .min_size = 1});
+  s.add({.path = "probes.method",
+         .type = KeyType::kString,
+         .default_value = std::string("dynamic"),
+         .unit = "-",
+         .help = "method",
+         .choices = {"dynamic", "minimisation"}});
+  s.add({.path = "output.report",
+         .type = KeyType::kBool,
+         .default_value = true,
+         .unit = "-",
          .help = "report"});
-  s.add({.path = "run.stages", .type = KeyType::kStringList,
-         .default_value = std::vector<std::string>{"a"}, .unit = "-", .help = "stages",
+  s.add({.path = "run.stages",
+         .type = KeyType::kStringList,
+         .default_value = std::vector<std::string>{"a"},
+         .unit = "-",
+         .help = "stages",
          .choices = {"a", "b", "c"}});
   return s;
 }
@@ -55,8 +84,8 @@ TEST(Scenario, DefaultsWithoutAFile) {
 TEST(Scenario, ParsesTypedValuesAndRecordsTheirLines) {
   const auto schema = make_schema();
   const auto sc = Scenario::from_string(
-      "[run]\nseed = 7\n\n[material]\nk = 2e8\nw = 2\n[states]\neps_dev = [0.1, 0.2]\n",
-      "x.toml", schema);
+      "[run]\nseed = 7\n\n[material]\nk = 2e8\nw = 2\n[states]\neps_dev = [0.1, 0.2]\n", "x.toml",
+      schema);
   EXPECT_EQ(sc.get_int("run.seed"), 7);
   EXPECT_DOUBLE_EQ(sc.get_double("material.k"), 2e8);
   EXPECT_DOUBLE_EQ(sc.get_double("material.w"), 2.0);  // an integer where a number is due
@@ -67,8 +96,9 @@ TEST(Scenario, ParsesTypedValuesAndRecordsTheirLines) {
 
 TEST(Scenario, UnknownKeyIsNamedWithItsLineAndASuggestion) {
   const auto schema = make_schema();
-  const auto msg = input_error(
-      [&] { Scenario::from_string("[material]\nk = 1e8\n[states]\nesp_dev = [0.1]\n", "s.toml", schema); });
+  const auto msg = input_error([&] {
+    Scenario::from_string("[material]\nk = 1e8\n[states]\nesp_dev = [0.1]\n", "s.toml", schema);
+  });
   EXPECT_NE(msg.find("s.toml:4"), std::string::npos) << msg;
   EXPECT_NE(msg.find("unknown key 'states.esp_dev'"), std::string::npos) << msg;
   EXPECT_NE(msg.find("did you mean 'states.eps_dev'"), std::string::npos) << msg;
@@ -84,8 +114,8 @@ TEST(Scenario, UnknownSectionIsAnUnknownKey) {
 
 TEST(Scenario, WrongTypeIsNamed) {
   const auto schema = make_schema();
-  auto msg = input_error(
-      [&] { Scenario::from_string("[material]\nk = \"stiff\"\n", "s.toml", schema); });
+  auto msg =
+      input_error([&] { Scenario::from_string("[material]\nk = \"stiff\"\n", "s.toml", schema); });
   EXPECT_NE(msg.find("s.toml:2: key 'material.k': expected a number, got a string"),
             std::string::npos)
       << msg;
@@ -99,15 +129,13 @@ TEST(Scenario, WrongTypeIsNamed) {
 TEST(Scenario, OutOfRangeIsNamed) {
   const auto schema = make_schema();
   auto msg = input_error([&] { Scenario::from_string("[material]\nk = 0\n", "s.toml", schema); });
-  EXPECT_NE(msg.find("key 'material.k': value 0.0 is out of range (0.0, inf)"),
-            std::string::npos)
+  EXPECT_NE(msg.find("key 'material.k': value 0.0 is out of range (0.0, inf)"), std::string::npos)
       << msg;
   msg = input_error([&] { Scenario::from_string("[material]\nw = 11\n", "s.toml", schema); });
   EXPECT_NE(msg.find("material.w"), std::string::npos) << msg;
   msg = input_error([&] { Scenario::from_string("[material]\nw = nan\n", "s.toml", schema); });
   EXPECT_NE(msg.find("finite"), std::string::npos) << msg;
-  msg = input_error(
-      [&] { Scenario::from_string("[states]\neps_dev = []\n", "s.toml", schema); });
+  msg = input_error([&] { Scenario::from_string("[states]\neps_dev = []\n", "s.toml", schema); });
   EXPECT_NE(msg.find("states.eps_dev"), std::string::npos) << msg;
   msg = input_error(
       [&] { Scenario::from_string("[probes]\nmethod = \"magic\"\n", "s.toml", schema); });

@@ -29,7 +29,7 @@ inline constexpr double rad_to_deg(double rad) { return rad * 180.0 / kPi; }
 // Special directions of the strain Rendulic plane (physics.md section 5), in degrees.
 // atan(1/sqrt(2)) is the angle of the isotropic axis (1, 1, 1) in the (sqrt2 lat, ax) plane.
 inline const double kIsoCompressionDeg = rad_to_deg(std::atan(1.0 / kSqrt2));  // 35.26
-inline const double kIsoExtensionDeg = kIsoCompressionDeg + 180.0;              // 215.26
+inline const double kIsoExtensionDeg = kIsoCompressionDeg + 180.0;             // 215.26
 inline constexpr double kUniaxialCompressionDeg = 90.0;
 inline constexpr double kUniaxialExtensionDeg = 270.0;
 inline const double kDevCompressionDeg = kIsoCompressionDeg + 90.0;  // 125.26, constant volume
