@@ -1,8 +1,7 @@
-// `rendulic report FILE.h5 [--no-figures]` (issue 8 item 1): writes report.md
-// (and the figures) beside an existing results file, as the run's report stage
-// does: for a file from an earlier version, another machine or an interrupted
-// session, without re-running anything. The file is only read; report.md is
-// replaced atomically.
+// `rendulic report FILE.h5 [--no-figures]` (issue 8 item 1): writes report.md (and the figures)
+// beside an existing results file, as the run's report stage does: for a file from an earlier
+// version, another machine or an interrupted session, without re-running anything. The file
+// is only read; report.md is replaced atomically.
 #include <iostream>
 #include <memory>
 
@@ -17,11 +16,10 @@ struct ReportOptions {
 };
 }  // namespace
 
-Subcommand add_report(CLI::App &parent) {
+Subcommand add_report(CLI::App& parent) {
   auto o = std::make_shared<ReportOptions>();
-  auto *sub = parent.add_subcommand("report",
-                                    "Write report.md (claims C1-C8, calibration, timings) and "
-                                    "figures beside FILE.h5");
+  auto* sub = parent.add_subcommand(
+      "report", "Write report.md (claims C1-C8, calibration, timings) and figures beside FILE.h5");
   sub->add_option("file", o->file, "results file (HDF5, schema rendulic/1)")->required();
   sub->add_flag("--no-figures", o->no_figures, "report.md only");
   return {sub, [o]() -> int {

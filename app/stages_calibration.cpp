@@ -48,7 +48,7 @@ void register_calibration_keys(ScenarioSchema& schema) {
               .help = "Fit the main undrained path together with the envelopes."});
   schema.add({.path = "calibration.max_iterations",
               .type = KeyType::kInt,
-              .default_value = std::int64_t{200},
+              .default_value = std::int64_t{calibration::SolverOptions{}.max_iterations},
               .unit = "-",
               .help = "Most iterations of the Ceres stage per model; a fit that reaches it is "
                       "reported as not converged.",
@@ -90,8 +90,8 @@ void run_calibration_stage(const Scenario& scenario, ResultsWriter& out, const R
       model == "all" ? models::law_names() : std::vector<std::string>{model};
   for (const std::string& m : models) {
     opt.model = m;
-    // Said before and after: one family can take minutes (paper.toml: ~5 min for the
-    // integrated laws), and a silent run looks hung.
+    // Said before and after: an integrated law's fit takes seconds to minutes (quick.toml's
+    // elastoplastic_fabric ~20 s), and a silent run looks hung.
     if (!ctx.quiet) std::cerr << "rendulic: calibrating " << m << std::endl;
     const auto t0 = std::chrono::steady_clock::now();
     try {
