@@ -60,7 +60,8 @@ void TeamController::start_exploration(bool up) {
 }
 
 void TeamController::close_window() {
-  const double cost = win_seconds_ / win_steps_;
+  const double steps = win_steps_;
+  const double cost = win_seconds_ / steps;
   const double previous = cost_[win_];
   cost_[win_] = cost;
   win_seconds_ = 0;
@@ -76,9 +77,13 @@ void TeamController::close_window() {
       start_exploration(up);
       if (win_ != cur_) return;
     } else {
-      // A clear loss (a descheduled member's time slice) is not worth checking again soon.
-      const int factor = cost > 4.0 * cost_[cur_] ? 8 : 2;
-      spacing_ = std::min(factor * spacing_, kMaxSpacing);
+      // Check again twice as late, and late enough that explorations cost at most about
+      // kOverhead of the time: a descheduled team member can waste a whole time slice, tens of
+      // milliseconds on a crowded machine.
+      const double waste = (cost - cost_[cur_]) * steps;
+      const double due = waste / (kOverhead * kWindowSeconds);
+      spacing_ = std::max(std::min(2 * spacing_, kMaxSpacing),
+                          static_cast<int>(std::min(due, static_cast<double>(kMaxWasteSpacing))));
     }
     win_ = cur_;
     return;

@@ -106,6 +106,20 @@ TEST(TeamController, DropsTheTeamOnALoadedMachine) {
   EXPECT_LT(at_team, 0.05 * total);
 }
 
+TEST(TeamController, ChecksRarelyWhereAStalledStepIsExpensive) {
+  TeamController c;
+  // A crowded machine: this process gets a sixth of a core (150 us per serial step) and a
+  // descheduled team member comes back after 80 ms.
+  auto crowded = [](int size, std::int64_t k) {
+    return size > 1 ? (k % 8 == 0 ? 80e-3 : 100e-6) : 150e-6;
+  };
+  double at_team = 0;
+  const double total = run_model(c, 2, 0, 100000, crowded, &at_team);
+  EXPECT_EQ(c.current(), 1);
+  EXPECT_LT(total, 1.03 * 100000 * 150e-6);  // the checks cost about 1 %, not 6 %
+  EXPECT_LE(c.explorations(), 3);
+}
+
 TEST(TeamController, FollowsTheLoadWhenItComesAndGoes) {
   TeamController c;
   auto idle = [](int size, std::int64_t) { return size > 1 ? 24e-6 : 40e-6; };

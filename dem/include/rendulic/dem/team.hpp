@@ -38,18 +38,21 @@ int max_team(std::size_t n, int threads);
 // with the current size, sometimes (exploration) with a neighbouring size on the ladder; a
 // size that was faster by more than kMargin becomes current. It starts with one thread and
 // explores upwards at once (on an idle machine the team is in use after one window).
-// Explorations that confirm the current size are spaced twice as far apart each time (eight
-// times after a clear loss, up to kMaxSpacing windows); a failing exploration is cut short as
-// soon as it has cost twice what the current size needs for a minimal window plus
-// kSlackSeconds, so on a loaded machine a check of the team costs about one descheduled step
-// (a time slice) per kMaxSpacing windows. When a team gets markedly slower than in its
-// previous window (load appeared) the next window explores downwards at once.
+// Explorations that confirm the current size are spaced twice as far apart each time (up to
+// kMaxSpacing windows), and far enough apart that their waste is about kOverhead of the time
+// (up to kMaxWasteSpacing windows); a failing exploration is cut short as soon as it has cost
+// twice what the current size needs for a minimal window plus kSlackSeconds, so a check of the
+// team on a loaded machine costs about one descheduled step (a time slice). When a team gets
+// markedly slower than in its previous window (load appeared) the next window explores
+// downwards at once.
 class TeamController {
  public:
   static constexpr double kWindowSeconds = 0.02;
   static constexpr int kMinWindowSteps = 4;
   static constexpr double kMargin = 0.05;
   static constexpr int kMaxSpacing = 64;
+  static constexpr double kOverhead = 0.01;
+  static constexpr int kMaxWasteSpacing = 1024;
   static constexpr double kJump = 1.5;           // a team slower than this factor: explore now
   static constexpr double kSlackSeconds = 1e-3;  // waking a sleeping team costs far less
 
