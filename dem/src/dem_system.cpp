@@ -23,7 +23,12 @@
 namespace rendulic::dem {
 namespace {
 // Four doubles handled as one vector (AVX with -march=native, SSE pairs otherwise); records are
-// 32-byte aligned (CacheAlignedAllocator).
+// 32-byte aligned (CacheAlignedAllocator). Without AVX, GCC notes at every use that passing
+// such a vector by value has another ABI than with it; these helpers are internal to this file
+// and inlined, so no ABI is involved.
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic ignored "-Wpsabi"
+#endif
 typedef double V4 __attribute__((vector_size(32)));
 inline V4 load4(const double* p) { return *reinterpret_cast<const V4*>(p); }
 inline void store4(double* p, V4 v) { *reinterpret_cast<V4*>(p) = v; }
