@@ -169,13 +169,15 @@ class DemSystem {
   // Per particle, then per slot: the velocity of the dissipative forces (x, y, z, unused) and
   // the pair-force accumulator (x, y, z, unused).
   AlignedVector va8_;
-  // Blocks of rows (block_lo_[b] .. block_lo_[b+1]) and their foreign slots (slot_lo_[b] ..
-  // slot_lo_[b+1], records N + s of pos4_ and va8_, copies of particle
-  // slot_particle_[s]). partner_: the list's partner of each entry, or its slot if the partner
-  // lies outside the entry's block.
+  AlignedVector ref4_;  // the list's reference position and half skin per particle
+  // Blocks of rows (block_lo_[b] .. block_lo_[b+1]) and their slots (slot_lo_[b] ..
+  // slot_lo_[b+1], records N + s of pos4_ and va8_: copies of particle slot_particle_[s] seen
+  // through image slot_code_[s]). partner_: the list's partner of each entry, or its slot if
+  // the partner lies outside the entry's block or is seen through another image.
   std::vector<std::size_t> block_lo_, slot_lo_;
   std::vector<std::int32_t> slot_particle_, partner_;
-  std::int64_t blocks_builds_ = -1;  // list build the blocks belong to
+  std::vector<std::uint8_t> slot_code_;  // the periodic image of each slot (NeighborList code)
+  std::int64_t blocks_builds_ = -1;      // list build the blocks belong to
   // Per-thread partial results of a step (two largest excesses), padded to a cache line.
   struct alignas(64) Top {
     double e1 = -1e300, e2 = -1e300;
