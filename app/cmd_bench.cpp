@@ -1,12 +1,25 @@
-// `rendulic bench [--json]` (interfaces.md, issue 3 item 9): DEM throughput in ns per
-// particle-step on the standard states (isotropic nu = 0.64 and nu = 0.82, N = 9261) under
-// strain-controlled constant-volume extension, for 1 and 2 threads. The states are prepared
-// quickly (fast compression with a strong background damping, then relaxed), which matters
-// for timing only through the contact network, not for physics; the timed steps use the
-// seed material. Each figure is the best of several repetitions (the machine may be shared).
+// `rendulic bench [--json] [--load] [--lammps DIR]` (docs/performance.md): DEM throughput in ns
+// per particle-step on the standard states (isotropic nu = 0.64 and nu = 0.82, N = 9261) under
+// strain-controlled constant-volume extension, for fixed teams of 1 and 2 threads and for the
+// default setting (the team chosen while running, team.hpp). The states are prepared quickly
+// (fast compression with a strong background damping, then relaxed), which matters for timing
+// only through the contact network, not for physics; the timed steps use the seed material.
+// Idle figures are the best of several repetitions (the machine may be shared). With --load
+// every figure is taken a second time beside a busy loop in a child process (a browser, another
+// job or a second MPI rank on a user's machine); loaded figures are the mean over the
+// repetitions, since the waits for a descheduled thread are what they measure. --lammps writes
+// the same states as LAMMPS data files for bench/lammps_compare.sh.
 #include <omp.h>
+#include <signal.h>
+#include <sys/prctl.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
 #include <iomanip>
 #include <iostream>
 #include <memory>
@@ -21,12 +34,57 @@ namespace {
 
 struct BenchOptions {
   bool json = false;
+  bool load = false;
+  std::string lammps_dir;
   std::int64_t n_particles = 9261;
   std::vector<int> threads = {1, 2};
   std::vector<double> volume_fractions = {0.64, 0.82};
   double seconds = 1.0;  // timed wall time per figure and repetition (at least)
   int repetitions = 3;
   std::uint64_t seed = 1;
+};
+
+// The busy loop of the loaded figures: a child process that spins until killed. It dies with
+// the parent (PR_SET_PDEATHSIG), and an interrupt or termination of the parent kills it first.
+volatile sig_atomic_t g_busy_pid = 0;
+
+void kill_busy_and_reraise(int sig) {
+  if (g_busy_pid > 0) kill(static_cast<pid_t>(g_busy_pid), SIGKILL);
+  signal(sig, SIG_DFL);
+  raise(sig);
+}
+
+class BusyLoop {
+ public:
+  BusyLoop() {
+    const pid_t parent = getpid();
+    pid_ = fork();
+    if (pid_ < 0) throw std::runtime_error("bench --load: cannot start the busy process");
+    if (pid_ == 0) {
+      prctl(PR_SET_PDEATHSIG, SIGKILL);
+      if (getppid() != parent) _exit(0);
+      volatile unsigned long spin = 0;
+      for (;;) spin = spin + 1;
+    }
+    g_busy_pid = pid_;
+    old_int_ = signal(SIGINT, kill_busy_and_reraise);
+    old_term_ = signal(SIGTERM, kill_busy_and_reraise);
+    usleep(100000);  // let the scheduler place it before anything is timed
+  }
+  BusyLoop(const BusyLoop&) = delete;
+  BusyLoop& operator=(const BusyLoop&) = delete;
+  ~BusyLoop() {
+    kill(pid_, SIGKILL);
+    waitpid(pid_, nullptr, 0);
+    g_busy_pid = 0;
+    signal(SIGINT, old_int_);
+    signal(SIGTERM, old_term_);
+  }
+
+ private:
+  pid_t pid_ = -1;
+  void (*old_int_)(int) = SIG_DFL;
+  void (*old_term_)(int) = SIG_DFL;
 };
 
 dem::DemSystem prepared_state(const BenchOptions& o, double nu) {
@@ -46,25 +104,67 @@ dem::DemSystem prepared_state(const BenchOptions& o, double nu) {
   return dem::DemSystem::restore(s.save(), dem::SystemOptions{});
 }
 
-double time_steps(const dem::DemSystem& base, int threads, const BenchOptions& o) {
-  omp_set_num_threads(threads);
-  const Eigen::Vector3d D(400.0, -200.0, -200.0);  // the quick scenario's path rate
-  double best = 1e300;
+const Eigen::Vector3d kRate(400.0, -200.0, -200.0);  // the quick scenario's path rate
+
+// One figure: `threads` > 0 is a fixed team of that size, 0 the default (the team chosen while
+// running, up to all cores). Returns the best and the mean over the repetitions.
+struct Figure {
+  double best = 1e300, mean = 0;
+};
+Figure time_steps(const dem::DemSystem& base, int threads, int all_cores, const BenchOptions& o) {
+  omp_set_num_threads(threads > 0 ? threads : all_cores);
+  Figure f;
+  double total_seconds = 0, total_steps = 0;
+  const double n = static_cast<double>(base.particles().size());
   for (int rep = 0; rep < o.repetitions; ++rep) {
     dem::DemSystem s = base;
-    s.advance(20, D);  // warm caches and the thread pool
+    s.set_fixed_team(threads);
+    // Warm caches and the thread pool; the default setting also settles its team size.
+    const auto w0 = std::chrono::steady_clock::now();
+    do s.advance(20, kRate);
+    while (threads == 0 &&
+           std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count() < 0.2);
     std::int64_t steps = 0;
     const auto t0 = std::chrono::steady_clock::now();
     double el = 0;
     while (el < o.seconds) {
-      s.advance(50, D);
+      s.advance(50, kRate);
       steps += 50;
       el = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     }
-    best = std::min(
-        best, el * 1e9 / (static_cast<double>(steps) * static_cast<double>(s.particles().size())));
+    f.best = std::min(f.best, el * 1e9 / (static_cast<double>(steps) * n));
+    total_seconds += el;
+    total_steps += static_cast<double>(steps);
   }
-  return best;
+  f.mean = total_seconds * 1e9 / (total_steps * n);
+  return f;
+}
+
+// The state as a LAMMPS data file (atom_style sphere: id type diameter density x y z), with
+// its peculiar velocities.
+void write_lammps(const dem::DemSystem& s, const std::filesystem::path& file) {
+  std::ofstream out(file);
+  if (!out) throw InputError("bench --lammps: cannot write " + file.string());
+  const dem::Particles& p = s.particles();
+  const Eigen::Vector3d L = s.cell().lengths;
+  out << std::setprecision(17) << "rendulic bench state (N = " << p.size()
+      << ", nu = " << s.volume_fraction() << ", dt = " << s.dt() << " s)\n\n"
+      << p.size() << " atoms\n1 atom types\n\n"
+      << "0 " << L[0] << " xlo xhi\n0 " << L[1] << " ylo yhi\n0 " << L[2] << " zlo zhi\n\n"
+      << "Atoms # sphere\n\n";
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    const Eigen::Vector3d x = p.position(i);
+    Eigen::Vector3d q;
+    for (int a = 0; a < 3; ++a) {
+      q[a] = x[a] - L[a] * std::floor(x[a] / L[a]);
+      if (q[a] >= L[a]) q[a] = 0;
+    }
+    out << i + 1 << " 1 " << 2 * p.radius[i] << " " << s.material().density << " " << q[0] << " "
+        << q[1] << " " << q[2] << "\n";
+  }
+  out << "\nVelocities\n\n";
+  for (std::size_t i = 0; i < p.size(); ++i)
+    out << i + 1 << " " << p.vx[i] << " " << p.vy[i] << " " << p.vz[i] << " 0 0 0\n";
 }
 
 }  // namespace
@@ -72,46 +172,79 @@ double time_steps(const dem::DemSystem& base, int threads, const BenchOptions& o
 Subcommand add_bench(CLI::App& parent) {
   auto o = std::make_shared<BenchOptions>();
   auto* sub = parent.add_subcommand(
-      "bench", "DEM throughput (ns per particle-step) on the standard states, 1 and 2 threads");
+      "bench",
+      "DEM throughput (ns per particle-step) on the standard states: fixed teams of 1 and 2 "
+      "threads and the default setting; --load adds the same figures beside a busy process");
   sub->add_flag("--json", o->json,
-                "print a JSON list of {volume_fraction, threads, n_particles, "
-                "ns_per_particle_step}");
+                "print a JSON list of {volume_fraction, threads (0: default), n_particles, "
+                "ns_per_particle_step[, ns_per_particle_step_loaded]}");
+  sub->add_flag("--load", o->load,
+                "also time every figure beside a busy loop (a child process), side by side");
+  sub->add_option("--lammps", o->lammps_dir,
+                  "write the prepared states as LAMMPS data files into DIR "
+                  "(bench/lammps_compare.sh)");
   sub->add_option("--particles", o->n_particles, "number of particles")
       ->capture_default_str()
       ->check(CLI::Range(std::int64_t{100}, std::int64_t{10000000}));
-  sub->add_option("--threads", o->threads, "thread counts to time")
+  sub->add_option("--threads", o->threads, "fixed team sizes to time (the default is added)")
       ->capture_default_str()
       ->check(CLI::Range(1, 1024));
   sub->add_option("--seconds", o->seconds, "timed wall time per figure and repetition")
       ->capture_default_str()
       ->check(CLI::Range(0.01, 600.0));
-  sub->add_option("--repetitions", o->repetitions, "repetitions (the best is reported)")
+  sub->add_option("--repetitions", o->repetitions,
+                  "repetitions (idle: the best is reported; loaded: the mean)")
       ->capture_default_str()
       ->check(CLI::Range(1, 100));
   return {sub, [o]() -> int {
+            const int all_cores = omp_get_max_threads();
+            if (!o->lammps_dir.empty()) std::filesystem::create_directories(o->lammps_dir);
+            std::vector<int> settings = o->threads;
+            settings.push_back(0);  // the default
             std::ostringstream json;
             json << "[";
             bool first = true;
             if (!o->json)
-              std::cout << "volume_fraction  threads  n_particles  ns_per_particle_step\n";
+              std::cout << "volume_fraction  threads  n_particles  ns_per_particle_step"
+                        << (o->load ? "  loaded" : "") << "\n";
             for (double nu : o->volume_fractions) {
               if (!o->json) std::cerr << "bench: preparing nu = " << nu << " ...\n";
               const dem::DemSystem state = prepared_state(*o, nu);
-              for (int t : o->threads) {
-                const double ns = time_steps(state, t, *o);
+              if (!o->lammps_dir.empty()) {
+                std::ostringstream name;
+                name << "nu" << std::lround(100 * nu) << ".data";
+                write_lammps(state, std::filesystem::path(o->lammps_dir) / name.str());
+              }
+              std::vector<Figure> idle, loaded;
+              for (int t : settings) idle.push_back(time_steps(state, t, all_cores, *o));
+              if (o->load) {
+                BusyLoop busy;
+                for (int t : settings) loaded.push_back(time_steps(state, t, all_cores, *o));
+              }
+              for (std::size_t k = 0; k < settings.size(); ++k) {
+                const int t = settings[k];
                 if (o->json) {
                   json << (first ? "" : ",") << "{\"volume_fraction\":" << nu
                        << ",\"threads\":" << t << ",\"n_particles\":" << o->n_particles
-                       << ",\"ns_per_particle_step\":" << std::setprecision(4) << ns << "}";
+                       << ",\"ns_per_particle_step\":" << std::setprecision(4) << idle[k].best;
+                  if (o->load) json << ",\"ns_per_particle_step_loaded\":" << loaded[k].mean;
+                  json << "}";
                   first = false;
                 } else {
-                  std::cout << std::setw(15) << nu << std::setw(9) << t << std::setw(13)
-                            << o->n_particles << std::setw(22) << std::setprecision(4) << ns
-                            << "\n";
+                  std::cout << std::setw(15) << nu << std::setw(9)
+                            << (t > 0 ? std::to_string(t) : "default") << std::setw(13)
+                            << o->n_particles << std::setw(22) << std::setprecision(4)
+                            << idle[k].best;
+                  if (o->load) std::cout << std::setw(8) << std::setprecision(4) << loaded[k].mean;
+                  std::cout << "\n";
                 }
               }
+              if (o->load && !o->json && settings.front() == 1)
+                std::cout << "  loaded, default against 1 thread: " << std::setprecision(3)
+                          << loaded.back().mean / loaded.front().mean << "x\n";
             }
             if (o->json) std::cout << json.str() << "]\n";
+            omp_set_num_threads(all_cores);
             return 0;
           }};
 }

@@ -38,7 +38,10 @@ Subcommand add_run(CLI::App& parent) {
   sub->add_option("--out", o->out, "output folder")->capture_default_str();
   sub->add_option("--set", o->sets, "override a scenario key by its dotted path: a.b=value")
       ->take_all();
-  sub->add_option("--threads", o->threads, "OpenMP threads (0: all cores)")
+  sub->add_option("--threads", o->threads,
+                  "OpenMP threads (0, the default: all cores). DEM steps use a team only where it "
+                  "pays: never below N = 1000, and only while it measures faster than one thread "
+                  "(a busy core makes it slower); results do not depend on it")
       ->check(CLI::NonNegativeNumber);
   sub->add_flag("--quiet", o->quiet, "no progress display");
   return {sub, [o]() -> int {

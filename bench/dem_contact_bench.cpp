@@ -1,6 +1,6 @@
-// Google Benchmarks of the DEM hot path (issue 3 item 9): the NormalContact kernel alone, and
-// whole steps (contact loop + integrator + list upkeep) on standard states, reported as ns per
-// particle-step. The whole-pipeline command is `rendulic bench` (docs/performance.md).
+// Google Benchmarks of the DEM hot path: the NormalContact kernel alone, and whole steps
+// (contact loop + integrator + list upkeep) on standard states with a fixed team, reported as
+// ns per particle-step. The whole-pipeline command is `rendulic bench` (docs/performance.md).
 #include <benchmark/benchmark.h>
 #include <omp.h>
 
@@ -57,6 +57,7 @@ void BM_Step(benchmark::State& state) {
   if (!cache.count(key)) cache.emplace(key, packing(n, nu));
   DemSystem s = cache.at(key);
   omp_set_num_threads(threads);
+  s.set_fixed_team(threads);  // this many threads, not the team the engine would choose
   const Eigen::Vector3d D(400.0, -200.0, -200.0);  // strain-controlled extension
   for (auto _ : state) s.step(D);
   // items_per_second = particle-steps per second: ns per particle-step = 1e9 / items_per_second.

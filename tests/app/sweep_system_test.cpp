@@ -65,10 +65,12 @@ void expect_error_falls_as_relaxation_tightens(const ResultsReader& f) {
   // The relaxation is not monotone in between: a loose threshold stops at the first check
   // after the relaxation peak, and at N = 250 the error even rose from 1e-6 to 1e-7 in one
   // measured run (0.11 -> 0.15, then 0.033 at 1e-8). What must hold: the tightest threshold
-  // is the most accurate, within the scatter of a converged envelope (10 % or 0.01 a_ref).
+  // is the most accurate, within the scatter of a converged envelope (10 % or 0.03 a_ref: over
+  // seeds 1-4 the error at 1e-8 ranged from 0.019 to 0.051 a_ref, and in one run it exceeded
+  // that at 1e-7 by 0.019; a round-off change of the force sums draws another realization).
   const double tightest = error.begin()->second;
   for (auto it = std::next(error.begin()); it != error.end(); ++it)
-    EXPECT_LE(tightest, std::max(1.1 * it->second, it->second + 0.01))
+    EXPECT_LE(tightest, std::max(1.1 * it->second, it->second + 0.03))
         << "threshold " << error.begin()->first << " vs " << it->first;
   // And overall it falls by a lot: the loosest threshold (1e-4) stops mid-relaxation.
   EXPECT_LT(error.begin()->second, 0.5 * error.rbegin()->second);

@@ -1,10 +1,10 @@
-// Parallel determinism (issue 3 item 8): the same thread count gives bit-identical results,
-// another thread count agrees to round-off. A system test because two threads on a shared
-// machine may wait on each other for seconds.
+// Parallel determinism (dem_system.hpp): the force loop's blocks and their reduction order
+// depend on N only, so 1, 2 and 3 threads give bitwise the same particles after many steps with
+// list rebuilds and a servo (stress-controlled) phase, and so does a run that changes its team
+// size from step to step or restarts from a saved state on another thread count. A system
+// test because two threads on a shared machine may wait on each other for seconds.
 #include <gtest/gtest.h>
 #include <omp.h>
-
-#include <cmath>
 
 #include "dem_helpers.hpp"
 
@@ -18,29 +18,69 @@ std::vector<double> flat(const Particles& p) {
   return v;
 }
 
-TEST(Determinism, DeterministicForAGivenThreadCountAndCloseAcrossCounts) {
+// A hot, dense gas of 8000 particles (four blocks, so up to four threads share a step),
+// compressed, then driven by a lateral stress servo: rebuilds, collisions and the stress sum of
+// the servo steps all take part.
+void drive(DemSystem& s, int first, int last) {
+  const Eigen::Vector3d D = Eigen::Vector3d::Constant(-3000.0);
+  for (int k = first; k < last; ++k) {
+    if (k < 400)
+      s.step(D);
+    else
+      s.step(CellControl::drained_triaxial(-100.0, 1e5));
+  }
+}
+
+DemSystem gas() {
   SystemOptions o;
   GasOptions g;
-  g.n_particles = 600;  // above the serial threshold, so loops really run in parallel
-  g.volume_fraction = 0.35;
-  const Eigen::Vector3d D = Eigen::Vector3d::Constant(-3000.0);
+  g.n_particles = 8000;
+  g.volume_fraction = 0.4;
+  g.velocity = 50.0;  // fast particles: a rebuild every ~100 steps
+  return make_gas(o, g, 5);
+}
+
+TEST(Determinism, BitIdenticalOnOneTwoAndThreeThreads) {
   const int saved = omp_get_max_threads();
-  omp_set_num_threads(2);
-  DemSystem a = make_gas(o, g, 5), b = make_gas(o, g, 5);
-  a.advance(100, D);
-  b.advance(100, D);
-  omp_set_num_threads(1);
-  DemSystem c = make_gas(o, g, 5);
-  c.advance(100, D);
+  ASSERT_GE(block_count(8000), 4u);
+  std::vector<std::vector<double>> results;
+  std::int64_t builds = 0;
+  for (int threads : {1, 2, 3}) {
+    omp_set_num_threads(threads);
+    DemSystem s = gas();
+    s.set_fixed_team(threads);
+    drive(s, 0, 600);
+    EXPECT_EQ(s.team(), threads);
+    results.push_back(flat(s.particles()));
+    builds = s.list_builds();
+  }
   omp_set_num_threads(saved);
-  EXPECT_EQ(flat(a.particles()), flat(b.particles()));  // same thread count: bit-identical
-  // Another thread count sums the same pair forces in another order: round-off only (the gas
-  // is chaotic, but 100 steps are far too few to amplify 1e-16 beyond 1e-9).
-  const auto fa = flat(a.particles()), fc = flat(c.particles());
-  double worst = 0;
-  for (std::size_t i = 0; i < a.particles().size(); ++i)
-    worst = std::max(worst, std::abs(fa[i] - fc[i]));  // positions x
-  EXPECT_LT(worst, 1e-9 * a.cell().lengths[0]);
+  EXPECT_GE(builds, 5);  // the list was rebuilt along the way
+  EXPECT_EQ(results[0], results[1]);
+  EXPECT_EQ(results[0], results[2]);
+}
+
+TEST(Determinism, ChangingTheTeamWhileRunningOrOnRestartChangesNothing) {
+  const int saved = omp_get_max_threads();
+  omp_set_num_threads(1);
+  DemSystem a = gas();
+  drive(a, 0, 600);
+  // The same run, its team size changing every few steps, saved and restored half way on
+  // another thread count.
+  omp_set_num_threads(3);
+  DemSystem b = gas();
+  for (int k = 0; k < 300; k += 25) {
+    b.set_fixed_team(1 + (k / 25) % 3);
+    drive(b, k, k + 25);
+  }
+  const State half = b.save();
+  omp_set_num_threads(2);
+  DemSystem c = DemSystem::restore(half, b.options());
+  c.set_fixed_team(2);
+  drive(c, 300, 600);
+  omp_set_num_threads(saved);
+  EXPECT_EQ(flat(a.particles()), flat(c.particles()));
+  EXPECT_EQ(a.cell().lengths, c.cell().lengths);
 }
 
 }  // namespace

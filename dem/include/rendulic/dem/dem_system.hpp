@@ -16,13 +16,14 @@
 // forces they are O(D t_c) ~ 1e-6 at the rates of this mission. The conservative part is the
 // symplectic Verlet scheme; the dissipative part is explicit with a second-order predictor.
 //
-// Parallel (OpenMP) over particles with a half neighbour list: each thread owns a contiguous
-// range of rows (equal list length) and accumulates pair forces into its own buffer, of which
-// only its range and its few partners outside it are touched; the owner of a range adds the
-// other threads' contributions in thread order. Every other reduction is serial or order-free
-// (max). Results are therefore deterministic for a given
-// thread count and bit-identical on restart (see State); different thread counts agree to
-// round-off.
+// Parallel (OpenMP) with results that do not depend on the number of threads: the rows of the
+// half neighbour list are cut into a fixed number of blocks (block_count(N), team.hpp), each
+// block accumulates the forces on its own rows in place and those on partners outside it into a
+// compact buffer of its own, and each particle then adds the buffers that hold a contribution
+// to it in block order. Every other reduction is per particle, serial or order-free (max). A
+// step therefore gives bitwise the same result on 1, 2 or 17 threads, which lets the engine
+// choose its team size while running (TeamController, team.hpp): on a loaded machine a team
+// whose members are descheduled in turn is slower than one thread, and is dropped.
 #pragma once
 
 #include <Eigen/Dense>
@@ -36,6 +37,7 @@
 #include "rendulic/dem/measures.hpp"
 #include "rendulic/dem/neighbor_list.hpp"
 #include "rendulic/dem/particles.hpp"
+#include "rendulic/dem/team.hpp"
 
 namespace rendulic::dem {
 
@@ -61,7 +63,7 @@ struct SystemOptions {
   bool IsValid(std::string* why) const;
 };
 
-// Everything needed to continue a run bit-identically (same build, same thread count): the
+// Everything needed to continue a run bit-identically (same build, any thread count): the
 // particle arrays, the cell, the clocks and the neighbour list's reference state (the list is
 // a pure function of it, so a restored run rebuilds exactly the same list).
 struct State {
@@ -111,6 +113,12 @@ class DemSystem {
   Eigen::Vector3d strain_E() const { return strain_E_; }
   Eigen::Vector3d last_D() const { return last_D_; }
   std::int64_t list_builds() const { return list_.builds(); }
+  // Threads of the last step (1 when it ran serially).
+  int team() const { return last_team_; }
+  // 0 (the default): the team size is chosen while running, up to max_team(N,
+  // omp_get_max_threads()); k > 0: always min(k, max_team(N, k)) threads (benchmarks).
+  void set_fixed_team(int threads) { fixed_team_ = threads; }
+  const TeamController& team_controller() const { return controller_; }
   // Diagonal of the stress from the last force evaluation that computed it (servo steps).
   Eigen::Vector3d last_stress_diag() const { return last_stress_diag_; }
 
@@ -126,12 +134,20 @@ class DemSystem {
   void rebuild_list();
   // Copies positions and radii into the packed array the force loop gathers from.
   void pack_positions();
-  void note_list_built();  // after every build: the longest row, the packed positions
-  void partition_rows(int threads);
-  // Forces at the current positions from the velocities in vel4_; then, if half_kick != 0,
+  void note_list_built();  // after every build: blocks, targets, packed positions
+  void make_blocks();
+  // Team size of the next step; *adaptive: the controller chose it (the step is timed).
+  int choose_team(bool* adaptive);
+  // Forces at the current positions from the velocities in va8_; then, if half_kick != 0,
   // v += half_kick F / m (the closing half kick of a step).
   template <bool kStress>
-  void compute_forces(double half_kick);
+  void compute_forces(double half_kick, int team);
+  // Inside a parallel region of T threads (or serially with T = 1): thread t's share of it.
+  template <bool kStress>
+  void forces_of_thread(std::size_t t, std::size_t T, double half_kick);
+  template <bool kStress>
+  void force_block(std::size_t b);
+  void sum_stress();  // last_stress_diag_ from the per-particle terms of the last evaluation
   template <bool kStress>
   void step_impl(const Eigen::Vector3d& D);
 
@@ -147,18 +163,29 @@ class DemSystem {
   Eigen::Vector3d last_D_ = Eigen::Vector3d::Zero();
   Eigen::Vector3d last_stress_diag_ = Eigen::Vector3d::Zero();
   std::vector<double> stress_scratch_;  // per-particle diagonal stress (servo steps)
-  // The force loop gathers partner j's data at random: packed, one partner costs three cache
-  // lines (position + radius, velocity, force buffer) instead of ten separate arrays.
-  AlignedVector pos4_;  // x, y, z, radius per particle
-  AlignedVector vel4_;  // velocities of the dissipative forces (x, y, z, unused)
-  AlignedVector acc4_;  // per-thread pair-force accumulators (x, y, z, unused)
-  // A thread's rows of the list and the partners outside them (compute_forces).
-  struct RowPart {
-    std::size_t lo = 0, hi = 0;
-    std::vector<std::int32_t> foreign;  // sorted partner indices outside [lo, hi)
+  // The force loop gathers partner j's data at random: packed, one partner costs two cache
+  // lines (position + radius; velocity + force accumulator) instead of ten separate arrays.
+  AlignedVector pos4_;  // x, y, z, radius per particle, then the foreign slots
+  // Per particle, then per slot: the velocity of the dissipative forces (x, y, z, unused) and
+  // the pair-force accumulator (x, y, z, unused).
+  AlignedVector va8_;
+  AlignedVector ref4_;  // the list's reference position and half skin per particle
+  // Blocks of rows (block_lo_[b] .. block_lo_[b+1]) and their slots (slot_lo_[b] ..
+  // slot_lo_[b+1], records N + s of pos4_ and va8_: copies of particle slot_particle_[s] seen
+  // through image slot_code_[s]). partner_: the list's partner of each entry, or its slot if
+  // the partner lies outside the entry's block or is seen through another image.
+  std::vector<std::size_t> block_lo_, slot_lo_;
+  std::vector<std::int32_t> slot_particle_, partner_;
+  std::vector<std::uint8_t> slot_code_;  // the periodic image of each slot (NeighborList code)
+  std::int64_t blocks_builds_ = -1;      // list build the blocks belong to
+  // Per-thread partial results of a step (two largest excesses), padded to a cache line.
+  struct alignas(64) Top {
+    double e1 = -1e300, e2 = -1e300;
   };
-  std::vector<RowPart> parts_;
-  std::int64_t parts_builds_ = -1;  // list build the partition belongs to
+  std::vector<Top> tops_;
+  TeamController controller_;
+  int fixed_team_ = 0;
+  int last_team_ = 1;
 };
 
 }  // namespace rendulic::dem

@@ -35,9 +35,10 @@ class NeighborList {
   // Throws InputError if the cell is too small for one periodic image per pair
   // (L_a <= 2 (2 r_max + skin)).
   void build(const Particles& p, const Eigen::Vector3d& lengths, double skin);
-  // The same with per-particle half skins (each >= skin / 2 and r_i + h_i <= r_max + skin / 2).
+  // The same with per-particle half skins (each >= skin / 2 and r_i + h_i <= r_max + skin / 2),
+  // on `threads` threads (0: omp_get_max_threads()); the list does not depend on them.
   void build(const Particles& p, const Eigen::Vector3d& lengths, double skin,
-             std::vector<double> half_skins);
+             std::vector<double> half_skins, int threads = 0);
 
   // Reference state of the last build (for the rebuild rule and for bit-identical restarts).
   const std::vector<double>& ref_x() const { return ref_x_; }

@@ -1,0 +1,89 @@
+// How many threads a DEM step uses (docs/performance.md, "Threads on a shared machine").
+//
+// A step of N = 1000 particles lasts tens of microseconds and needs a few team-wide
+// synchronisations; a scheduler time slice lasts milliseconds. On an idle machine a team of
+// two pays (the synchronisations cost about a microsecond each), but as soon as another
+// process competes for a core, one team member is regularly descheduled and the other waits
+// for it at every synchronisation: the step then costs a time slice instead of microseconds.
+// Because the engine's results do not depend on the team size (dem_system.hpp), the team can
+// be chosen while running: TeamController times windows of steps with the team in use and,
+// now and then, with a neighbouring size, and keeps the faster one.
+//
+// max_team() is the static part of the rule: no team at all where the step is too small to
+// pay for its synchronisations, and never more threads than the step has blocks of rows.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+
+namespace rendulic::dem {
+
+// Rows (particles) per block of the force loop: the blocks are the unit of parallel work and
+// of the thread-count independent reduction (dem_system.hpp). Their number depends on N only.
+inline constexpr std::size_t kRowsPerBlock = 500;
+// Blocks of the force loop for N particles: a power of two (so that 2, 4, ... threads get equal
+// shares), two from 2 kRowsPerBlock particles on, then about sqrt(N / kRowsPerBlock) (capped at
+// 64): a block is a slab of the cell, and its partners outside it, which cost a copy and a sum
+// each, grow with the number of slabs (N = 9261: 4 % more instructions per step with 4 blocks
+// than with one, 8 % with 8).
+std::size_t block_count(std::size_t n);
+// The largest team a step of n particles may use given `threads` available: 1 below
+// 2 kRowsPerBlock particles (a step there lasts about as long as a few synchronisations), at
+// most one thread per block.
+int max_team(std::size_t n, int threads);
+
+// Chooses the team size step by step from measured step times. Sizes are the ladder 1, 2,
+// 4, ..., max. The controller runs windows of at least kWindowSeconds of step time: mostly
+// with the current size, sometimes (exploration) with a neighbouring size on the ladder; a
+// size that was faster by more than kMargin becomes current. It starts with one thread and
+// explores upwards at once (on an idle machine the team is in use after one window).
+// Explorations that confirm the current size are spaced twice as far apart each time (up to
+// kMaxSpacing windows), and far enough apart that their waste is about kOverhead of the time
+// (up to kMaxWasteSpacing windows); a failing exploration is cut short as soon as it has cost
+// twice what the current size needs for a minimal window plus kSlackSeconds, so a check of the
+// team on a loaded machine costs about one descheduled step (a time slice). When a team gets
+// markedly slower than in its previous window (load appeared) the next window explores
+// downwards at once.
+class TeamController {
+ public:
+  static constexpr double kWindowSeconds = 0.02;
+  static constexpr int kMinWindowSteps = 4;
+  static constexpr double kMargin = 0.05;
+  static constexpr int kMaxSpacing = 64;
+  static constexpr double kOverhead = 0.01;
+  static constexpr int kMaxWasteSpacing = 1024;
+  static constexpr double kJump = 1.5;           // a team slower than this factor: explore now
+  static constexpr double kSlackSeconds = 1e-3;  // waking a sleeping team costs far less
+
+  // Team size for the next step, given the largest allowed (>= 1).
+  int choose(int max_size);
+  // The step just made with `size` threads took `seconds` (wall, without list builds).
+  void record(int size, double seconds);
+  int current() const { return max_ > 1 ? ladder_[cur_] : 1; }
+  // Windows that explored another size, and switches of the current size (for tests).
+  std::int64_t explorations() const { return explorations_; }
+  std::int64_t switches() const { return switches_; }
+
+ private:
+  void reset(int max_size);
+  void close_window();
+  void start_exploration(bool up);
+
+  static constexpr int kLadder = 16;
+  std::array<int, kLadder> ladder_{};
+  std::array<double, kLadder> cost_{};  // seconds per step of the last window of each size
+  int sizes_ = 0;                       // entries of ladder_ in use
+  int max_ = 0;                         // max_size the ladder was made for
+  int cur_ = 0;                         // index of the current size
+  int win_ = 0;                         // index of the size of the running window
+  double win_seconds_ = 0;
+  int win_steps_ = 0;
+  int spacing_ = 1;  // windows of the current size between explorations
+  int since_ = 0;    // windows of the current size since the last exploration
+  bool explore_up_ = true;
+  std::int64_t explorations_ = 0;
+  std::int64_t switches_ = 0;
+};
+
+}  // namespace rendulic::dem

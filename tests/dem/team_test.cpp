@@ -1,0 +1,164 @@
+// The team-size rule and controller of DEM steps (team.hpp). The rule is checked on its own and
+// on real systems (which team a step actually used), the controller on synthetic step times:
+// a model machine where a team is faster (idle), slower by a descheduled member's time slice
+// per step (loaded), or one turning into the other. No wall clock is read.
+#include "rendulic/dem/team.hpp"
+
+#include <gtest/gtest.h>
+#include <omp.h>
+
+#include <functional>
+
+#include "dem_helpers.hpp"
+
+namespace rendulic::dem {
+namespace {
+
+TEST(TeamRule, NoTeamWhereAStepCannotPayForIt) {
+  // Below 2 kRowsPerBlock a step lasts about as long as its synchronisations.
+  for (std::size_t n : {2u, 100u, 300u, 600u, 999u}) {
+    EXPECT_EQ(max_team(n, 2), 1) << n;
+    EXPECT_EQ(max_team(n, 64), 1) << n;
+  }
+  EXPECT_EQ(max_team(1000, 2), 2);
+  EXPECT_EQ(max_team(9261, 2), 2);
+  EXPECT_EQ(max_team(9261, 1), 1);
+  EXPECT_EQ(max_team(9261, 0), 1);
+}
+
+TEST(TeamRule, BlocksArePowersOfTwoGrowingSlowerThanN) {
+  std::size_t previous = 1;
+  for (std::size_t n = 2; n < 2000000; n = n * 5 / 4 + 1) {
+    const std::size_t b = block_count(n);
+    EXPECT_EQ(b & (b - 1), 0u) << n;  // equal shares for 2, 4, ... threads
+    EXPECT_GE(b, previous) << n;
+    EXPECT_LE(b, 64u);
+    if (b > 1) {
+      EXPECT_GE(n / b, kRowsPerBlock) << n;  // a block is never tiny
+    }
+    // Never more threads than blocks, never more than given.
+    EXPECT_LE(static_cast<std::size_t>(max_team(n, 1000)), b) << n;
+    EXPECT_LE(max_team(n, 3), 3);
+    previous = b;
+  }
+  EXPECT_EQ(block_count(1000), 2u);  // quick.toml's N: two threads can share it
+  EXPECT_EQ(block_count(9261), 4u);  // paper.toml's
+}
+
+TEST(TeamRule, ASmallSystemStepsOnOneThreadAndALargerOneUsesTheTeam) {
+  const int saved = omp_get_max_threads();
+  omp_set_num_threads(2);
+  SystemOptions o;
+  GasOptions g;
+  g.volume_fraction = 0.3;
+  g.n_particles = 300;
+  DemSystem small = make_gas(o, g, 3);
+  small.set_fixed_team(2);  // even when asked for two threads
+  small.advance(3, Eigen::Vector3d::Zero());
+  EXPECT_EQ(small.team(), 1);
+  g.n_particles = 1000;
+  DemSystem large = make_gas(o, g, 3);
+  large.set_fixed_team(2);
+  large.advance(3, Eigen::Vector3d::Zero());
+  EXPECT_EQ(large.team(), 2);
+  omp_set_num_threads(1);  // one thread available: no team, whatever is asked
+  large.advance(1, Eigen::Vector3d::Zero());
+  EXPECT_EQ(large.team(), 1);
+  omp_set_num_threads(saved);
+}
+
+// Runs `steps` steps of a model machine through the controller; cost(size, step) is the step's
+// time in seconds. Returns the total time.
+double run_model(TeamController& c, int max_size, std::int64_t first, std::int64_t steps,
+                 const std::function<double(int, std::int64_t)>& cost, double* at_team = nullptr) {
+  double total = 0;
+  for (std::int64_t k = first; k < first + steps; ++k) {
+    const int size = c.choose(max_size);
+    const double s = cost(size, k);
+    if (at_team && size > 1) *at_team += s;
+    c.record(size, s);
+    total += s;
+  }
+  return total;
+}
+
+TEST(TeamController, UsesTheTeamOnAnIdleMachine) {
+  TeamController c;
+  // N = 1000 on two idle cores: 40 us serial, 24 us with the team.
+  auto idle = [](int size, std::int64_t) { return size > 1 ? 24e-6 : 40e-6; };
+  const double total = run_model(c, 2, 0, 200000, idle);
+  EXPECT_EQ(c.current(), 2);
+  // Within 3 % of always using the team (explorations of one thread are rare).
+  EXPECT_LT(total, 1.03 * 200000 * 24e-6);
+}
+
+TEST(TeamController, DropsTheTeamOnALoadedMachine) {
+  TeamController c;
+  // A busy process shares a core: every 8th team step waits for a descheduled member (4 ms).
+  auto loaded = [](int size, std::int64_t k) {
+    return size > 1 ? (k % 8 == 0 ? 4e-3 : 24e-6) : 40e-6;
+  };
+  double at_team = 0;
+  const double total = run_model(c, 2, 0, 200000, loaded, &at_team);
+  EXPECT_EQ(c.current(), 1);
+  // Within 5 % of one thread; the explorations became rare.
+  EXPECT_LT(total, 1.05 * 200000 * 40e-6);
+  EXPECT_LT(at_team, 0.05 * total);
+}
+
+TEST(TeamController, ChecksRarelyWhereAStalledStepIsExpensive) {
+  TeamController c;
+  // A crowded machine: this process gets a sixth of a core (150 us per serial step) and a
+  // descheduled team member comes back after 80 ms.
+  auto crowded = [](int size, std::int64_t k) {
+    return size > 1 ? (k % 8 == 0 ? 80e-3 : 100e-6) : 150e-6;
+  };
+  double at_team = 0;
+  const double total = run_model(c, 2, 0, 100000, crowded, &at_team);
+  EXPECT_EQ(c.current(), 1);
+  EXPECT_LT(total, 1.03 * 100000 * 150e-6);  // the checks cost about 1 %, not 6 %
+  EXPECT_LE(c.explorations(), 3);
+}
+
+TEST(TeamController, FollowsTheLoadWhenItComesAndGoes) {
+  TeamController c;
+  auto idle = [](int size, std::int64_t) { return size > 1 ? 24e-6 : 40e-6; };
+  auto loaded = [](int size, std::int64_t k) {
+    return size > 1 ? (k % 8 == 0 ? 4e-3 : 24e-6) : 40e-6;
+  };
+  run_model(c, 2, 0, 100000, idle);
+  EXPECT_EQ(c.current(), 2);
+  // Load arrives: the team is dropped within a window or two.
+  const double t = run_model(c, 2, 100000, 2000, loaded);
+  EXPECT_EQ(c.current(), 1);
+  EXPECT_LT(t, 0.2);
+  run_model(c, 2, 102000, 100000, loaded);
+  // Load leaves: the team comes back at the next exploration (at most kMaxSpacing windows).
+  const std::int64_t window = static_cast<std::int64_t>(TeamController::kWindowSeconds / 40e-6);
+  run_model(c, 2, 202000, (TeamController::kMaxSpacing + 4) * window, idle);
+  EXPECT_EQ(c.current(), 2);
+  EXPECT_GE(c.switches(), 3);
+}
+
+TEST(TeamController, ClimbsTheLadderToTheBestSize) {
+  TeamController c;
+  // Eight cores, three of them busy: five threads would be best; of the ladder 1, 2, 4, 8 the
+  // team of four is, and eight is slow (descheduled members).
+  auto machine = [](int size, std::int64_t k) {
+    if (size == 8) return k % 4 == 0 ? 4e-3 : 10e-6;
+    return 80e-6 / size;
+  };
+  run_model(c, 8, 0, 100000, machine);
+  EXPECT_EQ(c.current(), 4);
+}
+
+TEST(TeamController, OneThreadAvailableMeansNoChoice) {
+  TeamController c;
+  EXPECT_EQ(c.choose(1), 1);
+  c.record(1, 1.0);
+  EXPECT_EQ(c.current(), 1);
+  EXPECT_EQ(c.explorations(), 0);
+}
+
+}  // namespace
+}  // namespace rendulic::dem
