@@ -39,6 +39,7 @@ struct EnvInfo {
   std::vector<Eigen::Vector2d> strain_pairs, stress_pairs, fabric_pairs;
   // The fabric split (docs/probes.md "Fabric split"); empty when not stored.
   std::vector<Eigen::Matrix3d> f_volume, f_rotation, f_contacts;
+  double mean_flips = kNaN;  // contacts opened + closed per probe (all contacts), if stored
   bool has_split() const { return !f_contacts.empty() && f_contacts.size() == theta.size(); }
 };
 
@@ -96,6 +97,14 @@ std::vector<StateInfo> read_states(const ResultsReader& r) {
         env.f_volume = r.read_tensors(e + "/d_fabric_volume");
         env.f_rotation = r.read_tensors(e + "/d_fabric_rotation");
         env.f_contacts = r.read_tensors(e + "/d_fabric_contacts");
+      }
+      if (r.exists(e + "/contacts_opened") && r.exists(e + "/contacts_closed")) {
+        const auto opened = r.read_vector(e + "/contacts_opened");
+        const auto closed = r.read_vector(e + "/contacts_closed");
+        double sum = 0;
+        for (std::size_t p = 0; p < opened.size() && p < closed.size(); ++p)
+          sum += opened[p] + closed[p];
+        if (!opened.empty()) env.mean_flips = sum / static_cast<double>(opened.size());
       }
       env.stress = read_fit(r, e + "/fit_stress");
       env.fabric = read_fit(r, e + "/fit_fabric");
@@ -414,8 +423,12 @@ std::vector<Claim> evaluate_claims(const ResultsReader& r) {
         measured = false;
         break;
       }
-      const double p = frobenius_mean(pl[i]->f_contacts) / pl[i]->amplitude;
-      const double e = frobenius_mean(el[i]->f_contacts) / el[i]->amplitude;
+      // A contact-set part at round-off (no contact changed) is zero.
+      auto structural = [](const EnvInfo& env) {
+        const double m = frobenius_mean(env.f_contacts);
+        return m > 1e-12 ? m / env.amplitude : 0.0;
+      };
+      const double p = structural(*pl[i]), e = structural(*el[i]);
       gain.push_back(e > 0 ? p / e : (p > 0 ? std::numeric_limits<double>::infinity() : kNaN));
       ok = ok && (e > 0 ? p > 5.0 * e : p > 0);
       // The line fit's inclination (the seed fits fabric envelopes with lines), else the map's.
@@ -430,6 +443,16 @@ std::vector<Claim> evaluate_claims(const ResultsReader& r) {
       c.measured = amplitude_note +
                    "; contact-set |dF| per unit strain, plastic / elastic: " + series(gain) +
                    "; steady-state fabric b/a " + fmt(thin) + "; inclination: " + series(inc, 4);
+      // Why the gain can be small: contacts made and lost per probe (a flip's fabric change
+      // does not shrink with the amplitude, and the many flips of a large probe partly cancel).
+      std::vector<double> el_flips, pl_flips;
+      for (std::size_t i = 0; i < pl.size(); ++i) {
+        el_flips.push_back(el[i]->mean_flips);
+        pl_flips.push_back(pl[i]->mean_flips);
+      }
+      if (std::all_of(el_flips.begin(), el_flips.end(), [](double v) { return std::isfinite(v); }))
+        c.measured += "; contacts made or lost per probe, elastic: " + series(el_flips) +
+                      ", plastic: " + series(pl_flips);
     } else {
       c.measured = amplitude_note;
     }
@@ -517,8 +540,8 @@ std::string report_markdown(const ResultsReader& r, const std::vector<Claim>& cl
     md << "- particles: " << r.attr_int("/material", "n_particles") << "\n";
   if (r.exists("/timings")) {
     md << "\n## Wall time per stage\n\n| stage | seconds |\n|---|---|\n";
-    for (const char* st : {"prepare", "isotropic", "path", "states", "probes", "linear_response",
-                           "fits", "calibration"})
+    for (const char* st : {"prepare", "isotropic", "path", "states", "elastic_range", "probes",
+                           "linear_response", "pressure", "fits", "calibration"})
       if (r.has_attr("/timings", st))
         md << "| " << st << " | " << fmt(r.attr_double("/timings", st), 4) << " |\n";
   }
@@ -529,6 +552,33 @@ std::string report_markdown(const ResultsReader& r, const std::vector<Claim>& cl
        << " | **" << c.verdict << "** |\n";
   md << "\nVerdicts use the dynamic-probe envelopes where present (the seed's method), else "
         "minimisation, else linear response (elastic only).\n";
+  // The elastic range of every state, at nu_max and at the pressure branches.
+  std::vector<std::string> roots = {""};
+  if (r.exists("/pressure"))
+    for (const auto& b : r.children("/pressure")) roots.push_back("/pressure/" + b);
+  std::ostringstream range;
+  for (const auto& root : roots) {
+    if (!r.exists(root + "/states")) continue;
+    for (const auto& label : r.children(root + "/states")) {
+      const std::string g = root + "/states/" + label, e = g + "/elastic_range";
+      if (!r.exists(e) || !r.has_attr(e, "yield_strain")) continue;
+      const bool yielded = r.has_attr(e, "yielded") && r.attr_int(e, "yielded") != 0;
+      auto attr_or_nan = [&](const std::string& object, const char* name) {
+        return r.has_attr(object, name) ? r.attr_double(object, name) : kNaN;
+      };
+      range << "| " << fmt(attr_or_nan(g, "volume_fraction"), 3) << " | "
+            << fmt(attr_or_nan(g, "pressure_star"), 3) << " | " << label << " | "
+            << fmt(-attr_or_nan(g, "eps_dev"), 3) << " | " << (yielded ? "" : ">= ")
+            << fmt(r.attr_double(e, "yield_strain")) << " | "
+            << (r.has_attr(e, "elastic_to") ? fmt(r.attr_double(e, "elastic_to")) : "-") << " |\n";
+    }
+  }
+  if (!range.str().empty())
+    md << "\n## Elastic range (docs/probes.md)\n\nThe yield strain is the first amplitude of the "
+          "ladder whose response departs from the elastic one by the tolerance; the yield lies "
+          "between the rung below (elastic to) and it.\n\n| nu | P* | state | -eps_dev | yield "
+          "strain | elastic to |\n|---|---|---|---|---|---|\n"
+       << range.str();
   if (r.exists("/calibration")) {
     md << "\n## Calibration (models.md)\n\n"
        << "| model | converged | objective | fitted misfit | held-out misfit | parameters "
