@@ -104,6 +104,9 @@ void check_stages_available(const Scenario& scenario) {
       requested(scenario, "elastic_range"))
     dem::probe_options_from(scenario);
   if (requested(scenario, "elastic_range")) dem::elastic_range_options_from(scenario);
+  if (requested(scenario, "pressure") && scenario.get_doubles("pressure.volume_fractions").empty())
+    throw InputError("run: stage 'pressure' needs pressure.volume_fractions (" +
+                     scenario.origin("pressure.volume_fractions") + ")");
 }
 
 void run_pipeline(const Scenario& scenario, ResultsWriter& out, const RunContext& ctx) {

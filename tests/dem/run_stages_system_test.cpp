@@ -173,15 +173,18 @@ TEST(RunStages, PressureBranchRepeatsThePathAndStatesAtALowerVolumeFraction) {
 TEST(RunStages, BadDemValuesExitTwoAndWriteNothing) {
   const std::string scenario = std::string(RENDULIC_SOURCE_DIR) + "/data/scenarios/quick.toml";
   const std::vector<std::string> bad = {
-      "dem.dt_factor=0.5",            // beyond the stability limit
-      "material.k=-1",                // out of range
-      "isotropic.nu_max=0.6",         // below nu0
-      "states.labels=[\"a\",\"b\"]",  // one label per state
-      "states.eps_dev=[0.006,0.5]",   // beyond path.eps_dev_max (and labels mismatch)
-      "dem.n_particles=10",           // too few
-      "preparation.nu_gas=0.5",       // random insertion cannot reach it
-      "path.rate=0",                  // not a rate
-      "probes.dt_factor=0.5",         // the probes' step beyond the stability limit
+      "dem.dt_factor=0.5",                      // beyond the stability limit
+      "material.k=-1",                          // out of range
+      "isotropic.nu_max=0.6",                   // below nu0
+      "states.labels=[\"a\",\"b\"]",            // one label per state
+      "states.eps_dev=[0.006,0.5]",             // beyond path.eps_dev_max (and labels mismatch)
+      "dem.n_particles=10",                     // too few
+      "preparation.nu_gas=0.5",                 // random insertion cannot reach it
+      "path.rate=0",                            // not a rate
+      "probes.dt_factor=0.5",                   // the probes' step beyond the stability limit
+      "pressure.volume_fractions=[0.9]",        // beyond isotropic.nu_max
+      "run.stages=[\"prepare\",\"pressure\"]",  // a pressure stage without volume fractions
+      "elastic_range.amplitudes=[1e-3,1e-4]",   // a ladder must increase
   };
   for (std::size_t k = 0; k < bad.size(); ++k) {
     const fs::path out = fresh_dir("bad" + std::to_string(k));
