@@ -263,7 +263,7 @@ def fig_elastic_range(f, out, written, notes):
 
 def fig_yield_pressure(f, out, written, notes):
     """Yield strain against P* over the volume fractions of the run (pressure stage)."""
-    pts = []  # (P*, yield, yielded, nu, label)
+    pts = []  # (P*, yield, yielded, nu, label, elastic_to)
     groups = [g for _, _, g in states(f)]
     if "pressure" in f:
         for tag, pg in f["pressure"].items():
@@ -277,7 +277,7 @@ def fig_yield_pressure(f, out, written, notes):
             continue
         pts.append((float(attr(g, "pressure_star")), float(attr(er, "yield_strain")),
                     int(attr(er, "yielded", 1)), float(attr(g, "volume_fraction")),
-                    g.name.split("/")[-1]))
+                    g.name.split("/")[-1], float(attr(er, "elastic_to", 0.0))))
     nus = sorted({round(p[3], 2) for p in pts})
     if len(nus) < 2:
         notes.append("yield against P*: elastic ranges at fewer than two volume fractions")
@@ -288,15 +288,20 @@ def fig_yield_pressure(f, out, written, notes):
         sel = [p for p in pts if round(p[3], 2) == nu]
         for p in sel:
             ax.plot(p[0], p[1], "o" if p[2] else "^", color=c, mfc=c if p[2] else "none")
+            if p[5] > 0:  # the bracket: still elastic at elastic_to, departed at the yield
+                ax.plot([p[0], p[0]], [p[5], p[1]], "-", color=c, lw=0.6, alpha=0.6)
             ax.annotate(p[4], (p[0], p[1]), fontsize=6, xytext=(3, 2), textcoords="offset points")
-        ax.plot([], [], "o", color=c, label=rf"$\nu$ = {nu:.2f}")
+        med_p = float(np.median([p[0] for p in sel]))
+        med_y = float(np.median([p[1] for p in sel]))
+        ax.plot(med_p, med_y, "s", color=c, ms=9, mfc="none", mew=1.5)
+        ax.plot([], [], "o", color=c, label=rf"$\nu$ = {nu:.2f} (square: median)")
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.set_xlabel(r"$P^*$")
     ax.set_ylabel("yield strain")
     ax.legend(fontsize=7)
-    ax.set_title("Elastic range against pressure (open: no departure within the ladder)",
-                 fontsize=8)
+    ax.set_title("Yield strain against pressure (lines: from the last elastic rung; open "
+                 "triangle: no departure within the ladder)", fontsize=8)
     save(fig, out, "yield_pressure", written)
 
 

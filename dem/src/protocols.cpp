@@ -213,8 +213,9 @@ CompressSummary compress_isotropic(DemSystem& sys, const CompressOptions& o, con
   }
   loading = true;
   constexpr int kRateUpdate = 20;  // steps between rate updates from the pressure
-  // Snapshots at the requested volume fractions are landed on like the target: the step that
-  // would cross one is shortened to end on it.
+  // Snapshots at the requested volume fractions leave the loading itself untouched (a run with
+  // snapshots is the same run as one without): the system is copied after the step that
+  // reaches or passes one, and the copy alone takes the fraction of a step back onto it.
   std::vector<double> snap_at;  // ln(nu) - ln_start, in loading order
   for (double nu : o.snapshot_nu) snap_at.push_back(std::log(nu) - ln_start);
   std::sort(snap_at.begin(), snap_at.end(),
@@ -227,22 +228,24 @@ CompressSummary compress_isotropic(DemSystem& sys, const CompressOptions& o, con
   std::size_t next_snap = 0;
   for (std::int64_t it = 0;; ++it) {
     const double done = std::log(sys.volume_fraction()) - ln_start;
-    const bool snapping = next_snap < snap_at.size();
-    const double remaining = sign * ((snapping ? snap_at[next_snap] : total) - done);
+    const double remaining = sign * (total - done);
     if (o.inertial_number > 0 && it % kRateUpdate == 0) {
       const double P = pressure(sys.stress());
       const double r =
           P > 0 ? o.inertial_number * std::sqrt(P / mat.density) / (2.0 * mat.r_mean) : o.rate_min;
       rate = std::clamp(r, o.rate_min, o.rate_max);
     }
-    const bool land = remaining <= 3.0 * rate * dt;
-    const bool last = land && !snapping;
+    const bool last = remaining <= 3.0 * rate * dt;
     // d ln(nu) / dt = -tr(D) = 3 * rate for D = -rate I.
-    const double r = land ? std::max(remaining, 0.0) / (3.0 * dt) : rate;
+    const double r = last ? std::max(remaining, 0.0) / (3.0 * dt) : rate;
     sys.step(Eigen::Vector3d::Constant(-sign * r));
     ++s.steps;
-    if (land && snapping) {
-      s.snapshots.push_back(sys);
+    while (next_snap < snap_at.size() &&
+           sign * (std::log(sys.volume_fraction()) - ln_start) >= sign * snap_at[next_snap]) {
+      DemSystem copy = sys;
+      const double back = std::log(copy.volume_fraction()) - ln_start - snap_at[next_snap];
+      copy.step(Eigen::Vector3d::Constant(back / (3.0 * dt)));
+      s.snapshots.push_back(std::move(copy));
       ++next_snap;
     }
     const double now = sign * (std::log(sys.volume_fraction()) - ln_start);

@@ -1,7 +1,8 @@
 // Records of the strain-controlled protocols (docs/dem.md): every sample carries the inertial
 // number of the imposed rate at that sample's pressure, I = rate 2<r> sqrt(rho / P), also on
 // the steps shortened to land on samples and snapshots; the loading's snapshots land exactly
-// on their volume fractions; window means and their batch-means standard errors.
+// on their volume fractions without changing the loading; window means and their batch-means
+// standard errors.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -66,6 +67,14 @@ TEST(PathRecords, LoadingSnapshotsLandOnTheirVolumeFractions) {
     const double want = expected_inertial(sys.material(), o.rate_max, rows[k].pressure);
     EXPECT_NEAR(rows[k].inertial_number, want, 1e-12 * want) << k;
   }
+  // The loading itself is the one without snapshots, bit for bit.
+  DemSystem plain = jammed(0.70);
+  CompressOptions p = o;
+  p.snapshot_nu.clear();
+  compress_isotropic(plain, p);
+  EXPECT_EQ(plain.steps(), sys.steps());
+  EXPECT_EQ(plain.particles().x, sys.particles().x);
+  EXPECT_EQ(plain.stress(), sys.stress());
   o.snapshot_nu = {0.71};  // beyond the target
   DemSystem again = jammed(0.70);
   EXPECT_THROW(compress_isotropic(again, o), InputError);

@@ -69,8 +69,10 @@ struct CompressOptions {
   double rate_min = 50.0;      // 1/s
   double inertial_number = 0;  // 0: constant rate_max
   int samples = 0;             // samples equally spaced in ln(nu), both ends included
-  // Copies of the system taken exactly at these volume fractions on the way (strictly
-  // between the start and the target), in loading order: CompressSummary::snapshots.
+  // Copies of the system at these volume fractions on the way (strictly between the start and
+  // the target), in loading order: CompressSummary::snapshots. Each is the loading's state
+  // after the step that reaches it, taken back onto it exactly by a fraction of a step; the
+  // loading itself goes on unchanged.
   std::vector<double> snapshot_nu;
   bool IsValid(std::string* why) const;
 };
