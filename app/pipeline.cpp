@@ -53,13 +53,13 @@ const std::vector<Stage>& stages() {
   return table;
 }
 
-bool requested(const Scenario& scenario, const std::string& name) {
+}  // namespace
+
+bool stage_requested(const Scenario& scenario, const std::string& name) {
   for (const auto& s : scenario.get_strings("run.stages"))
     if (s == name) return true;
   return false;
 }
-
-}  // namespace
 
 void register_run_keys(ScenarioSchema& schema) {
   std::vector<std::string> names;
@@ -95,23 +95,24 @@ void register_run_keys(ScenarioSchema& schema) {
 
 void check_stages_available(const Scenario& scenario) {
   for (const auto& s : stages())
-    if (requested(scenario, s.name) && !s.run && !s.post)
+    if (stage_requested(scenario, s.name) && !s.run && !s.post)
       throw NotAvailable(std::string("run: stage '") + s.name + "' has not landed yet (issue " +
                          s.issue + "); remove it from run.stages");
   // Cross-key rules of the DEM and probe stages, before the first (possibly long) stage runs.
   dem::dem_options_from_scenario(scenario);
-  if (requested(scenario, "probes") || requested(scenario, "linear_response") ||
-      requested(scenario, "elastic_range"))
+  if (stage_requested(scenario, "probes") || stage_requested(scenario, "linear_response") ||
+      stage_requested(scenario, "elastic_range"))
     dem::probe_options_from(scenario);
-  if (requested(scenario, "elastic_range")) dem::elastic_range_options_from(scenario);
-  if (requested(scenario, "pressure") && scenario.get_doubles("pressure.volume_fractions").empty())
+  if (stage_requested(scenario, "elastic_range")) dem::elastic_range_options_from(scenario);
+  if (stage_requested(scenario, "pressure") &&
+      scenario.get_doubles("pressure.volume_fractions").empty())
     throw InputError("run: stage 'pressure' needs pressure.volume_fractions (" +
                      scenario.origin("pressure.volume_fractions") + ")");
 }
 
 void run_pipeline(const Scenario& scenario, ResultsWriter& out, const RunContext& ctx) {
   for (const auto& s : stages()) {
-    if (!requested(scenario, s.name) || !s.run) continue;
+    if (!stage_requested(scenario, s.name) || !s.run) continue;
     const auto t0 = std::chrono::steady_clock::now();
     s.run(scenario, out, ctx);
     const double secs =
@@ -123,7 +124,7 @@ void run_pipeline(const Scenario& scenario, ResultsWriter& out, const RunContext
 void run_post_commit(const Scenario& scenario, const std::filesystem::path& results,
                      const RunContext& ctx) {
   for (const auto& s : stages())
-    if (requested(scenario, s.name) && s.post) s.post(scenario, results, ctx);
+    if (stage_requested(scenario, s.name) && s.post) s.post(scenario, results, ctx);
 }
 
 }  // namespace rendulic::app

@@ -18,12 +18,6 @@
 namespace rendulic::app {
 namespace {
 
-bool requested(const Scenario& sc, const std::string& stage) {
-  for (const auto& s : sc.get_strings("run.stages"))
-    if (s == stage) return true;
-  return false;
-}
-
 std::string branch_group(double nu) {
   char buf[48];
   std::snprintf(buf, sizeof buf, "/pressure/nu%g", nu);
@@ -42,10 +36,10 @@ void stage_pressure(const Scenario& sc, ResultsWriter& out, const RunContext& ct
     throw InputError("run: stage 'pressure' needs the stage 'isotropic' in run.stages");
   dem::ProbeOptions po = dem::probe_options_from(sc);
   if (ctx.threads > 0) po.threads = ctx.threads;
-  const bool with_range = requested(sc, "elastic_range");
-  const bool with_probes = requested(sc, "probes");
-  const bool with_lr = requested(sc, "linear_response");
-  const bool with_fits = requested(sc, "fits");
+  const bool with_range = stage_requested(sc, "elastic_range");
+  const bool with_probes = stage_requested(sc, "probes");
+  const bool with_lr = stage_requested(sc, "linear_response");
+  const bool with_fits = stage_requested(sc, "fits");
   for (auto& [nu, snapshot] : session.branches) {
     const std::string G = branch_group(nu);
     if (!ctx.quiet) std::cerr << "rendulic: pressure branch nu = " << nu << "\n";
