@@ -80,18 +80,29 @@ ElasticRange elastic_range(const DemSystem& state, const ElasticRangeOptions& op
   if (!options.IsValid(&why)) throw InputError(why);
   const std::vector<double> theta = elastic_range_directions();
   ElasticRange r;
-  // The elastic reference: the linear response's map per unit strain (Pa).
-  LinearResponse lr;
-  linear_response_envelope(state, options.amplitudes.front(), theta, probe, &lr);
-  const Eigen::Matrix2d map = rendulic_map_of(lr.stiffness);
-  const RendulicMap el = ellipse_of(map, 1.0);
-  r.elastic_major = el.semi_major;
-  r.elastic_minor = el.semi_minor;
-  const double t = deg_to_rad(kDevExtensionDeg);
-  const Eigen::Vector2d u(std::cos(t), std::sin(t));
-  r.elastic_k = u.dot(map * u);
   const std::size_t i_continue = index_of(theta, kDevExtensionDeg);
   const std::size_t i_reverse = index_of(theta, kDevCompressionDeg);
+  // The elastic reference: the linear response's map per unit strain (Pa). A network with no
+  // linear response (unstable even at its minimum: the linear_response stage records why)
+  // is referred to its ladder's first rung instead, and the attribute says so.
+  Eigen::Matrix2d map = Eigen::Matrix2d::Zero();
+  try {
+    LinearResponse lr;
+    linear_response_envelope(state, options.amplitudes.front(), theta, probe, &lr);
+    map = rendulic_map_of(lr.stiffness);
+  } catch (const std::runtime_error& e) {
+    r.elastic_reference = "first_rung";
+    r.elastic_reference_note = e.what();
+  }
+  auto set_reference = [&](const Eigen::Matrix2d& m) {
+    const RendulicMap el = ellipse_of(m, 1.0);
+    r.elastic_major = el.semi_major;
+    r.elastic_minor = el.semi_minor;
+    const double t = deg_to_rad(kDevExtensionDeg);
+    const Eigen::Vector2d u(std::cos(t), std::sin(t));
+    r.elastic_k = u.dot(m * u);
+  };
+  if (r.elastic_reference == "linear_response") set_reference(map);
   for (double a : options.amplitudes) {
     const auto t0 = std::chrono::steady_clock::now();
     Envelope env = options.method == "dynamic" ? dynamic_envelope(state, a, theta, probe)
@@ -100,6 +111,9 @@ ElasticRange elastic_range(const DemSystem& state, const ElasticRangeOptions& op
     std::vector<Eigen::Vector2d> stress(env.size());
     for (std::size_t p = 0; p < env.size(); ++p) stress[p] = rendulic_pair(env.d_stress[p]);
     const RendulicMap m = fit_rendulic_map(env.strain, stress);
+    if (r.amplitude.empty() && r.elastic_reference != "linear_response") {
+      set_reference(m.map);  // the map is per unit strain (pair to pair)
+    }
     r.amplitude.push_back(a);
     r.minor_over_elastic.push_back(m.semi_minor / a / r.elastic_minor);
     r.major_over_elastic.push_back(m.semi_major / a / r.elastic_major);
@@ -157,6 +171,9 @@ void write_elastic_range(ResultsWriter& out, const std::string& g, const Elastic
   out.attr(g, "elastic_major", r.elastic_major);
   out.attr(g, "elastic_minor", r.elastic_minor);
   out.attr(g, "elastic_k", r.elastic_k);
+  out.attr(g, "elastic_reference", r.elastic_reference);
+  if (!r.elastic_reference_note.empty())
+    out.attr(g, "elastic_reference_note", r.elastic_reference_note);
 }
 
 void register_elastic_range_keys(ScenarioSchema& schema) {

@@ -56,6 +56,8 @@ struct ElasticRange {
   // The linear response's (elastic) values: semi-axes of its Rendulic map per unit strain
   // (Pa) and its directional stiffness at 305.26 (= at 125.26).
   double elastic_major = 0.0, elastic_minor = 0.0, elastic_k = 0.0;
+  // "linear_response", or "first_rung" when the state has none (the note says why).
+  std::string elastic_reference = "linear_response", elastic_reference_note;
   std::vector<Envelope> envelopes;  // one per amplitude, the 4 directions each
   std::vector<double> seconds;      // wall time of each amplitude's probes
 };
@@ -65,7 +67,8 @@ void locate_yield(ElasticRange& range, double tolerance);
 
 // The ladder of one state, by options.method with the probe options of the campaign (rate,
 // time step, relaxation, force tolerance; amplitudes and directions are the ladder's). The
-// elastic reference is the linear response of the state (which must be at rest).
+// elastic reference is the linear response of the state (which must be at rest), or the
+// ladder's first rung if the state has none.
 ElasticRange elastic_range(const DemSystem& state, const ElasticRangeOptions& options,
                            const ProbeOptions& probe);
 
