@@ -1,8 +1,9 @@
 // `rendulic sweep [SCENARIO] [--out DIR] [--set key=value ...] [--threads T] [--quick]
-// [--factors F,...] [--target E]` (issue 8 item 3): the speed-versus-accuracy sweep of the
-// probe methods (sweep.hpp) around the scenario's settings; writes DIR/sweep.h5 (atomically),
-// DIR/sweep.csv and the Pareto chart DIR/pareto.png / .svg (the embedded plot script). All
-// input is validated before any simulation: bad input exits 2 and writes nothing.
+// [--factors F,...] [--target E] [--path-rates R,...] [--path-seeds S] [--base-n N]` (issue 8 item
+// 3): the speed-versus-accuracy sweep of the probe methods and of the path's rate (sweep.hpp)
+// around the scenario's settings; writes DIR/sweep.h5 (atomically), DIR/sweep.csv
+// (DIR/sweep_path.csv for the path's rate) and the Pareto chart DIR/pareto.png / .svg (the embedded
+// plot script). All input is validated before any simulation: bad input exits 2 and writes nothing.
 #include <omp.h>
 
 #include <filesystem>
@@ -26,6 +27,9 @@ struct SweepCli {
   bool quick = false;
   bool quiet = false;
   double target = 0.02;
+  int path_seeds = 0;              // 0: the preset's
+  int base_n = 0;                  // 0: the preset's
+  std::vector<double> path_rates;  // empty: the preset's
 };
 }  // namespace
 
@@ -42,11 +46,21 @@ Subcommand add_sweep(CLI::App& parent) {
       ->check(CLI::NonNegativeNumber);
   sub->add_flag("--quick", o->quick, "small sweep (N 250, 8 directions; about a minute)");
   sub->add_option("--factors", o->factors,
-                  "factors to sweep (dt_factor, n_particles, inertial_number, relax, method)")
+                  "factors to sweep (dt_factor, n_particles, inertial_number, relax, "
+                  "dt_factor_tight, method, path_rate)")
       ->delimiter(',');
   sub->add_option("--target", o->target,
                   "accuracy target: largest envelope error / reference major axis")
       ->capture_default_str();
+  sub->add_option("--path-seeds", o->path_seeds,
+                  "path_rate: independent packings per rate (seeds run.seed, run.seed + 1, ...)")
+      ->check(CLI::Range(1, 64));
+  sub->add_option("--path-rates", o->path_rates, "path_rate: the rates to run (1/s, D_xx)")
+      ->delimiter(',')
+      ->check(CLI::PositiveNumber);
+  sub->add_option("--base-n", o->base_n,
+                  "N of the base point and of the path_rate runs (default: 1000, --quick 250)")
+      ->check(CLI::Range(50, 5000000));
   sub->add_flag("--quiet", o->quiet, "no progress lines");
   return {sub, [o]() -> int {
             Scenario scenario = o->scenario.empty()
@@ -57,6 +71,9 @@ Subcommand add_sweep(CLI::App& parent) {
             if (!o->factors.empty()) so.factors = o->factors;
             so.threads = o->threads;
             so.target = o->target;
+            if (o->path_seeds > 0) so.path_seeds = o->path_seeds;
+            if (o->base_n > 0) so.base_n = o->base_n;
+            if (!o->path_rates.empty()) so.path_rates = o->path_rates;
             check_sweep_inputs(scenario, so);
             if (o->threads > 0) omp_set_num_threads(o->threads);
             const std::filesystem::path dir = o->out;
@@ -71,6 +88,11 @@ Subcommand add_sweep(CLI::App& parent) {
               const std::filesystem::path tmp = dir / "sweep.csv.tmp";
               std::ofstream(tmp) << sweep_csv(summary);
               std::filesystem::rename(tmp, dir / "sweep.csv");
+            }
+            if (!summary.path_points.empty()) {
+              const std::filesystem::path tmp = dir / "sweep_path.csv.tmp";
+              std::ofstream(tmp) << sweep_path_csv(summary);
+              std::filesystem::rename(tmp, dir / "sweep_path.csv");
             }
             out.commit();
             if (!quiet) {

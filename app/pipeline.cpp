@@ -10,6 +10,7 @@
 
 #include "rendulic/core/errors.hpp"
 #include "rendulic/dem/probe_campaign.hpp"
+#include "rendulic/dem/probe_elastic_range.hpp"
 #include "rendulic/dem/scenario_keys.hpp"
 #include "report.hpp"
 #include "stages.hpp"
@@ -37,22 +38,28 @@ void report_stage(const Scenario& scenario, const std::filesystem::path& results
 
 const std::vector<Stage>& stages() {
   static const std::vector<Stage> table = {
-      {"prepare", "3", stage_prepare},   {"isotropic", "3", stage_isotropic},
-      {"path", "3", stage_path},         {"states", "3", stage_states},
-      {"probes", "4", stage_probes},     {"linear_response", "4", stage_linear_response},
-      {"fits", "5", stage_fits},         {"calibration", "7", run_calibration_stage},
+      {"prepare", "3", stage_prepare},
+      {"isotropic", "3", stage_isotropic},
+      {"path", "3", stage_path},
+      {"states", "3", stage_states},
+      {"elastic_range", "14", stage_elastic_range},
+      {"probes", "4", stage_probes},
+      {"linear_response", "4", stage_linear_response},
+      {"pressure", "14", stage_pressure},
+      {"fits", "5", stage_fits},
+      {"calibration", "7", run_calibration_stage},
       {"report", "8", {}, report_stage},
   };
   return table;
 }
 
-bool requested(const Scenario& scenario, const std::string& name) {
+}  // namespace
+
+bool stage_requested(const Scenario& scenario, const std::string& name) {
   for (const auto& s : scenario.get_strings("run.stages"))
     if (s == name) return true;
   return false;
 }
-
-}  // namespace
 
 void register_run_keys(ScenarioSchema& schema) {
   std::vector<std::string> names;
@@ -68,8 +75,10 @@ void register_run_keys(ScenarioSchema& schema) {
               .type = KeyType::kStringList,
               .default_value = std::vector<std::string>{"prepare", "isotropic", "path", "states"},
               .unit = "-",
-              .help = "Stages to run, executed in the fixed order prepare, isotropic, path, "
-                      "states, probes, linear_response, fits, calibration, report.",
+              .help =
+                  "Stages to run, executed in the fixed order prepare, isotropic, path, "
+                  "states, elastic_range, probes, linear_response, pressure, fits, calibration, "
+                  "report.",
               .choices = names});
   schema.add({.path = "report.figures",
               .type = KeyType::kBool,
@@ -86,18 +95,24 @@ void register_run_keys(ScenarioSchema& schema) {
 
 void check_stages_available(const Scenario& scenario) {
   for (const auto& s : stages())
-    if (requested(scenario, s.name) && !s.run && !s.post)
+    if (stage_requested(scenario, s.name) && !s.run && !s.post)
       throw NotAvailable(std::string("run: stage '") + s.name + "' has not landed yet (issue " +
                          s.issue + "); remove it from run.stages");
   // Cross-key rules of the DEM and probe stages, before the first (possibly long) stage runs.
   dem::dem_options_from_scenario(scenario);
-  if (requested(scenario, "probes") || requested(scenario, "linear_response"))
+  if (stage_requested(scenario, "probes") || stage_requested(scenario, "linear_response") ||
+      stage_requested(scenario, "elastic_range"))
     dem::probe_options_from(scenario);
+  if (stage_requested(scenario, "elastic_range")) dem::elastic_range_options_from(scenario);
+  if (stage_requested(scenario, "pressure") &&
+      scenario.get_doubles("pressure.volume_fractions").empty())
+    throw InputError("run: stage 'pressure' needs pressure.volume_fractions (" +
+                     scenario.origin("pressure.volume_fractions") + ")");
 }
 
 void run_pipeline(const Scenario& scenario, ResultsWriter& out, const RunContext& ctx) {
   for (const auto& s : stages()) {
-    if (!requested(scenario, s.name) || !s.run) continue;
+    if (!stage_requested(scenario, s.name) || !s.run) continue;
     const auto t0 = std::chrono::steady_clock::now();
     s.run(scenario, out, ctx);
     const double secs =
@@ -109,7 +124,7 @@ void run_pipeline(const Scenario& scenario, ResultsWriter& out, const RunContext
 void run_post_commit(const Scenario& scenario, const std::filesystem::path& results,
                      const RunContext& ctx) {
   for (const auto& s : stages())
-    if (requested(scenario, s.name) && s.post) s.post(scenario, results, ctx);
+    if (stage_requested(scenario, s.name) && s.post) s.post(scenario, results, ctx);
 }
 
 }  // namespace rendulic::app

@@ -17,6 +17,8 @@ struct RunContext {
   bool quiet = false;  // no progress display
 };
 
+// Whether run.stages lists the stage `name`.
+bool stage_requested(const Scenario& scenario, const std::string& name);
 // Registers the run.* keys (seed, stages, ...).
 void register_run_keys(ScenarioSchema& schema);
 // NotAvailable naming the first requested stage that has not landed.

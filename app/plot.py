@@ -209,6 +209,102 @@ def fig7_trends(f, out, written, notes):
     save(fig, out, "fig7_features", written)
 
 
+def plastic_amplitude(f):
+    """The largest probe amplitude of the dynamic campaigns (> 1e-3), or None."""
+    amps = []
+    for eps, label, g in states(f):
+        for name, e in envelopes(g, "plastic"):
+            if attr(e, "method") != "linear_response":
+                amps.append(float(attr(e, "amplitude", 0.0)))
+    return max(amps) if amps else None
+
+
+def fig_elastic_range(f, out, written, notes):
+    """Where each state's response leaves the elastic one (elastic_range stage): b/a, |c|/a
+    and k_continue/k_reverse of the four-direction ladder against the amplitude."""
+    rows = [(eps, label, g["elastic_range"]) for eps, label, g in states(f)
+            if "elastic_range" in g]
+    if not rows:
+        notes.append("elastic range: no /states/*/elastic_range")
+        return
+    fig, ax = plt.subplots(1, 4, figsize=(15, 3.5))
+    colours = plt.cm.viridis(np.linspace(0, 0.9, len(rows)))
+    for (eps, label, g), c in zip(rows, colours):
+        a = g["amplitude"][:]
+        minor = g["minor_over_elastic"][:] * float(attr(g, "elastic_minor"))
+        major = g["major_over_elastic"][:] * float(attr(g, "elastic_major"))
+        kc, kr = g["k_continue"][:], g["k_reverse"][:]
+        y = float(attr(g, "yield_strain"))
+        lab = rf"{label} ($-\varepsilon_{{dev}}$ {-eps:.3f})"
+        ax[0].plot(a, minor / major, "o-", color=c, ms=4, label=lab)
+        ax[1].plot(a, g["minor_over_elastic"][:], "o-", color=c, ms=4)
+        ax[2].plot(a, g["center_over_a"][:], "o-", color=c, ms=4)
+        ax[3].plot(a, kc / kr, "o-", color=c, ms=4)
+        for x in ax:
+            x.axvline(y, color=c, lw=0.8, ls=":")
+    tol = float(attr(rows[0][2], "tolerance"))
+    ax[1].axhspan(1 - tol, 1 + tol, color="0.9", zorder=0)
+    ax[3].axhspan(1 - tol, 1 + tol, color="0.9", zorder=0)
+    ax[3].axhline(0.2, color="tab:red", lw=0.8, ls="--")
+    pa = plastic_amplitude(f)
+    for x in ax:
+        x.set_xscale("log")
+        x.set_xlabel(r"$|\delta\varepsilon|$")
+        if pa:
+            x.axvline(pa, color="k", lw=1, ls="--")
+    ax[0].set_title("b/a of the ladder's map", fontsize=9)
+    ax[1].set_title("minor axis / elastic (band: tolerance)", fontsize=9)
+    ax[2].set_title("|centre| / a", fontsize=9)
+    ax[3].set_title(r"$k_{continue}/k_{reverse}$ (red: 0.2)", fontsize=9)
+    ax[0].legend(fontsize=6)
+    fig.suptitle("Elastic range per state (dotted: yield strain; dashed: plastic amplitude)")
+    save(fig, out, "elastic_range", written)
+
+
+def fig_yield_pressure(f, out, written, notes):
+    """Yield strain against P* over the volume fractions of the run (pressure stage)."""
+    pts = []  # (P*, yield, yielded, nu, label, elastic_to)
+    groups = [g for _, _, g in states(f)]
+    if "pressure" in f:
+        for tag, pg in f["pressure"].items():
+            if "states" in pg:
+                groups += list(pg["states"].values())
+    for g in groups:
+        if "elastic_range" not in g:
+            continue
+        er = g["elastic_range"]
+        if attr(g, "pressure_star") is None or attr(g, "volume_fraction") is None:
+            continue
+        pts.append((float(attr(g, "pressure_star")), float(attr(er, "yield_strain")),
+                    int(attr(er, "yielded", 1)), float(attr(g, "volume_fraction")),
+                    g.name.split("/")[-1], float(attr(er, "elastic_to", 0.0))))
+    nus = sorted({round(p[3], 2) for p in pts})
+    if len(nus) < 2:
+        notes.append("yield against P*: elastic ranges at fewer than two volume fractions")
+        return
+    fig, ax = plt.subplots(figsize=(5.5, 4))
+    colours = plt.cm.plasma(np.linspace(0, 0.8, len(nus)))
+    for nu, c in zip(nus, colours):
+        sel = [p for p in pts if round(p[3], 2) == nu]
+        for p in sel:
+            ax.plot(p[0], p[1], "o" if p[2] else "^", color=c, mfc=c if p[2] else "none")
+            if p[5] > 0:  # the bracket: still elastic at elastic_to, departed at the yield
+                ax.plot([p[0], p[0]], [p[5], p[1]], "-", color=c, lw=0.6, alpha=0.6)
+            ax.annotate(p[4], (p[0], p[1]), fontsize=6, xytext=(3, 2), textcoords="offset points")
+        med_p = float(np.median([p[0] for p in sel]))
+        med_y = float(np.median([p[1] for p in sel]))
+        ax.plot(med_p, med_y, "s", color=c, ms=9, mfc="none", mew=1.5)
+        ax.plot([], [], "o", color=c, label=rf"$\nu$ = {nu:.2f} (square: median)")
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel(r"$P^*$")
+    ax.set_ylabel("yield strain")
+    ax.legend(fontsize=7)
+    ax.set_title("Yield strain against pressure (lines: from the last elastic rung; open "
+                 "triangle: no departure within the ladder)", fontsize=8)
+    save(fig, out, "yield_pressure", written)
+
+
 FACTOR_STYLE = {"dt_factor": ("o", "tab:blue"), "dt_factor_tight": ("o", "tab:cyan"),
                 "n_particles": ("s", "tab:green"), "inertial_number": ("^", "tab:orange"),
                 "relax": ("D", "tab:purple"), "method": ("*", "tab:red")}
@@ -240,6 +336,9 @@ def draw_sweep_points(ax, rows):
 def fig_pareto(f, out, written, notes):
     """Speed versus accuracy (rendulic sweep): envelope error against CPU time, log-log."""
     g = f["sweep"]
+    if "points" not in g:
+        notes.append("Pareto chart: no probe-method points (path_rate only)")
+        return
     rows = []
     for name in sorted(g["points"]):
         p = g["points"][name]
@@ -284,6 +383,36 @@ def fig_pareto(f, out, written, notes):
     save(fig, out, "pareto", written)
 
 
+def fig_path_rate(f, out, written, notes):
+    """The path's rate (rendulic sweep, factor path_rate): the steady-state stress ratio
+    against the inertial number, each seed and their mean with its standard error."""
+    g = f["sweep"]
+    if "path_rate" not in g:
+        return
+    rows = [g["path_rate"][k] for k in sorted(g["path_rate"])]
+    ok = [r for r in rows if attr(r, "status") == "ok"]
+    if not ok:
+        notes.append("path rate: no point with status ok")
+        return
+    fig, ax = plt.subplots(figsize=(6.5, 4.2))
+    for r in ok:
+        i = float(attr(r, "inertial_number"))
+        seeds = np.atleast_1d(np.asarray(attr(r, "ratio_per_seed", []), dtype=float))
+        ax.plot([i] * len(seeds), seeds, ".", color="0.6", ms=4)
+        filled = int(attr(r, "converged", 0)) == 1
+        ax.errorbar(i, float(attr(r, "ratio")), yerr=float(attr(r, "ratio_stderr")), fmt="o",
+                    color="tab:blue", mfc="tab:blue" if filled else "white", capsize=3)
+        ax.annotate(f"{float(attr(r, 'rate')):g}/s", (i, float(attr(r, "ratio"))), fontsize=6,
+                    xytext=(4, 4), textcoords="offset points")
+    ax.set_xscale("log")
+    ax.set_xlabel("inertial number of the path (steady state)")
+    ax.set_ylabel(r"steady-state $|\sigma_{dev}|/P$")
+    target = float(attr(g, "path_rate_target", 0.02))
+    ax.set_title("Path rate: mean +- standard error over seeds (grey: each seed); filled: "
+                 f"within {100 * target:g} % of the run 4x slower", fontsize=8)
+    save(fig, out, "path_rate", written)
+
+
 def main():
     if len(sys.argv) != 3:
         print("usage: plot.py FILE.h5 OUTDIR", file=sys.stderr)
@@ -300,14 +429,18 @@ def main():
         ("Fig. 5", lambda f: fig_envelopes(f, out, written, notes, 5, "plastic", "stress")),
         ("Fig. 6", lambda f: fig_envelopes(f, out, written, notes, 6, "plastic", "fabric")),
         ("Fig. 7", lambda f: fig7_trends(f, out, written, notes)),
+        ("elastic range", lambda f: fig_elastic_range(f, out, written, notes)),
+        ("yield against P*", lambda f: fig_yield_pressure(f, out, written, notes)),
     ]
     with h5py.File(path, "r") as f:
-        if "sweep" in f:  # a sweep file (rendulic sweep) has the Pareto chart only
-            figures = [("Pareto chart", lambda f: fig_pareto(f, out, written, notes))]
+        if "sweep" in f:  # a sweep file (rendulic sweep): the Pareto and path-rate charts
+            figures = [("Pareto chart", lambda f: fig_pareto(f, out, written, notes)),
+                       ("path rate", lambda f: fig_path_rate(f, out, written, notes))]
         for name, draw in figures:
             try:
                 draw(f)
-            except (KeyError, ValueError, IndexError) as e:  # partial files: skip, say why
+            except (KeyError, ValueError, IndexError, TypeError) as e:  # partial files: skip
+                # and say why
                 plt.close("all")
                 notes.append(f"{name}: {e}")
     for w in written:

@@ -22,8 +22,25 @@ struct DemRunSession {
   std::vector<dem::DemSystem> snapshots;                        // on the path, states.labels order
   std::vector<std::pair<std::string, dem::DemSystem>> relaxed;  // after states
   std::optional<dem::DemRunOptions> options;
+  // The loading's snapshots at pressure.volume_fractions (after isotropic): (nu, system).
+  std::vector<std::pair<double, dem::DemSystem>> branches;
+  double path_start_pressure = 0;  // Pa, the relaxed state at nu_max the path starts from
 };
 DemRunSession& dem_run_session();
+
+// Pieces of the DEM stages that the pressure branches repeat (stages_dem.cpp).
+// Appends every path sample as a row of the datasets <group>/time, strain, ... (the /path
+// layout of docs/results.md).
+dem::SampleFn path_recorder(ResultsWriter& out, const std::string& group);
+// The snapshots brought to rest (rest.hpp) over one OpenMP team; throws naming the state if
+// one is not at rest afterwards.
+std::vector<std::pair<dem::DemSystem, dem::RestSummary>> rest_states(
+    const std::vector<dem::DemSystem>& snapshots, const dem::RestOptions& options,
+    const std::vector<std::string>& labels, const RunContext& ctx);
+// A state at rest under `group`: its attributes (docs/results.md /states/<label>), stress and
+// fabric; with_configuration adds positions, radii, cell lengths and the checkpoint.
+void write_state(ResultsWriter& out, const std::string& group, const dem::DemSystem& sys,
+                 const dem::RestSummary& rest, double force_tolerance, bool with_configuration);
 
 // DEM (stages_dem.cpp, issue 3).
 void stage_prepare(const Scenario&, ResultsWriter&, const RunContext&);
@@ -33,8 +50,15 @@ void stage_states(const Scenario&, ResultsWriter&, const RunContext&);
 // Probe campaigns and linear response (stages_probes.cpp, issue 4).
 void stage_probes(const Scenario&, ResultsWriter&, const RunContext&);
 void stage_linear_response(const Scenario&, ResultsWriter&, const RunContext&);
+// The elastic range of every state (probe_elastic_range.hpp): /states/<label>/elastic_range.
+void stage_elastic_range(const Scenario&, ResultsWriter&, const RunContext&);
+// The pressure branches (stages_pressure.cpp): path, states at rest, elastic range, probes,
+// linear response and fits from each of the loading's snapshots, under /pressure/nu<nu>.
+void stage_pressure(const Scenario&, ResultsWriter&, const RunContext&);
 // Envelope fits (stages_probes.cpp, issue 5): fit_stress / fit_fabric of every envelope.
 void register_fit_keys(ScenarioSchema& schema);
 void stage_fits(const Scenario&, ResultsWriter&, const RunContext&);
+// The fits of every envelope under <state_group>/envelopes, with the fits.* options.
+void fit_state_envelopes(const Scenario& sc, ResultsWriter& out, const std::string& state_group);
 
 }  // namespace rendulic::app

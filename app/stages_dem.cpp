@@ -2,11 +2,13 @@
 //   prepare   -> /material, /preparation : random gas, compression to nu0, relaxation
 //   isotropic -> /isotropic : loading nu0 -> nu_max (>= 50 samples), relaxation at nu_max
 //   path      -> /path      : constant-volume axisymmetric extension, snapshots in memory
-//   states    -> /states/<label> : each snapshot relaxed at fixed cell, stored with a
-//                checkpoint that restarts bit-identically (same build, same thread count)
+//   states    -> /states/<label> : each snapshot relaxed at fixed cell and minimised to
+//                mechanical equilibrium (rest.hpp), stored with a checkpoint that restarts
+//                bit-identically (same build)
 // The stages of one run share the live system through one DemRunSession (a process holds one
 // run); later stages (probe campaigns) reach it through dem_run_session(). Progress (stage,
 // %, ETA) goes to stderr only when stderr is a terminal and --quiet is off.
+#include <omp.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -22,6 +24,7 @@
 #include "rendulic/core/conventions.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/dem/protocols.hpp"
+#include "rendulic/dem/rest.hpp"
 #include "rendulic/dem/scenario_keys.hpp"
 #include "stages.hpp"
 
@@ -177,11 +180,16 @@ void stage_isotropic(const Scenario&, ResultsWriter& out, const RunContext& ctx)
     out.append("/isotropic/inertial_number", m.inertial_number);
   };
   progress.start_task("loading to nu_max");
-  const dem::CompressSummary c = dem::compress_isotropic(sys, o.loading, row, progress.fn());
+  dem::CompressSummary c = dem::compress_isotropic(sys, o.loading, row, progress.fn());
+  auto& branches = dem_run_session().branches;
+  branches.clear();
+  for (std::size_t k = 0; k < c.snapshots.size(); ++k)
+    branches.emplace_back(o.loading.snapshot_nu[k], std::move(c.snapshots[k]));
   progress.start_task("relax at nu_max");
   const dem::RelaxSummary r = dem::relax(sys, o.relax, progress.fn());
   warn_cap(ctx, "at nu_max", r);
   const dem::Measures me = sys.measure();
+  dem_run_session().path_start_pressure = me.pressure;
   out.attr("/isotropic", "max_inertial_number", c.max_inertial_number);
   out.attr("/isotropic", "relaxed_pressure_star", me.pressure_star);
   out.attr("/isotropic", "relaxed_coordination", me.coordination);
@@ -191,6 +199,24 @@ void stage_isotropic(const Scenario&, ResultsWriter& out, const RunContext& ctx)
   out.attr("/isotropic", "wall_time_s", progress.elapsed());
 }
 
+dem::SampleFn path_recorder(ResultsWriter& out, const std::string& g) {
+  return [&out, g](const dem::Measures& m) {
+    out.append(g + "/time", m.time);
+    out.append(g + "/strain", m.strain);
+    out.append(g + "/eps_v", m.eps_v);
+    out.append(g + "/eps_dev", m.eps_dev);
+    out.append(g + "/stress", m.stress);
+    out.append(g + "/stress_star", m.stress_star);
+    out.append(g + "/fabric", m.fabric);
+    out.append(g + "/volume_fraction", m.volume_fraction);
+    out.append(g + "/coordination", m.coordination);
+    out.append(g + "/coordination_nonrattler", m.coordination_nonrattler);
+    out.append(g + "/kinetic_energy", m.kinetic_energy);
+    out.append(g + "/elastic_energy", m.elastic_energy);
+    out.append(g + "/inertial_number", m.inertial_number);
+  };
+}
+
 void stage_path(const Scenario&, ResultsWriter& out, const RunContext& ctx) {
   dem::DemSystem& sys = live_system("path");
   auto& session = dem_run_session();
@@ -198,22 +224,8 @@ void stage_path(const Scenario&, ResultsWriter& out, const RunContext& ctx) {
   Progress progress(ctx, "path");
   progress.start_task("undrained extension");
   const std::int64_t steps0 = sys.steps();
-  auto row = [&](const dem::Measures& m) {
-    out.append("/path/time", m.time);
-    out.append("/path/strain", m.strain);
-    out.append("/path/eps_v", m.eps_v);
-    out.append("/path/eps_dev", m.eps_dev);
-    out.append("/path/stress", m.stress);
-    out.append("/path/stress_star", m.stress_star);
-    out.append("/path/fabric", m.fabric);
-    out.append("/path/volume_fraction", m.volume_fraction);
-    out.append("/path/coordination", m.coordination);
-    out.append("/path/coordination_nonrattler", m.coordination_nonrattler);
-    out.append("/path/kinetic_energy", m.kinetic_energy);
-    out.append("/path/elastic_energy", m.elastic_energy);
-    out.append("/path/inertial_number", m.inertial_number);
-  };
-  dem::PathSummary p = dem::undrained_extension(sys, o.path, row, progress.fn());
+  dem::PathSummary p =
+      dem::undrained_extension(sys, o.path, path_recorder(out, "/path"), progress.fn());
   out.attr("/path", "rate", o.path.rate);
   out.attr("/path", "max_inertial_number", p.max_inertial_number);
   out.attr("/path", "steps", sys.steps() - steps0);
@@ -221,53 +233,108 @@ void stage_path(const Scenario&, ResultsWriter& out, const RunContext& ctx) {
   session.snapshots = std::move(p.snapshots);
 }
 
+std::vector<std::pair<dem::DemSystem, dem::RestSummary>> rest_states(
+    const std::vector<dem::DemSystem>& snapshots, const dem::RestOptions& options,
+    const std::vector<std::string>& labels, const RunContext& ctx) {
+  // The states are independent: one OpenMP team over them, the engine's inner loops serial
+  // inside each (as the probe campaigns do), so each state is the same whatever the thread
+  // count. No exception may leave the parallel region.
+  Progress progress(ctx, "states");
+  const int n = static_cast<int>(snapshots.size());
+  std::vector<std::optional<dem::DemSystem>> rested(snapshots.size());
+  std::vector<dem::RestSummary> summaries(snapshots.size());
+  std::vector<std::string> errors(snapshots.size());
+  progress.start_task("relax and minimise " + std::to_string(n) + " states");
+  int done = 0;
+  const int team = ctx.threads > 0 ? ctx.threads : omp_get_max_threads();
+#pragma omp parallel for schedule(dynamic, 1) num_threads(team)
+  for (int k = 0; k < n; ++k) {
+    omp_set_num_threads(1);
+    const auto u = static_cast<std::size_t>(k);
+    try {
+      dem::DemSystem sys = snapshots[u];
+      summaries[u] = dem::bring_to_rest(sys, options);
+      rested[u] = std::move(sys);
+    } catch (const std::exception& e) {
+      errors[u] = e.what();
+    }
+#pragma omp critical(rendulic_states_progress)
+    {
+      ++done;
+      if (omp_get_thread_num() == 0) progress(double(done) / n);
+    }
+  }
+  std::vector<std::pair<dem::DemSystem, dem::RestSummary>> out;
+  for (std::size_t k = 0; k < snapshots.size(); ++k) {
+    if (!errors[k].empty()) throw std::runtime_error("state " + labels[k] + ": " + errors[k]);
+    warn_cap(ctx, "of state " + labels[k], summaries[k].relaxed);
+    if (!(summaries[k].at_rest.ratio < dem::kEquilibrium))
+      throw std::runtime_error(
+          "state " + labels[k] + ": not at rest after minimisation (net force " +
+          std::to_string(summaries[k].at_rest.ratio) + " of the mean contact force)");
+    out.emplace_back(std::move(*rested[k]), summaries[k]);
+  }
+  return out;
+}
+
+void write_state(ResultsWriter& out, const std::string& g, const dem::DemSystem& sys,
+                 const dem::RestSummary& r, double force_tolerance, bool with_configuration) {
+  const dem::Measures m = sys.measure();
+  out.attr(g, "eps_dev", m.eps_dev);
+  out.attr(g, "volume_fraction", m.volume_fraction);
+  out.attr(g, "pressure_star", m.pressure_star);
+  out.attr(g, "coordination", m.coordination);
+  out.attr(g, "coordination_nonrattler", m.coordination_nonrattler);
+  out.attr(g, "rattler_fraction", m.rattler_fraction);
+  out.attr(g, "kinetic_to_elastic", m.kinetic_to_elastic);
+  write_relax(out, g, "", r.relaxed);
+  // Equilibrium (rest.hpp): the criterion after the dynamic relaxation and at rest, what the
+  // minimisation moved and changed.
+  out.attr(g, "force_balance_relaxed", r.after_relax.ratio);
+  out.attr(g, "force_balance", r.at_rest.ratio);
+  out.attr(g, "minimise_iterations", r.minimised.iterations);
+  out.attr(g, "minimise_force_tolerance", force_tolerance);
+  out.attr(g, "minimise_max_displacement", r.max_displacement);
+  out.attr(g, "minimise_stress_change_over_p",
+           r.stress_change.norm() / std::max(m.pressure, 1e-300));
+  out.write(g + "/stress", m.stress);
+  out.write(g + "/fabric", m.fabric);
+  if (!with_configuration) return;
+  const dem::Particles& p = sys.particles();
+  out.write(g + "/positions", as_matrix(p.x, p.y, p.z));
+  out.write(g + "/radii", p.radius);
+  out.write(g + "/cell_lengths",
+            std::vector<double>(sys.cell().lengths.data(), sys.cell().lengths.data() + 3));
+  // Checkpoint: everything DemSystem::restore() needs for a bit-identical continuation.
+  const dem::State st = sys.save();
+  const std::string cp = g + "/checkpoint";
+  out.write(cp + "/velocities", as_matrix(p.vx, p.vy, p.vz));
+  out.write(cp + "/forces", as_matrix(p.fx, p.fy, p.fz));
+  out.write(cp + "/reference_positions", as_matrix(st.ref_x, st.ref_y, st.ref_z));
+  out.write(cp + "/reference_cell_lengths",
+            std::vector<double>(st.ref_lengths.data(), st.ref_lengths.data() + 3));
+  out.write(cp + "/reference_half_skins", st.ref_half_skin);
+  out.write(cp + "/strain_E", std::vector<double>(st.strain_E.data(), st.strain_E.data() + 3));
+  out.write(cp + "/last_D", std::vector<double>(st.last_D.data(), st.last_D.data() + 3));
+  out.attr(cp, "time", st.time);
+  out.attr(cp, "steps", st.steps);
+}
+
 void stage_states(const Scenario&, ResultsWriter& out, const RunContext& ctx) {
   auto& session = dem_run_session();
   if (session.snapshots.empty())
     throw InputError("run: stage 'states' needs the stage 'path' in run.stages");
   const dem::DemRunOptions& o = *session.options;
-  Progress progress(ctx, "states");
+  const auto t0 = Clock::now();
+  auto rested = rest_states(session.snapshots, o.state_rest, o.state_labels, ctx);
   session.relaxed.clear();
-  for (std::size_t k = 0; k < session.snapshots.size(); ++k) {
+  for (std::size_t k = 0; k < rested.size(); ++k) {
     const std::string& label = o.state_labels[k];
-    const std::string g = "/states/" + label;
-    dem::DemSystem sys = session.snapshots[k];
-    progress.start_task(label + " (" + std::to_string(k + 1) + "/" +
-                        std::to_string(session.snapshots.size()) + ")");
-    const dem::RelaxSummary r = dem::relax(sys, o.state_relax, progress.fn());
-    warn_cap(ctx, "of state " + label, r);
-    const dem::Measures m = sys.measure();
-    out.attr(g, "eps_dev", m.eps_dev);
-    out.attr(g, "volume_fraction", m.volume_fraction);
-    out.attr(g, "pressure_star", m.pressure_star);
-    out.attr(g, "coordination", m.coordination);
-    out.attr(g, "coordination_nonrattler", m.coordination_nonrattler);
-    out.attr(g, "rattler_fraction", m.rattler_fraction);
-    out.attr(g, "kinetic_to_elastic", m.kinetic_to_elastic);
-    write_relax(out, g, "", r);
-    const dem::Particles& p = sys.particles();
-    out.write(g + "/positions", as_matrix(p.x, p.y, p.z));
-    out.write(g + "/radii", p.radius);
-    out.write(g + "/cell_lengths",
-              std::vector<double>(sys.cell().lengths.data(), sys.cell().lengths.data() + 3));
-    out.write(g + "/stress", m.stress);
-    out.write(g + "/fabric", m.fabric);
-    // Checkpoint: everything DemSystem::restore() needs for a bit-identical continuation.
-    const dem::State st = sys.save();
-    const std::string cp = g + "/checkpoint";
-    out.write(cp + "/velocities", as_matrix(p.vx, p.vy, p.vz));
-    out.write(cp + "/forces", as_matrix(p.fx, p.fy, p.fz));
-    out.write(cp + "/reference_positions", as_matrix(st.ref_x, st.ref_y, st.ref_z));
-    out.write(cp + "/reference_cell_lengths",
-              std::vector<double>(st.ref_lengths.data(), st.ref_lengths.data() + 3));
-    out.write(cp + "/reference_half_skins", st.ref_half_skin);
-    out.write(cp + "/strain_E", std::vector<double>(st.strain_E.data(), st.strain_E.data() + 3));
-    out.write(cp + "/last_D", std::vector<double>(st.last_D.data(), st.last_D.data() + 3));
-    out.attr(cp, "time", st.time);
-    out.attr(cp, "steps", st.steps);
-    session.relaxed.emplace_back(label, std::move(sys));
+    write_state(out, "/states/" + label, rested[k].first, rested[k].second,
+                o.state_rest.minimise.force_tolerance, true);
+    session.relaxed.emplace_back(label, std::move(rested[k].first));
   }
-  out.attr("/states", "wall_time_s", progress.elapsed());
+  out.attr("/states", "wall_time_s", std::chrono::duration<double>(Clock::now() - t0).count());
 }
 
 }  // namespace rendulic::app

@@ -5,9 +5,11 @@
 // cannot be fitted (no fabric change at all, a degenerate set) gets shape "none" and the
 // reason, never an invented fit.
 #include <iostream>
+#include <tuple>
 
 #include "rendulic/core/errors.hpp"
 #include "rendulic/dem/probe_campaign.hpp"
+#include "rendulic/dem/probe_elastic_range.hpp"
 #include "rendulic/probes/envelope_fit.hpp"
 #include "rendulic/probes/fit_io.hpp"
 #include "stages.hpp"
@@ -72,6 +74,20 @@ void stage_linear_response(const Scenario& sc, ResultsWriter& out, const RunCont
   }
 }
 
+void stage_elastic_range(const Scenario& sc, ResultsWriter& out, const RunContext& ctx) {
+  dem::ProbeOptions o = dem::probe_options_from(sc);
+  if (ctx.threads > 0) o.threads = ctx.threads;
+  const dem::ElasticRangeOptions eo = dem::elastic_range_options_from(sc);
+  for (const auto& [label, state] : relaxed_states("elastic_range")) {
+    if (!ctx.quiet) std::cerr << "rendulic: elastic_range of state " << label << "\n";
+    const dem::ElasticRange r = dem::elastic_range(state, eo, o);
+    dem::write_elastic_range(out, "/states/" + label + "/elastic_range", r, eo);
+    if (!ctx.quiet)
+      std::cerr << "rendulic: state " << label << ": yield strain " << r.yield_strain
+                << (r.yielded ? "" : " (no departure within the ladder: a lower bound)") << "\n";
+  }
+}
+
 void register_fit_keys(ScenarioSchema& s) {
   s.add({.path = "fits.stress_shape",
          .type = KeyType::kString,
@@ -97,6 +113,29 @@ void register_fit_keys(ScenarioSchema& s) {
          .default_value = true,
          .unit = "-",
          .help = "Use the probe directions (affine start, exact for a linear law plus shift)."});
+}
+
+void fit_state_envelopes(const Scenario& sc, ResultsWriter& out, const std::string& state_group) {
+  const ResultsReader in(out.temporary_path());
+  const std::string eg = state_group + "/envelopes";
+  if (!in.exists(eg)) return;
+  const FitOptions stress = fit_options(sc, "stress"), fabric = fit_options(sc, "fabric");
+  for (const auto& name : in.children(eg)) {
+    const std::string g = eg + "/" + name;
+    for (const auto& [pairs, fit_name, options] :
+         {std::tuple<std::string, std::string, const FitOptions&>{"stress_star", "fit_stress",
+                                                                  stress},
+          {"fabric", "fit_fabric", fabric}}) {
+      if (!in.exists(g + "/" + pairs)) continue;
+      try {
+        write_envelope_fit(out, g + "/" + fit_name,
+                           fit_envelope(read_envelope(in, g, pairs), options));
+      } catch (const InputError& e) {  // degenerate envelope: say so, as stage_fits does
+        out.attr(g + "/" + fit_name, "shape", "none");
+        out.attr(g + "/" + fit_name, "error", std::string(e.what()));
+      }
+    }
+  }
 }
 
 void stage_fits(const Scenario& sc, ResultsWriter& out, const RunContext& ctx) {

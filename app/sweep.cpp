@@ -14,6 +14,7 @@
 #include <map>
 #include <sstream>
 
+#include "rendulic/core/conventions.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/dem/contact.hpp"
 #include "rendulic/dem/probe_campaign.hpp"
@@ -44,13 +45,13 @@ std::string fmt(double x) {
 
 // The scenario's protocol up to its first snapshot: gas, compression to nu0 and relaxation
 // with the preparation damping, isotropic loading to nu_max and relaxation with the
-// material's, the undrained path to the first states.eps_dev, relaxation at fixed cell. The
-// same primitives and options as the run stages (stages_dem.cpp), with N replaced and one
-// shortcut: the isotropic loading runs at its constant largest rate (isotropic.rate_max)
+// material's, the undrained path to the first states.eps_dev, brought to rest as by the states
+// stage. The same primitives and options as the run stages (stages_dem.cpp), with N replaced and
+// one shortcut: the isotropic loading runs at its constant largest rate (isotropic.rate_max)
 // instead of holding the inertial number. Held, it crawls through jamming at rate_min
 // (minutes at N = 500); the probed state has the same nu, P* and eps_dev either way, and
 // its preparation history is not what the sweep measures.
-dem::DemSystem prepare_state(const dem::DemRunOptions& o, int n, std::uint64_t seed) {
+dem::DemSystem isotropic_state(const dem::DemRunOptions& o, int n, std::uint64_t seed) {
   dem::SystemOptions prep = o.system;
   prep.material.gamma_b = o.prepare_gamma_b;
   dem::GasOptions gas = o.gas;
@@ -66,6 +67,11 @@ dem::DemSystem prepare_state(const dem::DemRunOptions& o, int n, std::uint64_t s
   loading.inertial_number = 0.0;
   dem::compress_isotropic(sys, loading);
   dem::relax(sys, o.relax);
+  return sys;
+}
+
+dem::DemSystem prepare_state(const dem::DemSystem& isotropic, const dem::DemRunOptions& o) {
+  dem::DemSystem sys = isotropic;
   dem::PathOptions path = o.path;
   const double first =
       *std::min_element(path.snapshot_eps_dev.begin(), path.snapshot_eps_dev.end());
@@ -73,7 +79,7 @@ dem::DemSystem prepare_state(const dem::DemRunOptions& o, int n, std::uint64_t s
   path.snapshot_eps_dev = {first};
   path.samples = 2;
   dem::DemSystem state = std::move(dem::undrained_extension(sys, path).snapshots.front());
-  dem::relax(state, o.state_relax);
+  dem::bring_to_rest(state, o.state_rest);
   return state;
 }
 
@@ -262,6 +268,8 @@ class Sweeper {
                 x.dt_factor = v;
                 x.relax = o_.tight_relax;
               }));
+      } else if (factor == "path_rate") {
+        for (double v : o_.path_rates) s.path_points.push_back(path_point(v));
       } else if (factor == "method") {
         for (const std::string& m : o_.methods) {
           add(s, factor, 0.0, with(base, [&](Setting& x) { x.method = m; }));
@@ -273,6 +281,10 @@ class Sweeper {
         }
       }
     }
+    std::stable_sort(
+        s.path_points.begin(), s.path_points.end(),
+        [](const PathRatePoint& a, const PathRatePoint& b) { return a.rate > b.rate; });
+    compare_path_rates(s.path_points, o_.path_rate_target);
     for (const auto& [n, st] : states_) s.states.push_back(state_summary_[n]);
     mark_pareto(s.points);
     describe_breaks(s);
@@ -297,7 +309,7 @@ class Sweeper {
     if (it != states_.end()) return it->second;
     say("preparing the state at N = " + std::to_string(n) + " ...");
     Stopwatch w;
-    dem::DemSystem sys = prepare_state(run_, n, seed_);
+    dem::DemSystem sys = prepare_state(isotropic(n, seed_), run_);
     SweepState ss;
     ss.n_particles = n;
     ss.prepare_wall_s = w.wall();
@@ -315,6 +327,79 @@ class Sweeper {
     state_summary_[n] = ss;
     return states_.emplace(n, StateData{std::move(sys), std::move(ref), f, {}, {}, false})
         .first->second;
+  }
+
+  // The isotropic state at nu_max of N particles from a seed (made once).
+  const dem::DemSystem& isotropic(int n, std::uint64_t seed) {
+    const auto key = std::make_pair(n, seed);
+    auto it = isotropic_.find(key);
+    if (it == isotropic_.end()) it = isotropic_.emplace(key, isotropic_state(run_, n, seed)).first;
+    return it->second;
+  }
+
+  // The path at `rate` from the isotropic state of each of path_seeds seeds (run.seed,
+  // run.seed + 1, ...): the steady-state mean per seed, and over the seeds.
+  PathRatePoint path_point(double rate) {
+    PathRatePoint p;
+    p.rate = rate;
+    try {
+      std::vector<double> inertial_means;
+      for (int k = 0; k < o_.path_seeds; ++k) {
+        dem::DemSystem sys = isotropic(o_.base_n, seed_ + static_cast<std::uint64_t>(k));
+        dem::PathOptions path = run_.path;
+        path.rate = rate;
+        path.snapshot_eps_dev.clear();
+        std::vector<double> x, ratio, inertial;
+        Stopwatch w;
+        const dem::PathSummary run =
+            dem::undrained_extension(sys, path, [&](const dem::Measures& m) {
+              if (!(m.pressure > 0)) return;
+              x.push_back(-m.eps_dev);
+              ratio.push_back(std::abs(signed_deviator(m.stress)) / m.pressure);
+              inertial.push_back(m.inertial_number);
+            });
+        p.wall_s += w.wall();
+        p.cpu_s += w.cpu();
+        p.steps += run.steps;
+        const double lo = dem::kSteadyStateFrom * path.eps_dev_max, hi = path.eps_dev_max;
+        const dem::WindowMean r = dem::window_mean(x, ratio, lo, hi);
+        if (!r.ok) {
+          p.status = "failed";
+          p.note = "too few samples in the steady-state window (" + std::to_string(r.samples) +
+                   "): raise path.samples";
+          break;
+        }
+        p.ratio_per_seed.push_back(r.mean);
+        p.ratio_stderr_per_seed.push_back(r.standard_error);
+        p.window_samples = r.samples;
+        inertial_means.push_back(dem::window_mean(x, inertial, lo, hi).mean);
+      }
+      if (p.status == "ok") {
+        const auto n = static_cast<double>(p.ratio_per_seed.size());
+        for (std::size_t k = 0; k < p.ratio_per_seed.size(); ++k) {
+          p.ratio += p.ratio_per_seed[k] / n;
+          p.inertial_number += inertial_means[k] / n;
+        }
+        // Independent seeds: the spread of their means; one seed: its batch-means error.
+        if (p.ratio_per_seed.size() >= 2) {
+          double ss = 0;
+          for (double v : p.ratio_per_seed) ss += (v - p.ratio) * (v - p.ratio);
+          p.ratio_stderr = std::sqrt(ss / (n - 1) / n);
+        } else {
+          p.ratio_stderr = p.ratio_stderr_per_seed.front();
+        }
+      }
+    } catch (const std::exception& e) {
+      p.status = "failed";
+      p.note = std::string("failed: ") + e.what();
+    }
+    say("path_rate = " + fmt(rate) + ": " +
+        (p.status == "ok"
+             ? "|sigma_dev|/P " + fmt(p.ratio) + " +- " + fmt(p.ratio_stderr) +
+                   " at I = " + fmt(p.inertial_number) + " (" +
+                   std::to_string(p.ratio_per_seed.size()) + " seeds), cpu " + fmt(p.cpu_s) + " s"
+             : p.note));
+    return p;
   }
 
   const std::pair<const dem::Envelope*, const Features*> reference(StateData& st, double amp) {
@@ -418,6 +503,7 @@ class Sweeper {
   double elastic_amp_ = 0, plastic_amp_ = 0;
   std::uint64_t seed_ = 1;
   std::map<int, StateData> states_;
+  std::map<std::pair<int, std::uint64_t>, dem::DemSystem> isotropic_;
   std::map<int, SweepState> state_summary_;
   std::map<std::string, SweepPoint> cache_;
 };
@@ -449,6 +535,7 @@ SweepOptions SweepOptions::preset(bool quick) {
     o.n_particles = {250, 500};
     o.inertial_numbers = {1e-4, 1e-3, 1e-2};
     o.relax_thresholds = {1e-4, 1e-5, 1e-6, 1e-7, 1e-8};
+    o.path_rates = {4000, 1000};
   } else {
     o.base_n = 1000;
     o.directions = 0;  // the scenario's probes.directions
@@ -456,6 +543,7 @@ SweepOptions SweepOptions::preset(bool quick) {
     o.n_particles = {250, 500, 1000, 2000};
     o.inertial_numbers = {1e-5, 1e-4, 3e-4, 1e-3, 3e-3, 1e-2};
     o.relax_thresholds = {1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11};
+    o.path_rates = {1200, 600, 300, 150, 75, 37.5};
   }
   return o;
 }
@@ -469,13 +557,14 @@ bool SweepOptions::IsValid(std::string* why) const {
   for (const auto& f : factors)
     if (std::find(kSweepFactors.begin(), kSweepFactors.end(), f) == kSweepFactors.end())
       return fail("sweep: unknown factor '" + f +
-                  "' (dt_factor, n_particles, inertial_number, relax, method)");
+                  "' (dt_factor, n_particles, inertial_number, relax, dt_factor_tight, method, "
+                  "path_rate)");
   if (threads < 0) return fail("sweep: threads must be >= 0");
   if (!(target > 0 && target < 1)) return fail("sweep: target must be in (0, 1)");
   if (base_n < 50) return fail("sweep: base N must be >= 50");
   if (directions != 0 && directions < 4) return fail("sweep: directions must be 0 or >= 4");
   if (!all_positive(dt_factors) || !all_positive(n_particles) || !all_positive(inertial_numbers) ||
-      !all_positive(relax_thresholds))
+      !all_positive(relax_thresholds) || !all_positive(path_rates))
     return fail("sweep: every swept value must be positive and finite");
   for (double n : n_particles)
     if (n < 50 || n != std::floor(n)) return fail("sweep: N values must be integers >= 50");
@@ -484,6 +573,9 @@ bool SweepOptions::IsValid(std::string* why) const {
   for (double r : relax_thresholds)
     if (r >= 1) return fail("sweep: relaxation thresholds must be < 1");
   if (!(tight_relax > 0 && tight_relax < 1)) return fail("sweep: tight_relax must be in (0, 1)");
+  if (!(path_rate_target > 0 && path_rate_target < 1))
+    return fail("sweep: path_rate_target must be in (0, 1)");
+  if (path_seeds < 1 || path_seeds > 64) return fail("sweep: path seeds must be in 1..64");
   for (const auto& m : methods)
     if (m != "dynamic" && m != "minimisation" && m != "linear_response")
       return fail("sweep: unknown method '" + m + "'");
@@ -523,6 +615,20 @@ void mark_pareto(std::vector<SweepPoint>& points) {
       }
     }
     p.pareto = !dominated;
+  }
+}
+
+void compare_path_rates(std::vector<PathRatePoint>& points, double target) {
+  for (PathRatePoint& p : points) {
+    p.has_slower = false;
+    p.converged = false;
+    if (p.status != "ok") continue;
+    for (const PathRatePoint& q : points) {
+      if (q.status != "ok" || std::abs(q.rate * 4.0 - p.rate) > 1e-9 * p.rate) continue;
+      p.has_slower = true;
+      p.change_4x = std::abs(p.ratio - q.ratio) / q.ratio;
+      p.converged = p.change_4x <= target;
+    }
   }
 }
 
@@ -604,9 +710,34 @@ void describe_breaks(SweepSummary& s) {
         p.method != "minimisation")
       s.breaks.push_back("method " + p.method + " at amplitude " + fmt(p.amplitude) + ": error " +
                          fmt(p.error) + " against the minimisation envelope");
+  // The path's rate: the steady-state ratio against the run 4x slower.
+  for (const PathRatePoint& p : s.path_points) {
+    if (p.status != "ok") {
+      s.breaks.push_back("path_rate = " + fmt(p.rate) + ": " + p.note);
+    } else if (p.has_slower) {
+      s.breaks.push_back("path_rate = " + fmt(p.rate) + " (I = " + fmt(p.inertial_number) +
+                         "): steady-state |sigma_dev|/P " + fmt(p.ratio) + " +- " +
+                         fmt(p.ratio_stderr) + ", " + fmt(100 * p.change_4x) +
+                         " % from the run 4x slower" +
+                         (p.converged ? " (quasi-static)" : " (rate-dependent)"));
+    }
+  }
+  if (!s.path_points.empty()) {
+    const PathRatePoint* best = nullptr;
+    for (const PathRatePoint& p : s.path_points)
+      if (p.converged && (!best || p.rate > best->rate)) best = &p;
+    s.recommendations.push_back(
+        best ? "path_rate: fastest within " + fmt(100 * s.options.path_rate_target) +
+                   " % of the run 4x slower is " + fmt(best->rate) +
+                   " 1/s (I = " + fmt(best->inertial_number) + ", cpu " + fmt(best->cpu_s) + " s)"
+             : "path_rate: no swept rate is within " + fmt(100 * s.options.path_rate_target) +
+                   " % of the run 4x slower");
+  }
   // Recommendations: per factor, the cheapest value that meets the target.
   for (const std::string factor :
        {"dt_factor", "n_particles", "inertial_number", "relax", "dt_factor_tight"}) {
+    const auto& swept = s.options.factors;
+    if (std::find(swept.begin(), swept.end(), factor) == swept.end()) continue;
     const SweepPoint* best = nullptr;
     for (const SweepPoint* p : ok_points(s, factor))
       if (p->meets_target && (!best || p->cpu_s < best->cpu_s)) best = p;
@@ -654,6 +785,31 @@ void write_sweep_h5(const SweepSummary& s, ResultsWriter& out) {
              {"ref_major", st.ref_major},
              {"ref_minor", st.ref_minor},
              {"ref_inclination_deg", st.ref_inclination_deg}});
+  }
+  out.attr(g, "path_rate_target", s.options.path_rate_target);
+  for (std::size_t i = 0; i < s.path_points.size(); ++i) {
+    const PathRatePoint& p = s.path_points[i];
+    char name[48];
+    std::snprintf(name, sizeof name, "/path_rate/p%03zu", i);
+    const std::string pg = g + name;
+    out.attr(pg, "status", p.status);
+    out.attr(pg, "note", p.note);
+    put(pg, {{"rate", p.rate},
+             {"wall_s", p.wall_s},
+             {"cpu_s", p.cpu_s},
+             {"steps", static_cast<double>(p.steps)}});
+    if (p.status != "ok") continue;
+    put(pg, {{"inertial_number", p.inertial_number},
+             {"ratio", p.ratio},
+             {"ratio_stderr", p.ratio_stderr},
+             {"window_samples", static_cast<double>(p.window_samples)}});
+    out.attr(pg, "ratio_per_seed", p.ratio_per_seed);
+    out.attr(pg, "ratio_stderr_per_seed", p.ratio_stderr_per_seed);
+    out.attr(pg, "has_slower", std::int64_t{p.has_slower});
+    if (p.has_slower) {
+      out.attr(pg, "change_4x", p.change_4x);
+      out.attr(pg, "converged", std::int64_t{p.converged});
+    }
   }
   for (std::size_t i = 0; i < s.points.size(); ++i) {
     const SweepPoint& p = s.points[i];
@@ -726,6 +882,31 @@ std::string sweep_csv(const SweepSummary& s) {
     std::string note = p.note;
     std::replace(note.begin(), note.end(), '"', '\'');
     c << p.meets_target << ',' << p.pareto << ",\"" << note << "\"\n";
+  }
+  return c.str();
+}
+
+std::string sweep_path_csv(const SweepSummary& s) {
+  if (s.path_points.empty()) return {};
+  std::ostringstream c;
+  c << std::setprecision(6);
+  c << "rate,status,inertial_number,ratio,ratio_stderr,window_samples,change_4x,converged,steps,"
+       "wall_s,cpu_s,note\n";
+  for (const PathRatePoint& p : s.path_points) {
+    const bool ok = p.status == "ok";
+    c << p.rate << ',' << p.status << ',';
+    if (ok)
+      c << p.inertial_number << ',' << p.ratio << ',' << p.ratio_stderr << ',' << p.window_samples
+        << ',';
+    else
+      c << ",,,,";
+    if (ok && p.has_slower)
+      c << p.change_4x << ',' << p.converged << ',';
+    else
+      c << ",,";
+    std::string note = p.note;
+    std::replace(note.begin(), note.end(), '"', '\'');
+    c << p.steps << ',' << p.wall_s << ',' << p.cpu_s << ",\"" << note << "\"\n";
   }
   return c.str();
 }

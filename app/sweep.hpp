@@ -11,6 +11,10 @@
 // The error of an envelope is max over directions of |d_sigma* - d_sigma*_ref| / a_ref
 // (a_ref: the reference's fitted semi-major axis); the fitted features (axes, inclination,
 // centre) are compared too. Costs are the wall and CPU time of making the envelope.
+// The path's rate (factor path_rate) is swept on its own: from the isotropic state at nu_max
+// the undrained path runs at each rate, and its steady-state stress ratio |sigma_dev|/P (the
+// mean over the steady-state window with its batch-means standard error, protocols.hpp) is
+// compared with the run 4x slower; the fastest rate within 2 % of it is quasi-static.
 // Settings that cannot run are reported, never crashed on: a time step beyond the engine's
 // stability bound is "refused" (the engine's own check), a run whose energy grows is
 // "diverged", any other failure "failed" with the message.
@@ -29,7 +33,8 @@ namespace rendulic::app {
 // dt_factor_tight: the time-step series again at the relaxation threshold tight_relax, where
 // the relaxation no longer hides the integrator's own error.
 inline const std::vector<std::string> kSweepFactors = {
-    "dt_factor", "n_particles", "inertial_number", "relax", "dt_factor_tight", "method"};
+    "dt_factor",       "n_particles", "inertial_number", "relax",
+    "dt_factor_tight", "method",      "path_rate"};
 
 struct SweepOptions {
   bool quick = false;  // the small variant (system test): N 250, 8 directions, few values
@@ -42,6 +47,9 @@ struct SweepOptions {
   int base_n = 1000;
   int directions = 0;  // 0: the scenario's probes.directions
   std::vector<double> dt_factors, n_particles, inertial_numbers, relax_thresholds;
+  std::vector<double> path_rates;  // 1/s (path.rate), each run from the same isotropic state
+  double path_rate_target = 0.02;  // steady-state ratio within this of the run 4x slower
+  int path_seeds = 1;  // independent packings (seeds run.seed, run.seed + 1, ...) per rate
   std::vector<std::string> methods = {"dynamic", "minimisation", "linear_response"};
   double tight_relax = 1e-9;  // the threshold of the dt_factor_tight series
   static SweepOptions preset(bool quick);
@@ -86,6 +94,24 @@ struct SweepPoint {
   std::vector<double> stress_star_x, stress_star_y;  // the envelope (status ok)
 };
 
+// One run of the undrained path (factor path_rate).
+struct PathRatePoint {
+  double rate = 0;             // 1/s (D_xx)
+  double inertial_number = 0;  // mean over the steady-state window, at the samples' pressure
+  // Steady-state |sigma_dev| / P: mean over the seeds, and its standard error (the spread of
+  // the seeds' means; with one seed, its batch-means error).
+  double ratio = 0, ratio_stderr = 0;
+  std::vector<double> ratio_per_seed, ratio_stderr_per_seed;
+  int window_samples = 0;
+  std::int64_t steps = 0;
+  double wall_s = 0, cpu_s = 0;
+  // Against the run at rate / 4 when it was swept (else has_slower = false):
+  bool has_slower = false;
+  double change_4x = 0;    // |ratio - ratio(rate/4)| / ratio(rate/4)
+  bool converged = false;  // change_4x <= path_rate_target
+  std::string status = "ok", note;
+};
+
 struct SweepSummary {
   SweepOptions options;
   std::string scenario_toml;
@@ -93,6 +119,7 @@ struct SweepSummary {
   double stability_limit_factor = 0;  // the engine's bound on dt / t_c
   std::vector<SweepState> states;
   std::vector<SweepPoint> points;
+  std::vector<PathRatePoint> path_points;  // by decreasing rate
   // One line per finding of where a method breaks (refused or diverged steps, the noise floor
   // of the relaxation, rate effects, the linear response at plastic amplitudes).
   std::vector<std::string> breaks;
@@ -116,8 +143,13 @@ void mark_pareto(std::vector<SweepPoint>& points);
 // Fills summary.breaks and summary.recommendations from the points.
 void describe_breaks(SweepSummary& summary);
 
+// Fills change_4x and converged of each path point from the point at a quarter of its rate.
+void compare_path_rates(std::vector<PathRatePoint>& points, double target);
+
 // sweep.h5 (docs/results.md "Sweep file") through the atomic writer, and sweep.csv.
 void write_sweep_h5(const SweepSummary& summary, ResultsWriter& out);
 std::string sweep_csv(const SweepSummary& summary);
+// The path_rate points, one row each (sweep_path.csv; empty when none was swept).
+std::string sweep_path_csv(const SweepSummary& summary);
 
 }  // namespace rendulic::app

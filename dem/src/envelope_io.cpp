@@ -49,6 +49,14 @@ void write_envelope(ResultsWriter& out, const std::string& group, const Envelope
   out.write(group + "/fabric", envelope.fabric);
   out.write(group + "/d_stress", envelope.d_stress);
   out.write(group + "/d_fabric", envelope.d_fabric);
+  if (!envelope.d_fabric_volume.empty()) {
+    if (envelope.d_fabric_volume.size() != m || envelope.d_fabric_rotation.size() != m ||
+        envelope.d_fabric_contacts.size() != m)
+      throw std::logic_error("write_envelope: inconsistent fabric split sizes");
+    out.write(group + "/d_fabric_volume", envelope.d_fabric_volume);
+    out.write(group + "/d_fabric_rotation", envelope.d_fabric_rotation);
+    out.write(group + "/d_fabric_contacts", envelope.d_fabric_contacts);
+  }
   std::vector<std::string> names;
   for (const auto& [name, values] : envelope.diagnostics) {
     if (values.size() != m) throw std::logic_error("write_envelope: diagnostic " + name);
@@ -78,6 +86,11 @@ Envelope read_envelope(const ResultsReader& in, const std::string& group) {
   env.fabric = in.read_pairs(group + "/fabric");
   env.d_stress = in.read_tensors(group + "/d_stress");
   env.d_fabric = in.read_tensors(group + "/d_fabric");
+  if (in.exists(group + "/d_fabric_volume")) {
+    env.d_fabric_volume = in.read_tensors(group + "/d_fabric_volume");
+    env.d_fabric_rotation = in.read_tensors(group + "/d_fabric_rotation");
+    env.d_fabric_contacts = in.read_tensors(group + "/d_fabric_contacts");
+  }
   const std::size_t m = env.theta_deg.size();
   if (env.strain.size() != m || env.stress_star.size() != m || env.fabric.size() != m ||
       env.d_stress.size() != m || env.d_fabric.size() != m ||

@@ -308,7 +308,7 @@ LinearResponse linear_response(const PackingData& packing, const LinearResponseO
 
   // Stress and fabric rates in the tension frame (dE), column by column.
   const Eigen::Matrix3d sigma_t = -out.stress;
-  Matrix6d c_full, c_affine, g_full;
+  Matrix6d c_full, c_affine, g_full, g_volume, g_rotation;
   for (int a = 0; a < 6; ++a) {
     const Eigen::Matrix3d& de = basis[a];
     Eigen::Matrix3d ds_full = Eigen::Matrix3d::Zero(), ds_affine = Eigen::Matrix3d::Zero();
@@ -333,16 +333,20 @@ LinearResponse linear_response(const PackingData& packing, const LinearResponseO
     const double tr = de.trace();
     ds_full = ds_full / out.volume - sigma_t * tr;
     ds_affine = ds_affine / out.volume - sigma_t * tr;
-    df = df / out.volume - out.fabric * tr;
+    const Eigen::Matrix3d df_rotation = df / out.volume, df_volume = -out.fabric * tr;
     // d sigma_T = C_T dE with dE = -d_eps and sigma = -sigma_T: C = C_T. The fabric keeps
     // its sign, so only the strain flips: G = -G_T.
     c_full.col(a) = to_mandel(ds_full);
     c_affine.col(a) = to_mandel(ds_affine);
-    g_full.col(a) = -to_mandel(df);
+    g_rotation.col(a) = -to_mandel(df_rotation);
+    g_volume.col(a) = -to_mandel(df_volume);
+    g_full.col(a) = g_rotation.col(a) + g_volume.col(a);
   }
   out.stiffness = c_full;
   out.affine_stiffness = c_affine;
   out.fabric_stiffness = g_full;
+  out.fabric_volume_stiffness = g_volume;
+  out.fabric_rotation_stiffness = g_rotation;
   out.ok = true;
   std::ostringstream os;
   os << "linear response: " << n << " particles, " << out.n_rattlers << " rattlers, "

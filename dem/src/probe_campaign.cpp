@@ -13,6 +13,7 @@
 #include "rendulic/core/conventions.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/dem/envelope_io.hpp"
+#include "rendulic/dem/probe_elastic_range.hpp"
 #include "rendulic/dem/probe_mpi.hpp"
 #include "rendulic/dem/scenario_keys.hpp"
 
@@ -125,6 +126,7 @@ Eigen::Matrix3d exp_sym(const Eigen::Matrix3d& a) {
 struct ProbeOutcome {
   Eigen::Matrix3d d_stress, d_fabric;
   std::pair<double, double> changes, backbone_changes;  // contacts (opened, closed)
+  FabricSplit split;                                    // of d_fabric
 };
 
 // No exception may leave a parallel region: probes record their errors, the first is thrown
@@ -138,9 +140,18 @@ void rethrow_first(const std::vector<std::string>& errors, const std::string& me
 ProbeOutcome outcome_of(const Eigen::Matrix3d& d_stress, const Eigen::Matrix3d& d_fabric,
                         const std::vector<std::uint64_t>& keys_before,
                         const std::vector<std::uint64_t>& keys_after,
-                        const std::vector<bool>& backbone) {
+                        const std::vector<bool>& backbone, const FabricSplit& split) {
   return {d_stress, d_fabric, contact_changes(keys_before, keys_after),
-          contact_changes(among(keys_before, backbone), among(keys_after, backbone))};
+          contact_changes(among(keys_before, backbone), among(keys_after, backbone)), split};
+}
+
+// The (i, j) pairs of sorted contact keys.
+std::vector<std::pair<int, int>> pairs_of(const std::vector<std::uint64_t>& keys) {
+  std::vector<std::pair<int, int>> out;
+  out.reserve(keys.size());
+  for (std::uint64_t key : keys)
+    out.emplace_back(static_cast<int>(key >> 32), static_cast<int>(key & 0xffffffffu));
+  return out;
 }
 
 // The envelope of a campaign with the contact-change diagnostics common to the methods, from
@@ -157,7 +168,7 @@ Envelope assemble_envelope(const std::string& method, double amplitude, double k
   auto& diag = env.diagnostics;
   for (std::size_t p = 0; p < records.size(); ++p) {
     const ProbeOutcome& o = records[p].outcome;
-    env.add(theta_deg[p], probe_strain(theta_deg[p], amplitude), o.d_stress, o.d_fabric);
+    env.add(theta_deg[p], probe_strain(theta_deg[p], amplitude), o.d_stress, o.d_fabric, o.split);
     diag["contacts_opened"].push_back(o.changes.first);
     diag["contacts_closed"].push_back(o.changes.second);
     diag["backbone_contacts_opened"].push_back(o.backbone_changes.first);
@@ -188,9 +199,10 @@ namespace {
 
 template <class A>
 void io(A& a, ProbeOutcome& o) {
-  auto& [d_stress, d_fabric, changes, backbone_changes] = o;
+  auto& [d_stress, d_fabric, changes, backbone_changes, split] = o;
   a(d_stress), a(d_fabric), a(changes.first), a(changes.second);
   a(backbone_changes.first), a(backbone_changes.second);
+  a(split.volume), a(split.rotation), a(split.contacts);
 }
 
 // What one probe of each method reports (ProbeOutcome plus the method's own diagnostics).
@@ -291,6 +303,8 @@ Envelope dynamic_envelope_of(const DemSystem& given, double amplitude,
   const std::vector<Contact> contacts_before = state.contacts();
   const std::vector<std::uint64_t> keys_before = contact_keys(contacts_before);
   const std::vector<bool> backbone = non_rattlers(state.particles().size(), contacts_before);
+  const PackingData packing_before = packing_of(state);
+  const std::vector<std::pair<int, int>> pairs_before = pairs_of(keys_before);
   const int m = static_cast<int>(theta_deg.size());
   std::vector<DynamicProbe> probes(m);
   const bool assemble = compute_probes(scope, options, "dynamic", probes, [&](int p) {
@@ -306,8 +320,10 @@ Envelope dynamic_envelope_of(const DemSystem& given, double amplitude,
     r.relaxed = relax(sys, options.relax);
     const Measures after = sys.measure();
     const std::vector<std::uint64_t> keys_after = contact_keys(sys.contacts());
+    const FabricSplit split = split_fabric_change(packing_before, packing_of(sys), pairs_before,
+                                                  before.fabric, after.fabric);
     r.outcome = outcome_of(after.stress - before.stress, after.fabric - before.fabric, keys_before,
-                           keys_after, backbone);
+                           keys_after, backbone, split);
     return r;
   });
   if (!assemble) return {};
@@ -323,8 +339,7 @@ Envelope dynamic_envelope_of(const DemSystem& given, double amplitude,
   }
   const Material& mat = state.material();
   env.attributes["rate"] = rate;
-  env.attributes["inertial_number"] =
-      rate * 2.0 * mat.r_mean * std::sqrt(mat.density / std::max(before.pressure, 1e-300));
+  env.attributes["inertial_number"] = inertial_number(mat, rate, before.pressure);
   env.attributes["relax_kinetic_to_elastic"] = options.relax.kinetic_to_elastic;
   env.attributes["relax_time_cap"] = options.relax.time_cap;
   env.attributes["dt"] = state.dt();
@@ -384,6 +399,7 @@ Envelope minimisation_envelope(const DemSystem& state, double amplitude,
   const double min_overlap = mo.force_tolerance * ref_summary.mean_contact_force / mo.k;
   const StressFabric before = measure_stress_fabric(ref, mo.k, nullptr, min_overlap);
   const std::vector<std::uint64_t> keys_before = contact_keys(find_pairs(ref, 0.0), min_overlap);
+  const std::vector<std::pair<int, int>> pairs_before = pairs_of(keys_before);
   std::vector<bool> backbone(ref.size(), true);
   {
     std::vector<Contact> cs;
@@ -403,8 +419,10 @@ Envelope minimisation_envelope(const DemSystem& state, double amplitude,
     r.summary = minimise_energy(probe, mo);
     const StressFabric after = measure_stress_fabric(probe, mo.k, nullptr, min_overlap);
     const std::vector<std::uint64_t> keys_after = contact_keys(find_pairs(probe, 0.0), min_overlap);
+    const FabricSplit split =
+        split_fabric_change(ref, probe, pairs_before, before.fabric, after.fabric);
     r.outcome = outcome_of(after.stress - before.stress, after.fabric - before.fabric, keys_before,
-                           keys_after, backbone);
+                           keys_after, backbone, split);
     return r;
   });
   if (!assemble) return {};
@@ -461,6 +479,12 @@ std::string envelope_name(const std::string& method, double amplitude) {
 std::vector<Envelope> run_probe_campaign(const DemSystem& state, const std::string& label,
                                          const std::vector<std::string>& methods,
                                          const ProbeOptions& options, ResultsWriter& out) {
+  return run_probe_campaign_in(state, "/states/" + label, methods, options, out);
+}
+
+std::vector<Envelope> run_probe_campaign_in(const DemSystem& state, const std::string& state_group,
+                                            const std::vector<std::string>& methods,
+                                            const ProbeOptions& options, ResultsWriter& out) {
   std::string why;
   if (!options.IsValid(&why)) throw InputError(why);
   const std::vector<double> theta = probe_directions(options.directions);
@@ -481,7 +505,7 @@ std::vector<Envelope> run_probe_campaign(const DemSystem& state, const std::stri
       } else {  // one factorisation serves every amplitude
         env = linear_response_envelope(lr, theta, amplitude, state.material().k_star());
       }
-      const std::string group = envelope_path(label, envelope_name(method, amplitude));
+      const std::string group = state_group + "/envelopes/" + envelope_name(method, amplitude);
       write_envelope(out, group, env);
       if (method == "linear_response") {
         out.write(group + "/stiffness", Eigen::MatrixXd(lr.stiffness));
@@ -589,6 +613,7 @@ void register_probe_keys(ScenarioSchema& schema) {
   s.max = 1.0;
   s.max_open = true;
   schema.add(s);
+  register_elastic_range_keys(schema);
 }
 
 ProbeOptions probe_options_from(const Scenario& scenario) {

@@ -19,6 +19,14 @@ void Envelope::add(double theta, const Eigen::Matrix3d& d_eps, const Eigen::Matr
   d_fabric.push_back(d_f);
 }
 
+void Envelope::add(double theta, const Eigen::Matrix3d& d_eps, const Eigen::Matrix3d& d_sigma,
+                   const Eigen::Matrix3d& d_f, const FabricSplit& split) {
+  add(theta, d_eps, d_sigma, d_f);
+  d_fabric_volume.push_back(split.volume);
+  d_fabric_rotation.push_back(split.rotation);
+  d_fabric_contacts.push_back(split.contacts);
+}
+
 Envelope linear_response_envelope(const LinearResponse& response,
                                   const std::vector<double>& theta_deg, double amplitude,
                                   double k_star) {
@@ -32,7 +40,13 @@ Envelope linear_response_envelope(const LinearResponse& response,
   env.k_star = k_star;
   for (double theta : theta_deg) {
     const Eigen::Matrix3d d_eps = probe_strain(theta, amplitude);
-    env.add(theta, d_eps, response.stress_increment(d_eps), response.fabric_increment(d_eps));
+    // No contact opens or closes in the linear response: its fabric rate is the volume and
+    // rotation parts alone.
+    const FabricSplit split{from_mandel(response.fabric_volume_stiffness * to_mandel(d_eps)),
+                            from_mandel(response.fabric_rotation_stiffness * to_mandel(d_eps)),
+                            Eigen::Matrix3d::Zero()};
+    env.add(theta, d_eps, response.stress_increment(d_eps), response.fabric_increment(d_eps),
+            split);
   }
   env.attributes["n_rattlers"] = response.n_rattlers;
   env.attributes["n_backbone_contacts"] = response.n_backbone_contacts;

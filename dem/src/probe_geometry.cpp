@@ -149,4 +149,33 @@ StressFabric measure_stress_fabric(const PackingData& packing, double k,
   return out;
 }
 
+Eigen::Matrix3d fabric_of_pairs(const PackingData& packing,
+                                const std::vector<std::pair<int, int>>& pairs) {
+  const Eigen::Matrix3d h_inv = packing.cell.inverse();
+  Eigen::Matrix3d f = Eigen::Matrix3d::Zero();
+  for (const auto& [i, j] : pairs) {
+    const Eigen::Vector3d l = minimum_image(
+        packing.cell, h_inv, (packing.positions.row(i) - packing.positions.row(j)).transpose());
+    const Eigen::Vector3d n = l.normalized();
+    const double w = 4.0 / 3.0 * std::numbers::pi *
+                     (std::pow(packing.radii(i), 3) + std::pow(packing.radii(j), 3));
+    f += w * (n * n.transpose());
+  }
+  return f / packing.volume();
+}
+
+FabricSplit split_fabric_change(const PackingData& before, const PackingData& after,
+                                const std::vector<std::pair<int, int>>& contacts_before,
+                                const Eigen::Matrix3d& fabric_before,
+                                const Eigen::Matrix3d& fabric_after) {
+  const Eigen::Matrix3d fixed0 = fabric_of_pairs(before, contacts_before);
+  const Eigen::Matrix3d fixed1 = fabric_of_pairs(after, contacts_before);
+  const double shrink = before.volume() / after.volume();
+  FabricSplit s;
+  s.volume = fixed0 * (shrink - 1.0);
+  s.rotation = fixed1 - fixed0 * shrink;
+  s.contacts = (fabric_after - fabric_before) - s.volume - s.rotation;
+  return s;
+}
+
 }  // namespace rendulic::dem

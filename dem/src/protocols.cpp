@@ -37,6 +37,8 @@ bool CompressOptions::IsValid(std::string* why) const {
   if (!(rate_min > 0 && rate_min <= rate_max)) return fail(why, "rate_min in (0, rate_max]");
   if (!(inertial_number >= 0)) return fail(why, "inertial number must be >= 0");
   if (samples < 0 || samples == 1) return fail(why, "samples must be 0 or >= 2");
+  for (double nu : snapshot_nu)
+    if (!(nu > 0 && nu < 1)) return fail(why, "snapshot volume fractions in (0, 1)");
   return true;
 }
 bool PathOptions::IsValid(std::string* why) const {
@@ -138,6 +140,12 @@ DemSystem make_gas(const SystemOptions& options, const GasOptions& gas, std::uin
   return DemSystem(std::move(q), PeriodicCell{Eigen::Vector3d::Constant(L)}, options);
 }
 
+double inertial_number(const Material& m, double rate, double pressure) {
+  if (rate == 0) return 0.0;
+  if (!(pressure > 0)) return std::numeric_limits<double>::infinity();
+  return std::abs(rate) * 2.0 * m.r_mean * std::sqrt(m.density / pressure);
+}
+
 double relax_ratio(const DemSystem& sys) {
   const Material& m = sys.material();
   const double floor = static_cast<double>(sys.particles().size()) * 0.5 * m.k * (1e-4 * m.r_mean) *
@@ -188,7 +196,12 @@ CompressSummary compress_isotropic(DemSystem& sys, const CompressOptions& o, con
   const double dt = sys.dt();
   const Material& mat = sys.material();
   int next_sample = 0;
-  auto record = [&](const Measures& m) {
+  double rate = o.rate_max;
+  // Samples carry the loading's rate (the first one: at rest), not the shortened last step's.
+  bool loading = false;
+  auto record = [&](Measures m) {
+    m.strain_rate = loading ? rate : 0.0;
+    m.inertial_number = inertial_number(mat, m.strain_rate, m.pressure);
     if (m.pressure_star > kJammedPressureStar && m.strain_rate > 0)
       s.max_inertial_number = std::max(s.max_inertial_number, m.inertial_number);
     if (sample) sample(m);
@@ -198,8 +211,21 @@ CompressSummary compress_isotropic(DemSystem& sys, const CompressOptions& o, con
     record(sys.measure());
     next_sample = 1;
   }
-  double rate = o.rate_max;
+  loading = true;
   constexpr int kRateUpdate = 20;  // steps between rate updates from the pressure
+  // Snapshots at the requested volume fractions leave the loading itself untouched (a run with
+  // snapshots is the same run as one without): the system is copied after the step that
+  // reaches or passes one, and the copy alone takes the fraction of a step back onto it.
+  std::vector<double> snap_at;  // ln(nu) - ln_start, in loading order
+  for (double nu : o.snapshot_nu) snap_at.push_back(std::log(nu) - ln_start);
+  std::sort(snap_at.begin(), snap_at.end(),
+            [&](double a, double b) { return sign * a < sign * b; });
+  for (double e : snap_at)
+    if (!(sign * e > 0 && sign * e < sign * total))
+      throw InputError(
+          "isotropic compression: snapshot volume fractions must lie strictly "
+          "between the start and the target");
+  std::size_t next_snap = 0;
   for (std::int64_t it = 0;; ++it) {
     const double done = std::log(sys.volume_fraction()) - ln_start;
     const double remaining = sign * (total - done);
@@ -214,6 +240,14 @@ CompressSummary compress_isotropic(DemSystem& sys, const CompressOptions& o, con
     const double r = last ? std::max(remaining, 0.0) / (3.0 * dt) : rate;
     sys.step(Eigen::Vector3d::Constant(-sign * r));
     ++s.steps;
+    while (next_snap < snap_at.size() &&
+           sign * (std::log(sys.volume_fraction()) - ln_start) >= sign * snap_at[next_snap]) {
+      DemSystem copy = sys;
+      const double back = std::log(copy.volume_fraction()) - ln_start - snap_at[next_snap];
+      copy.step(Eigen::Vector3d::Constant(back / (3.0 * dt)));
+      s.snapshots.push_back(std::move(copy));
+      ++next_snap;
+    }
     const double now = sign * (std::log(sys.volume_fraction()) - ln_start);
     while (o.samples >= 2 && next_sample < o.samples &&
            (last || now >= sign * (sample_point(next_sample) - ln_start))) {
@@ -248,13 +282,18 @@ PathSummary undrained_extension(DemSystem& sys, const PathOptions& o, const Samp
   std::size_t next_snap = 0;
   int next_sample = 1;
   auto sample_at = [&](int k) { return o.eps_dev_max * k / (o.samples - 1); };
-  auto record = [&](const Measures& m) {
+  // Samples carry the path's rate (max |D_aa| = rate) and the inertial number it has at the
+  // sample's pressure; the first sample is the state at rest before the path.
+  const Material& mat = sys.material();
+  auto record = [&](Measures m, bool moving) {
+    m.strain_rate = moving ? o.rate : 0.0;
+    m.inertial_number = inertial_number(mat, m.strain_rate, m.pressure);
     if (m.pressure > 0 && std::isfinite(m.inertial_number))
       s.max_inertial_number = std::max(s.max_inertial_number, m.inertial_number);
     if (sample) sample(m);
   };
   const Eigen::Vector3d shape(1.0, -0.5, -0.5);
-  record(sys.measure());
+  record(sys.measure(), false);
   // Events (samples, snapshots, the end) are hit exactly by shortening the step's rate.
   constexpr double kHit = 1e-12;  // relative tolerance of landing on an event
   for (std::int64_t it = 0;; ++it) {
@@ -275,7 +314,7 @@ PathSummary undrained_extension(DemSystem& sys, const PathOptions& o, const Samp
     }
     bool sampled = false;
     while (next_sample < o.samples && after >= sample_at(next_sample) - tol) {
-      if (!sampled) record(sys.measure());
+      if (!sampled) record(sys.measure(), true);
       sampled = true;
       ++next_sample;
     }
@@ -287,6 +326,32 @@ PathSummary undrained_extension(DemSystem& sys, const PathOptions& o, const Samp
   s.time = sys.time() - t0;
   if (progress) progress(1.0);
   return s;
+}
+
+WindowMean window_mean(const std::vector<double>& x, const std::vector<double>& y, double x_lo,
+                       double x_hi, int batches) {
+  WindowMean w;
+  std::vector<double> in;
+  for (std::size_t i = 0; i < x.size() && i < y.size(); ++i)
+    if (x[i] >= x_lo && x[i] <= x_hi) in.push_back(y[i]);
+  w.samples = static_cast<int>(in.size());
+  if (in.empty()) return w;
+  w.mean = std::accumulate(in.begin(), in.end(), 0.0) / static_cast<double>(in.size());
+  if (batches < 2 || w.samples < 2 * batches) return w;
+  // Batch b holds samples [b n / B, (b + 1) n / B): equal counts up to one sample.
+  std::vector<double> means(static_cast<std::size_t>(batches));
+  for (int b = 0; b < batches; ++b) {
+    const std::size_t lo = static_cast<std::size_t>(b) * in.size() / batches;
+    const std::size_t hi = static_cast<std::size_t>(b + 1) * in.size() / batches;
+    means[static_cast<std::size_t>(b)] =
+        std::accumulate(in.begin() + lo, in.begin() + hi, 0.0) / static_cast<double>(hi - lo);
+  }
+  const double m = std::accumulate(means.begin(), means.end(), 0.0) / batches;
+  double ss = 0.0;
+  for (double v : means) ss += (v - m) * (v - m);
+  w.standard_error = std::sqrt(ss / (batches - 1) / batches);
+  w.ok = true;
+  return w;
 }
 
 std::int64_t impose_strain_increment(DemSystem& sys, const Eigen::Vector3d& d_eps, double rate) {

@@ -101,6 +101,17 @@ void register_dem_keys(ScenarioSchema& s) {
   s.add(num("isotropic.rate_min", 50, "1/s",
             "Smallest isotropic loading rate (used while the pressure is ~0, below jamming).", 0,
             1e6, true));
+  {
+    KeySpec k = num("pressure.volume_fractions", 0, "-",
+                    "Volume fractions (between preparation.nu0 and isotropic.nu_max) at which the "
+                    "isotropic loading is also snapshotted; the pressure stage repeats the path, "
+                    "the states, their elastic range, probes and linear response from each "
+                    "(docs/dem.md 'Pressure branches').",
+                    0, 1, true, true);
+    k.type = KeyType::kDoubleList;
+    k.default_value = std::vector<double>{};
+    s.add(k);
+  }
   s.add(num("path.rate", 400, "1/s",
             "Axial extension rate D_xx of the undrained path D = rate diag(1, -1/2, -1/2).", 0, 1e6,
             true));
@@ -132,6 +143,11 @@ void register_dem_keys(ScenarioSchema& s) {
             "Relaxation of each snapshot ends when E_kin / E_el falls below this.", 0, 1, true));
   s.add(num("states.time_cap", 2e-3, "s", "Longest relaxation of a snapshot (reported if hit).", 0,
             10, true));
+  s.add(num("states.force_tolerance", 1e-9, "-",
+            "After the dynamic relaxation each snapshot is minimised (FIRE, fixed cell) until the "
+            "largest net force on a particle is below this x the mean contact force: the state "
+            "is then at rest, and so are its stress, fabric, linear response and envelopes.",
+            0, 1e-4, true));
 }
 
 Material material_from_scenario(const Scenario& sc) {
@@ -167,13 +183,17 @@ DemRunOptions dem_options_from_scenario(const Scenario& sc) {
   o.loading.inertial_number = sc.get_double("isotropic.inertial_number");
   o.loading.rate_max = sc.get_double("isotropic.rate_max");
   o.loading.rate_min = sc.get_double("isotropic.rate_min");
+  o.branch_nu = sc.get_doubles("pressure.volume_fractions");
+  o.loading.snapshot_nu = o.branch_nu;
   o.path.rate = sc.get_double("path.rate");
   o.path.eps_dev_max = sc.get_double("path.eps_dev_max");
   o.path.samples = static_cast<int>(sc.get_int("path.samples"));
   o.path.snapshot_eps_dev = sc.get_doubles("states.eps_dev");
   o.state_labels = sc.get_strings("states.labels");
-  o.state_relax.kinetic_to_elastic = sc.get_double("states.kinetic_to_elastic");
-  o.state_relax.time_cap = sc.get_double("states.time_cap");
+  o.state_rest.relax.kinetic_to_elastic = sc.get_double("states.kinetic_to_elastic");
+  o.state_rest.relax.time_cap = sc.get_double("states.time_cap");
+  o.state_rest.minimise.force_tolerance = sc.get_double("states.force_tolerance");
+  o.state_rest.minimise.k = m.k;
 
   auto where = [&](const char* key) { return std::string(key) + " (" + sc.origin(key) + ")"; };
   if (!(o.gas.volume_fraction < o.prepare.target_nu))
@@ -192,6 +212,11 @@ DemRunOptions dem_options_from_scenario(const Scenario& sc) {
     if (!seen.insert(l).second)
       throw InputError(where("states.labels") + ": duplicate label '" + l + "'");
   }
+  for (double nu : o.branch_nu)
+    if (!(nu > o.prepare.target_nu && nu < o.loading.target_nu))
+      throw InputError(where("pressure.volume_fractions") +
+                       ": every entry must lie strictly between preparation.nu0 and "
+                       "isotropic.nu_max");
   for (double e : o.path.snapshot_eps_dev)
     if (e > o.path.eps_dev_max)
       throw InputError(where("states.eps_dev") + ": every entry must be <= path.eps_dev_max");

@@ -72,8 +72,11 @@ void expect_error_falls_as_relaxation_tightens(const ResultsReader& f) {
   for (auto it = std::next(error.begin()); it != error.end(); ++it)
     EXPECT_LE(tightest, std::max(1.1 * it->second, it->second + 0.03))
         << "threshold " << error.begin()->first << " vs " << it->first;
-  // And overall it falls by a lot: the loosest threshold (1e-4) stops mid-relaxation.
-  EXPECT_LT(error.begin()->second, 0.5 * error.rbegin()->second);
+  // And it is no worse than the loosest. (It used to fall by half and more: the probed state
+  // was only relaxed dynamically, and a loose threshold stopped while the state itself still
+  // moved. The state is now at rest, dem.md "States at rest", and every threshold from 1e-4
+  // to 1e-7 stops at the same first check after the relaxation peak.)
+  EXPECT_LE(error.begin()->second, error.rbegin()->second);
 }
 
 void expect_unstable_step_refused(const ResultsReader& f) {

@@ -18,15 +18,17 @@ struct Envelope {
   std::vector<Eigen::Vector2d> strain, stress, fabric;
 };
 
-// Response = D u + shift for unit strain directions u, D given in the (iso, dev) frame.
+// Response = D u + shift for unit strain directions u, D given in the (iso, dev) frame, over
+// the 36 probe directions of the project (from 35.26 deg: they hold 125.26 and 305.26).
 inline Envelope make_envelope(const Eigen::Matrix2d& d_isodev, const Eigen::Vector2d& shift,
                               const Eigen::Matrix2d& f_isodev, const Eigen::Vector2d& f_shift,
                               double amplitude) {
   const Eigen::Matrix2d R = rendulic_to_iso_dev();
   const Eigen::Matrix2d D = R.transpose() * d_isodev * R, Df = R.transpose() * f_isodev * R;
   Envelope e;
-  for (int i = 0; i < 36; ++i) {
-    const double th = 10.0 * i + (i == 3 ? kIsoCompressionDeg - 30.0 : 0.0);  // has 35.26
+  const Eigen::VectorXd theta = probe_directions_deg(36);
+  for (Eigen::Index i = 0; i < theta.size(); ++i) {
+    const double th = theta(i);
     const Eigen::Vector2d u(std::cos(deg_to_rad(th)), std::sin(deg_to_rad(th)));
     e.theta.push_back(th);
     e.strain.push_back(amplitude * u);
@@ -34,6 +36,26 @@ inline Envelope make_envelope(const Eigen::Matrix2d& d_isodev, const Eigen::Vect
     e.fabric.push_back(amplitude * Df * u + f_shift);
   }
   return e;
+}
+
+// The fabric split of an envelope: its fabric pairs as the kinematic part (the isotropic part
+// as `volume`, the rest as `rotation`) plus a contact-set part of Frobenius norm `structural`
+// per probe (along the deviator of x).
+inline void write_split(ResultsWriter& w, const std::string& g, const Envelope& e,
+                        double structural) {
+  std::vector<Eigen::Matrix3d> vol, rot, con;
+  const Eigen::Matrix3d dev =
+      Eigen::Vector3d(2, -1, -1).asDiagonal().toDenseMatrix() / std::sqrt(6.0);
+  for (const auto& f : e.fabric) {
+    const Eigen::Matrix3d df = from_rendulic_pair(f);
+    const Eigen::Matrix3d v = Eigen::Matrix3d::Identity() * df.trace() / 3.0;
+    vol.push_back(v);
+    rot.push_back(df - v);
+    con.push_back(structural * dev);
+  }
+  w.write(g + "/d_fabric_volume", vol);
+  w.write(g + "/d_fabric_rotation", rot);
+  w.write(g + "/d_fabric_contacts", con);
 }
 
 // Exact ellipse (or line) attributes of an affine image of the unit circle.
@@ -61,17 +83,28 @@ inline Eigen::Matrix2d stiffness(double B, double G, double A) {
 // A seed-like file: bulk constant, shear shrinking, anisotropy growing; plastic envelopes
 // shifted and thinning to a line; fabric: isotropic-only elastic change, deviatoric plastic.
 // plastic_method: the method attribute of the 2e-3 envelopes.
+// yield: the yield strain of every state's elastic range (the plastic amplitude is 2e-3, so
+// yield <= 1e-3 puts it beyond the elastic range); structural: the contact-set part of dF per
+// elastic probe, in units of one contact flip of this file (nu 0.82, N 1000, w 3).
+// xx_noise: a deterministic scatter of sigma*_xx along the path (C8's standard errors).
 inline fs::path seed_like(const std::string& name, bool contradict_c1,
-                          const std::string& plastic_method = "dynamic") {
+                          const std::string& plastic_method = "dynamic", double yield = 5e-4,
+                          double structural = 0.0, double xx_noise = 0.0) {
   const fs::path dir = fs::path(RENDULIC_TEST_TMP) / "app_report" / name;
   fs::remove_all(dir);
   const double eps[] = {0.006, 0.021, 0.043, 0.068, 0.32};
   ResultsWriter w(dir / "results.h5");
   w.attr("/material", "n_particles", std::int64_t{1000});
+  w.attr("/material", "w", 3.0);
+  w.attr("/material", "r_mean", 1e-3);
+  const double nu = 0.82;
+  // One contact flip: 2 nu r_max^3 / (N <r^3>) with r in [0.5, 1.5] mm, <r^3> = 1.25 mm^3.
+  const double flip = 2 * nu * 1.5 * 1.5 * 1.5 / (1000 * 1.25);
   for (int i = 0; i < 60; ++i) {  // Fig. 1 path: xx dips then recovers, lateral saturates
     const double x = 0.32 * i / 59.0;
     const double lat = 0.05 + 0.02 * (1 - std::exp(-x / 0.03));
-    const double xx = 0.05 - 0.03 * (1 - std::exp(-x / 0.02)) + 0.01 * x;
+    const double xx =
+        0.05 - 0.03 * (1 - std::exp(-x / 0.02)) + 0.05 * x + xx_noise * std::sin(37.0 * i);
     w.append("/path/eps_dev", -x);
     w.append("/path/stress_star", Eigen::Matrix3d(Eigen::Vector3d(xx, lat, lat).asDiagonal()));
     const double fx = 0.9 - 0.2 * (1 - std::exp(-x / 0.03)),
@@ -81,6 +114,9 @@ inline fs::path seed_like(const std::string& name, bool contradict_c1,
   for (int s = 0; s < 5; ++s) {
     const std::string g = "/states/s" + std::to_string(s + 1);
     w.attr(g, "eps_dev", -eps[s]);
+    w.attr(g, "volume_fraction", nu);
+    w.attr(g + "/elastic_range", "yield_strain", yield);
+    w.attr(g + "/elastic_range", "yielded", std::int64_t{1});
     const double G = 1.0 / (1 + 10 * eps[s]), A = -0.4 * eps[s] / 0.32;
     const Eigen::Matrix2d De = stiffness(10.0, G, A);
     Eigen::Matrix2d Fe = Eigen::Matrix2d::Zero();
@@ -88,15 +124,18 @@ inline fs::path seed_like(const std::string& name, bool contradict_c1,
     const Eigen::Vector2d c1shift =
         contradict_c1 ? Eigen::Vector2d(0, 3e-4) : Eigen::Vector2d(0, 0);
     Envelope el = make_envelope(De, c1shift, Fe, Eigen::Vector2d::Zero(), 5e-5);
-    const std::string e = g + "/envelopes/dynamic_elastic";
-    w.attr(e, "method", "dynamic");
-    w.attr(e, "amplitude", 5e-5);
-    w.write(e + "/theta_deg", el.theta);
-    w.write(e + "/strain", el.strain);
-    w.write(e + "/stress_star", el.stress);
-    w.write(e + "/fabric", el.fabric);
-    write_fit(w, e + "/fit_stress", De, c1shift, 5e-5);
-    write_fit(w, e + "/fit_fabric", Fe, Eigen::Vector2d::Zero(), 5e-5);
+    for (const char* method : {"dynamic", "linear_response"}) {
+      const std::string e = g + "/envelopes/" + method + "_5e-05";
+      w.attr(e, "method", method);
+      w.attr(e, "amplitude", 5e-5);
+      w.write(e + "/theta_deg", el.theta);
+      w.write(e + "/strain", el.strain);
+      w.write(e + "/stress_star", el.stress);
+      w.write(e + "/fabric", el.fabric);
+      write_split(w, e, el, std::string(method) == "dynamic" ? structural * flip : 0.0);
+      write_fit(w, e + "/fit_stress", De, c1shift, 5e-5);
+      write_fit(w, e + "/fit_fabric", Fe, Eigen::Vector2d::Zero(), 5e-5);
+    }
 
     const double Gp = s == 4 ? 0.0 : 0.5 * G / (1 + s);
     const Eigen::Matrix2d Dp = stiffness(10.0, Gp, s == 4 ? 0.0 : A);
@@ -108,13 +147,14 @@ inline fs::path seed_like(const std::string& name, bool contradict_c1,
     if (s == 4) {  // keep a finite deviatoric spread to pass "finite change" on the last state
       for (auto& f : pl.fabric) f += rendulic_from_iso_dev(Eigen::Vector2d(0, 1e-5 * f.norm()));
     }
-    const std::string p = g + "/envelopes/dynamic_plastic";
+    const std::string p = g + "/envelopes/" + plastic_method + "_0.002";
     w.attr(p, "method", plastic_method);
     w.attr(p, "amplitude", 2e-3);
     w.write(p + "/theta_deg", pl.theta);
     w.write(p + "/strain", pl.strain);
     w.write(p + "/stress_star", pl.stress);
     w.write(p + "/fabric", pl.fabric);
+    write_split(w, p, pl, 30 * flip);  // plastic: tens of contacts change per probe
     write_fit(w, p + "/fit_stress", Dp, shift, 2e-3);
     write_fit(w, p + "/fit_fabric", Fp, Eigen::Vector2d(1e-4, 0), 2e-3);
   }

@@ -120,6 +120,52 @@ TEST_F(ProbeCampaign, LargerProbeTimeStepKeepsTheElasticEnvelope) {
   }
 }
 
+// The fabric split of every probe (docs/probes.md "Fabric split") sums to its fabric change;
+// elastic probes that change no contact have no contact-set part, and their kinematic parts
+// (volume + rotation) are the linear response's within the 2 % the fabric maps agree to
+// above; the linear response has no contact-set part and its volume part is F tr(d_eps).
+TEST_F(ProbeCampaign, FabricSplitSumsToTheChangeOfEveryProbe) {
+  ProbeOptions opt;
+  const std::vector<double> theta = probe_directions(4);
+  const Envelope linear = linear_response_envelope(*state_, 5e-5, theta, opt);
+  const Envelope elastic = dynamic_envelope(*state_, 5e-5, theta, opt);
+  const double scale = state_->fabric().norm();
+  double kin_err = 0, kin_max = 0;
+  for (const Envelope* e : {&linear, &elastic}) {
+    ASSERT_EQ(e->d_fabric_contacts.size(), e->size()) << e->method;
+    for (std::size_t p = 0; p < e->size(); ++p) {
+      const Eigen::Matrix3d sum =
+          e->d_fabric_volume[p] + e->d_fabric_rotation[p] + e->d_fabric_contacts[p];
+      EXPECT_LE((sum - e->d_fabric[p]).norm(), 1e-14 * scale) << e->method << p;
+      EXPECT_LE(e->d_fabric_contacts[p].norm(), 1e-13 * scale) << e->method << p;
+    }
+  }
+  for (std::size_t p = 0; p < elastic.size(); ++p) {
+    const Eigen::Matrix3d d_eps = probe_strain(theta[p], 5e-5);
+    EXPECT_LE((linear.d_fabric_volume[p] - state_->fabric() * d_eps.trace()).norm(),
+              1e-3 * linear.d_fabric_volume[p].norm() + 1e-18);
+    const Eigen::Matrix3d kin = elastic.d_fabric_volume[p] + elastic.d_fabric_rotation[p];
+    const Eigen::Matrix3d kin_lr = linear.d_fabric_volume[p] + linear.d_fabric_rotation[p];
+    kin_err = std::max(kin_err, (kin - kin_lr).norm());
+    kin_max = std::max(kin_max, kin_lr.norm());
+  }
+  EXPECT_LE(kin_err, kFabricMapTol * kin_max);
+  // Plastic probes change contacts: their contact-set part is what the kinematic parts miss.
+  for (const char* method : {"dynamic", "minimisation"}) {
+    const Envelope plastic = std::string(method) == "dynamic"
+                                 ? dynamic_envelope(*state_, 2e-3, theta, opt)
+                                 : minimisation_envelope(*state_, 2e-3, theta, opt);
+    double structural = 0;
+    for (std::size_t p = 0; p < plastic.size(); ++p) {
+      const Eigen::Matrix3d sum =
+          plastic.d_fabric_volume[p] + plastic.d_fabric_rotation[p] + plastic.d_fabric_contacts[p];
+      EXPECT_LE((sum - plastic.d_fabric[p]).norm(), 1e-14 * scale) << method << p;
+      structural += plastic.d_fabric_contacts[p].norm();
+    }
+    EXPECT_GT(structural, 0.0) << method;
+  }
+}
+
 TEST_F(ProbeCampaign, LargeProbesChangeContacts) {
   ProbeOptions opt;
   const Envelope plastic = dynamic_envelope(*state_, 2e-3, probe_directions(4), opt);

@@ -1,6 +1,7 @@
-// The DEM stages through the real `rendulic run` (issue 3 items 6-7; interfaces.md results
-// schema): a tiny fast scenario writes /material, /isotropic, /path and /states with the
-// documented datasets; the stored checkpoint restores a state whose measures reproduce the
+// The DEM stages through the real `rendulic run` (interfaces.md results schema): a tiny fast
+// scenario writes /material, /isotropic, /path and /states with the documented datasets, its
+// states at rest (the net-force bound recomputed from the stored positions) with their
+// elastic range; the stored checkpoint restores a state whose measures reproduce the
 // stored stress bit for bit; every bad DEM scenario value exits 2 and writes nothing.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
@@ -13,6 +14,7 @@
 #include "cli_runner.hpp"
 #include "rendulic/core/results.hpp"
 #include "rendulic/dem/protocols.hpp"
+#include "rendulic/dem/rest.hpp"
 
 namespace rendulic::dem {
 namespace {
@@ -29,7 +31,8 @@ std::string tiny_overrides() {
   return " --quiet --threads 1 --set dem.n_particles=250 --set preparation.rate=10000"
          " --set relax.time_cap=1e-5 --set isotropic.rate_max=5000 --set isotropic.rate_min=5000"
          " --set isotropic.samples=50 --set path.rate=5000 --set path.samples=20"
-         " --set states.time_cap=1e-5 --set calibration.model=anisotropic_elastic";
+         " --set states.time_cap=1e-5 --set calibration.model=anisotropic_elastic"
+         " --set 'elastic_range.amplitudes=[5e-5,1e-3]' --set 'probes.amplitudes=[5e-5,2e-3]'";
 }
 
 TEST(RunStages, TinyScenarioWritesTheInterfacesSchema) {
@@ -73,6 +76,25 @@ TEST(RunStages, TinyScenarioWritesTheInterfacesSchema) {
     EXPECT_EQ(f.shape(g + "/positions"), (std::vector<std::uint64_t>{250, 3}));
     EXPECT_EQ(f.read_vector(g + "/radii").size(), 250u);
     EXPECT_EQ(f.read_vector(g + "/cell_lengths").size(), 3u);
+    // At rest (rest.hpp): the net force bound, recomputed from the stored configuration.
+    const auto radii = f.read_vector(g + "/radii");
+    const auto lengths = f.read_vector(g + "/cell_lengths");
+    const PackingData stored = PackingData::orthorhombic(
+        f.read_matrix(g + "/positions"), Eigen::Map<const Eigen::VectorXd>(radii.data(), 250),
+        Eigen::Vector3d(lengths[0], lengths[1], lengths[2]));
+    const ForceBalance b = force_balance(stored, 1e8);
+    EXPECT_LT(b.ratio, kEquilibrium) << g;
+    EXPECT_NEAR(b.ratio, f.attr_double(g, "force_balance"), 1e-6 * kEquilibrium) << g;
+    EXPECT_GT(f.attr_double(g, "force_balance_relaxed"), b.ratio) << g;
+    // The elastic range of the state, with its documented datasets.
+    for (const char* d :
+         {"amplitude", "minor_over_elastic", "center_over_a", "k_continue", "k_reverse"})
+      EXPECT_EQ(f.read_vector(g + "/elastic_range/" + d).size(), 2u) << g << " " << d;
+    EXPECT_TRUE(f.has_attr(g + "/elastic_range", "yield_strain")) << g;
+    // The stored stress is the stress of the stored positions (the linear response's too).
+    EXPECT_LE((measure_stress_fabric(stored, 1e8).stress - f.read_tensor(g + "/stress")).norm(),
+              1e-9 * f.read_tensor(g + "/stress").norm())
+        << g;
   }
 
   // Restart from the stored checkpoint of state c: the same build measures the same stress.
@@ -115,18 +137,54 @@ TEST(RunStages, TinyScenarioWritesTheInterfacesSchema) {
   EXPECT_EQ(s.measure().fabric, f.read_tensor(g + "/fabric"));
 }
 
+// The pressure branches (docs/dem.md): the loading copied at nu = 0.72 on its way to 0.82,
+// and from there a path at the main path's inertial number, states at rest and their elastic
+// range under /pressure/nu0.72.
+TEST(RunStages, PressureBranchRepeatsThePathAndStatesAtALowerVolumeFraction) {
+  const fs::path out = fresh_dir("pressure");
+  const std::string scenario = std::string(RENDULIC_SOURCE_DIR) + "/data/scenarios/quick.toml";
+  const CmdResult r = rendulic(
+      "run " + scenario + " --out " + out.string() + tiny_overrides() +
+      " --set 'run.stages=[\"prepare\",\"isotropic\",\"path\",\"states\",\"elastic_range\","
+      "\"pressure\"]' --set 'pressure.volume_fractions=[0.72]' --set 'states.eps_dev=[0.006,0.32]'"
+      " --set 'states.labels=[\"a\",\"e\"]'");
+  ASSERT_EQ(r.code, 0) << r.out;
+  ResultsReader f(out / "results.h5");
+  const std::string g = "/pressure/nu0.72";
+  EXPECT_NEAR(f.attr_double(g, "volume_fraction"), 0.72, 1e-9);
+  EXPECT_LT(f.attr_double(g, "pressure_star"), f.attr_double("/states/a", "pressure_star"));
+  const auto eps_dev = f.read_vector(g + "/path/eps_dev");
+  ASSERT_EQ(eps_dev.size(), 20u);
+  EXPECT_NEAR(eps_dev.back(), -0.32, 1e-9);
+  // The same inertial number as the main path at the start of the steady state.
+  const auto i_main = f.read_vector("/path/inertial_number");
+  const auto i_branch = f.read_vector(g + "/path/inertial_number");
+  EXPECT_NEAR(i_branch[1], i_main[1], 0.3 * i_main[1]);
+  EXPECT_LT(f.attr_double(g + "/path", "rate"), f.attr_double("/path", "rate"));
+  for (const char* label : {"a", "e"}) {
+    const std::string sg = g + "/states/" + label;
+    EXPECT_LT(f.attr_double(sg, "force_balance"), kEquilibrium) << sg;
+    EXPECT_NEAR(f.attr_double(sg, "volume_fraction"), 0.72, 1e-9) << sg;
+    EXPECT_TRUE(f.has_attr(sg + "/elastic_range", "yield_strain")) << sg;
+    EXPECT_FALSE(f.exists(sg + "/positions")) << sg;
+  }
+}
+
 TEST(RunStages, BadDemValuesExitTwoAndWriteNothing) {
   const std::string scenario = std::string(RENDULIC_SOURCE_DIR) + "/data/scenarios/quick.toml";
   const std::vector<std::string> bad = {
-      "dem.dt_factor=0.5",            // beyond the stability limit
-      "material.k=-1",                // out of range
-      "isotropic.nu_max=0.6",         // below nu0
-      "states.labels=[\"a\",\"b\"]",  // one label per state
-      "states.eps_dev=[0.006,0.5]",   // beyond path.eps_dev_max (and labels mismatch)
-      "dem.n_particles=10",           // too few
-      "preparation.nu_gas=0.5",       // random insertion cannot reach it
-      "path.rate=0",                  // not a rate
-      "probes.dt_factor=0.5",         // the probes' step beyond the stability limit
+      "dem.dt_factor=0.5",                      // beyond the stability limit
+      "material.k=-1",                          // out of range
+      "isotropic.nu_max=0.6",                   // below nu0
+      "states.labels=[\"a\",\"b\"]",            // one label per state
+      "states.eps_dev=[0.006,0.5]",             // beyond path.eps_dev_max (and labels mismatch)
+      "dem.n_particles=10",                     // too few
+      "preparation.nu_gas=0.5",                 // random insertion cannot reach it
+      "path.rate=0",                            // not a rate
+      "probes.dt_factor=0.5",                   // the probes' step beyond the stability limit
+      "pressure.volume_fractions=[0.9]",        // beyond isotropic.nu_max
+      "run.stages=[\"prepare\",\"pressure\"]",  // a pressure stage without volume fractions
+      "elastic_range.amplitudes=[1e-3,1e-4]",   // a ladder must increase
   };
   for (std::size_t k = 0; k < bad.size(); ++k) {
     const fs::path out = fresh_dir("bad" + std::to_string(k));

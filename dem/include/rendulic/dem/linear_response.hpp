@@ -71,8 +71,12 @@ struct LinearResponse {
   Matrix6d stiffness = Matrix6d::Constant(std::numeric_limits<double>::quiet_NaN());
   // The affine part alone (Born + pre-stress terms, no relaxation).
   Matrix6d affine_stiffness = Matrix6d::Constant(std::numeric_limits<double>::quiet_NaN());
-  // d_F = fabric_stiffness * d_eps (Mandel, dimensionless per unit strain).
+  // d_F = fabric_stiffness * d_eps (Mandel, dimensionless per unit strain), and its two parts
+  // (no contact opens or closes): the volume change, fabric_volume_stiffness d_eps = F tr(d_eps),
+  // and the rotation of the normals (affine and non-affine), fabric_rotation_stiffness.
   Matrix6d fabric_stiffness = Matrix6d::Constant(std::numeric_limits<double>::quiet_NaN());
+  Matrix6d fabric_volume_stiffness = Matrix6d::Constant(std::numeric_limits<double>::quiet_NaN());
+  Matrix6d fabric_rotation_stiffness = Matrix6d::Constant(std::numeric_limits<double>::quiet_NaN());
   // Reference stress (Pa, compression positive) and fabric of the backbone contacts.
   Eigen::Matrix3d stress = Eigen::Matrix3d::Zero();
   Eigen::Matrix3d fabric = Eigen::Matrix3d::Zero();

@@ -75,6 +75,11 @@ std::string envelope_name(const std::string& method, double amplitude);
 std::vector<Envelope> run_probe_campaign(const DemSystem& state, const std::string& label,
                                          const std::vector<std::string>& methods,
                                          const ProbeOptions& options, ResultsWriter& out);
+// The same under any group of a state (the envelopes go to <state_group>/envelopes/<name>),
+// e.g. a pressure branch's /pressure/nu0.7/states/<label>.
+std::vector<Envelope> run_probe_campaign_in(const DemSystem& state, const std::string& state_group,
+                                            const std::vector<std::string>& methods,
+                                            const ProbeOptions& options, ResultsWriter& out);
 
 // Scenario keys of the probe campaigns (section [probes]) and the options they give. Throws
 // InputError naming the key, also for a probes.dt_factor beyond the stability limit of the

@@ -24,6 +24,10 @@ struct Envelope {
   std::vector<Eigen::Vector2d> fabric;       // Rendulic pairs of d_F
   std::vector<Eigen::Matrix3d> d_stress;     // Pa, compression positive
   std::vector<Eigen::Matrix3d> d_fabric;
+  // d_fabric split with the contact set of the starting state held fixed (FabricSplit,
+  // probe_geometry.hpp): volume change, rotation of the normals, contacts made and lost.
+  // Empty for envelopes made without it; otherwise one entry per probe each.
+  std::vector<Eigen::Matrix3d> d_fabric_volume, d_fabric_rotation, d_fabric_contacts;
   // Per-probe diagnostics ([m] each), e.g. contacts_opened, contacts_closed, relax_time,
   // relax_steps, kinetic_to_elastic, converged; written as datasets next to the envelope.
   std::map<std::string, std::vector<double>> diagnostics;
@@ -34,6 +38,8 @@ struct Envelope {
   // Appends one probe; the pairs follow from the tensors (core/conventions.hpp).
   void add(double theta, const Eigen::Matrix3d& d_eps, const Eigen::Matrix3d& d_sigma,
            const Eigen::Matrix3d& d_f);
+  void add(double theta, const Eigen::Matrix3d& d_eps, const Eigen::Matrix3d& d_sigma,
+           const Eigen::Matrix3d& d_f, const FabricSplit& split);
 };
 
 // The elastic envelope of the linear response for the given directions and amplitude: the

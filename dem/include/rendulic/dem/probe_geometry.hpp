@@ -8,6 +8,7 @@
 #pragma once
 
 #include <Eigen/Dense>
+#include <utility>
 #include <vector>
 
 namespace rendulic::dem {
@@ -56,5 +57,28 @@ struct StressFabric {
 StressFabric measure_stress_fabric(const PackingData& packing, double k,
                                    const std::vector<char>* include = nullptr,
                                    double min_overlap = 0.0);
+
+// The fabric of eq. 2 over a given set of pairs (i, j) of `packing`, whatever their overlap:
+// (1/V) sum (V_i + V_j) n n with n the unit minimum-image branch vector of each pair.
+Eigen::Matrix3d fabric_of_pairs(const PackingData& packing,
+                                const std::vector<std::pair<int, int>>& pairs);
+
+// The change of the fabric of eq. 2 between two configurations of the same particles, split
+// with the contact set of the first held fixed (docs/probes.md "Fabric split"). With F_S(x, V)
+// the fabric of the pairs S at positions x in volume V, S the contacts of `before`:
+//   volume   = F_S(x0, V0) (V0 / V1 - 1)         the same normals in the new volume,
+//   rotation = F_S(x1, V1) - F_S(x0, V0) V0 / V1  the normals of the same pairs, rotated,
+//   contacts = (F1 - F0) - volume - rotation       contacts made and lost (the structure).
+// The three sum to F1 - F0 exactly; F0 and F1 are the fabrics as measured (over the contact
+// sets of each configuration), F_S(x0, V0) equals F0 when S is the set F0 was measured on.
+struct FabricSplit {
+  Eigen::Matrix3d volume = Eigen::Matrix3d::Zero();
+  Eigen::Matrix3d rotation = Eigen::Matrix3d::Zero();
+  Eigen::Matrix3d contacts = Eigen::Matrix3d::Zero();
+};
+FabricSplit split_fabric_change(const PackingData& before, const PackingData& after,
+                                const std::vector<std::pair<int, int>>& contacts_before,
+                                const Eigen::Matrix3d& fabric_before,
+                                const Eigen::Matrix3d& fabric_after);
 
 }  // namespace rendulic::dem

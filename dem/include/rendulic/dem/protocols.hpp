@@ -69,15 +69,28 @@ struct CompressOptions {
   double rate_min = 50.0;      // 1/s
   double inertial_number = 0;  // 0: constant rate_max
   int samples = 0;             // samples equally spaced in ln(nu), both ends included
+  // Copies of the system at these volume fractions on the way (strictly between the start and
+  // the target), in loading order: CompressSummary::snapshots. Each is the loading's state
+  // after the step that reaches it, taken back onto it exactly by a fraction of a step; the
+  // loading itself goes on unchanged.
+  std::vector<double> snapshot_nu;
   bool IsValid(std::string* why) const;
 };
+// The inertial number I = rate 2<r> sqrt(rho / P) of a strain rate (1/s, the largest |D_aa|)
+// at pressure P (Pa), physics.md section 4: 0 at rest, +inf for a positive rate at P <= 0.
+// The protocols record it from the rate they impose, not from the last step's D: events
+// (samples, snapshots, the end) are hit by shortening a step, and that step's D is not the
+// rate of the loading.
+double inertial_number(const Material& material, double rate, double pressure);
+
 // Below this P* a packing counts as unjammed for the inertial-number bookkeeping: as P -> 0
 // the inertial number diverges at any finite rate, and it means nothing for a fluid.
 inline constexpr double kJammedPressureStar = 1e-4;
 struct CompressSummary {
   double time = 0;
   std::int64_t steps = 0;
-  double max_inertial_number = 0;  // over samples with P* > kJammedPressureStar
+  double max_inertial_number = 0;    // over samples with P* > kJammedPressureStar
+  std::vector<DemSystem> snapshots;  // at options.snapshot_nu, in loading order
 };
 CompressSummary compress_isotropic(DemSystem& sys, const CompressOptions& options,
                                    const SampleFn& sample = {}, const ProgressFn& progress = {});
@@ -100,6 +113,25 @@ struct PathSummary {
 };
 PathSummary undrained_extension(DemSystem& sys, const PathOptions& options,
                                 const SampleFn& sample = {}, const ProgressFn& progress = {});
+
+// The mean of a path series over a window of the path and its standard error (docs/dem.md
+// "Steady state and plateau means"): the samples y with x in [x_lo, x_hi] (e.g. x = -eps_dev),
+// cut into `batches` contiguous batches of equal count; the standard error is the standard
+// deviation of the batch means over sqrt(batches) (batch means: neighbouring samples of a
+// path are correlated, so the plain standard error of the samples would be too small).
+// ok = false (and standard_error 0) when the window holds fewer than 2 samples per batch.
+// The steady state of the undrained path: -eps_dev from this fraction of the path's end on
+// ([0.2, 0.32] for the seed's path, where its Fig. 1 has reached the asymptote).
+inline constexpr double kSteadyStateFrom = 0.625;
+
+struct WindowMean {
+  double mean = 0.0;
+  double standard_error = 0.0;
+  int samples = 0;
+  bool ok = false;
+};
+WindowMean window_mean(const std::vector<double>& x, const std::vector<double>& y, double x_lo,
+                       double x_hi, int batches = 5);
 
 // Imposes the diagonal strain increment d_eps (compression positive, physics.md section 5)
 // in whole steps at constant D, the largest component advancing at `rate` (1/s) at most.

@@ -1,5 +1,5 @@
 // Scenario keys of the DEM stages (physics.md sections 1-4; interfaces.md `rendulic run`):
-// material.*, dem.*, preparation.*, relax.*, isotropic.*, path.*, states.*. Each key is
+// material.*, dem.*, preparation.*, relax.*, isotropic.*, path.*, states.*, pressure.*. Each key is
 // declared once with type, unit, default (the seed study's values), range and help; the
 // options of the protocols are built from a validated scenario, and cross-key rules (e.g.
 // nu0 < nu_max, snapshot strains within the path) are checked here, before any simulation.
@@ -10,6 +10,7 @@
 
 #include "rendulic/core/scenario.hpp"
 #include "rendulic/dem/protocols.hpp"
+#include "rendulic/dem/rest.hpp"
 
 namespace rendulic::dem {
 
@@ -24,8 +25,10 @@ struct DemRunOptions {
   RelaxOptions relax;            // at nu0 and at nu_max
   CompressOptions loading;       // nu0 -> nu_max (isotropic branch)
   PathOptions path;
+  // Volume fractions of the pressure branches (snapshots of the loading, loading.snapshot_nu).
+  std::vector<double> branch_nu;
   std::vector<std::string> state_labels;  // one per path.snapshot_eps_dev
-  RelaxOptions state_relax;
+  RestOptions state_rest;                 // dynamic relaxation, then FIRE to equilibrium (rest.hpp)
 };
 
 // The material.* keys.

@@ -1,0 +1,88 @@
+// The `pressure` stage of `rendulic run` (physics.md section 5, "beyond the seed": the elastic
+// range and its dependence on pressure; docs/dem.md "Pressure branches"). The isotropic stage
+// snapshots the loading at pressure.volume_fractions on its way to nu_max; from each snapshot
+// this stage repeats, under /pressure/nu<nu>, what the run does at nu_max: relaxation, the
+// undrained path (at the main path's inertial number: its rate scaled by sqrt(P / P_main)),
+// the states brought to rest, and for each state the stages the run requests among
+// elastic_range, probes, linear_response and fits. The branches' states are stored without
+// their configuration (positions, checkpoint): the main states carry those.
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+
+#include "rendulic/core/errors.hpp"
+#include "rendulic/dem/probe_campaign.hpp"
+#include "rendulic/dem/probe_elastic_range.hpp"
+#include "stages.hpp"
+
+namespace rendulic::app {
+namespace {
+
+std::string branch_group(double nu) {
+  char buf[48];
+  std::snprintf(buf, sizeof buf, "/pressure/nu%g", nu);
+  return buf;
+}
+
+}  // namespace
+
+void stage_pressure(const Scenario& sc, ResultsWriter& out, const RunContext& ctx) {
+  auto& session = dem_run_session();
+  if (!session.options) throw InputError("run: stage 'pressure' needs the stages before it");
+  const dem::DemRunOptions& o = *session.options;
+  if (o.branch_nu.empty())
+    throw InputError("run: stage 'pressure' needs pressure.volume_fractions");
+  if (session.branches.size() != o.branch_nu.size())
+    throw InputError("run: stage 'pressure' needs the stage 'isotropic' in run.stages");
+  dem::ProbeOptions po = dem::probe_options_from(sc);
+  if (ctx.threads > 0) po.threads = ctx.threads;
+  const bool with_range = stage_requested(sc, "elastic_range");
+  const bool with_probes = stage_requested(sc, "probes");
+  const bool with_lr = stage_requested(sc, "linear_response");
+  const bool with_fits = stage_requested(sc, "fits");
+  for (auto& [nu, snapshot] : session.branches) {
+    const std::string G = branch_group(nu);
+    if (!ctx.quiet) std::cerr << "rendulic: pressure branch nu = " << nu << "\n";
+    dem::DemSystem sys = snapshot;
+    const dem::RelaxSummary r = dem::relax(sys, o.relax);
+    const dem::Measures start = sys.measure();
+    dem::PathOptions path = o.path;
+    // The same inertial number as the main path: I ~ rate / sqrt(P).
+    if (session.path_start_pressure > 0 && start.pressure > 0)
+      path.rate = o.path.rate * std::sqrt(start.pressure / session.path_start_pressure);
+    out.attr(G, "volume_fraction", start.volume_fraction);
+    out.attr(G, "pressure_star", start.pressure_star);
+    out.attr(G, "coordination", start.coordination);
+    out.attr(G, "relax_converged", std::int64_t{r.converged});
+    out.attr(G + "/path", "rate", path.rate);
+    dem::PathSummary p = dem::undrained_extension(sys, path, path_recorder(out, G + "/path"));
+    out.attr(G + "/path", "max_inertial_number", p.max_inertial_number);
+    auto rested = rest_states(p.snapshots, o.state_rest, o.state_labels, ctx);
+    for (std::size_t k = 0; k < rested.size(); ++k) {
+      const std::string& label = o.state_labels[k];
+      const std::string sg = G + "/states/" + label;
+      const dem::DemSystem& state = rested[k].first;
+      write_state(out, sg, state, rested[k].second, o.state_rest.minimise.force_tolerance, false);
+      if (with_range) {
+        const dem::ElasticRangeOptions eo = dem::elastic_range_options_from(sc);
+        const dem::ElasticRange er = dem::elastic_range(state, eo, po);
+        dem::write_elastic_range(out, sg + "/elastic_range", er, eo);
+        if (!ctx.quiet)
+          std::cerr << "rendulic: nu " << nu << " state " << label << ": yield strain "
+                    << er.yield_strain << "\n";
+      }
+      if (with_probes) dem::run_probe_campaign_in(state, sg, dem::probe_methods_from(sc), po, out);
+      if (with_lr) {
+        try {
+          dem::run_probe_campaign_in(state, sg, {"linear_response"}, po, out);
+        } catch (const std::runtime_error& e) {
+          std::cerr << "rendulic: warning: no linear response for nu " << nu << " state " << label
+                    << ": " << e.what() << "\n";
+        }
+      }
+      if (with_fits) fit_state_envelopes(sc, out, sg);
+    }
+  }
+}
+
+}  // namespace rendulic::app

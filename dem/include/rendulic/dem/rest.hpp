@@ -1,0 +1,56 @@
+// States at rest (physics.md section 5: a probe starts from a state in mechanical equilibrium,
+// not only one with little kinetic energy; docs/dem.md "States at rest"). Two things live here:
+//  - the one equilibrium criterion of the project, force_balance(): the largest net contact
+//    force on a non-rattler over the mean force of the contacts between non-rattlers. The
+//    states stage, the tests and the report all use it (a dynamically relaxed state at
+//    E_kin/E_el = 1e-5 sits at about 2e-2 of it; a state at rest is below kEquilibrium);
+//  - bring_to_rest(): a snapshot relaxed dynamically (the seed's relaxation, relax()) and then
+//    brought to its nearest energy minimum at the fixed cell by FIRE (probe_minimise.hpp), so
+//    that its stress, fabric, contacts, linear response and every envelope refer to one
+//    configuration at rest.
+#pragma once
+
+#include "rendulic/dem/dem_system.hpp"
+#include "rendulic/dem/probe_geometry.hpp"
+#include "rendulic/dem/probe_minimise.hpp"
+#include "rendulic/dem/protocols.hpp"
+
+namespace rendulic::dem {
+
+// A state counts as at rest when force_balance(...).ratio is below this.
+inline constexpr double kEquilibrium = 1e-4;
+
+struct ForceBalance {
+  double max_net_force = 0.0;       // N, largest |sum of contact forces| on a non-rattler
+  double mean_contact_force = 0.0;  // N, mean k delta over contacts between non-rattlers
+  double ratio = 0.0;               // max_net_force / mean_contact_force; 0 without contacts
+  int non_rattlers = 0;             // particles with >= 4 contacts among non-rattlers
+  int contacts = 0;                 // contacts between non-rattlers
+};
+// Contacts are pairs with overlap > 0 under the linear law f = k delta (the static force of a
+// state at rest); rattlers are removed iteratively (fewer than 4 contacts, measures.hpp). The
+// net force on a non-rattler sums all its contacts, those with rattlers included.
+ForceBalance force_balance(const PackingData& packing, double k);
+
+struct RestOptions {
+  RelaxOptions relax;  // the dynamic relaxation first
+  // Then FIRE to max net force < force_tolerance x mean contact force (every particle).
+  MinimiseOptions minimise;
+  bool IsValid(std::string* why) const;
+};
+struct RestSummary {
+  RelaxSummary relaxed;
+  ForceBalance after_relax;  // the criterion after the dynamic relaxation
+  MinimiseSummary minimised;
+  ForceBalance at_rest;           // ... and at the minimum
+  double max_displacement = 0.0;  // m, largest move of a particle by the minimisation
+  Eigen::Matrix3d stress_change;  // Pa, stress at rest - after the dynamic relaxation
+};
+
+// Relaxes `sys` dynamically, then minimises its energy at the fixed cell and puts the state
+// at the minimum: positions there (wrapped into the cell), velocities zero, forces and the
+// neighbour list recomputed from there; clock, strain and step count are kept. Throws
+// std::runtime_error if FIRE does not converge.
+RestSummary bring_to_rest(DemSystem& sys, const RestOptions& options);
+
+}  // namespace rendulic::dem

@@ -1,0 +1,222 @@
+// The elastic range of a state: a ladder of probe amplitudes in four directions, compared with
+// the linear response (see probe_elastic_range.hpp; docs/probes.md "Elastic range").
+#include "rendulic/dem/probe_elastic_range.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <map>
+#include <stdexcept>
+
+#include "rendulic/core/conventions.hpp"
+#include "rendulic/core/errors.hpp"
+#include "rendulic/dem/envelope_io.hpp"
+#include "rendulic/dem/probe_campaign.hpp"
+
+namespace rendulic::dem {
+
+bool ElasticRangeOptions::IsValid(std::string* why) const {
+  auto fail = [&](const std::string& m) {
+    if (why) *why = m;
+    return false;
+  };
+  if (amplitudes.size() < 2) return fail("elastic_range: at least two amplitudes");
+  for (std::size_t i = 0; i < amplitudes.size(); ++i) {
+    if (!(amplitudes[i] > 0.0) || !(amplitudes[i] <= 0.05))
+      return fail("elastic_range: amplitudes must be in (0, 0.05]");
+    if (i > 0 && !(amplitudes[i] > amplitudes[i - 1]))
+      return fail("elastic_range: amplitudes must increase");
+  }
+  if (method != "dynamic" && method != "minimisation")
+    return fail("elastic_range: method must be dynamic or minimisation");
+  if (!(tolerance > 0.0) || !(tolerance < 1.0))
+    return fail("elastic_range: tolerance must be in (0, 1)");
+  return true;
+}
+
+std::vector<double> elastic_range_directions() {
+  return {kIsoCompressionDeg, kDevCompressionDeg, kIsoExtensionDeg, kDevExtensionDeg};
+}
+
+namespace {
+
+// Directional stiffness (d_sigma : d_eps) / |d_eps|^2 of probe p of an envelope, Pa.
+double directional_stiffness(const Envelope& env, std::size_t p) {
+  const Eigen::Vector2d u = env.strain[p] / env.strain[p].norm();
+  return rendulic_pair(env.d_stress[p]).dot(u) / env.amplitude;
+}
+
+std::size_t index_of(const std::vector<double>& theta, double deg) {
+  for (std::size_t p = 0; p < theta.size(); ++p)
+    if (std::abs(theta[p] - deg) < 1e-9) return p;
+  throw std::logic_error("elastic range: direction missing");
+}
+
+}  // namespace
+
+void locate_yield(ElasticRange& r, double tolerance) {
+  const std::size_t n = r.amplitude.size();
+  r.departure.assign(n, 0.0);
+  for (std::size_t i = 0; i < n; ++i)
+    r.departure[i] = std::max(std::abs(r.minor_over_elastic[i] - 1.0),
+                              std::abs(1.0 - r.k_continue[i] / r.k_reverse[i]));
+  r.yielded = false;
+  r.yield_strain = n ? r.amplitude.back() : 0.0;
+  r.elastic_to = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    // A non-finite departure (a reverse stiffness of zero) counts as departed.
+    if (!(r.departure[i] < tolerance)) {
+      r.yielded = true;
+      r.yield_strain = r.amplitude[i];
+      return;
+    }
+    r.elastic_to = r.amplitude[i];
+  }
+}
+
+ElasticRange elastic_range(const DemSystem& state, const ElasticRangeOptions& options,
+                           const ProbeOptions& probe) {
+  std::string why;
+  if (!options.IsValid(&why)) throw InputError(why);
+  const std::vector<double> theta = elastic_range_directions();
+  ElasticRange r;
+  const std::size_t i_continue = index_of(theta, kDevExtensionDeg);
+  const std::size_t i_reverse = index_of(theta, kDevCompressionDeg);
+  // The elastic reference: the linear response's map per unit strain (Pa). A network with no
+  // linear response (unstable even at its minimum: the linear_response stage records why)
+  // is referred to its ladder's first rung instead, and the attribute says so.
+  Eigen::Matrix2d map = Eigen::Matrix2d::Zero();
+  try {
+    LinearResponse lr;
+    linear_response_envelope(state, options.amplitudes.front(), theta, probe, &lr);
+    map = rendulic_map_of(lr.stiffness);
+  } catch (const std::runtime_error& e) {
+    r.elastic_reference = "first_rung";
+    r.elastic_reference_note = e.what();
+  }
+  auto set_reference = [&](const Eigen::Matrix2d& m) {
+    const RendulicMap el = ellipse_of(m, 1.0);
+    r.elastic_major = el.semi_major;
+    r.elastic_minor = el.semi_minor;
+    const double t = deg_to_rad(kDevExtensionDeg);
+    const Eigen::Vector2d u(std::cos(t), std::sin(t));
+    r.elastic_k = u.dot(m * u);
+  };
+  if (r.elastic_reference == "linear_response") set_reference(map);
+  for (double a : options.amplitudes) {
+    const auto t0 = std::chrono::steady_clock::now();
+    Envelope env = options.method == "dynamic" ? dynamic_envelope(state, a, theta, probe)
+                                               : minimisation_envelope(state, a, theta, probe);
+    if (env.size() == 0) continue;  // an MPI worker: rank 0 assembles
+    std::vector<Eigen::Vector2d> stress(env.size());
+    for (std::size_t p = 0; p < env.size(); ++p) stress[p] = rendulic_pair(env.d_stress[p]);
+    const RendulicMap m = fit_rendulic_map(env.strain, stress);
+    if (r.amplitude.empty() && r.elastic_reference != "linear_response") {
+      set_reference(m.map);  // the map is per unit strain (pair to pair)
+    }
+    r.amplitude.push_back(a);
+    r.minor_over_elastic.push_back(m.semi_minor / a / r.elastic_minor);
+    r.major_over_elastic.push_back(m.semi_major / a / r.elastic_major);
+    r.center_over_a.push_back(m.center.norm() / m.semi_major);
+    r.k_continue.push_back(directional_stiffness(env, i_continue));
+    r.k_reverse.push_back(directional_stiffness(env, i_reverse));
+    r.envelopes.push_back(std::move(env));
+    r.seconds.push_back(
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+  }
+  if (!r.amplitude.empty()) locate_yield(r, options.tolerance);
+  return r;
+}
+
+void write_elastic_range(ResultsWriter& out, const std::string& g, const ElasticRange& r,
+                         const ElasticRangeOptions& options) {
+  out.create_group(g);
+  out.write(g + "/amplitude", r.amplitude);
+  out.write(g + "/minor_over_elastic", r.minor_over_elastic);
+  out.write(g + "/major_over_elastic", r.major_over_elastic);
+  out.write(g + "/center_over_a", r.center_over_a);
+  out.write(g + "/k_continue", r.k_continue);
+  out.write(g + "/k_reverse", r.k_reverse);
+  out.write(g + "/departure", r.departure);
+  out.write(g + "/theta_deg", elastic_range_directions());
+  // Every probe of the ladder, amplitude by amplitude (rows a * 4 + direction).
+  std::vector<Eigen::Matrix3d> ds, df, fv, fr, fc;
+  std::map<std::string, std::vector<double>> diagnostics;
+  for (const Envelope& e : r.envelopes) {
+    ds.insert(ds.end(), e.d_stress.begin(), e.d_stress.end());
+    df.insert(df.end(), e.d_fabric.begin(), e.d_fabric.end());
+    fv.insert(fv.end(), e.d_fabric_volume.begin(), e.d_fabric_volume.end());
+    fr.insert(fr.end(), e.d_fabric_rotation.begin(), e.d_fabric_rotation.end());
+    fc.insert(fc.end(), e.d_fabric_contacts.begin(), e.d_fabric_contacts.end());
+    for (const auto& [name, values] : e.diagnostics) {
+      auto& v = diagnostics[name];
+      v.insert(v.end(), values.begin(), values.end());
+    }
+  }
+  out.write(g + "/d_stress", ds);
+  out.write(g + "/d_fabric", df);
+  if (fv.size() == ds.size()) {
+    out.write(g + "/d_fabric_volume", fv);
+    out.write(g + "/d_fabric_rotation", fr);
+    out.write(g + "/d_fabric_contacts", fc);
+  }
+  for (const auto& [name, values] : diagnostics)
+    if (values.size() == ds.size()) out.write(g + "/" + name, values);
+  out.write(g + "/seconds", r.seconds);
+  out.attr(g, "yield_strain", r.yield_strain);
+  out.attr(g, "yielded", std::int64_t{r.yielded});
+  out.attr(g, "elastic_to", r.elastic_to);
+  out.attr(g, "tolerance", options.tolerance);
+  out.attr(g, "method", options.method);
+  out.attr(g, "elastic_major", r.elastic_major);
+  out.attr(g, "elastic_minor", r.elastic_minor);
+  out.attr(g, "elastic_k", r.elastic_k);
+  out.attr(g, "elastic_reference", r.elastic_reference);
+  if (!r.elastic_reference_note.empty())
+    out.attr(g, "elastic_reference_note", r.elastic_reference_note);
+}
+
+void register_elastic_range_keys(ScenarioSchema& schema) {
+  const ElasticRangeOptions d;
+  schema.add({.path = "elastic_range.amplitudes",
+              .type = KeyType::kDoubleList,
+              .default_value = d.amplitudes,
+              .unit = "-",
+              .help = "Ladder of probe amplitudes |d_eps| of the elastic_range stage, increasing; "
+                      "each is probed at 35.26, 125.26, 215.26 and 305.26 deg.",
+              .min = 0.0,
+              .max = 0.05,
+              .min_open = true,
+              .min_size = 2});
+  schema.add({.path = "elastic_range.method",
+              .type = KeyType::kString,
+              .default_value = d.method,
+              .unit = "-",
+              .help = "Probe method of the ladder (dynamic: as the probes stage; minimisation: "
+                      "quasi-static).",
+              .choices = {"dynamic", "minimisation"}});
+  schema.add({.path = "elastic_range.tolerance",
+              .type = KeyType::kDouble,
+              .default_value = d.tolerance,
+              .unit = "-",
+              .help = "The response has left the elastic one where |minor axis / elastic - 1| or "
+                      "|1 - k_continue / k_reverse| reaches this; the yield strain is that "
+                      "amplitude (docs/probes.md).",
+              .min = 0.0,
+              .max = 1.0,
+              .min_open = true,
+              .max_open = true});
+}
+
+ElasticRangeOptions elastic_range_options_from(const Scenario& scenario) {
+  ElasticRangeOptions o;
+  o.amplitudes = scenario.get_doubles("elastic_range.amplitudes");
+  o.method = scenario.get_string("elastic_range.method");
+  o.tolerance = scenario.get_double("elastic_range.tolerance");
+  std::string why;
+  if (!o.IsValid(&why))
+    throw InputError(why + " (" + scenario.origin("elastic_range.amplitudes") + ")");
+  return o;
+}
+
+}  // namespace rendulic::dem
