@@ -74,6 +74,7 @@ int run_calibrate(const CalibrateArgs& a) {
   opt.solver.backend = backend_from_string(a.backend);
   opt.solver.max_iterations = a.max_iterations;
   opt.solver.function_tolerance = a.function_tolerance;
+  opt.solver.gradient_tolerance = calibration::kDemGradientTolerance;
   opt.solver.progress = a.progress;
   opt.holdout = split_commas(a.holdout);
   opt.free = split_commas(a.free);

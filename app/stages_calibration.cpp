@@ -78,6 +78,7 @@ void run_calibration_stage(const Scenario& scenario, ResultsWriter& out, const R
   opt.solver.backend = backend_from_string(scenario.get_string("calibration.backend"));
   opt.solver.max_iterations = static_cast<int>(scenario.get_int("calibration.max_iterations"));
   opt.solver.function_tolerance = scenario.get_double("calibration.function_tolerance");
+  opt.solver.gradient_tolerance = calibration::kDemGradientTolerance;
   opt.objective.path = scenario.get_bool("calibration.path");
   opt.objective.envelope_features = scenario.get_bool("calibration.features");
   LoadOptions lo;

@@ -246,9 +246,9 @@ std::string CalibrationSummary::BriefReport() const {
   std::ostringstream o;
   o << "calibration of " << model << " on " << fitted_states.size() << " state(s)";
   if (!held_out_states.empty()) o << " (+" << held_out_states.size() << " held out)";
-  o << ": " << (fit.converged ? "converged" : "NOT converged") << ", back end " << fit.backend
-    << ", Jacobian " << fit.jacobian << ", cost " << fit.cost << ", relative rms misfit "
-    << fitted_misfit;
+  o << ": " << (fit.converged ? "converged" : "NOT converged") << " (stopped by " << fit.termination
+    << "), back end " << fit.backend << ", Jacobian " << fit.jacobian << ", cost " << fit.cost
+    << ", relative rms misfit " << fitted_misfit;
   if (held_out_misfit) o << ", held-out misfit " << *held_out_misfit;
   o << ", " << fit.seconds << " s\n";
   for (std::size_t k = 0; k < fit.names.size(); ++k)

@@ -97,7 +97,10 @@ std::string to_json(const CalibrationSummary& s) {
   o << "]},\n  \"objective\": " << num(f.cost)
     << ",\n  \"converged\": " << (f.converged ? "true" : "false")
     << ",\n  \"backend\": " << str(f.backend) << ",\n  \"jacobian\": " << str(f.jacobian)
-    << ",\n  \"evaluations\": " << f.evaluations << ",\n  \"seconds\": " << num(f.seconds)
+    << ",\n  \"termination\": " << str(f.termination) << ",\n  \"solver_report\": " << str(f.report)
+    << ",\n  \"at_bound\": [";
+  for (std::size_t k = 0; k < f.at_bound.size(); ++k) o << (k ? ", " : "") << str(f.at_bound[k]);
+  o << "],\n  \"evaluations\": " << f.evaluations << ",\n  \"seconds\": " << num(f.seconds)
     << ",\n  \"n_residuals\": " << f.uncertainty.n_residuals
     << ",\n  \"rank\": " << f.uncertainty.rank
     << ",\n  \"condition_number\": " << num(f.uncertainty.condition_number)
