@@ -2,8 +2,6 @@
 // the weighting and normalisation are documented in docs/calibration.md "Objectives").
 #include "rendulic/calibration/objective.hpp"
 
-#include <omp.h>
-
 #include <algorithm>
 #include <cmath>
 #include <set>
@@ -94,7 +92,6 @@ bool ObjectiveOptions::IsValid(std::string* why) const {
     if (!(w >= 0.0) || !std::isfinite(w)) return fail("block weights must be finite and >= 0");
   if (!envelope_points && !envelope_features && !path)
     return fail("at least one of envelope_points, envelope_features, path must be on");
-  if (path_steps < 10) return fail("path_steps must be >= 10");
   if (!(fabric_scale_min >= 0.0)) return fail("fabric_scale_min must be >= 0");
   return step.IsValid(why);
 }
@@ -170,32 +167,19 @@ class Kernel final : public KernelBase {
   explicit Kernel(const Objective::Impl* o) : o_(o) {}
 
   // Residuals for any scalar: double for values, Jets for the exact Jacobian (integrated
-  // predictions go through the driver with Jets, driver_core.hpp). Every probe and the path is
-  // an independent prediction writing its own residuals, so the tasks run in parallel, the path
-  // first (the longest). The residuals do not depend on the thread count.
+  // predictions go through the driver with Jets, driver_core.hpp). One thread: with exact
+  // derivatives a whole fit takes seconds, and threads spinning at the end of every short
+  // evaluation cost more than they gave on the shared 2-core machine (docs/calibration.md
+  // "Accuracy and cost").
   template <typename T>
   bool eval(const T* z, T* r) const {
     T p[M::kCount];
     o_->space.full(z, p);
     double pd[M::kCount];
     for (int i = 0; i < M::kCount; ++i) pd[i] = value_of(p[i]);
-    const int n_tasks = static_cast<int>(o_->tasks.size());
-    const int n = n_tasks + (o_->path_task.active ? 1 : 0);
-    const bool parallel = o_->any_integrated && n > 1 && !omp_in_parallel();
-    int all = 1;
-#pragma omp parallel for schedule(dynamic) reduction(min : all) if (parallel)
-    for (int k = 0; k < n; ++k) {
-      const bool path = o_->path_task.active && k == 0;
-      const int t = o_->path_task.active ? k - 1 : k;
-      all = std::min(all,
-                     (path ? path_residuals<T>(p, pd, r) : task_residuals<T>(t, p, pd, r)) ? 1 : 0);
-    }
-    if (all != 1) return false;
-    for (const auto& b : o_->blocks)
-      if (b.multiplier != 1.0) {
-        const T m = T(std::sqrt(b.multiplier));
-        for (int i = 0; i < b.size; ++i) r[b.offset + i] *= m;
-      }
+    if (o_->path_task.active && !path_residuals<T>(p, pd, r)) return false;
+    for (int t = 0; t < static_cast<int>(o_->tasks.size()); ++t)
+      if (!task_residuals<T>(t, p, pd, r)) return false;
     for (int i = 0; i < o_->n_residuals; ++i)
       if (!std::isfinite(value_of(r[i]))) return false;
     return true;
@@ -283,9 +267,8 @@ class Kernel final : public KernelBase {
 
   bool path(const double* p, PathData* out) const override {
     std::vector<models::MaterialState> states;
-    std::vector<double> eps;
-    if (!run_path<double>(p, p, &states, &eps)) return false;
-    out->eps_dev = eps;
+    if (!run_path<double>(p, p, &states)) return false;
+    out->eps_dev = o_->path.eps_dev;
     out->stress.clear();
     out->fabric.clear();
     for (const auto& y : states) {
@@ -335,54 +318,50 @@ class Kernel final : public KernelBase {
     return true;
   }
 
-  // The law's undrained path from the first data row to the last eps_dev, in
-  // options.path_steps equal steps; eps_dev (signed) of every recorded state.
+  // The law's undrained path from the first data row, integrated from each sample of the data
+  // to the next (the driver controls the error within each), so that the model is sampled
+  // exactly at the data's eps_dev; one state per data row.
   template <typename T>
-  bool run_path(const T* p, const double* pd, std::vector<models::StateT<T>>* states,
-                std::vector<double>* eps) const {
+  bool run_path(const T* p, const double* pd, std::vector<models::StateT<T>>* states) const {
     const PathData& d = o_->path;
     const models::MaterialState sd = start_state(pd, d.stress[0], d.fabric[0], d.volume_fraction);
     if (!M::admissible(pd, sd, nullptr)) return false;
     const models::StaticLawOps<M, T> ops{p, pd};
-    const int steps = o_->options.path_steps;
-    if (!models::integrate_steps(ops, models::state_cast<T>(sd),
-                                 models::undrained_axisymmetric_strain(d.eps_dev.back()), steps,
-                                 o_->options.step, states, nullptr))
-      return false;
-    eps->resize(steps + 1);
-    for (int k = 0; k <= steps; ++k) (*eps)[k] = d.eps_dev.back() * k / steps;
+    models::StateT<T> y = models::state_cast<T>(sd);
+    states->assign(1, y);
+    for (std::size_t k = 1; k < d.eps_dev.size(); ++k) {
+      const auto res = models::integrate_adaptive(
+          ops, y, models::undrained_axisymmetric_strain(d.eps_dev[k] - d.eps_dev[k - 1]),
+          o_->options.step);
+      if (!res.success) return false;
+      y = res.end;
+      states->push_back(y);
+    }
     return true;
   }
 
-  // Undrained path residuals, the model sampled at the data's eps_dev (linear interpolation).
+  // Undrained path residuals: (iso, dev) pairs of stress and fabric at every data row after the
+  // first (which the model starts from).
   template <typename T>
   bool path_residuals(const T* p, const double* pd, T* r) const {
     const PathData& d = o_->path;
     std::vector<models::StateT<T>> s;
-    std::vector<double> se;
-    if (!run_path<T>(p, pd, &s, &se)) return false;
-    const Eigen::Matrix2d R = rendulic_to_iso_dev();
-    const int n = static_cast<int>(d.eps_dev.size());
-    std::size_t j = 0;
-    for (int k = 1; k < n; ++k) {
-      const double e = std::abs(d.eps_dev[k]);
-      while (j + 2 < se.size() && std::abs(se[j + 1]) < e) ++j;
-      const double e0 = std::abs(se[j]), e1 = std::abs(se[j + 1]);
-      const double w = e1 > e0 ? std::clamp((e - e0) / (e1 - e0), 0.0, 1.0) : 0.0;
-      const models::Mat3<T> sig = T(1 - w) * s[j].stress + T(w) * s[j + 1].stress;
-      const models::Mat3<T> fab = T(1 - w) * s[j].fabric + T(w) * s[j + 1].fabric;
-      const PathTask& t = o_->path_task;
+    if (!run_path<T>(p, pd, &s)) return false;
+    const Eigen::Matrix<T, 2, 2> R = rendulic_to_iso_dev().cast<T>();
+    const PathTask& t = o_->path_task;
+    for (std::size_t k = 1; k < d.eps_dev.size(); ++k) {
       const Eigen::Matrix<T, 2, 1> ds =
-          R.cast<T>() * pair_of<T>(models::Mat3<T>(sig - d.stress[k].cast<T>()));
+          R * pair_of<T>(models::Mat3<T>(s[k].stress - d.stress[k].cast<T>()));
       const Eigen::Matrix<T, 2, 1> df =
-          R.cast<T>() * pair_of<T>(models::Mat3<T>(fab - d.fabric[k].cast<T>()));
+          R * pair_of<T>(models::Mat3<T>(s[k].fabric - d.fabric[k].cast<T>()));
+      const int i = 2 * (static_cast<int>(k) - 1);
       if (t.stress_offset >= 0) {
-        r[t.stress_offset + 2 * (k - 1)] = t.stress_w * ds(0);
-        r[t.stress_offset + 2 * (k - 1) + 1] = t.stress_w * ds(1);
+        r[t.stress_offset + i] = t.stress_w * ds(0);
+        r[t.stress_offset + i + 1] = t.stress_w * ds(1);
       }
       if (t.fabric_offset >= 0) {
-        r[t.fabric_offset + 2 * (k - 1)] = t.fabric_w * df(0);
-        r[t.fabric_offset + 2 * (k - 1) + 1] = t.fabric_w * df(1);
+        r[t.fabric_offset + i] = t.fabric_w * df(0);
+        r[t.fabric_offset + i + 1] = t.fabric_w * df(1);
       }
     }
     return true;
@@ -599,16 +578,6 @@ bool Objective::exact_derivatives() const {
   return impl_->options.derivatives == Derivatives::kExact;
 }
 bool Objective::integrated() const { return impl_->any_integrated; }
-
-void Objective::set_block_multipliers(const std::vector<double>& m) {
-  if (m.size() != impl_->blocks.size())
-    throw InputError("calibration objective: one multiplier per block expected");
-  for (std::size_t b = 0; b < m.size(); ++b) {
-    if (!(m[b] > 0.0) || !std::isfinite(m[b]))
-      throw InputError("calibration objective: block multipliers must be finite and > 0");
-    impl_->blocks[b].multiplier = m[b];
-  }
-}
 
 bool Objective::predict_path(const std::vector<double>& p, PathData* out) const {
   if (impl_->path.empty()) return false;

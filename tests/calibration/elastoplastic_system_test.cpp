@@ -33,7 +33,6 @@ TEST(ElastoplasticCalibration, RecoversEvolutionParametersFromPathAndEnvelopes) 
   o.values = {{"B", 2.2e10}, {"G", 3e9},    {"beta_A", 0.8},  {"c_F", 4.0},     {"p_ref", 2e9},
               {"m_e", 3e-3}, {"M_ss", 0.6}, {"beta_s", 25.0}, {"beta_F", 40.0}, {"F_dev_max", 0.4}};
   o.level_one_start = false;
-  o.objective.path_steps = 200;  // a multiple of the 20 data samples: no interpolation error
   o.objective.step.tolerance = 1e-10;
   const CalibrationSummary s = calibrate(d, o);
   ASSERT_TRUE(s.fit.converged) << s.fit.report;

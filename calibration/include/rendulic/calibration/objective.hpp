@@ -114,12 +114,14 @@ struct ObjectiveOptions {
   // to the stress) puts the error of a 2e-3 probe response near 1e-5 of the response, far
   // below the noise of DEM envelopes (docs/calibration.md "Predictions and derivatives"); with
   // central differences use 1e-10, which their relative step 1e-6 needs.
+  // A probe that needs more than 1000 substeps is at parameters where the law is pathologically
+  // stiff; failing it fast (an infinite cost) is what the optimiser needs.
   models::StepOptions step = [] {
     models::StepOptions s;
     s.tolerance = 1e-6;
+    s.max_substeps = 1000;
     return s;
   }();
-  int path_steps = 200;  // recorded model path samples (interpolated to the data's eps_dev)
   bool IsValid(std::string* why) const;
 };
 
@@ -137,8 +139,6 @@ struct ResidualBlock {
   // Model-free noise of the block's data, as a relative rms pair norm (the units of the
   // misfit): from the second differences of the data around their own smooth curve.
   double noise = 0.0;
-  // Extra factor on the block's squared residuals (the likelihood weights of calibrate()).
-  double multiplier = 1.0;
 };
 
 class Objective {
@@ -157,8 +157,6 @@ class Objective {
   int num_parameters() const;
   bool exact_derivatives() const;  // Jacobian by Jets (else central differences)
   bool integrated() const;         // some prediction goes through the driver
-  // Multiplies the squared residuals of block b by m[b] (> 0), one per block of blocks().
-  void set_block_multipliers(const std::vector<double>& m);
 
   // Residuals at working coordinates z; false where the law cannot be evaluated (inadmissible
   // state, driver failure): back ends treat that as an infinite cost.
@@ -172,8 +170,8 @@ class Objective {
   // vector p. The returned data has stress and fabric filled in; ok=false on a model failure.
   EnvelopeData predict_envelope(const std::vector<double>& p, const StateData& state,
                                 const EnvelopeData& probes, bool* ok) const;
-  // The law's undrained path from the data's first path row (path_steps + 1 rows, eps_dev
-  // signed); false without a path or on a model failure.
+  // The law's undrained path from the data's first path row, at the data's eps_dev (signed);
+  // false without a path or on a model failure.
   bool predict_path(const std::vector<double>& p, PathData* out) const;
 
   struct Impl;

@@ -29,9 +29,9 @@ Backend backend_from_string(const std::string& name);  // InputError on an unkno
 // Ceres's function tolerance for DEM data (the `run` stage and `rendulic calibrate`). With
 // exact derivatives through the driver, Levenberg-Marquardt on DEM data stops by its gradient
 // or parameter tolerance; the function tolerance is only a backstop against a crawl (an
-// iteration that lowers the cost by less than 1e-14 of it). It used to be 1e-3, when central
+// iteration that lowers the cost by less than 1e-16 of it, i.e. not at all). It used to be 1e-3, when central
 // differences through the driver left the fits crawling (docs/calibration.md "When to stop").
-inline constexpr double kDemFunctionTolerance = 1e-14;
+inline constexpr double kDemFunctionTolerance = 1e-16;
 // Gradient tolerance for DEM data, relative to the cost at the start: the gradient (per unit
 // of the working coordinates, i.e. per e-fold change of a log parameter) is 1e-8 of that cost.
 inline constexpr double kDemGradientTolerance = 1e-8;
@@ -54,6 +54,10 @@ struct SolverOptions {
   double function_tolerance = 1e-15;
   double gradient_tolerance = 1e-15;
   double parameter_tolerance = 1e-8;
+  // Minimise -2 ln L of selection.hpp (each block's variance profiled, never below the data's
+  // noise) instead of 0.5 |r|^2: per-block Ceres losses, the block weights updated at every
+  // iteration; the standard errors are those of the block-weighted problem at the optimum.
+  bool likelihood = false;
   bool polish = true;     // Ceres after the NLopt stages
   bool progress = false;  // Ceres prints one line per iteration (cost, step) to stdout
   IdentifiabilityOptions identifiability;
@@ -68,7 +72,7 @@ struct FitResult {
   std::vector<double> params;      // the law's full parameter vector
   Eigen::MatrixXd correlation;
   Uncertainty uncertainty;
-  double cost = 0.0;  // 0.5 |r|^2 at the optimum
+  double cost = 0.0;  // 0.5 |r|^2 at the optimum (0.5 sum_b rho_b with the likelihood)
   double rms = 0.0;   // sqrt(|r|^2 / n): normalised rms misfit (1 = data-scale misfit)
   bool converged = false;
   std::string backend;
