@@ -219,16 +219,22 @@ CalibrationSummary calibrate(const CalibrationData& data, const CalibrationOptio
     std::vector<double> r(objective.num_residuals());
     if (!out.fit.converged || out.fit.termination == "budget") {
       reason = "the local fit stopped by " + out.fit.termination;
-    } else {
-      for (std::size_t k = 0; k < out.fit.names.size() && reason.empty(); ++k)
+    } else if (objective.residuals(out.fit.z.data(), r.data())) {
+      // Stress envelopes: one predicted worse than by no response at all is a failed fit; one
+      // off by more than three times its noise means the fit is not done, and then a free
+      // parameter without any effect on the data says the local search sits on a plateau.
+      bool above_noise = false;
+      for (int b = 0; b < nb && reason.empty(); ++b) {
+        if (out.blocks[b].kind != "stress") continue;
+        const double mb = misfit({out.blocks[b]}, r, out.blocks[b].state, "stress");
+        above_noise = above_noise || mb > 3.0 * out.blocks[b].noise;
+        if (mb > 1.0)
+          reason = "the stress envelope '" + out.blocks[b].envelope + "' of state '" +
+                   out.blocks[b].state + "' is predicted worse than by no response at all";
+      }
+      for (std::size_t k = 0; k < out.fit.names.size() && reason.empty() && above_noise; ++k)
         if (k < out.fit.uncertainty.no_effect.size() && out.fit.uncertainty.no_effect[k])
           reason = "'" + out.fit.names[k] + "' has no effect on the data at the local optimum";
-      if (reason.empty() && objective.residuals(out.fit.z.data(), r.data()))
-        for (int b = 0; b < nb && reason.empty(); ++b)
-          if (out.blocks[b].kind == "stress" &&
-              misfit({out.blocks[b]}, r, out.blocks[b].state, "stress") > 1.0)
-            reason = "the stress envelope '" + out.blocks[b].envelope + "' of state '" +
-                     out.blocks[b].state + "' is predicted worse than by no response at all";
     }
     if (!reason.empty()) {
       SolverOptions g = so;

@@ -163,14 +163,17 @@ int pick(const std::vector<SelectionRow>& rows, const std::vector<bool>& candida
   return sel;
 }
 
-// One sentence per other law: what it adds over the selected one, or what it lacks.
+// One sentence per other law: what it adds over the selected one, or what it lacks. Only the
+// laws with `describe` set are described (all candidates when empty).
 std::string explain(const std::vector<SelectionRow>& rows, const std::vector<bool>& candidate,
-                    int sel, bool stress, const SelectionRule& rule) {
+                    int sel, bool stress, const SelectionRule& rule,
+                    const std::vector<bool>& describe = {}) {
   auto score = [&](int i) -> const SetScore& { return stress ? rows[i].stress : rows[i].all; };
   const SetScore& s = score(sel);
   std::vector<std::string> parts;
   for (std::size_t i = 0; i < rows.size(); ++i) {
     if (static_cast<int>(i) == sel || !candidate[i]) continue;
+    if (!describe.empty() && !describe[i]) continue;
     const SetScore& m = score(static_cast<int>(i));
     const double d = m.bic - s.bic;
     const std::string& name = rows[i].model;
@@ -203,7 +206,7 @@ std::string explain(const std::vector<SelectionRow>& rows, const std::vector<boo
   }
   // Pairs of other laws where the richer adds nothing over the simpler (e.g. the anisotropy
   // term of the elastic laws when an elasto-plastic law is selected).
-  for (std::size_t a = 0; a < rows.size(); ++a)
+  for (std::size_t a = 0; a < rows.size() && describe.empty(); ++a)
     for (std::size_t b = 0; b < rows.size(); ++b) {
       if (a == b || !candidate[a] || !candidate[b] || static_cast<int>(a) == sel ||
           static_cast<int>(b) == sel || rows[b].n_free <= rows[a].n_free)
@@ -294,12 +297,20 @@ Selection select_model(const std::vector<ModelScore>& models, const SelectionRul
     if (!e.empty()) s << ": " << e;
     s << ".";
   } else if (sel_s >= 0) {
+    // The laws without fabric, compared with the selected one on the stress blocks.
+    std::vector<bool> only_stress(out.rows.size());
     bool others = false;
-    for (std::size_t i = 0; i < out.rows.size(); ++i)
-      others = others || (cand_stress[i] && !cand_all[i]);
-    if (others)
-      s << " On the stress blocks alone, where the laws without fabric compete too, the choice is "
-           "the same.";
+    for (std::size_t i = 0; i < out.rows.size(); ++i) {
+      only_stress[i] = cand_stress[i] && !cand_all[i];
+      others = others || only_stress[i];
+    }
+    if (others) {
+      s << " On the stress blocks alone, where the laws without fabric compete too, the choice "
+           "is the same";
+      const std::string e = explain(out.rows, cand_stress, sel_s, true, rule, only_stress);
+      if (!e.empty()) s << ": " << e;
+      s << ".";
+    }
   }
   out.sentence = s.str();
   return out;

@@ -594,10 +594,22 @@ FitResult solve(const Objective& obj, const std::vector<double>& z0, const Solve
     for (int k : pinned) {
       const bool upper = z[k] >= sp.z_upper(k) - 1e-9 * (sp.z_upper(k) - sp.z_lower(k));
       std::ostringstream w;
-      w << "parameter '" << out.names[k] << "' sits at its " << (upper ? "upper" : "lower")
+      w << "parameter '" << out.names[k] << "' ended on its " << (upper ? "upper" : "lower")
         << " bound " << out.values[k]
-        << ": the data push it beyond, so it is held there and not estimated";
+        << " with the data pulling it beyond: it is held there and not estimated";
       out.uncertainty.warnings.push_back(w.str());
+    }
+    if (!pinned.empty()) {
+      // A parameter may reach its bound because the data cannot tell it from others (a flat
+      // valley ends on the bound): the rank test on every free parameter says so.
+      Eigen::VectorXd pv(p), d(p);
+      for (int k = 0; k < p; ++k) {
+        pv(k) = out.values[k];
+        d(k) = sp.dp_dz(k, z[k]);
+      }
+      const Uncertainty all = estimate_uncertainty(J, r, out.names, pv, d, o.identifiability);
+      for (const auto& w : all.warnings)
+        if (w.rfind("rank-deficient", 0) == 0) out.uncertainty.warnings.push_back(w);
     }
     for (int k = 0; k < p; ++k)
       out.stderr_.push_back(std::abs(sp.dp_dz(k, z[k])) * out.uncertainty.stderr_z(k));

@@ -20,14 +20,17 @@ struct Jacobians {
   Eigen::VectorXd r_exact, r_central;
 };
 
-// The exact Jacobian (Jets through the driver at its default tolerance) and central differences
-// of the residuals with step h in the working coordinates, on an objective integrated far more
-// tightly (the difference quotient needs the objective smooth far below h; the driver's yield
-// event is located to 1e-9 of the elastic range, so h = 1e-4 keeps that jitter at 1e-5).
+// The exact Jacobian (Jets through the driver's substeps at tolerance exact_tolerance: the
+// derivative of the integrator's discrete map, which tends to the true sensitivity as the
+// tolerance falls) and central differences of the residuals with step h in the working
+// coordinates, on an objective integrated far more tightly (the difference quotient needs the
+// objective smooth far below h; the driver's yield event is located to 1e-9 of the elastic
+// range, so h = 1e-4 keeps that jitter at 1e-5).
 Jacobians both(const std::string& law_name, const CalibrationData& d, const ParameterSpace& space,
                double h, double exact_tolerance) {
   ObjectiveOptions exact;
   exact.step.tolerance = exact_tolerance;
+  exact.step.max_substeps = 100000;
   ObjectiveOptions tight = exact;
   tight.step.tolerance = 1e-12;
   tight.derivatives = Derivatives::kCentral;
@@ -77,7 +80,7 @@ TEST(Derivatives, HypoplasticExactMatchesCentralDifferences) {
   const auto l2 = models::make_law("hypoplastic_wu");
   std::vector<double> p0 = {-1.6, -18.0, -12.0, 24.0};
   const ParameterSpace space(*l2, p0, {"c1", "c2", "c3", "c4"});
-  const Jacobians j = both("hypoplastic_wu", d, space, 1e-4);
+  const Jacobians j = both("hypoplastic_wu", d, space, 1e-4, 1e-9);
   EXPECT_LT((j.r_exact - j.r_central).norm(), 1e-5 * j.r_central.norm());
   EXPECT_LT(worst_column_error(j, space.names()), 1e-4);
 }
@@ -88,10 +91,11 @@ TEST(Derivatives, ElastoplasticExactMatchesCentralDifferences) {
       {"m_e", 2e-3}, {"M_ss", 0.45}, {"beta_s", 40.0}, {"beta_F", 25.0}, {"F_dev_max", 0.6}};
   const auto law = law_with("elastoplastic_fabric", truth);
   testing::SyntheticSpec spec;
-  spec.directions = 12;
+  spec.states.erase(spec.states.begin(), spec.states.begin() + 2);  // two anisotropic states
+  spec.directions = 6;
   spec.plastic_amplitude = 2e-3;
   spec.path_end = -0.08;
-  spec.path_samples = 10;
+  spec.path_samples = 4;
   const CalibrationData d = testing::synthetic_data(*law, spec);
   const auto l2 = testing::law_with("elastoplastic_fabric", {{"B", 2.0e10},
                                                              {"G", 3.3e9},
@@ -108,9 +112,17 @@ TEST(Derivatives, ElastoplasticExactMatchesCentralDifferences) {
   const ParameterSpace space(
       *l2, l2->parameters(),
       {"B", "G", "beta_A", "c_F", "n_p", "a_G", "m_e", "M_ss", "beta_s", "beta_F", "F_dev_max"});
-  const Jacobians j = both("elastoplastic_fabric", d, space, 1e-4);
-  EXPECT_LT((j.r_exact - j.r_central).norm(), 1e-4 * j.r_central.norm());
-  EXPECT_LT(worst_column_error(j, space.names()), 1e-3);
+  const Jacobians j = both("elastoplastic_fabric", d, space, 1e-4, 1e-9);
+  EXPECT_LT((j.r_exact - j.r_central).norm(), 1e-6 * j.r_central.norm());
+  EXPECT_LT(worst_column_error(j, space.names()), 1e-4);
+  // At the calibration's default tolerance (1e-6) the derivative of the discrete map is still
+  // within 1 % of the sensitivity: what Levenberg-Marquardt needs.
+  Jacobians jd = j;
+  ObjectiveOptions defaults;
+  const Objective od("elastoplastic_fabric", d, d.labels(), space, defaults);
+  const std::vector<double> z = space.to_z(space.base());
+  ASSERT_TRUE(od.jacobian(z.data(), &jd.r_exact, &jd.exact));
+  EXPECT_LT(worst_column_error(jd, space.names()), 1e-2);
 }
 
 }  // namespace

@@ -43,8 +43,9 @@ struct CalibrationOptions {
   // N_b / sigma_b^2 follow the fit. false: least squares with the weights of `objective`
   // (every block counts with its weight).
   bool likelihood_weights = true;
-  // A local fit that is poor (stopped by its budget or failed, a free parameter without effect
-  // on the data, or a stress envelope predicted worse than by no response) is repeated from
+  // A local fit that is poor (stopped by its budget or failed, a stress envelope predicted
+  // worse than by no response, or a free parameter without effect on the data while a stress
+  // envelope is still off by more than three times its noise) is repeated from
   // NLopt's global search (GN_CRS2_LM over the box, then BOBYQA, then Levenberg-Marquardt) with
   // this many evaluations; the better fit is kept (CalibrationSummary::global_start says).
   bool global_start = true;
