@@ -172,7 +172,8 @@ Subcommand add_calibrate(CLI::App& parent) {
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   sub->add_option("--function-tolerance", args->function_tolerance,
-                  "Ceres stops when an iteration lowers the cost by less than this fraction")
+                  "Ceres stops when an iteration lowers the cost by less than this fraction "
+                  "(a backstop: fits stop by their gradient or parameter tolerance)")
       ->check(CLI::Range(1e-16, 0.1))
       ->capture_default_str();
   sub->add_flag("--progress", args->progress, "Print Ceres's iterations (cost, step) to stdout");

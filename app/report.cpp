@@ -148,11 +148,17 @@ std::string model_selection_markdown(const ResultsReader& r) {
   static const char* kinds[] = {"stress_elastic", "stress_plastic", "fabric_elastic",
                                 "fabric_plastic", "path_stress",    "path_fabric"};
   md << "| law | free | stress el. | stress pl. | fabric el. | fabric pl. | path stress | path "
-        "fabric | held-out score | BIC | Δ BIC | stopped by | global start | s |\n"
+        "fabric | held-out score (all / stress) | BIC (all / stress) | Δ BIC (all / stress) | "
+        "stopped by | global start | s |\n"
         "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
-  double best = kNaN;
+  double best = kNaN, best_stress = kNaN;
+  const std::string sel_s = r.has_attr("/calibration", "selected_model_stress")
+                                ? r.attr_string("/calibration", "selected_model_stress")
+                                : "";
   if (!sel.empty() && r.has_attr("/calibration/" + sel, "information_criterion"))
     best = r.attr_double("/calibration/" + sel, "information_criterion");
+  if (!sel_s.empty() && r.has_attr("/calibration/" + sel_s, "information_criterion_stress"))
+    best_stress = r.attr_double("/calibration/" + sel_s, "information_criterion_stress");
   std::vector<std::string> flags;
   std::string noise_row;
   for (const std::string& m : r.children("/calibration")) {
@@ -164,11 +170,12 @@ std::string model_selection_markdown(const ResultsReader& r) {
     md << "| " << (m == sel ? "**" + m + "**" : m) << " | " << r.attr_int(g, "n_free");
     for (const char* k : kinds) md << " | " << num(std::string("misfit_") + k);
     const double ic = r.attr_double(g, "information_criterion");
+    const double ics = r.attr_double(g, "information_criterion_stress");
     const bool fabric = r.attr_string(g, "blocks_covered").find("fabric") != std::string::npos;
-    md << " | " << num(fabric ? "held_out_score" : "held_out_score_stress") << " | "
-       << (fabric ? fmt(ic, 6)
-                  : fmt(r.attr_double(g, "information_criterion_stress"), 6) + " (stress)")
-       << " | " << (fabric && std::isfinite(best) ? fmt(ic - best, 4) : "-") << " | "
+    md << " | " << (fabric ? num("held_out_score") : "-") << " / " << num("held_out_score_stress")
+       << " | " << (fabric ? fmt(ic, 6) : "-") << " / " << fmt(ics, 6) << " | "
+       << (fabric && std::isfinite(best) ? fmt(ic - best, 4) : "-") << " / "
+       << (std::isfinite(best_stress) ? fmt(ics - best_stress, 4) : "-") << " | "
        << (r.has_attr(g, "termination") ? r.attr_string(g, "termination") : "-") << " | "
        << (r.has_attr(g, "global_start") && r.attr_string(g, "global_start").rfind("used", 0) == 0
                ? "used"

@@ -61,8 +61,8 @@ void register_calibration_keys(ScenarioSchema& schema) {
               .default_value = calibration::kDemFunctionTolerance,
               .unit = "-",
               .help = "Ceres stops when an iteration lowers the cost by less than this "
-                      "fraction; tighter costs time for changes well inside the standard "
-                      "errors (docs/calibration.md).",
+                      "fraction: a backstop; with exact derivatives the fits stop by their "
+                      "gradient or parameter tolerance (docs/calibration.md).",
               .min = 1e-16,
               .max = 0.1});
   schema.add({.path = "calibration.features",

@@ -79,6 +79,48 @@ std::vector<std::string> default_holdout(const CalibrationData& data) {
   return out;
 }
 
+ModelScore yardstick_score(const CalibrationData& data, const std::string& model,
+                           const std::vector<double>& params, int n_free,
+                           const std::vector<std::string>& fitted,
+                           const std::vector<std::string>& held_out,
+                           const models::StepOptions& step) {
+  const std::unique_ptr<models::Law> law = models::make_law(model);
+  if (!law) throw InputError("yardstick: unknown model '" + model + "'");
+  ModelScore out;
+  out.model = model;
+  out.n_free = n_free;
+  out.fitted_states = fitted;
+  out.held_out_states = held_out;
+  // Any parameter serves as the (unused) free one: only the residuals at `params` are needed.
+  const ParameterSpace space(*law, params, {law->parameter_info()[0].name});
+  const std::vector<double> z = space.to_z(params);
+  auto score_blocks = [&](const std::vector<std::string>& states, bool is_held_out) {
+    if (states.empty()) return;
+    const Objective y(model, data, states, space,
+                      yardstick_options(step, !is_held_out && !data.path.empty()));
+    std::vector<double> ry(y.num_residuals());
+    const bool ok = y.residuals(z.data(), ry.data());
+    for (const auto& b : y.blocks()) {
+      BlockScore bs;
+      bs.state = b.state;
+      bs.envelope = b.envelope;
+      bs.kind = yardstick_kind(b);
+      bs.id = b.state == "path" ? "path/" + bs.kind : b.state + "/" + b.envelope + "/" + bs.kind;
+      bs.held_out = is_held_out;
+      bs.components = b.size;
+      bs.scale = b.scale;
+      bs.noise = b.noise;
+      double s2 = 0.0;
+      for (int i = 0; i < b.size; ++i) s2 += ry[b.offset + i] * ry[b.offset + i];
+      bs.misfit = ok ? std::sqrt(s2 / b.weight) : std::numeric_limits<double>::infinity();
+      out.blocks.push_back(bs);
+    }
+  };
+  score_blocks(fitted, false);
+  score_blocks(held_out, true);
+  return out;
+}
+
 std::vector<StateSummary> per_state_analysis(const CalibrationData& data) {
   std::vector<StateSummary> out;
   for (const auto& s : data.states) out.push_back(analyse_state(s));
@@ -286,35 +328,8 @@ CalibrationSummary calibrate(const CalibrationData& data, const CalibrationOptio
   }
 
   // The common yardstick (selection.hpp): the same blocks and scales for every law.
-  out.score.model = options.model;
-  out.score.n_free = space.size();
-  out.score.fitted_states = out.fitted_states;
-  out.score.held_out_states = out.held_out_states;
-  const models::StepOptions step = oo.step;
-  auto score_blocks = [&](const std::vector<std::string>& states, bool held_out) {
-    if (states.empty()) return;
-    const Objective y(options.model, data, states, space,
-                      yardstick_options(step, !held_out && !data.path.empty()));
-    std::vector<double> ry(y.num_residuals());
-    const bool yok = y.residuals(out.fit.z.data(), ry.data());
-    for (const auto& b : y.blocks()) {
-      BlockScore bs;
-      bs.state = b.state;
-      bs.envelope = b.envelope;
-      bs.kind = yardstick_kind(b);
-      bs.id = b.state == "path" ? "path/" + bs.kind : b.state + "/" + b.envelope + "/" + bs.kind;
-      bs.held_out = held_out;
-      bs.components = b.size;
-      bs.scale = b.scale;
-      bs.noise = b.noise;
-      double s2 = 0.0;
-      for (int i = 0; i < b.size; ++i) s2 += ry[b.offset + i] * ry[b.offset + i];
-      bs.misfit = yok ? std::sqrt(s2 / b.weight) : std::numeric_limits<double>::infinity();
-      out.score.blocks.push_back(bs);
-    }
-  };
-  score_blocks(out.fitted_states, false);
-  score_blocks(out.held_out_states, true);
+  out.score = yardstick_score(data, options.model, out.fit.params, space.size(), out.fitted_states,
+                              out.held_out_states, oo.step);
   const SetScore all = score_set(out.score, BlockSet::kAll);
   out.fitted_misfit = all.fitted_misfit;
   if (std::isfinite(all.held_out_misfit)) out.held_out_misfit = all.held_out_misfit;

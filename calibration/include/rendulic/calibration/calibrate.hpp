@@ -103,6 +103,16 @@ CalibrationSummary calibrate(const CalibrationData& data, const CalibrationOptio
 // interpolates between fitted states; none with fewer than three.
 std::vector<std::string> default_holdout(const CalibrationData& data);
 
+// The law `model` with the full parameter vector `params` scored on the common yardstick
+// (selection.hpp) over the fitted and the held-out states (the path with the fitted ones);
+// n_free is what the information criterion counts. calibrate() fills
+// CalibrationSummary::score with it; it also scores parameters from elsewhere.
+ModelScore yardstick_score(const CalibrationData& data, const std::string& model,
+                           const std::vector<double>& params, int n_free,
+                           const std::vector<std::string>& fitted,
+                           const std::vector<std::string>& held_out,
+                           const models::StepOptions& step = ObjectiveOptions{}.step);
+
 // Level one only (no law): per-state stiffness and plastic features of every state.
 std::vector<StateSummary> per_state_analysis(const CalibrationData& data);
 
