@@ -301,7 +301,7 @@ def fig_model_envelopes(f, out, written, notes, kind, quantity):
     title = f"Calibrated laws over the DEM: {kind} {quantity} envelopes"
     if no_fabric:
         title += " (no fabric predicted by " + ", ".join(sorted(no_fabric)) + ")"
-    fig.suptitle(title)
+    fig.suptitle(title, y=1.06)  # above the panels' titles and axis offsets
     desc = "models: " + ", ".join(sorted(drawn))
     if no_fabric:
         desc += "; no fabric: " + ", ".join(sorted(no_fabric))
