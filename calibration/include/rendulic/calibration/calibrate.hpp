@@ -36,8 +36,10 @@ struct CalibrationOptions {
   std::map<std::string, std::pair<double, double>> bounds;  // search boxes of free parameters
   bool level_one_start = true;  // start (and p_ref) from the per-state numbers
   // Elastic laws (isotropic_elastic, anisotropic_elastic) cannot describe the shift of
-  // elasto-plastic envelopes or the non-linear main path; by default they are fitted to the
-  // elastic envelopes only (a note in the warnings says so). false: use what `objective` says.
+  // elasto-plastic envelopes or the non-linear main path. true: fit them to the elastic
+  // envelopes only (a note in the warnings says so). By default they are fitted to every block
+  // like the others: the likelihood lets a block a law cannot follow carry little weight, and
+  // the selection compares every law on the same blocks.
   bool elastic_laws_use_elastic_data_only = false;
   // Maximum likelihood (selection.hpp; SolverOptions::likelihood): the block weights
   // N_b / sigma_b^2 follow the fit. false: least squares with the weights of `objective`
