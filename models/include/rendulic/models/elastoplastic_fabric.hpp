@@ -173,17 +173,20 @@ struct ElastoplasticFabric {
   // Drift correction after an explicit substep: a state outside the surface has its alpha moved
   // along n until |r - alpha| = m. Only the back ratio changes, never stress or fabric, so the
   // correction cannot create stress that the strain did not cause. Inward drift after plastic
-  // loading is left alone: the smooth transition (plastic_share) still treats such a state as
-  // plastic, and pulling it back onto the surface would make the step a non-smooth function of
-  // the parameters.
+  // loading (`on_surface`) is corrected only with the sharp switch (w_yield = 0), where a state
+  // a hair inside would turn elastic; with the smooth transition (plastic_share) such a state
+  // is still plastic, and pulling it back onto the surface would make the step a non-smooth
+  // function of the parameters.
   template <typename T>
-  static void correct(const T* p, StateT<T>* s, bool /*on_surface*/) {
+  static void correct(const T* p, StateT<T>* s, bool on_surface) {
     const T pr = trace(s->stress) / T(3);
     if (!(pr > T(0))) return;
     const Mat3<T> xi = dev(s->stress) / pr - tensor_of<T>(s->internal);
     const T xi_norm = safe_norm(xi);
     const T f = xi_norm - p[kM];
-    if (f > T(0) && xi_norm > T(0)) s->internal += mandel_of<T>(Mat3<T>(xi * (f / xi_norm)));
+    const bool sharp = !(p[kWyield] > T(kYieldSurfaceBand));
+    if ((f > T(0) || (on_surface && sharp)) && xi_norm > T(0))
+      s->internal += mandel_of<T>(Mat3<T>(xi * (f / xi_norm)));
   }
 };
 
