@@ -74,8 +74,11 @@ int run_calibrate(const CalibrateArgs& a) {
   opt.solver.backend = backend_from_string(a.backend);
   opt.solver.max_iterations = a.max_iterations;
   opt.solver.function_tolerance = a.function_tolerance;
+  opt.solver.gradient_tolerance = calibration::kDemGradientTolerance;
   opt.solver.progress = a.progress;
   opt.holdout = split_commas(a.holdout);
+  if (opt.holdout.empty()) opt.holdout = {"auto"};
+  if (opt.holdout.size() == 1 && opt.holdout[0] == "none") opt.holdout.clear();
   opt.free = split_commas(a.free);
   opt.objective.path = !a.no_path;
   opt.objective.envelope_features = a.features;
@@ -94,7 +97,8 @@ int run_calibrate(const CalibrateArgs& a) {
   LoadOptions lo;
   lo.states = split_commas(a.states);
   for (const auto& h : opt.holdout)
-    if (!lo.states.empty() && std::find(lo.states.begin(), lo.states.end(), h) == lo.states.end())
+    if (h != "auto" && !lo.states.empty() &&
+        std::find(lo.states.begin(), lo.states.end(), h) == lo.states.end())
       lo.states.push_back(h);
   lo.load_path = !a.no_path;
   const CalibrationData data = load_calibration_data(a.results, lo);
@@ -110,8 +114,19 @@ int run_calibrate(const CalibrateArgs& a) {
     std::cerr << "rendulic: " << a.results << " is read-only: /calibration/" << a.model
               << " not written\n";
   if (!a.no_write && writable) {
+    // The selection over every law now in the file (the others as stored).
+    std::vector<ModelScore> scores{summary.score};
+    {
+      const ResultsReader r(a.results);
+      if (r.exists("/calibration"))
+        for (const auto& m : r.children("/calibration")) {
+          ModelScore ms;
+          if (m != a.model && read_model_score(r, m, &ms)) scores.push_back(ms);
+        }
+    }
     ResultsWriter w = ResultsWriter::update(a.results);
     write_calibration(w, summary);
+    write_selection(w, select_model(scores));
     w.commit();
   }
   if (a.out.empty()) {
@@ -139,7 +154,8 @@ Subcommand add_calibrate(CLI::App& parent) {
       ->delimiter(',');
   sub->add_option("--out", args->out, "Write the JSON here (default: print it)");
   sub->add_option("--holdout", args->holdout,
-                  "States to predict but not fit (held-out check), comma separated")
+                  "States to predict but not fit (held-out check), comma separated; default "
+                  "auto (every second state inside the path), none for no held-out state")
       ->delimiter(',');
   sub->add_option("--backend", args->backend,
                   "ceres (default), multistart, global (NLopt global + BOBYQA + Ceres), bobyqa");
@@ -156,7 +172,8 @@ Subcommand add_calibrate(CLI::App& parent) {
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   sub->add_option("--function-tolerance", args->function_tolerance,
-                  "Ceres stops when an iteration lowers the cost by less than this fraction")
+                  "Ceres stops when an iteration lowers the cost by less than this fraction "
+                  "(a backstop: fits stop by their gradient or parameter tolerance)")
       ->check(CLI::Range(1e-16, 0.1))
       ->capture_default_str();
   sub->add_flag("--progress", args->progress, "Print Ceres's iterations (cost, step) to stdout");

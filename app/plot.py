@@ -20,10 +20,11 @@ SPECIAL = {"I.C.": ISO, "I.E.": ISO + 180, "U.C.": 90.0, "U.E.": 270.0,
 ELASTIC_MAX, PLASTIC_MIN = 1e-4, 1e-3  # physics.md section 5
 
 
-def save(fig, out, name, written):
+def save(fig, out, name, written, description=None):
     for ext in ("png", "svg"):
         path = os.path.join(out, f"{name}.{ext}")
-        fig.savefig(path, dpi=130, bbox_inches="tight")
+        meta = {"Description": description} if description else None
+        fig.savefig(path, dpi=130, bbox_inches="tight", metadata=meta)
         written.append(path)
     plt.close(fig)
 
@@ -305,6 +306,144 @@ def fig_yield_pressure(f, out, written, notes):
     save(fig, out, "yield_pressure", written)
 
 
+# Calibrated laws over the DEM (docs/calibration.md "Model envelopes beside the DEM"): per
+# amplitude and quantity one figure, one panel per state, with the DEM points (the probe
+# method the claims use: dynamic, else minimisation, else the linear response at elastic
+# amplitude), the DEM fit, and every calibrated law's envelope for the same probes; and the
+# path with every law's prediction. The SVG description lists the laws drawn.
+MODEL_COLOURS = ["tab:red", "tab:green", "tab:purple", "tab:brown", "tab:olive", "tab:cyan"]
+
+
+def calibrated_models(f):
+    """(name, group, label) of every calibrated law; the selected one is marked."""
+    if "calibration" not in f:
+        return []
+    sel = attr(f["calibration"], "selected_model", "")
+    out = []
+    for name, g in f["calibration"].items():
+        if not isinstance(g, h5py.Group) or attr(g, "error") is not None:
+            continue
+        out.append((name, g, name + (" (selected)" if name == sel else "")))
+    return out
+
+
+def dem_envelope(state_group, kind):
+    """The DEM envelope a panel shows: dynamic, else minimisation, else (elastic only) the
+    linear response; returns (name, group) or None."""
+    envs = envelopes(state_group, kind)
+    for method in ("dynamic", "minimisation", "linear_response"):
+        if method == "linear_response" and kind != "elastic":
+            continue
+        for name, g in envs:
+            if attr(g, "method") == method:
+                return name, g
+    return None
+
+
+def closed(theta, pts):
+    order = np.argsort(theta)
+    p = np.asarray(pts)[order]
+    return np.vstack([p, p[:1]])
+
+
+def fig_model_envelopes(f, out, written, notes, kind, quantity):
+    models = calibrated_models(f)
+    if not models:
+        notes.append(f"models {kind} {quantity}: no calibrated law")
+        return
+    k_star = float(attr(f["material"], "k_star", 1.0)) if "material" in f else 1.0
+    panels = []
+    for eps, label, g in states(f):
+        env = dem_envelope(g, kind)
+        if env is not None:
+            panels.append((eps, label, env))
+    if not panels:
+        notes.append(f"models {kind} {quantity}: no {kind} DEM envelopes")
+        return
+    key = "stress_star" if quantity == "stress" else "fabric"
+    fit_key = "fit_stress" if quantity == "stress" else "fit_fabric"
+    n = len(panels)
+    fig, axes = plt.subplots(1, n, figsize=(3.4 * n, 3.6), squeeze=False)
+    drawn, no_fabric = set(), set()
+    for ax, (eps, label, (name, g)) in zip(axes[0], panels):
+        r = g[key][:]
+        ax.plot(r[:, 0], r[:, 1], "k.", ms=4, label=f"DEM ({attr(g, 'method', '?')})")
+        if fit_key in g:
+            x, y = fit_curve(g[fit_key])
+            ax.plot(x, y, "k-", lw=0.8, label="DEM fit")
+        for i, (mname, mg, mlabel) in enumerate(models):
+            path = f"states/{label}/envelopes/{name}"
+            if path not in mg:
+                continue
+            e = mg[path]
+            pred = e["stress"][:] / k_star if quantity == "stress" else e["fabric"][:]
+            if quantity == "fabric" and not np.any(pred):
+                no_fabric.add(mname)  # a law without fabric (hypoplastic_wu): nothing to draw
+                continue
+            c = closed(e["theta_deg"][:], pred)
+            ax.plot(c[:, 0], c[:, 1], "-", color=MODEL_COLOURS[i % len(MODEL_COLOURS)], lw=1.2,
+                    label=mlabel)
+            drawn.add(mname)
+        ax.axhline(0, color="0.85", lw=0.6)
+        ax.axvline(0, color="0.85", lw=0.6)
+        ax.set_title(rf"{label}: $-\varepsilon_{{dev}}$ = {-eps:.3f}, "
+                     f"|δε| = {float(attr(g, 'amplitude', 0)):g}", fontsize=8)
+        sym = "\\sigma^*" if quantity == "stress" else "F"
+        ax.set_xlabel(r"$\sqrt{2}\,\delta " + sym + r"_{yy}$")
+        ax.tick_params(labelsize=7)
+    sym = "\\sigma^*" if quantity == "stress" else "F"
+    axes[0][0].set_ylabel(r"$\delta " + sym + r"_{xx}$")
+    axes[0][0].legend(fontsize=6)
+    title = f"Calibrated laws over the DEM: {kind} {quantity} envelopes"
+    if no_fabric:
+        title += " (no fabric predicted by " + ", ".join(sorted(no_fabric)) + ")"
+    fig.suptitle(title, y=1.06)  # above the panels' titles and axis offsets
+    desc = "models: " + ", ".join(sorted(drawn))
+    if no_fabric:
+        desc += "; no fabric: " + ", ".join(sorted(no_fabric))
+    save(fig, out, f"models_{kind}_{quantity}", written, description=desc)
+
+
+def fig_models_path(f, out, written, notes):
+    models = [m for m in calibrated_models(f) if "path" in m[1]]
+    if "path" not in f or not models:
+        notes.append("models path: no path or no law with a predicted path")
+        return
+    g = f["path"]
+    k_star = float(attr(f["material"], "k_star", 1.0)) if "material" in f else 1.0
+    e0 = float(g["eps_dev"][0])
+    x = -g["eps_dev"][:]
+    s, F = g["stress_star"][:], g["fabric"][:]
+    fig, ax = plt.subplots(1, 2, figsize=(10, 3.8))
+    for i, lab in ((0, "xx"), (1, "yy")):
+        ax[0].plot(x, s[:, i, i], "k-" if i == 0 else "k--", lw=1.4,
+                   label=rf"DEM $\sigma^*_{{{lab}}}$")
+        ax[1].plot(x, F[:, i, i], "k-" if i == 0 else "k--", lw=1.4, label=f"DEM $F_{{{lab}}}$")
+    drawn = []
+    for j, (mname, mg, mlabel) in enumerate(models):
+        p = mg["path"]
+        xm = -(e0 + p["eps_dev"][:])
+        sm, fm = p["stress"][:] / k_star, p["fabric"][:]
+        c = MODEL_COLOURS[j % len(MODEL_COLOURS)]
+        for i in (0, 1):
+            ls = "-" if i == 0 else "--"
+            ax[0].plot(xm, sm[:, i, i], ls, color=c, lw=1, label=mlabel if i == 0 else None)
+            ax[1].plot(xm, fm[:, i, i], ls, color=c, lw=1, label=mlabel if i == 0 else None)
+        drawn.append(mname)
+    # The DEM sets the scale: a law far off leaves the frame rather than flatten the data.
+    for a, d in ((ax[0], s), (ax[1], F)):
+        lo = min(d[:, 0, 0].min(), d[:, 1, 1].min())
+        hi = max(d[:, 0, 0].max(), d[:, 1, 1].max())
+        a.set_ylim(lo - 0.5 * (hi - lo), hi + 0.5 * (hi - lo))
+    for a in ax:
+        a.set_xlabel(r"$-\varepsilon_{dev}$")
+        a.legend(fontsize=6)
+    ax[0].set_title("(a) stress: xx solid, yy dashed")
+    ax[1].set_title("(b) fabric: xx solid, yy dashed")
+    fig.suptitle("Calibrated laws along the main path (Fig. 1 analogue)")
+    save(fig, out, "models_path", written, description="models: " + ", ".join(sorted(drawn)))
+
+
 FACTOR_STYLE = {"dt_factor": ("o", "tab:blue"), "dt_factor_tight": ("o", "tab:cyan"),
                 "n_particles": ("s", "tab:green"), "inertial_number": ("^", "tab:orange"),
                 "relax": ("D", "tab:purple"), "method": ("*", "tab:red")}
@@ -431,6 +570,15 @@ def main():
         ("Fig. 7", lambda f: fig7_trends(f, out, written, notes)),
         ("elastic range", lambda f: fig_elastic_range(f, out, written, notes)),
         ("yield against P*", lambda f: fig_yield_pressure(f, out, written, notes)),
+        ("models elastic stress",
+         lambda f: fig_model_envelopes(f, out, written, notes, "elastic", "stress")),
+        ("models plastic stress",
+         lambda f: fig_model_envelopes(f, out, written, notes, "plastic", "stress")),
+        ("models elastic fabric",
+         lambda f: fig_model_envelopes(f, out, written, notes, "elastic", "fabric")),
+        ("models plastic fabric",
+         lambda f: fig_model_envelopes(f, out, written, notes, "plastic", "fabric")),
+        ("models path", lambda f: fig_models_path(f, out, written, notes)),
     ]
     with h5py.File(path, "r") as f:
         if "sweep" in f:  # a sweep file (rendulic sweep): the Pareto and path-rate charts

@@ -8,6 +8,7 @@
 #include <fstream>
 #include <iomanip>
 #include <limits>
+#include <map>
 #include <sstream>
 
 #include "commands.hpp"
@@ -255,6 +256,94 @@ constexpr double kTroughFrom = 0.125, kTroughTo = 0.375;  // -eps_dev 0.04-0.12 
 // its relative difference is at most this many times that of the stress envelope of the same
 // probes (the same relaxation error acts on both).
 constexpr double kKinematicNoiseFactor = 3.0;
+
+// "Model selection" (docs/calibration.md "Model selection"): the common yardstick per law,
+// the held-out score, the information criterion, how each fit stopped, and the sentence of
+// /calibration `selection`; parameters at a bound or undetermined are named.
+std::string model_selection_markdown(const ResultsReader& r) {
+  if (!r.has_attr("/calibration", "selection")) return "";
+  std::ostringstream md;
+  const std::string sel = r.attr_string("/calibration", "selected_model");
+  md << "\n## Model selection (docs/calibration.md)\n\n"
+     << r.attr_string("/calibration", "selection") << "\n\n";
+  static const char* kinds[] = {"stress_elastic", "stress_plastic", "fabric_elastic",
+                                "fabric_plastic", "path_stress",    "path_fabric"};
+  md << "| law | free | stress el. | stress pl. | fabric el. | fabric pl. | path stress | path "
+        "fabric | held-out score (all / stress) | BIC (all / stress) | Δ BIC (all / stress) | "
+        "stopped by | global start | s |\n"
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+  double best = kNaN, best_stress = kNaN;
+  const std::string sel_s = r.has_attr("/calibration", "selected_model_stress")
+                                ? r.attr_string("/calibration", "selected_model_stress")
+                                : "";
+  if (!sel.empty() && r.has_attr("/calibration/" + sel, "information_criterion"))
+    best = r.attr_double("/calibration/" + sel, "information_criterion");
+  if (!sel_s.empty() && r.has_attr("/calibration/" + sel_s, "information_criterion_stress"))
+    best_stress = r.attr_double("/calibration/" + sel_s, "information_criterion_stress");
+  std::vector<std::string> flags;
+  std::string noise_row;
+  for (const std::string& m : r.children("/calibration")) {
+    const std::string g = "/calibration/" + m;
+    if (r.has_attr(g, "error") || !r.has_attr(g, "information_criterion")) continue;
+    auto num = [&](const std::string& a, int prec = 3) {
+      return r.has_attr(g, a) ? fmt(r.attr_double(g, a), prec) : std::string("-");
+    };
+    md << "| " << (m == sel ? "**" + m + "**" : m) << " | " << r.attr_int(g, "n_free");
+    for (const char* k : kinds) md << " | " << num(std::string("misfit_") + k);
+    const double ic = r.attr_double(g, "information_criterion");
+    const double ics = r.attr_double(g, "information_criterion_stress");
+    const bool fabric = r.attr_string(g, "blocks_covered").find("fabric") != std::string::npos;
+    md << " | " << (fabric ? num("held_out_score") : "-") << " / " << num("held_out_score_stress")
+       << " | " << (fabric ? fmt(ic, 6) : "-") << " / " << fmt(ics, 6) << " | "
+       << (fabric && std::isfinite(best) ? fmt(ic - best, 4) : "-") << " / "
+       << (std::isfinite(best_stress) ? fmt(ics - best_stress, 4) : "-") << " | "
+       << (r.has_attr(g, "termination") ? r.attr_string(g, "termination") : "-") << " | "
+       << (r.has_attr(g, "global_start") && r.attr_string(g, "global_start").rfind("used", 0) == 0
+               ? "used"
+               : "no")
+       << " | " << num("seconds", 2) << " |\n";
+    const std::string at = r.has_attr(g, "at_bound") ? r.attr_string(g, "at_bound") : "";
+    const std::string und = r.has_attr(g, "undetermined") ? r.attr_string(g, "undetermined") : "";
+    if (!at.empty()) flags.push_back(m + ": at a bound of its range: " + at);
+    if (!und.empty())
+      flags.push_back(m +
+                      ": not determined by the data (standard error above half the value): " + und);
+    if (r.has_attr(g, "global_start") && r.attr_string(g, "global_start").rfind("used", 0) == 0)
+      flags.push_back(m + ": global start " + r.attr_string(g, "global_start"));
+    if (noise_row.empty() && fabric) {
+      // The data's own noise per kind (rms over the fitted blocks; any law's yardstick has it).
+      std::stringstream ids(r.attr_string(g, "yardstick_blocks"));
+      const auto noise = r.attr_doubles(g, "yardstick_noise");
+      const auto held = r.attr_doubles(g, "yardstick_held_out");
+      std::map<std::string, std::pair<double, int>> acc;
+      std::string id;
+      for (std::size_t i = 0; std::getline(ids, id, ',') && i < noise.size(); ++i) {
+        if (i < held.size() && held[i] != 0.0) continue;
+        const std::string kind = id.substr(id.rfind('/') + 1);
+        acc[kind].first += noise[i] * noise[i];
+        ++acc[kind].second;
+      }
+      noise_row = "| *DEM noise* | ";
+      for (const char* k : kinds)
+        noise_row += " | " + (acc.count(k) ? fmt(std::sqrt(acc[k].first / acc[k].second))
+                                           : std::string("-"));
+      noise_row += " | | | | | | |\n";
+    }
+  }
+  md << noise_row;
+  md << "\nMisfits: relative rms of (law - DEM) per block over the fitted states, each block "
+        "normalised by its data scale only; the DEM noise row is the data's own roughness on "
+        "the same scale. Held-out score: geometric mean of max(misfit, noise) over the held-out "
+        "states' blocks. BIC: -2 ln L + k ln N with the block variances profiled "
+        "(docs/calibration.md \"Model selection\"); laws without fabric are compared on the "
+        "stress blocks only. Rule: "
+     << r.attr_string("/calibration", "selection_rule") << ".\n";
+  if (!flags.empty()) {
+    md << "\nParameters to read with care:\n\n";
+    for (const auto& f : flags) md << "- " << f << "\n";
+  }
+  return md.str();
+}
 
 }  // namespace
 
@@ -607,6 +696,7 @@ std::string report_markdown(const ResultsReader& r, const std::vector<Claim>& cl
     md << "\nA standard error of inf marks a parameter the data do not determine; fixed "
           "parameters show none. Warnings per model are in the results file "
           "(/calibration/<model> attribute `warnings`).\n";
+    md << model_selection_markdown(r);
   }
   if (!figures.empty()) {
     md << "\n## Figures\n\n";

@@ -31,9 +31,11 @@ void register_calibration_keys(ScenarioSchema& schema) {
               .help = "State labels to fit (empty: every state with envelopes)."});
   schema.add({.path = "calibration.holdout",
               .type = KeyType::kStringList,
-              .default_value = std::vector<std::string>{},
+              .default_value = std::vector<std::string>{"auto"},
               .unit = "-",
-              .help = "State labels predicted but not fitted (held-out error)."});
+              .help = "State labels predicted but not fitted (held-out error); [\"auto\"]: with "
+                      "three states or more every second one inside the path (a..e: b and d); "
+                      "[] or [\"none\"]: none."});
   schema.add({.path = "calibration.backend",
               .type = KeyType::kString,
               .default_value = std::string{"ceres"},
@@ -59,8 +61,8 @@ void register_calibration_keys(ScenarioSchema& schema) {
               .default_value = calibration::kDemFunctionTolerance,
               .unit = "-",
               .help = "Ceres stops when an iteration lowers the cost by less than this "
-                      "fraction; tighter costs time for changes well inside the standard "
-                      "errors (docs/calibration.md).",
+                      "fraction: a backstop; with exact derivatives the fits stop by their "
+                      "gradient or parameter tolerance (docs/calibration.md).",
               .min = 1e-16,
               .max = 0.1});
   schema.add({.path = "calibration.features",
@@ -75,19 +77,23 @@ void run_calibration_stage(const Scenario& scenario, ResultsWriter& out, const R
   CalibrationOptions opt;
   const std::string model = scenario.get_string("calibration.model");
   opt.holdout = scenario.get_strings("calibration.holdout");
+  if (opt.holdout.size() == 1 && opt.holdout[0] == "none") opt.holdout.clear();
   opt.solver.backend = backend_from_string(scenario.get_string("calibration.backend"));
   opt.solver.max_iterations = static_cast<int>(scenario.get_int("calibration.max_iterations"));
   opt.solver.function_tolerance = scenario.get_double("calibration.function_tolerance");
+  opt.solver.gradient_tolerance = calibration::kDemGradientTolerance;
   opt.objective.path = scenario.get_bool("calibration.path");
   opt.objective.envelope_features = scenario.get_bool("calibration.features");
   LoadOptions lo;
   lo.states = scenario.get_strings("calibration.states");
   if (!lo.states.empty())
-    for (const auto& h : opt.holdout) lo.states.push_back(h);
+    for (const auto& h : opt.holdout)
+      if (h != "auto") lo.states.push_back(h);
   lo.load_path = opt.objective.path;
   const CalibrationData data = load_calibration_data(out.temporary_path(), lo);
   const std::vector<std::string> models =
       model == "all" ? models::law_names() : std::vector<std::string>{model};
+  std::vector<ModelScore> scores;
   for (const std::string& m : models) {
     opt.model = m;
     // Said before and after: an integrated law's fit takes seconds to minutes (quick.toml's
@@ -97,6 +103,7 @@ void run_calibration_stage(const Scenario& scenario, ResultsWriter& out, const R
     try {
       const CalibrationSummary summary = calibrate(data, opt);
       write_calibration(out, summary);
+      scores.push_back(summary.score);
       if (!ctx.quiet) {
         std::cout << summary.BriefReport() << std::flush;
         std::cerr << "rendulic: calibrated " << m << " in "
@@ -113,6 +120,12 @@ void run_calibration_stage(const Scenario& scenario, ResultsWriter& out, const R
       out.attr(g, "error", std::string(e.what()));
       std::cerr << "rendulic: warning: calibration of " << m << " failed: " << e.what() << "\n";
     }
+  }
+  // Which law this scene needs (docs/calibration.md "Model selection").
+  if (!scores.empty()) {
+    const Selection sel = select_model(scores);
+    write_selection(out, sel);
+    if (!ctx.quiet) std::cout << "model selection: " << sel.sentence << "\n" << std::flush;
   }
 }
 

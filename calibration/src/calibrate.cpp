@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <set>
 #include <sstream>
 
@@ -15,6 +16,10 @@ namespace rendulic::calibration {
 bool CalibrationOptions::IsValid(std::string* why) const {
   if (model.empty()) {
     if (why) *why = "no model named";
+    return false;
+  }
+  if (global_start_evaluations < 10) {
+    if (why) *why = "global_start_evaluations must be >= 10";
     return false;
   }
   return objective.IsValid(why) && solver.IsValid(why);
@@ -62,6 +67,60 @@ double misfit(const std::vector<ResidualBlock>& blocks, const std::vector<double
 
 }  // namespace
 
+std::vector<std::string> default_holdout(const CalibrationData& data) {
+  std::vector<const StateData*> order;
+  for (const auto& s : data.states) order.push_back(&s);
+  std::stable_sort(order.begin(), order.end(), [](const StateData* a, const StateData* b) {
+    return std::abs(a->eps_dev) < std::abs(b->eps_dev);
+  });
+  std::vector<std::string> out;
+  if (order.size() < 3) return out;
+  for (std::size_t i = 1; i + 1 < order.size(); i += 2) out.push_back(order[i]->label);
+  return out;
+}
+
+ModelScore yardstick_score(const CalibrationData& data, const std::string& model,
+                           const std::vector<double>& params, int n_free,
+                           const std::vector<std::string>& fitted,
+                           const std::vector<std::string>& held_out,
+                           const models::StepOptions& step) {
+  const std::unique_ptr<models::Law> law = models::make_law(model);
+  if (!law) throw InputError("yardstick: unknown model '" + model + "'");
+  ModelScore out;
+  out.model = model;
+  out.n_free = n_free;
+  out.fitted_states = fitted;
+  out.held_out_states = held_out;
+  // Any parameter serves as the (unused) free one: only the residuals at `params` are needed.
+  const ParameterSpace space(*law, params, {law->parameter_info()[0].name});
+  const std::vector<double> z = space.to_z(params);
+  auto score_blocks = [&](const std::vector<std::string>& states, bool is_held_out) {
+    if (states.empty()) return;
+    const Objective y(model, data, states, space,
+                      yardstick_options(step, !is_held_out && !data.path.empty()));
+    std::vector<double> ry(y.num_residuals());
+    const bool ok = y.residuals(z.data(), ry.data());
+    for (const auto& b : y.blocks()) {
+      BlockScore bs;
+      bs.state = b.state;
+      bs.envelope = b.envelope;
+      bs.kind = yardstick_kind(b);
+      bs.id = b.state == "path" ? "path/" + bs.kind : b.state + "/" + b.envelope + "/" + bs.kind;
+      bs.held_out = is_held_out;
+      bs.components = b.size;
+      bs.scale = b.scale;
+      bs.noise = b.noise;
+      double s2 = 0.0;
+      for (int i = 0; i < b.size; ++i) s2 += ry[b.offset + i] * ry[b.offset + i];
+      bs.misfit = ok ? std::sqrt(s2 / b.weight) : std::numeric_limits<double>::infinity();
+      out.blocks.push_back(bs);
+    }
+  };
+  score_blocks(fitted, false);
+  score_blocks(held_out, true);
+  return out;
+}
+
 std::vector<StateSummary> per_state_analysis(const CalibrationData& data) {
   std::vector<StateSummary> out;
   for (const auto& s : data.states) out.push_back(analyse_state(s));
@@ -81,7 +140,10 @@ CalibrationSummary calibrate(const CalibrationData& data, const CalibrationOptio
   CalibrationSummary out;
   out.model = options.model;
   for (const auto& pi : law->parameter_info()) out.param_names.push_back(pi.name);
-  const std::set<std::string> hold(options.holdout.begin(), options.holdout.end());
+  const std::vector<std::string> holdout =
+      options.holdout.size() == 1 && options.holdout[0] == "auto" ? default_holdout(data)
+                                                                  : options.holdout;
+  const std::set<std::string> hold(holdout.begin(), holdout.end());
   for (const auto& h : hold)
     if (!data.find(h)) throw InputError("calibrate: held-out state '" + h + "' is not in the data");
   for (const auto& s : data.states)
@@ -183,11 +245,61 @@ CalibrationSummary calibrate(const CalibrationData& data, const CalibrationOptio
   out.free_mask.assign(out.param_names.size(), false);
   for (const auto& f : space.free()) out.free_mask[f.index] = true;
 
-  // Level 2.
+  // Level 2: maximum likelihood (selection.hpp) unless asked otherwise.
   const Objective objective(options.model, data, out.fitted_states, space, oo);
   out.blocks = objective.blocks();
+  const int nb = static_cast<int>(out.blocks.size());
   const std::vector<double> z0 = space.to_z(space.base());
-  out.fit = solve(objective, z0, options.solver);
+  SolverOptions so = options.solver;
+  so.likelihood = options.likelihood_weights;
+  out.fit = solve(objective, z0, so);
+
+  // Global start where the local fit is poor (docs/calibration.md "Global start").
+  out.global_start = "not needed";
+  if (options.global_start && so.backend == Backend::kCeres) {
+    std::string reason;
+    std::vector<double> r(objective.num_residuals());
+    if (!out.fit.converged || out.fit.termination == "budget") {
+      reason = "the local fit stopped by " + out.fit.termination;
+    } else if (objective.residuals(out.fit.z.data(), r.data())) {
+      // Stress envelopes: one predicted worse than by no response at all is a failed fit; one
+      // off by more than three times its noise means the fit is not done, and then a free
+      // parameter without any effect on the data says the local search sits on a plateau.
+      bool above_noise = false;
+      for (int b = 0; b < nb && reason.empty(); ++b) {
+        if (out.blocks[b].kind != "stress") continue;
+        const double mb = misfit({out.blocks[b]}, r, out.blocks[b].state, "stress");
+        above_noise = above_noise || mb > 3.0 * out.blocks[b].noise;
+        if (mb > 1.0)
+          reason = "the stress envelope '" + out.blocks[b].envelope + "' of state '" +
+                   out.blocks[b].state + "' is predicted worse than by no response at all";
+      }
+      for (std::size_t k = 0; k < out.fit.names.size() && reason.empty() && above_noise; ++k)
+        if (k < out.fit.uncertainty.no_effect.size() && out.fit.uncertainty.no_effect[k])
+          reason = "'" + out.fit.names[k] + "' has no effect on the data at the local optimum";
+    }
+    if (!reason.empty()) {
+      SolverOptions g = so;
+      g.backend = Backend::kGlobal;
+      g.global_evaluations = options.global_start_evaluations;
+      g.local_evaluations = std::max(10, options.global_start_evaluations / 2);
+      const FitResult gf = solve(objective, out.fit.z, g);
+      std::ostringstream o;
+      o << "used (" << reason << "): cost " << out.fit.cost << " locally, " << gf.cost
+        << " from the global start";
+      const double seconds = out.fit.seconds + gf.seconds;
+      const int evaluations = out.fit.evaluations + gf.evaluations;
+      if (gf.cost < out.fit.cost) {
+        out.fit = gf;
+        o << " (kept)";
+      } else {
+        o << " (the local fit kept)";
+      }
+      out.fit.seconds = seconds;
+      out.fit.evaluations = evaluations;
+      out.global_start = o.str();
+    }
+  }
   out.warnings = out.fit.uncertainty.warnings;
   if (dropped)
     out.warnings.push_back("note: " + options.model +
@@ -198,7 +310,6 @@ CalibrationSummary calibrate(const CalibrationData& data, const CalibrationOptio
 
   std::vector<double> r(objective.num_residuals(), 0.0);
   const bool ok = objective.residuals(out.fit.z.data(), r.data());
-  out.fitted_misfit = ok ? misfit(out.blocks, r, "") : INFINITY;
   if (ok && use_path) out.path_misfit = misfit(out.blocks, r, "path");
 
   // Held-out states: predicted with the fitted parameters, never fitted.
@@ -210,10 +321,31 @@ CalibrationSummary calibrate(const CalibrationData& data, const CalibrationOptio
     const Objective held(options.model, data, out.held_out_states, space, ho);
     hb = held.blocks();
     rh.assign(held.num_residuals(), 0.0);
-    if (held.residuals(out.fit.z.data(), rh.data())) {
-      out.held_out_misfit = misfit(hb, rh, "");
-    } else {
+    if (!held.residuals(out.fit.z.data(), rh.data())) {
+      rh.clear();
       out.warnings.push_back("the fitted model cannot be evaluated at the held-out states");
+    }
+  }
+
+  // The common yardstick (selection.hpp): the same blocks and scales for every law.
+  out.score = yardstick_score(data, options.model, out.fit.params, space.size(), out.fitted_states,
+                              out.held_out_states, oo.step);
+  const SetScore all = score_set(out.score, BlockSet::kAll);
+  out.fitted_misfit = all.fitted_misfit;
+  if (std::isfinite(all.held_out_misfit)) out.held_out_misfit = all.held_out_misfit;
+  if (use_path) objective.predict_path(out.fit.params, &out.predicted_path);
+
+  // Parameters on a bound of their box, and those the data do not determine.
+  for (std::size_t k = 0; k < out.fit.names.size(); ++k) {
+    const FreeParameter& f = space.free()[k];
+    const double z = out.fit.z[k], lo = space.z_lower(static_cast<int>(k)),
+                 hi = space.z_upper(static_cast<int>(k));
+    if (z <= lo + 1e-9 * (hi - lo) || z >= hi - 1e-9 * (hi - lo)) {
+      out.at_bound.push_back(f.name);
+    } else if (!std::isfinite(out.fit.stderr_[k]) ||
+               out.fit.stderr_[k] > options.solver.identifiability.relative_stderr_warning *
+                                        std::abs(out.fit.values[k])) {
+      out.undetermined.push_back(f.name);
     }
   }
 
@@ -246,9 +378,9 @@ std::string CalibrationSummary::BriefReport() const {
   std::ostringstream o;
   o << "calibration of " << model << " on " << fitted_states.size() << " state(s)";
   if (!held_out_states.empty()) o << " (+" << held_out_states.size() << " held out)";
-  o << ": " << (fit.converged ? "converged" : "NOT converged") << ", back end " << fit.backend
-    << ", Jacobian " << fit.jacobian << ", cost " << fit.cost << ", relative rms misfit "
-    << fitted_misfit;
+  o << ": " << (fit.converged ? "converged" : "NOT converged") << " (stopped by " << fit.termination
+    << "), back end " << fit.backend << ", Jacobian " << fit.jacobian << ", cost " << fit.cost
+    << ", relative rms misfit " << fitted_misfit;
   if (held_out_misfit) o << ", held-out misfit " << *held_out_misfit;
   o << ", " << fit.seconds << " s\n";
   for (std::size_t k = 0; k < fit.names.size(); ++k)

@@ -2,8 +2,6 @@
 // the weighting and normalisation are documented in docs/calibration.md "Objectives").
 #include "rendulic/calibration/objective.hpp"
 
-#include <omp.h>
-
 #include <algorithm>
 #include <cmath>
 #include <set>
@@ -11,9 +9,13 @@
 #include "law_dispatch.hpp"
 #include "rendulic/core/conventions.hpp"
 #include "rendulic/core/errors.hpp"
+#include "rendulic/models/driver_core.hpp"
+#include "rendulic/models/law_model.hpp"
 #include "rendulic/models/paths.hpp"
 
 namespace rendulic::calibration {
+
+using models::value_of;
 
 // ---------------------------------------------------------------- parameter space
 
@@ -90,7 +92,6 @@ bool ObjectiveOptions::IsValid(std::string* why) const {
     if (!(w >= 0.0) || !std::isfinite(w)) return fail("block weights must be finite and >= 0");
   if (!envelope_points && !envelope_features && !path)
     return fail("at least one of envelope_points, envelope_features, path must be on");
-  if (path_steps < 10) return fail("path_steps must be >= 10");
   if (!(fabric_scale_min >= 0.0)) return fail("fabric_scale_min must be >= 0");
   return step.IsValid(why);
 }
@@ -102,15 +103,6 @@ namespace {
 template <typename T>
 Eigen::Matrix<T, 2, 1> pair_of(const models::Mat3<T>& q) {
   return {T(kSqrt2) * T(0.5) * (q(1, 1) + q(2, 2)), q(0, 0)};
-}
-
-template <typename T>
-double value_of(const T& x) {
-  if constexpr (std::is_same_v<T, double>) {
-    return x;
-  } else {
-    return x.a;
-  }
 }
 
 // Affine projection (probes/ fit_affine, written for any scalar): for directions theta_i the
@@ -150,6 +142,7 @@ struct KernelBase {
   virtual ceres::CostFunction* cost_function() const = 0;
   virtual bool envelope(const double* p, const StateData& s, const EnvelopeData& probes,
                         bool integrated, EnvelopeData* out) const = 0;
+  virtual bool path(const double* p, PathData* out) const = 0;
 };
 
 struct Objective::Impl {
@@ -162,7 +155,7 @@ struct Objective::Impl {
   PathTask path_task;
   std::vector<ResidualBlock> blocks;
   int n_residuals = 0;
-  bool autodiff = false;
+  bool any_integrated = false;
   std::unique_ptr<KernelBase> kernel;
 };
 
@@ -173,34 +166,20 @@ class Kernel final : public KernelBase {
  public:
   explicit Kernel(const Objective::Impl* o) : o_(o) {}
 
-  // Residuals for any scalar; integrated blocks only for double (autodiff() is false then).
+  // Residuals for any scalar: double for values, Jets for the exact Jacobian (integrated
+  // predictions go through the driver with Jets, driver_core.hpp). One thread: with exact
+  // derivatives a whole fit takes seconds, and threads spinning at the end of every short
+  // evaluation cost more than they gave on the shared 2-core machine (docs/calibration.md
+  // "Accuracy and cost").
   template <typename T>
   bool eval(const T* z, T* r) const {
     T p[M::kCount];
     o_->space.full(z, p);
     double pd[M::kCount];
     for (int i = 0; i < M::kCount; ++i) pd[i] = value_of(p[i]);
-    const int n_tasks = static_cast<int>(o_->tasks.size());
-    bool ok = true;
-    if constexpr (std::is_same_v<T, double>) {
-      // Integrated laws (numeric Jacobians): every probe and the path is an independent
-      // integration writing its own residuals, so tasks run in parallel, the path first (the
-      // longest). The residuals do not depend on the thread count.
-      const int n = n_tasks + (o_->path_task.active ? 1 : 0);
-      int all = 1;
-#pragma omp parallel for schedule(dynamic) reduction(min : all) if (n > 1 && !omp_in_parallel())
-      for (int k = 0; k < n; ++k) {
-        const bool path = o_->path_task.active && k == 0;
-        const int t = o_->path_task.active ? k - 1 : k;
-        all =
-            std::min(all, (path ? path_residuals(pd, r) : task_residuals<T>(t, p, pd, r)) ? 1 : 0);
-      }
-      ok = all == 1;
-    } else {
-      for (int t = 0; t < n_tasks && ok; ++t) ok = task_residuals<T>(t, p, pd, r);
-      if (ok && o_->path_task.active) return false;  // path: double only
-    }
-    if (!ok) return false;
+    if (o_->path_task.active && !path_residuals<T>(p, pd, r)) return false;
+    for (int t = 0; t < static_cast<int>(o_->tasks.size()); ++t)
+      if (!task_residuals<T>(t, p, pd, r)) return false;
     for (int i = 0; i < o_->n_residuals; ++i)
       if (!std::isfinite(value_of(r[i]))) return false;
     return true;
@@ -211,34 +190,32 @@ class Kernel final : public KernelBase {
   bool task_residuals(int index, const T* p, const double* pd, T* r) const {
     const EnvTask& t = o_->tasks[static_cast<std::size_t>(index)];
     std::vector<Eigen::Matrix<T, 2, 1>> ps, pf;
-    {
-      const StateData& s = o_->states[t.state];
-      if (!predict<T>(p, pd, s, t.env, t.integrated, &ps, &pf)) return false;
-      const int m = t.env.size();
-      if (t.stress_offset >= 0)
-        for (int i = 0; i < m; ++i)
-          for (int c = 0; c < 2; ++c)
-            r[t.stress_offset + 2 * i + c] = t.stress_w * (ps[i](c) - T(t.env.stress[i](c)));
-      if (t.fabric_offset >= 0)
-        for (int i = 0; i < m; ++i)
-          for (int c = 0; c < 2; ++c)
-            r[t.fabric_offset + 2 * i + c] = t.fabric_w * (pf[i](c) - T(t.env.fabric[i](c)));
-      if (t.features_offset >= 0)
+    const StateData& s = o_->states[t.state];
+    if (!predict<T>(p, pd, s, t.env, t.integrated, &ps, &pf)) return false;
+    const int m = t.env.size();
+    if (t.stress_offset >= 0)
+      for (int i = 0; i < m; ++i)
         for (int c = 0; c < 2; ++c)
-          for (int k = 0; k < 3; ++k) {
-            T f = T(0);
-            for (int i = 0; i < m; ++i) f += T(t.projection(k, i)) * ps[i](c);
-            r[t.features_offset + 3 * c + k] = t.features_w * (f - T(t.data_features(k, c)));
-          }
-      if (t.fabric_features_offset >= 0)
+          r[t.stress_offset + 2 * i + c] = t.stress_w * (ps[i](c) - T(t.env.stress[i](c)));
+    if (t.fabric_offset >= 0)
+      for (int i = 0; i < m; ++i)
         for (int c = 0; c < 2; ++c)
-          for (int k = 0; k < 3; ++k) {
-            T f = T(0);
-            for (int i = 0; i < m; ++i) f += T(t.projection(k, i)) * pf[i](c);
-            r[t.fabric_features_offset + 3 * c + k] =
-                t.fabric_features_w * (f - T(t.data_fabric_features(k, c)));
-          }
-    }
+          r[t.fabric_offset + 2 * i + c] = t.fabric_w * (pf[i](c) - T(t.env.fabric[i](c)));
+    if (t.features_offset >= 0)
+      for (int c = 0; c < 2; ++c)
+        for (int k = 0; k < 3; ++k) {
+          T f = T(0);
+          for (int i = 0; i < m; ++i) f += T(t.projection(k, i)) * ps[i](c);
+          r[t.features_offset + 3 * c + k] = t.features_w * (f - T(t.data_features(k, c)));
+        }
+    if (t.fabric_features_offset >= 0)
+      for (int c = 0; c < 2; ++c)
+        for (int k = 0; k < 3; ++k) {
+          T f = T(0);
+          for (int i = 0; i < m; ++i) f += T(t.projection(k, i)) * pf[i](c);
+          r[t.fabric_features_offset + 3 * c + k] =
+              t.fabric_features_w * (f - T(t.data_fabric_features(k, c)));
+        }
     return true;
   }
 
@@ -258,16 +235,17 @@ class Kernel final : public KernelBase {
 
   ceres::CostFunction* cost_function() const override {
     const int n = o_->space.size();
-    if (o_->autodiff) {
-      // Stride 4: Jets of 4 derivatives, the law evaluated ceil(n/4) times per Jacobian.
+    if (o_->options.derivatives == Derivatives::kExact) {
+      // Stride 4: Jets of 4 derivatives, the law evaluated ceil(n/4) times per Jacobian (each
+      // pass takes the same substeps: the driver's control uses the values only).
       auto* f = new ceres::DynamicAutoDiffCostFunction<AutoFunctor, 4>(new AutoFunctor{this});
       f->AddParameterBlock(n);
       f->SetNumResiduals(o_->n_residuals);
       return f;
     }
     ceres::NumericDiffOptions nd;
-    // Relative step 1e-6 in z: the integrated objective is smooth to ~1e-10 (driver tolerance),
-    // so the central difference error is ~1e-4 relative at worst, ample for Gauss-Newton.
+    // Relative step 1e-6 in z: the integrated objective is smooth to about the driver's
+    // tolerance, so keep that tolerance far below 1e-6 when comparing against these.
     nd.relative_step_size = 1e-6;
     auto* f = new ceres::DynamicNumericDiffCostFunction<NumericFunctor, ceres::CENTRAL>(
         new NumericFunctor{this}, ceres::TAKE_OWNERSHIP, nd);
@@ -287,7 +265,31 @@ class Kernel final : public KernelBase {
     return true;
   }
 
+  bool path(const double* p, PathData* out) const override {
+    std::vector<models::MaterialState> states;
+    if (!run_path<double>(p, p, &states)) return false;
+    out->eps_dev = o_->path.eps_dev;
+    out->stress.clear();
+    out->fabric.clear();
+    for (const auto& y : states) {
+      out->stress.push_back(y.stress);
+      out->fabric.push_back(y.fabric);
+    }
+    out->volume_fraction = o_->path.volume_fraction;
+    return true;
+  }
+
  private:
+  static models::MaterialState start_state(const double* pd, const Eigen::Matrix3d& stress,
+                                           const Eigen::Matrix3d& fabric, double volume_fraction) {
+    models::MaterialState st;
+    st.stress = stress;
+    st.fabric = fabric;
+    st.volume_fraction = volume_fraction;
+    st.internal = M::initial_internal(pd, stress, fabric);
+    return st;
+  }
+
   template <typename T>
   bool predict(const T* p, const double* pd, const StateData& s, const EnvelopeData& env,
                bool integrated, std::vector<Eigen::Matrix<T, 2, 1>>* ps,
@@ -295,32 +297,18 @@ class Kernel final : public KernelBase {
     const int m = env.size();
     ps->resize(m);
     pf->resize(m);
+    const models::MaterialState sd = start_state(pd, s.stress, s.fabric, s.volume_fraction);
+    if (!M::admissible(pd, sd, nullptr)) return false;
+    const models::StateT<T> st = models::state_cast<T>(sd);
     if (integrated) {
-      if constexpr (std::is_same_v<T, double>) {
-        const detail::ParamLaw<M> law(pd);
-        const models::MaterialState st = law.make_state(s.stress, s.fabric, s.volume_fraction);
-        if (!law.admissible(st, nullptr)) return false;
-        for (int i = 0; i < m; ++i) {
-          const models::StepResult res = models::integrate(law, st, env.d_eps[i], o_->options.step);
-          if (!res.success) return false;
-          (*ps)[i] = rendulic_pair(res.end.stress - st.stress);
-          (*pf)[i] = rendulic_pair(res.end.fabric - st.fabric);
-        }
-        return true;
-      } else {
-        return false;
+      const models::StaticLawOps<M, T> ops{p, pd};
+      for (int i = 0; i < m; ++i) {
+        const auto res = models::integrate_adaptive(ops, st, env.d_eps[i], o_->options.step);
+        if (!res.success) return false;
+        (*ps)[i] = pair_of<T>(models::Mat3<T>(res.end.stress - st.stress));
+        (*pf)[i] = pair_of<T>(models::Mat3<T>(res.end.fabric - st.fabric));
       }
-    }
-    models::StateT<T> st;
-    st.stress = s.stress.template cast<T>();
-    st.fabric = s.fabric.template cast<T>();
-    st.internal = M::initial_internal(pd, s.stress, s.fabric).template cast<T>();
-    st.volume_fraction = T(s.volume_fraction);
-    {
-      models::MaterialState sd;
-      sd.stress = s.stress;
-      sd.fabric = s.fabric;
-      if (!M::admissible(pd, sd, nullptr)) return false;
+      return true;
     }
     for (int i = 0; i < m; ++i) {
       const models::RateT<T> rt = M::template rate<T>(p, st, env.d_eps[i].template cast<T>());
@@ -330,37 +318,50 @@ class Kernel final : public KernelBase {
     return true;
   }
 
-  // Undrained path from the first data row to the last eps_dev, sampled at the data's eps_dev.
-  bool path_residuals(const double* pd, double* r) const {
+  // The law's undrained path from the first data row, integrated from each sample of the data
+  // to the next (the driver controls the error within each), so that the model is sampled
+  // exactly at the data's eps_dev; one state per data row.
+  template <typename T>
+  bool run_path(const T* p, const double* pd, std::vector<models::StateT<T>>* states) const {
     const PathData& d = o_->path;
-    const detail::ParamLaw<M> law(pd);
-    const models::MaterialState st = law.make_state(d.stress[0], d.fabric[0], d.volume_fraction);
-    if (!law.admissible(st, nullptr)) return false;
-    models::PathOptions po;
-    po.steps = o_->options.path_steps;
-    po.step = o_->options.step;
-    const models::PathSeries s = models::undrained_axisymmetric_path(law, st, d.eps_dev.back(), po);
-    if (!s.success) return false;
-    const Eigen::Matrix2d R = rendulic_to_iso_dev();
-    const int n = static_cast<int>(d.eps_dev.size());
-    std::size_t j = 0;
-    for (int k = 1; k < n; ++k) {
-      const double e = std::abs(d.eps_dev[k]);
-      while (j + 2 < s.eps_dev.size() && std::abs(s.eps_dev[j + 1]) < e) ++j;
-      const double e0 = std::abs(s.eps_dev[j]), e1 = std::abs(s.eps_dev[j + 1]);
-      const double w = e1 > e0 ? std::clamp((e - e0) / (e1 - e0), 0.0, 1.0) : 0.0;
-      const Eigen::Matrix3d sig = (1 - w) * s.stress[j] + w * s.stress[j + 1];
-      const Eigen::Matrix3d fab = (1 - w) * s.fabric[j] + w * s.fabric[j + 1];
-      const PathTask& t = o_->path_task;
-      const Eigen::Vector2d ds = R * rendulic_pair(sig - d.stress[k]);
-      const Eigen::Vector2d df = R * rendulic_pair(fab - d.fabric[k]);
+    const models::MaterialState sd = start_state(pd, d.stress[0], d.fabric[0], d.volume_fraction);
+    if (!M::admissible(pd, sd, nullptr)) return false;
+    const models::StaticLawOps<M, T> ops{p, pd};
+    models::StateT<T> y = models::state_cast<T>(sd);
+    states->assign(1, y);
+    for (std::size_t k = 1; k < d.eps_dev.size(); ++k) {
+      const auto res = models::integrate_adaptive(
+          ops, y, models::undrained_axisymmetric_strain(d.eps_dev[k] - d.eps_dev[k - 1]),
+          o_->options.step);
+      if (!res.success) return false;
+      y = res.end;
+      states->push_back(y);
+    }
+    return true;
+  }
+
+  // Undrained path residuals: (iso, dev) pairs of stress and fabric at every data row after the
+  // first (which the model starts from).
+  template <typename T>
+  bool path_residuals(const T* p, const double* pd, T* r) const {
+    const PathData& d = o_->path;
+    std::vector<models::StateT<T>> s;
+    if (!run_path<T>(p, pd, &s)) return false;
+    const Eigen::Matrix<T, 2, 2> R = rendulic_to_iso_dev().cast<T>();
+    const PathTask& t = o_->path_task;
+    for (std::size_t k = 1; k < d.eps_dev.size(); ++k) {
+      const Eigen::Matrix<T, 2, 1> ds =
+          R * pair_of<T>(models::Mat3<T>(s[k].stress - d.stress[k].cast<T>()));
+      const Eigen::Matrix<T, 2, 1> df =
+          R * pair_of<T>(models::Mat3<T>(s[k].fabric - d.fabric[k].cast<T>()));
+      const int i = 2 * (static_cast<int>(k) - 1);
       if (t.stress_offset >= 0) {
-        r[t.stress_offset + 2 * (k - 1)] = t.stress_w * ds(0);
-        r[t.stress_offset + 2 * (k - 1) + 1] = t.stress_w * ds(1);
+        r[t.stress_offset + i] = t.stress_w * ds(0);
+        r[t.stress_offset + i + 1] = t.stress_w * ds(1);
       }
       if (t.fabric_offset >= 0) {
-        r[t.fabric_offset + 2 * (k - 1)] = t.fabric_w * df(0);
-        r[t.fabric_offset + 2 * (k - 1) + 1] = t.fabric_w * df(1);
+        r[t.fabric_offset + i] = t.fabric_w * df(0);
+        r[t.fabric_offset + i + 1] = t.fabric_w * df(1);
       }
     }
     return true;
@@ -373,6 +374,54 @@ double rms_norm(const std::vector<Eigen::Vector2d>& v) {
   double s = 0.0;
   for (const auto& x : v) s += x.squaredNorm();
   return v.empty() ? 0.0 : std::sqrt(s / v.size());
+}
+
+// The smallest noise we ascribe to data (relative to its scale): exact data (model-generated,
+// or the linear response) would otherwise get infinite weight in the likelihood.
+constexpr double kNoiseFloor = 1e-6;
+
+// Robust noise of a sequence of residual pairs from their second differences: for data that
+// are a smooth curve plus independent noise of standard deviation s per component, the second
+// difference has standard deviation sqrt(6) s; its median absolute value (x 1.4826) ignores the
+// few jumps and kinks a curve may have. Returned as the rms pair norm relative to `scale`.
+double second_difference_noise(const std::vector<Eigen::Vector2d>& r, bool cyclic, double scale) {
+  const int n = static_cast<int>(r.size());
+  std::vector<double> d2;
+  for (int i = cyclic ? 0 : 1; i < (cyclic ? n : n - 1); ++i) {
+    const Eigen::Vector2d d = r[(i + 1) % n] - 2.0 * r[i] + r[(i + n - 1) % n];
+    d2.push_back(std::abs(d(0)));
+    d2.push_back(std::abs(d(1)));
+  }
+  if (d2.empty() || !(scale > 0.0)) return kNoiseFloor;
+  std::nth_element(d2.begin(), d2.begin() + d2.size() / 2, d2.end());
+  const double s = 1.4826 * d2[d2.size() / 2] / std::sqrt(6.0);
+  return std::max(kSqrt2 * s / scale, kNoiseFloor);
+}
+
+// Noise of an envelope: of its residual from the affine (ellipse) fit c + M u(theta), taken
+// around the circle of directions, so that the ellipse's own curvature does not count.
+double envelope_noise(const std::vector<double>& theta, const std::vector<Eigen::Vector2d>& pairs,
+                      double scale) {
+  const int m = static_cast<int>(theta.size());
+  std::vector<int> order(m);
+  for (int i = 0; i < m; ++i) order[i] = i;
+  std::sort(order.begin(), order.end(), [&](int a, int b) { return theta[a] < theta[b]; });
+  const Eigen::Matrix<double, 3, Eigen::Dynamic> P = affine_projection(theta);
+  Eigen::Matrix<double, 3, 2> coef = Eigen::Matrix<double, 3, 2>::Zero();
+  for (int i = 0; i < m; ++i) coef += P.col(i) * pairs[i].transpose();
+  std::vector<Eigen::Vector2d> res;
+  for (int i : order) {
+    const double t = deg_to_rad(theta[i]);
+    res.push_back(
+        pairs[i] -
+        (coef.row(0) + std::cos(t) * coef.row(1) + std::sin(t) * coef.row(2)).transpose());
+  }
+  return second_difference_noise(res, true, scale);
+}
+
+// Noise of the path: second differences of its (change of) pairs along eps_dev.
+double path_noise(const std::vector<Eigen::Vector2d>& change, double scale) {
+  return second_difference_noise(change, false, scale);
 }
 
 }  // namespace
@@ -391,12 +440,23 @@ Objective::Objective(std::string law_name, const CalibrationData& data,
       law_name, [](auto tag) { return detail::kHasFabric<typename decltype(tag)::type>; });
   int offset = 0;
   auto add_block = [&](const std::string& st, const std::string& kind, const std::string& env,
-                       int size, double scale, double weight, bool integrated) {
-    o.blocks.push_back({st, kind, env, offset, size, scale, weight, integrated});
+                       double amplitude, int size, double scale, double weight, bool integrated,
+                       double noise) {
+    ResidualBlock b;
+    b.state = st;
+    b.kind = kind;
+    b.envelope = env;
+    b.amplitude = amplitude;
+    b.offset = offset;
+    b.size = size;
+    b.scale = scale;
+    b.weight = weight;
+    b.integrated = integrated;
+    b.noise = noise;
+    o.blocks.push_back(b);
     offset += size;
     return offset - size;
   };
-  bool all_rate = true;
   for (const auto& label : states) {
     const StateData* s = data.find(label);
     if (!s) throw InputError("calibration: no state '" + label + "' in the data");
@@ -405,6 +465,10 @@ Objective::Objective(std::string law_name, const CalibrationData& data,
     for (const auto& env : s->envelopes) {
       if (!env.IsValid(&why)) throw InputError("state '" + label + "': " + why);
       if (env.elastic() ? !options.elastic_envelopes : !options.plastic_envelopes) continue;
+      // The linear response at a larger amplitude is the elastic one scaled: it repeats the
+      // elastic block and carries no elasto-plastic information.
+      if (options.linear_response_elastic_only && !env.elastic() && env.method == "linear_response")
+        continue;
       EnvTask t;
       t.state = si;
       t.env = env;
@@ -419,15 +483,17 @@ Objective::Objective(std::string law_name, const CalibrationData& data,
       bool used = false;
       if (options.envelope_points && options.weight_stress > 0.0) {
         t.stress_w = std::sqrt(options.weight_stress / m) / t.stress_scale;
-        t.stress_offset = add_block(label, "stress", env.name, 2 * m, t.stress_scale,
-                                    options.weight_stress, t.integrated);
+        t.stress_offset = add_block(label, "stress", env.name, env.amplitude, 2 * m, t.stress_scale,
+                                    options.weight_stress, t.integrated,
+                                    envelope_noise(env.theta_deg, env.stress, t.stress_scale));
         used = true;
       }
       if (options.envelope_points && options.weight_fabric > 0.0 && law_fabric &&
           t.fabric_scale > options.fabric_scale_min) {
         t.fabric_w = std::sqrt(options.weight_fabric / m) / t.fabric_scale;
-        t.fabric_offset = add_block(label, "fabric", env.name, 2 * m, t.fabric_scale,
-                                    options.weight_fabric, t.integrated);
+        t.fabric_offset = add_block(label, "fabric", env.name, env.amplitude, 2 * m, t.fabric_scale,
+                                    options.weight_fabric, t.integrated,
+                                    envelope_noise(env.theta_deg, env.fabric, t.fabric_scale));
         used = true;
       }
       if (options.envelope_features && options.weight_features > 0.0) {
@@ -439,8 +505,9 @@ Objective::Objective(std::string law_name, const CalibrationData& data,
             t.data_features(k, c) = f;
           }
         t.features_w = std::sqrt(options.weight_features / 3.0) / t.stress_scale;
-        t.features_offset = add_block(label, "features", env.name, 6, t.stress_scale,
-                                      options.weight_features, t.integrated);
+        t.features_offset = add_block(label, "features", env.name, env.amplitude, 6, t.stress_scale,
+                                      options.weight_features, t.integrated,
+                                      envelope_noise(env.theta_deg, env.stress, t.stress_scale));
         used = true;
         if (options.weight_fabric > 0.0 && law_fabric &&
             t.fabric_scale > options.fabric_scale_min) {
@@ -453,12 +520,13 @@ Objective::Objective(std::string law_name, const CalibrationData& data,
           t.fabric_features_w =
               std::sqrt(options.weight_features * options.weight_fabric / 3.0) / t.fabric_scale;
           t.fabric_features_offset =
-              add_block(label, "fabric_features", env.name, 6, t.fabric_scale,
-                        options.weight_features * options.weight_fabric, t.integrated);
+              add_block(label, "fabric_features", env.name, env.amplitude, 6, t.fabric_scale,
+                        options.weight_features * options.weight_fabric, t.integrated,
+                        envelope_noise(env.theta_deg, env.fabric, t.fabric_scale));
         }
       }
       if (used) {
-        all_rate = all_rate && !t.integrated;
+        o.any_integrated = o.any_integrated || t.integrated;
         o.tasks.push_back(std::move(t));
       }
     }
@@ -476,21 +544,20 @@ Objective::Objective(std::string law_name, const CalibrationData& data,
     const double ss = rms_norm(ds), sf = rms_norm(df);
     if (options.weight_path_stress > 0.0 && ss > 0.0) {
       o.path_task.stress_w = std::sqrt(options.weight_path_stress / n) / ss;
-      o.path_task.stress_offset =
-          add_block("path", "path_stress", "", 2 * n, ss, options.weight_path_stress, true);
+      o.path_task.stress_offset = add_block("path", "path_stress", "", 0.0, 2 * n, ss,
+                                            options.weight_path_stress, true, path_noise(ds, ss));
     }
     if (options.weight_path_fabric > 0.0 && law_fabric && sf > options.fabric_scale_min) {
       o.path_task.fabric_w = std::sqrt(options.weight_path_fabric / n) / sf;
-      o.path_task.fabric_offset =
-          add_block("path", "path_fabric", "", 2 * n, sf, options.weight_path_fabric, true);
+      o.path_task.fabric_offset = add_block("path", "path_fabric", "", 0.0, 2 * n, sf,
+                                            options.weight_path_fabric, true, path_noise(df, sf));
     }
     o.path_task.active = o.path_task.stress_offset >= 0 || o.path_task.fabric_offset >= 0;
-    all_rate = all_rate && !o.path_task.active;
+    o.any_integrated = o.any_integrated || o.path_task.active;
   }
   o.n_residuals = offset;
   if (o.n_residuals == 0) throw InputError("calibration: nothing to fit (no residual blocks)");
   if (o.space.size() == 0) throw InputError("calibration: no free parameters");
-  o.autodiff = all_rate;
   o.kernel = detail::dispatch_law(law_name, [&](auto tag) -> std::unique_ptr<KernelBase> {
     using M = typename decltype(tag)::type;
     if (static_cast<int>(o.space.base().size()) != M::kCount)
@@ -507,7 +574,15 @@ const ParameterSpace& Objective::space() const { return impl_->space; }
 const std::vector<ResidualBlock>& Objective::blocks() const { return impl_->blocks; }
 int Objective::num_residuals() const { return impl_->n_residuals; }
 int Objective::num_parameters() const { return impl_->space.size(); }
-bool Objective::autodiff() const { return impl_->autodiff; }
+bool Objective::exact_derivatives() const {
+  return impl_->options.derivatives == Derivatives::kExact;
+}
+bool Objective::integrated() const { return impl_->any_integrated; }
+
+bool Objective::predict_path(const std::vector<double>& p, PathData* out) const {
+  if (impl_->path.empty()) return false;
+  return impl_->kernel->path(p.data(), out);
+}
 
 bool Objective::residuals(const double* z, double* r) const {
   return impl_->kernel->residuals(z, r);

@@ -97,10 +97,43 @@ std::string to_json(const CalibrationSummary& s) {
   o << "]},\n  \"objective\": " << num(f.cost)
     << ",\n  \"converged\": " << (f.converged ? "true" : "false")
     << ",\n  \"backend\": " << str(f.backend) << ",\n  \"jacobian\": " << str(f.jacobian)
-    << ",\n  \"evaluations\": " << f.evaluations << ",\n  \"seconds\": " << num(f.seconds)
+    << ",\n  \"termination\": " << str(f.termination) << ",\n  \"solver_report\": " << str(f.report)
+    << ",\n  \"at_bound\": [";
+  for (std::size_t k = 0; k < f.at_bound.size(); ++k) o << (k ? ", " : "") << str(f.at_bound[k]);
+  o << "],\n  \"evaluations\": " << f.evaluations << ",\n  \"seconds\": " << num(f.seconds)
     << ",\n  \"n_residuals\": " << f.uncertainty.n_residuals
     << ",\n  \"rank\": " << f.uncertainty.rank
     << ",\n  \"condition_number\": " << num(f.uncertainty.condition_number)
+    << ",\n  \"global_start\": " << str(s.global_start) << ",\n  \"undetermined\": [";
+  for (std::size_t k = 0; k < s.undetermined.size(); ++k)
+    o << (k ? ", " : "") << str(s.undetermined[k]);
+  const SetScore all = score_set(s.score, BlockSet::kAll);
+  const SetScore stress = score_set(s.score, BlockSet::kStress);
+  o << "],\n  \"information_criterion\": " << num(all.bic)
+    << ",\n  \"information_criterion_stress\": " << num(stress.bic)
+    << ",\n  \"held_out_score\": " << num(all.held_out_score)
+    << ",\n  \"held_out_score_stress\": " << num(stress.held_out_score)
+    << ",\n  \"misfit_by_kind\": {";
+  bool first = true;
+  for (const auto& [k, v] : all.fitted_by_kind) {
+    o << (first ? "" : ", ") << str(k) << ": " << num(v);
+    first = false;
+  }
+  o << "},\n  \"held_out_misfit_by_kind\": {";
+  first = true;
+  for (const auto& [k, v] : all.held_out_by_kind) {
+    o << (first ? "" : ", ") << str(k) << ": " << num(v);
+    first = false;
+  }
+  o << "},\n  \"yardstick\": [";
+  for (std::size_t k = 0; k < s.score.blocks.size(); ++k) {
+    const BlockScore& b = s.score.blocks[k];
+    o << (k ? "," : "") << "\n    {\"id\": " << str(b.id)
+      << ", \"held_out\": " << (b.held_out ? "true" : "false")
+      << ", \"components\": " << b.components << ", \"scale\": " << num(b.scale)
+      << ", \"noise\": " << num(b.noise) << ", \"misfit\": " << num(b.misfit) << "}";
+  }
+  o << "]"
     << ",\n  \"fitted_misfit\": " << num(s.fitted_misfit)
     << ",\n  \"held_out_misfit\": " << (s.held_out_misfit ? num(*s.held_out_misfit) : "null")
     << ",\n  \"path_misfit\": " << (s.path_misfit >= 0 ? num(s.path_misfit) : "null")
@@ -150,6 +183,60 @@ void write_calibration(ResultsWriter& out, const CalibrationSummary& s) {
   out.attr(g, "jacobian", f.jacobian);
   out.attr(g, "fitted_misfit", s.fitted_misfit);
   if (s.held_out_misfit) out.attr(g, "held_out_misfit", *s.held_out_misfit);
+  out.attr(g, "termination", f.termination);
+  out.attr(g, "global_start", s.global_start);
+  out.attr(g, "seconds", f.seconds);
+  out.attr(g, "n_free", std::int64_t{s.score.n_free});
+  {
+    std::string at, und;
+    for (const auto& n : s.at_bound) at += (at.empty() ? "" : ",") + n;
+    for (const auto& n : s.undetermined) und += (und.empty() ? "" : ",") + n;
+    out.attr(g, "at_bound", at);
+    out.attr(g, "undetermined", und);
+  }
+  // The yardstick (selection.hpp): one entry per block, and its summaries.
+  {
+    std::string ids;
+    std::vector<double> misfit, noise, scale, comps, held;
+    for (const auto& b : s.score.blocks) {
+      ids += (ids.empty() ? "" : ",") + b.id;
+      misfit.push_back(b.misfit);
+      noise.push_back(b.noise);
+      scale.push_back(b.scale);
+      comps.push_back(b.components);
+      held.push_back(b.held_out ? 1.0 : 0.0);
+    }
+    out.attr(g, "yardstick_blocks", ids);
+    out.attr(g, "yardstick_misfit", misfit);
+    out.attr(g, "yardstick_noise", noise);
+    out.attr(g, "yardstick_scale", scale);
+    out.attr(g, "yardstick_components", comps);
+    out.attr(g, "yardstick_held_out", held);
+    const SetScore all = score_set(s.score, BlockSet::kAll);
+    const SetScore stress = score_set(s.score, BlockSet::kStress);
+    out.attr(g, "information_criterion", all.bic);
+    out.attr(g, "information_criterion_stress", stress.bic);
+    out.attr(g, "log_likelihood", -0.5 * all.deviance);
+    out.attr(g, "n_residuals_criterion", std::int64_t{all.n});
+    if (std::isfinite(stress.held_out_misfit))
+      out.attr(g, "held_out_misfit_stress", stress.held_out_misfit);
+    if (std::isfinite(all.held_out_score)) out.attr(g, "held_out_score", all.held_out_score);
+    if (std::isfinite(stress.held_out_score))
+      out.attr(g, "held_out_score_stress", stress.held_out_score);
+    out.attr(g, "fitted_misfit_stress", stress.fitted_misfit);
+    std::string kinds;
+    for (const auto& [k, v] : all.fitted_by_kind) {
+      kinds += (kinds.empty() ? "" : ",") + k;
+      out.attr(g, "misfit_" + k, v);
+    }
+    for (const auto& [k, v] : all.held_out_by_kind) out.attr(g, "held_out_misfit_" + k, v);
+    out.attr(g, "blocks_covered", kinds);
+  }
+  if (!s.predicted_path.eps_dev.empty()) {
+    out.write(g + "/path/eps_dev", s.predicted_path.eps_dev);
+    out.write(g + "/path/stress", s.predicted_path.stress);  // Pa
+    out.write(g + "/path/fabric", s.predicted_path.fabric);
+  }
   std::string names, free, warnings, fitted, held;
   for (const auto& n : s.param_names) names += (names.empty() ? "" : ",") + n;
   for (const auto& n : f.names) free += (free.empty() ? "" : ",") + n;
@@ -197,6 +284,75 @@ void write_calibration(ResultsWriter& out, const CalibrationSummary& s) {
       out.attr(eg, "amplitude", pe.amplitude);
     }
   }
+}
+
+namespace {
+
+std::vector<std::string> split(const std::string& s) {
+  std::vector<std::string> out;
+  std::string item;
+  std::stringstream ss(s);
+  while (std::getline(ss, item, ','))
+    if (!item.empty()) out.push_back(item);
+  return out;
+}
+
+}  // namespace
+
+bool read_model_score(const ResultsReader& in, const std::string& model, ModelScore* score) {
+  const std::string g = "/calibration/" + model;
+  if (!in.exists(g) || !in.has_attr(g, "yardstick_blocks") || in.has_attr(g, "error")) return false;
+  ModelScore m;
+  m.model = model;
+  m.n_free = static_cast<int>(in.attr_int(g, "n_free"));
+  m.fitted_states = split(in.attr_string(g, "fitted_states"));
+  m.held_out_states = split(in.attr_string(g, "held_out_states"));
+  const std::vector<std::string> ids = split(in.attr_string(g, "yardstick_blocks"));
+  const auto misfit = in.attr_doubles(g, "yardstick_misfit");
+  const auto noise = in.attr_doubles(g, "yardstick_noise");
+  const auto scale = in.attr_doubles(g, "yardstick_scale");
+  const auto comps = in.attr_doubles(g, "yardstick_components");
+  const auto held = in.attr_doubles(g, "yardstick_held_out");
+  if (misfit.size() != ids.size() || noise.size() != ids.size() || scale.size() != ids.size() ||
+      comps.size() != ids.size() || held.size() != ids.size())
+    return false;
+  for (std::size_t i = 0; i < ids.size(); ++i) {
+    BlockScore b;
+    b.id = ids[i];
+    const auto parts = [&] {
+      std::vector<std::string> p;
+      std::string item;
+      std::stringstream ss(ids[i]);
+      while (std::getline(ss, item, '/')) p.push_back(item);
+      return p;
+    }();
+    if (parts.size() == 2) {
+      b.state = parts[0];
+      b.kind = parts[1];
+    } else if (parts.size() == 3) {
+      b.state = parts[0];
+      b.envelope = parts[1];
+      b.kind = parts[2];
+    } else {
+      return false;
+    }
+    b.misfit = misfit[i];
+    b.noise = noise[i];
+    b.scale = scale[i];
+    b.components = static_cast<int>(comps[i]);
+    b.held_out = held[i] != 0.0;
+    m.blocks.push_back(b);
+  }
+  *score = std::move(m);
+  return true;
+}
+
+void write_selection(ResultsWriter& out, const Selection& sel) {
+  out.attr("/calibration", "selected_model", sel.selected);
+  out.attr("/calibration", "selected_model_stress", sel.selected_stress);
+  out.attr("/calibration", "selection", sel.sentence);
+  out.attr("/calibration", "selection_rule", sel.rule);
+  for (const auto& r : sel.rows) out.attr("/calibration/" + r.model, "selection_note", r.note);
 }
 
 }  // namespace rendulic::calibration

@@ -1,9 +1,11 @@
 // Ceres and NLopt back ends (solver.hpp; docs/calibration.md "Back ends").
 #include "rendulic/calibration/solver.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <nlopt.hpp>
 #include <random>
 #include <sstream>
@@ -58,40 +60,254 @@ double objective_cost(const Objective& objective, const std::vector<double>& z) 
 
 namespace {
 
+// The likelihood of selection.hpp as a Ceres loss on one block: with s = |r_b|^2 = w m_b^2
+// (the block's weighted relative misfit) and x = s / (w nu_b^2),
+//   rho(s) = N_b x             for x < 1   (the data's noise sets sigma_b),
+//   rho(s) = N_b (ln x + 1)    for x >= 1  (sigma_b = m_b, profiled),
+// i.e. -2 ln L_b up to a constant that depends on the data only; continuous with its first
+// derivative at x = 1. Ceres's corrector, seeing rho'' <= 0, rescales the block by sqrt(rho')
+// at every iteration (the block weights N_b / sigma_b^2 of the likelihood, updated as the fit
+// moves), while it judges steps by the true sum of rho.
+class BlockLikelihoodLoss final : public ceres::LossFunction {
+ public:
+  BlockLikelihoodLoss(double components, double floor2) : n_(components), c_(floor2) {}
+  void Evaluate(double s, double rho[3]) const override {
+    const double x = s / c_;
+    if (x < 1.0) {
+      rho[0] = n_ * x;
+      rho[1] = n_ / c_;
+      rho[2] = 0.0;
+    } else {
+      rho[0] = n_ * (std::log(x) + 1.0);
+      rho[1] = n_ / s;
+      rho[2] = -n_ / (s * s);
+    }
+  }
+
+ private:
+  double n_, c_;
+};
+
+double block_floor2(const ResidualBlock& b) {
+  return b.weight * std::max(b.noise * b.noise, 1e-24);
+}
+
+// sum_b rho_b at residuals r (the likelihood cost is half of it).
+double likelihood_sum(const Objective& obj, const double* r, std::vector<double>* rho1 = nullptr) {
+  double sum = 0.0;
+  if (rho1) rho1->clear();
+  for (const auto& b : obj.blocks()) {
+    double s = 0.0;
+    for (int i = 0; i < b.size; ++i) s += r[b.offset + i] * r[b.offset + i];
+    double rho[3];
+    BlockLikelihoodLoss(b.size, block_floor2(b)).Evaluate(s, rho);
+    sum += rho[0];
+    if (rho1) rho1->push_back(rho[1]);
+  }
+  return sum;
+}
+
+// The cost the back ends minimise: 0.5 |r|^2, or 0.5 sum_b rho_b with the likelihood.
+double cost_of(const Objective& obj, const std::vector<double>& z, bool likelihood) {
+  if (!likelihood) return objective_cost(obj, z);
+  std::vector<double> r(obj.num_residuals());
+  if (!obj.residuals(z.data(), r.data())) return std::numeric_limits<double>::infinity();
+  return 0.5 * likelihood_sum(obj, r.data());
+}
+
+// One evaluation of the whole objective (all blocks at once: the predictions of a state are
+// shared by its blocks, and the probes run in parallel), cached for the per-block cost
+// functions of the likelihood, which Ceres calls one after the other at the same point.
+class SharedEvaluation {
+ public:
+  explicit SharedEvaluation(const Objective& obj) : obj_(obj), f_(obj.make_cost_function()) {}
+  bool get(const double* z, bool jacobian, const double** r, const double** j) {
+    const int p = obj_.num_parameters(), n = obj_.num_residuals();
+    const bool same = !key_.empty() && std::equal(key_.begin(), key_.end(), z);
+    if (!same || (jacobian && !has_j_)) {
+      key_.assign(z, z + p);
+      r_.resize(n);
+      has_j_ = jacobian;
+      if (jacobian) j_.resize(static_cast<std::size_t>(n) * p);
+      double* jac[1] = {j_.data()};
+      const double* params[1] = {z};
+      ok_ = f_->Evaluate(params, r_.data(), jacobian ? jac : nullptr);
+    }
+    *r = r_.data();
+    *j = j_.data();
+    return ok_;
+  }
+
+ private:
+  const Objective& obj_;
+  std::unique_ptr<ceres::CostFunction> f_;
+  std::vector<double> key_, r_, j_;  // j_ row-major n x p
+  bool has_j_ = false, ok_ = false;
+};
+
+class BlockSlice final : public ceres::CostFunction {
+ public:
+  BlockSlice(SharedEvaluation* shared, const ResidualBlock& b, int p)
+      : shared_(shared), offset_(b.offset), size_(b.size), p_(p) {
+    set_num_residuals(b.size);
+    mutable_parameter_block_sizes()->push_back(p);
+  }
+  bool Evaluate(double const* const* parameters, double* residuals,
+                double** jacobians) const override {
+    const double *r = nullptr, *j = nullptr;
+    const bool jac = jacobians != nullptr && jacobians[0] != nullptr;
+    if (!shared_->get(parameters[0], jac, &r, &j)) return false;
+    std::copy(r + offset_, r + offset_ + size_, residuals);
+    if (jac)
+      std::copy(j + static_cast<std::size_t>(offset_) * p_,
+                j + static_cast<std::size_t>(offset_ + size_) * p_, jacobians[0]);
+    return true;
+  }
+
+ private:
+  SharedEvaluation* shared_;
+  int offset_, size_, p_;
+};
+
 struct CeresRun {
   std::vector<double> z;
   double cost = std::numeric_limits<double>::infinity();
   bool converged = false;
   int iterations = 0;
   std::string message;
+  std::string termination = "failure";
+  std::vector<int> pinned;  // free parameters held on a bound (see run_ceres)
 };
 
-CeresRun run_ceres(const Objective& obj, std::vector<double> z, const SolverOptions& o) {
+// Which criterion stopped Ceres, in the words of FitResult::termination.
+std::string termination_of(const ceres::Solver::Summary& s) {
+  if (s.termination_type == ceres::NO_CONVERGENCE) return "budget";
+  if (s.termination_type != ceres::CONVERGENCE) return "failure";
+  if (s.message.rfind("Gradient tolerance", 0) == 0) return "gradient";
+  if (s.message.rfind("Function tolerance", 0) == 0) return "function";
+  return "parameter";  // parameter tolerance, or the trust region shrank to nothing
+}
+
+// Stops Levenberg-Marquardt once the same free parameters have sat on a bound of the box for
+// three accepted steps in a row: the fit is then crawling along the bound (see run_ceres).
+class BoundWatch final : public ceres::IterationCallback {
+ public:
+  BoundWatch(const ParameterSpace& sp, const std::vector<double>* z, const std::vector<int>& skip)
+      : sp_(sp), z_(z), skip_(skip) {}
+  ceres::CallbackReturnType operator()(const ceres::IterationSummary& it) override {
+    if (!it.step_is_successful) return ceres::SOLVER_CONTINUE;
+    std::vector<int> on;
+    for (int k = 0; k < sp_.size(); ++k) {
+      if (std::find(skip_.begin(), skip_.end(), k) != skip_.end()) continue;
+      const double lo = sp_.z_lower(k), hi = sp_.z_upper(k), tol = 1e-9 * (hi - lo);
+      if ((*z_)[k] <= lo + tol || (*z_)[k] >= hi - tol) on.push_back(k);
+    }
+    count_ = !on.empty() && on == last_ ? count_ + 1 : (on.empty() ? 0 : 1);
+    last_ = on;
+    if (count_ >= 3) {
+      stopped_ = true;
+      return ceres::SOLVER_TERMINATE_SUCCESSFULLY;
+    }
+    return ceres::SOLVER_CONTINUE;
+  }
+  bool stopped() const { return stopped_; }
+
+ private:
+  const ParameterSpace& sp_;
+  const std::vector<double>* z_;
+  std::vector<int> skip_, last_;
+  int count_ = 0;
+  bool stopped_ = false;
+};
+
+// The cost of a run: plain least squares, least squares with fixed block weights (`frozen`),
+// or the likelihood.
+struct CostModel {
+  bool likelihood = false;
+  const std::vector<double>* frozen = nullptr;
+};
+
+// Per-block factors of the gradient J^T r of the cost model at residuals r.
+std::vector<double> block_factors(const Objective& obj, const double* r, const CostModel& cm) {
+  if (cm.frozen) return *cm.frozen;
+  if (cm.likelihood) {
+    std::vector<double> rho1;
+    likelihood_sum(obj, r, &rho1);
+    return rho1;
+  }
+  return std::vector<double>(obj.blocks().size(), 1.0);
+}
+
+CeresRun run_ceres_once(const Objective& obj, std::vector<double> z, const SolverOptions& o,
+                        const CostModel& cm, const std::vector<int>& pinned,
+                        const std::vector<int>& inward, bool* stopped_on_bound) {
   const ParameterSpace& sp = obj.space();
   for (int k = 0; k < sp.size(); ++k) z[k] = std::clamp(z[k], sp.z_lower(k), sp.z_upper(k));
   ceres::Problem problem;
-  problem.AddResidualBlock(obj.make_cost_function(), nullptr, z.data());
+  SharedEvaluation shared(obj);
+  if (cm.likelihood || cm.frozen) {
+    for (std::size_t i = 0; i < obj.blocks().size(); ++i) {
+      const ResidualBlock& b = obj.blocks()[i];
+      ceres::LossFunction* loss = cm.frozen
+                                      ? static_cast<ceres::LossFunction*>(new ceres::ScaledLoss(
+                                            nullptr, (*cm.frozen)[i], ceres::TAKE_OWNERSHIP))
+                                      : new BlockLikelihoodLoss(b.size, block_floor2(b));
+      problem.AddResidualBlock(new BlockSlice(&shared, b, sp.size()), loss, z.data());
+    }
+  } else {
+    problem.AddResidualBlock(obj.make_cost_function(), nullptr, z.data());
+  }
   for (int k = 0; k < sp.size(); ++k) {
     problem.SetParameterLowerBound(z.data(), k, sp.z_lower(k));
     problem.SetParameterUpperBound(z.data(), k, sp.z_upper(k));
   }
+  if (static_cast<int>(pinned.size()) == sp.size()) {
+    problem.SetParameterBlockConstant(z.data());
+  } else if (!pinned.empty()) {
+    problem.SetManifold(z.data(), new ceres::SubsetManifold(sp.size(), pinned));
+  }
   ceres::Solver::Options so;
   so.linear_solver_type = ceres::DENSE_QR;
+  // A parameter the data barely see (a column of J near zero) would otherwise get Ceres's
+  // minimal damping (1e-6) and take steps of order one whatever the trust region, straight
+  // into regions where the law cannot be evaluated; this damps it like a column of norm 0.03.
+  so.min_lm_diagonal = 1e-3;
   so.max_num_iterations = o.max_iterations;
   so.function_tolerance = o.function_tolerance;
-  so.gradient_tolerance = o.gradient_tolerance;
+  // Relative to the cost at the start, so that the criterion does not depend on the units
+  // and weights of the residuals (Ceres's own is absolute).
+  so.gradient_tolerance = o.gradient_tolerance * std::max(cost_of(obj, z, o.likelihood), 1e-300);
+  if (cm.frozen) {
+    std::vector<double> r(obj.num_residuals());
+    double c = 0.0;
+    if (obj.residuals(z.data(), r.data()))
+      for (std::size_t i = 0; i < obj.blocks().size(); ++i)
+        for (int k = 0; k < obj.blocks()[i].size; ++k)
+          c +=
+              0.5 * (*cm.frozen)[i] * r[obj.blocks()[i].offset + k] * r[obj.blocks()[i].offset + k];
+    so.gradient_tolerance = o.gradient_tolerance * std::max(c, 1e-300);
+  }
   so.parameter_tolerance = o.parameter_tolerance;
   so.logging_type = o.progress ? ceres::PER_MINIMIZER_ITERATION : ceres::SILENT;
   so.minimizer_progress_to_stdout = o.progress;
   so.num_threads = 1;
+  std::vector<int> skip = pinned;
+  skip.insert(skip.end(), inward.begin(), inward.end());
+  BoundWatch watch(sp, &z, skip);
+  so.update_state_every_iteration = true;
+  so.callbacks.push_back(&watch);
   ceres::Solver::Summary summary;
   ceres::Solve(so, &problem, &summary);
+  *stopped_on_bound = watch.stopped();
   CeresRun run;
   run.z = z;
+  run.pinned = pinned;
   run.iterations = static_cast<int>(summary.iterations.size());
   run.message = summary.message;
+  run.termination = termination_of(summary);
   if (summary.termination_type == ceres::FAILURE || !std::isfinite(summary.final_cost)) {
     run.converged = false;
+    run.termination = "failure";
     return run;
   }
   run.cost = summary.final_cost;
@@ -99,10 +315,83 @@ CeresRun run_ceres(const Objective& obj, std::vector<double> z, const SolverOpti
   return run;
 }
 
+// Levenberg-Marquardt inside the box, with an active set: Ceres projects a trust-region step
+// onto the box but judges it by the unprojected model, so where the optimum lies on a bound
+// (the data push a parameter out of its range) every step is judged too optimistic and the
+// solver crawls. A free parameter left on a bound with the gradient pointing out of the box
+// is therefore held there and the fit repeated, until no new parameter is held.
+CeresRun run_ceres_model(const Objective& obj, std::vector<double> z, const SolverOptions& o,
+                         const CostModel& cm) {
+  const ParameterSpace& sp = obj.space();
+  std::vector<int> pinned, inward;
+  CeresRun run;
+  int iterations = 0;
+  for (int round = 0; round <= 2 * sp.size(); ++round) {
+    bool on_bound = false;
+    run = run_ceres_once(obj, z, o, cm, pinned, inward, &on_bound);
+    iterations += run.iterations;
+    if (!std::isfinite(run.cost) || run.termination == "budget") break;
+    z = run.z;
+    Eigen::VectorXd r;
+    Eigen::MatrixXd J;
+    if (!obj.jacobian(z.data(), &r, &J)) break;
+    // The gradient of the run's cost: each block's J^T r scaled by its factor.
+    const std::vector<double> f = block_factors(obj, r.data(), cm);
+    Eigen::VectorXd g = Eigen::VectorXd::Zero(sp.size());
+    for (std::size_t b = 0; b < obj.blocks().size(); ++b) {
+      const ResidualBlock& blk = obj.blocks()[b];
+      g += f[b] * J.middleRows(blk.offset, blk.size).transpose() * r.segment(blk.offset, blk.size);
+    }
+    bool more = false;
+    for (int k = 0; k < sp.size(); ++k) {
+      if (std::find(pinned.begin(), pinned.end(), k) != pinned.end()) continue;
+      const double lo = sp.z_lower(k), hi = sp.z_upper(k), tol = 1e-9 * (hi - lo);
+      const bool at_lo = z[k] <= lo + tol, at_hi = z[k] >= hi - tol;
+      if ((at_lo && g(k) > 0.0) || (at_hi && g(k) < 0.0)) {
+        pinned.push_back(k);
+        more = true;
+      } else if ((at_lo || at_hi) && std::find(inward.begin(), inward.end(), k) == inward.end()) {
+        inward.push_back(k);  // on the bound but pulled inside: let it move, stop watching it
+        more = more || on_bound;
+      }
+    }
+    if (!more && !on_bound) break;
+    std::sort(pinned.begin(), pinned.end());
+  }
+  run.iterations = iterations;
+  run.pinned = pinned;
+  return run;
+}
+
+// Levenberg-Marquardt for the solver's cost. The likelihood can have several maxima: its
+// profiled block variances let a law give up a block it cannot fit (an elastic law the path,
+// say) for closer fits of the others, or not. Two starts, the better kept: the weights
+// following the fit from the first step, and first a fit with the block weights held at their
+// values at the start point (which finds the maxima the first would leave for a compromise).
+CeresRun run_ceres(const Objective& obj, std::vector<double> z, const SolverOptions& o) {
+  if (!o.likelihood) return run_ceres_model(obj, z, o, {});
+  CeresRun best = run_ceres_model(obj, z, o, {true, nullptr});
+  int iterations = best.iterations;
+  std::vector<double> r(obj.num_residuals());
+  if (obj.residuals(z.data(), r.data())) {
+    const std::vector<double> frozen = block_factors(obj, r.data(), {true, nullptr});
+    const CeresRun first = run_ceres_model(obj, z, o, {false, &frozen});
+    iterations += first.iterations;
+    if (std::isfinite(first.cost)) {
+      CeresRun second = run_ceres_model(obj, first.z, o, {true, nullptr});
+      iterations += second.iterations;
+      if (second.cost < best.cost) best = second;
+    }
+  }
+  best.iterations = iterations;
+  return best;
+}
+
 // NLopt works on u in [0, 1]^p (the box in working coordinates) so that one step size and one
 // tolerance fit every parameter.
 struct NloptContext {
   const Objective* obj;
+  bool likelihood = false;
   std::vector<double> lo, hi;
   int evaluations = 0;
   double best = std::numeric_limits<double>::infinity();
@@ -117,7 +406,7 @@ struct NloptContext {
 double nlopt_function(const std::vector<double>& u, std::vector<double>&, void* data) {
   auto* c = static_cast<NloptContext*>(data);
   ++c->evaluations;
-  const double f = objective_cost(*c->obj, c->z_of(u));
+  const double f = cost_of(*c->obj, c->z_of(u), c->likelihood);
   if (f < c->best) {
     c->best = f;
     c->best_u = u;
@@ -177,11 +466,15 @@ FitResult solve(const Objective& obj, const std::vector<double>& z0, const Solve
   FitResult out;
   out.names = sp.names();
   out.backend = to_string(o.backend);
-  out.jacobian = obj.autodiff() ? "autodiff" : "numeric (central differences)";
+  out.jacobian = !obj.exact_derivatives() ? "numeric (central differences)"
+                 : obj.integrated()       ? "autodiff (through the driver)"
+                                          : "autodiff";
   std::ostringstream rep;
   std::vector<double> z = z0;
   bool converged = false;
   double cost = std::numeric_limits<double>::infinity();
+  std::string termination = "failure";
+  std::vector<int> pinned;
 
   if (o.backend == Backend::kCeres || o.backend == Backend::kMultiStart) {
     std::mt19937_64 rng(o.seed);
@@ -200,10 +493,12 @@ FitResult solve(const Objective& obj, const std::vector<double>& z0, const Solve
         cost = run.cost;
         z = run.z;
         converged = run.converged;
+        termination = run.termination;
+        pinned = run.pinned;
       }
     }
   } else {
-    NloptContext c{&obj, {}, {}, 0, std::numeric_limits<double>::infinity(), {}};
+    NloptContext c{&obj, o.likelihood, {}, {}, 0, std::numeric_limits<double>::infinity(), {}};
     for (int k = 0; k < p; ++k) {
       c.lo.push_back(sp.z_lower(k));
       c.hi.push_back(sp.z_upper(k));
@@ -223,6 +518,7 @@ FitResult solve(const Objective& obj, const std::vector<double>& z0, const Solve
     z = c.z_of(u);
     cost = c.best;
     converged = std::isfinite(cost);
+    termination = "budget";  // NLopt's own stopping rule; the polish says more
     if (o.polish && std::isfinite(cost)) {
       const CeresRun run = run_ceres(obj, z, o);
       out.evaluations += run.iterations;
@@ -232,6 +528,8 @@ FitResult solve(const Objective& obj, const std::vector<double>& z0, const Solve
         z = run.z;
         cost = run.cost;
         converged = run.converged;
+        termination = run.termination;
+        pinned = run.pinned;
       }
     }
   }
@@ -241,17 +539,80 @@ FitResult solve(const Objective& obj, const std::vector<double>& z0, const Solve
   for (const auto& f : sp.free()) out.values.push_back(out.params[f.index]);
   out.cost = cost;
   out.converged = converged && std::isfinite(cost);
+  out.termination = std::isfinite(cost) ? termination : "failure";
+  for (int k : pinned) out.at_bound.push_back(out.names[k]);
   Eigen::VectorXd r;
   Eigen::MatrixXd J;
   if (std::isfinite(cost) && obj.jacobian(z.data(), &r, &J)) {
-    out.rms = std::sqrt(r.squaredNorm() / r.size());
-    Eigen::VectorXd pv(p), d(p);
-    for (int k = 0; k < p; ++k) {
-      pv(k) = out.values[k];
-      d(k) = sp.dp_dz(k, z[k]);
+    if (o.likelihood) {
+      // The weighted least-squares problem the likelihood is at its optimum: each block scaled
+      // by sqrt(rho_b'), i.e. by sqrt(N_b) / sigma_b.
+      std::vector<double> rho1;
+      likelihood_sum(obj, r.data(), &rho1);
+      for (std::size_t b = 0; b < obj.blocks().size(); ++b) {
+        const ResidualBlock& blk = obj.blocks()[b];
+        const double f = std::sqrt(rho1[b]);
+        r.segment(blk.offset, blk.size) *= f;
+        J.middleRows(blk.offset, blk.size) *= f;
+      }
     }
-    out.uncertainty = estimate_uncertainty(J, r, out.names, pv, d, o.identifiability);
-    for (int k = 0; k < p; ++k) out.stderr_.push_back(std::abs(d(k)) * out.uncertainty.stderr_z(k));
+    out.rms = std::sqrt(r.squaredNorm() / r.size());
+    // Parameters held on a bound are not estimated from the data: the uncertainty is that of
+    // the others, and theirs is undetermined (+inf), with a warning that says why.
+    std::vector<int> est;
+    for (int k = 0; k < p; ++k)
+      if (std::find(pinned.begin(), pinned.end(), k) == pinned.end()) est.push_back(k);
+    const int q = static_cast<int>(est.size());
+    Eigen::MatrixXd Jq(J.rows(), q);
+    Eigen::VectorXd pv(q), d(q);
+    std::vector<std::string> names;
+    for (int j = 0; j < q; ++j) {
+      const int k = est[j];
+      Jq.col(j) = J.col(k);
+      pv(j) = out.values[k];
+      d(j) = sp.dp_dz(k, z[k]);
+      names.push_back(out.names[k]);
+    }
+    const Uncertainty uq =
+        q > 0 ? estimate_uncertainty(Jq, r, names, pv, d, o.identifiability) : Uncertainty{};
+    out.uncertainty = uq;
+    out.uncertainty.covariance = Eigen::MatrixXd::Zero(p, p);
+    out.uncertainty.stderr_z =
+        Eigen::VectorXd::Constant(p, std::numeric_limits<double>::infinity());
+    out.uncertainty.correlation = Eigen::MatrixXd::Identity(p, p);
+    out.uncertainty.determined.assign(p, false);
+    out.uncertainty.no_effect.assign(p, false);
+    for (int a = 0; a < q; ++a) {
+      out.uncertainty.stderr_z(est[a]) = uq.stderr_z(a);
+      out.uncertainty.determined[est[a]] = uq.determined[a];
+      out.uncertainty.no_effect[est[a]] = uq.no_effect[a];
+      for (int b = 0; b < q; ++b) {
+        out.uncertainty.covariance(est[a], est[b]) = uq.covariance(a, b);
+        out.uncertainty.correlation(est[a], est[b]) = uq.correlation(a, b);
+      }
+    }
+    for (int k : pinned) {
+      const bool upper = z[k] >= sp.z_upper(k) - 1e-9 * (sp.z_upper(k) - sp.z_lower(k));
+      std::ostringstream w;
+      w << "parameter '" << out.names[k] << "' ended on its " << (upper ? "upper" : "lower")
+        << " bound " << out.values[k]
+        << " with the data pulling it beyond: it is held there and not estimated";
+      out.uncertainty.warnings.push_back(w.str());
+    }
+    if (!pinned.empty()) {
+      // A parameter may reach its bound because the data cannot tell it from others (a flat
+      // valley ends on the bound): the rank test on every free parameter says so.
+      Eigen::VectorXd pv(p), d(p);
+      for (int k = 0; k < p; ++k) {
+        pv(k) = out.values[k];
+        d(k) = sp.dp_dz(k, z[k]);
+      }
+      const Uncertainty all = estimate_uncertainty(J, r, out.names, pv, d, o.identifiability);
+      for (const auto& w : all.warnings)
+        if (w.rfind("rank-deficient", 0) == 0) out.uncertainty.warnings.push_back(w);
+    }
+    for (int k = 0; k < p; ++k)
+      out.stderr_.push_back(std::abs(sp.dp_dz(k, z[k])) * out.uncertainty.stderr_z(k));
     out.correlation = out.uncertainty.correlation;
   } else {
     out.converged = false;

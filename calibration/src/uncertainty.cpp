@@ -30,11 +30,13 @@ Uncertainty estimate_uncertainty(const Eigen::MatrixXd& J, const Eigen::VectorXd
   u.stderr_z = Eigen::VectorXd::Constant(k, inf);
   u.correlation = Eigen::MatrixXd::Identity(k, k);
   u.determined.assign(k, true);
+  u.no_effect.assign(k, false);
   // Column normalisation: makes the rank and condition tests independent of parameter units.
   Eigen::VectorXd norms = J.colwise().norm().transpose();
   for (int j = 0; j < k; ++j) {
     if (!(norms(j) > 0.0)) {
       u.determined[j] = false;
+      u.no_effect[j] = true;
       u.warnings.push_back("parameter '" + names[j] +
                            "' does not affect the fitted data at all: the data cannot "
                            "determine it (fix it, or add data that depend on it)");

@@ -9,49 +9,31 @@
 #include <sstream>
 #include <vector>
 
+#include "rendulic/models/driver_core.hpp"
+
 namespace rendulic::models {
 namespace {
 
-bool finite(const LawRate& r) {
-  return r.d_stress.allFinite() && r.d_fabric.allFinite() && r.d_internal.allFinite();
-}
+using driver_detail::advance;
+using driver_detail::advance_heun;
+using driver_detail::error_estimate;
+using driver_detail::finite;
+using driver_detail::fmt;
 
-MaterialState advance(const MaterialState& s, const LawRate& r, double tr_de) {
-  MaterialState o = s;
-  o.stress += r.d_stress;
-  o.fabric += r.d_fabric;
-  o.internal += r.d_internal;
-  o.volume_fraction = s.volume_fraction * std::exp(tr_de);  // nu V = const, eps_v log strain
-  return o;
-}
-
-MaterialState advance_heun(const MaterialState& s, const LawRate& r1, const LawRate& r2,
-                           double tr_de) {
-  MaterialState o = s;
-  o.stress += 0.5 * (r1.d_stress + r2.d_stress);
-  o.fabric += 0.5 * (r1.d_fabric + r2.d_fabric);
-  o.internal += 0.5 * (r1.d_internal + r2.d_internal);
-  o.volume_fraction = s.volume_fraction * std::exp(tr_de);
-  return o;
-}
-
-// Local error estimate |y_heun - y_euler| = |r2 - r1| / 2, relative for stress and fabric,
-// absolute for the (dimensionless) internal variables; the worst block counts.
-double error_estimate(const LawRate& r1, const LawRate& r2, const MaterialState& y,
-                      double stress_floor) {
-  const double e_s =
-      0.5 * (r2.d_stress - r1.d_stress).norm() / std::max(y.stress.norm(), stress_floor);
-  const double e_f = 0.5 * (r2.d_fabric - r1.d_fabric).norm() / std::max(y.fabric.norm(), 1e-12);
-  const double e_q = 0.5 * (r2.d_internal - r1.d_internal).lpNorm<Eigen::Infinity>();
-  return std::max({e_s, e_f, e_q});
-}
-
-std::string fmt(double v) {
-  std::ostringstream os;
-  os.precision(3);
-  os << v;
-  return os.str();
-}
+// The run-time Law as the Ops of driver_core.hpp (double precision).
+struct VirtualLawOps {
+  using Scalar = double;
+  const Law& law;
+  LawRate rate(const MaterialState& s, const Eigen::Matrix3d& de) const { return law.rate(s, de); }
+  void correct(MaterialState* s, bool on_surface) const { law.correct(s, on_surface); }
+  double yield_function(const MaterialState& s) const { return law.yield_function(s); }
+  LawRate value_rate(const MaterialState& s, const Eigen::Matrix3d& de) const {
+    return law.rate(s, de);
+  }
+  void value_correct(MaterialState* s, bool on_surface) const { law.correct(s, on_surface); }
+  double value_yield_function(const MaterialState& s) const { return law.yield_function(s); }
+  bool admissible(const MaterialState& s, std::string* why) const { return law.admissible(s, why); }
+};
 
 StepResult integrate_fixed(const Law& law, const MaterialState& start, const Eigen::Matrix3d& d_eps,
                            const StepOptions& o) {
@@ -120,120 +102,6 @@ StepResult integrate_fixed(const Law& law, const MaterialState& start, const Eig
   return res;
 }
 
-StepResult integrate_adaptive(const Law& law, const MaterialState& start,
-                              const Eigen::Matrix3d& d_eps, const StepOptions& o) {
-  StepResult res;
-  MaterialState y = start;
-  double t = 0.0, dt = 1.0;
-  bool rejected_last = false;
-  while (t < 1.0) {
-    if (res.substeps + res.rejected >= o.max_substeps) {
-      res.reason = "modified Euler: more than " + std::to_string(o.max_substeps) +
-                   " substeps (reached fraction " + fmt(t) + " of the increment)";
-      res.end = y;
-      return res;
-    }
-    if (dt < o.min_fraction) {
-      res.reason = "modified Euler: substep below " + fmt(o.min_fraction) +
-                   " of the increment at fraction " + fmt(t) + " (law too stiff or undefined)";
-      res.end = y;
-      return res;
-    }
-    std::string why;
-    if (!law.admissible(y, &why)) {
-      res.reason = "at fraction " + fmt(t) + " of the increment: " + why;
-      res.end = y;
-      return res;
-    }
-    // One Heun trial over the fraction h of the increment.
-    struct Trial {
-      bool ok = false;
-      MaterialState yh;
-      double err = 0.0;
-      bool plastic = false;
-    };
-    auto trial = [&](double h) {
-      Trial tr;
-      const Eigen::Matrix3d de = h * d_eps;
-      const double tr_de = de.trace();
-      const LawRate r1 = law.rate(y, de);
-      ++res.rate_evaluations;
-      if (!finite(r1)) return tr;
-      MaterialState y1 = advance(y, r1, tr_de);
-      law.correct(&y1, r1.plastic);  // see integrate_fixed
-      if (!law.admissible(y1, nullptr)) return tr;
-      const LawRate r2 = law.rate(y1, de);
-      ++res.rate_evaluations;
-      if (!finite(r2)) return tr;
-      tr.yh = advance_heun(y, r1, r2, tr_de);
-      tr.ok = law.admissible(tr.yh, nullptr);
-      tr.plastic = r1.plastic;
-      tr.err = error_estimate(r1, r2, tr.yh, o.stress_floor);
-      tr.ok = tr.ok && std::isfinite(tr.err);
-      return tr;
-    };
-    Trial tr = trial(dt);
-    // Elastic-to-plastic transition inside the substep: shorten it to end on the yield
-    // surface (bisection on the elastic trial; Sloan 1987), so that no substep averages the
-    // elastic and the plastic rate across the kink.
-    const double f0 = law.yield_function(y);
-    if (tr.ok && f0 < -kYieldSurfaceBand && std::isfinite(f0) && law.yield_function(tr.yh) > 0.0) {
-      // Illinois (modified regula falsi) on f(c) = yield_function(trial(c dt)), bracketing
-      // f(lo) <= 0 < f(hi); it stops once the inside end is within the surface band, which is
-      // what the law needs to see the next substep as plastic loading.
-      double lo = 0.0, hi = 1.0, f_lo = f0, f_hi = law.yield_function(tr.yh);
-      int side = 0;
-      for (int it = 0; it < 100 && hi - lo > 1e-15; ++it) {
-        double c = lo - f_lo * (hi - lo) / (f_hi - f_lo);
-        if (!(c > lo && c < hi)) c = 0.5 * (lo + hi);
-        const Trial tc = trial(c * dt);
-        const double fc = tc.ok ? law.yield_function(tc.yh) : 1.0;
-        if (fc <= 0.0) {
-          lo = c;
-          f_lo = fc;
-          if (fc >= -kYieldSurfaceBand) break;
-          if (side == -1) f_hi *= 0.5;
-          side = -1;
-        } else {
-          hi = c;
-          f_hi = fc;
-          if (side == 1) f_lo *= 0.5;
-          side = 1;
-        }
-      }
-      // lo = 0 means the state was already within rounding of the surface: step just past it.
-      dt *= lo > 0.0 ? lo : hi;
-      tr = trial(dt);
-    }
-    const bool ok = tr.ok;
-    const double err = tr.err;
-    const MaterialState& yh = tr.yh;
-    if (!ok || err > o.tolerance) {
-      // Sloan's factor q = 0.9 sqrt(TOL/R) (second-order local error), never below 0.1.
-      const double q = ok ? std::max(0.9 * std::sqrt(o.tolerance / err), 0.1) : 0.1;
-      dt *= q;
-      ++res.rejected;
-      rejected_last = true;
-      continue;
-    }
-    y = yh;
-    law.correct(&y, tr.plastic);
-    t += dt;
-    ++res.substeps;
-    res.error_estimate = std::max(res.error_estimate, err);
-    double q = err > 0.0 ? 0.9 * std::sqrt(o.tolerance / err) : 2.0;
-    q = std::min(q, rejected_last ? 1.0 : 2.0);  // no growth right after a rejection
-    rejected_last = false;
-    dt = q * dt;
-    if (t + dt > 1.0 || 1.0 - (t + dt) < 1e-12) dt = 1.0 - t;
-    if (1.0 - t < 1e-14) break;
-  }
-  res.end = y;
-  res.success = true;
-  res.within_tolerance = true;
-  return res;
-}
-
 }  // namespace
 
 bool StepOptions::IsValid(std::string* why) const {
@@ -286,7 +154,7 @@ StepResult integrate(const Law& law, const MaterialState& start, const Eigen::Ma
   }
   if (options.scheme == Scheme::kExplicitEuler || !options.adaptive)
     return integrate_fixed(law, start, d_eps, options);
-  return integrate_adaptive(law, start, d_eps, options);
+  return integrate_adaptive(VirtualLawOps{law}, start, d_eps, options);
 }
 
 MixedResult integrate_mixed(const Law& law, const MaterialState& start, const MixedControl& control,

@@ -85,6 +85,9 @@ const std::vector<ParameterInfo>& ElastoplasticFabric::parameter_info() {
     v.push_back(
         {"beta_F", "1", 30.0, 0.0, 1e5, "rate of approach of F^D to F_dev_max per plastic strain"});
     v.push_back({"F_dev_max", "1", 0.5, 0.0, 10.0, "steady-state fabric deviator |F^D|"});
+    v.push_back({"w_yield", "1", 0.02, 0.0, 0.5,
+                 "width of the elastic-to-plastic transition below the yield surface, in units of "
+                 "the elastic range (0: a sharp switch)"});
     return v;
   }();
   return info;

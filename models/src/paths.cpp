@@ -58,12 +58,15 @@ PathSeries isotropic_compression_path(const Law& law, const MaterialState& start
   return run_path(law, start, (eps_v_end / 3.0) * Eigen::Matrix3d::Identity(), options);
 }
 
+Eigen::Matrix3d undrained_axisymmetric_strain(double eps_dev) {
+  // diag(1, -1/2, -1/2) has signed deviator +sqrt(3/2), so a = eps_dev / sqrt(3/2).
+  const double a = eps_dev / std::sqrt(1.5);
+  return a * Eigen::Vector3d(1.0, -0.5, -0.5).asDiagonal().toDenseMatrix();
+}
+
 PathSeries undrained_axisymmetric_path(const Law& law, const MaterialState& start,
                                        double eps_dev_end, const PathOptions& options) {
-  // diag(1, -1/2, -1/2) has signed deviator +sqrt(3/2), so a = eps_dev_end / sqrt(3/2).
-  const double a = eps_dev_end / std::sqrt(1.5);
-  return run_path(law, start, a * Eigen::Vector3d(1.0, -0.5, -0.5).asDiagonal().toDenseMatrix(),
-                  options);
+  return run_path(law, start, undrained_axisymmetric_strain(eps_dev_end), options);
 }
 
 }  // namespace rendulic::models

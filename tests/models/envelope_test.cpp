@@ -208,5 +208,35 @@ TEST(Envelope, ElastoplasticSmallProbesElasticLargeProbesShiftedAndThinner) {
   }
 }
 
+// The smooth elastic-to-plastic transition of elastoplastic_fabric (w_yield, docs/models.md
+// family 4) against the sharp switch (w_yield = 0): the elastic probes are the same to rounding
+// (the relaxed state is the centre of the elastic domain, far below the transition), and the
+// 2e-3 envelopes of the law's own path states move by far less than DEM noise (about 1e-3 of
+// a stress envelope, 0.07 of a fabric one): the transition takes the last 2 % of the elastic
+// range only.
+TEST(Envelope, ElastoplasticSmoothTransitionChangesEnvelopesLittle) {
+  auto smooth = make_law("elastoplastic_fabric");
+  auto sharp = make_law("elastoplastic_fabric");
+  std::string why;
+  ASSERT_TRUE(sharp->set_parameter("w_yield", 0.0, &why)) << why;
+  const MaterialState start = smooth->make_state(Eigen::Matrix3d::Identity() * 2e9,
+                                                 Eigen::Matrix3d::Identity() * 2.0, 0.82);
+  PathOptions po;
+  po.steps = 68;
+  const PathSeries path = undrained_axisymmetric_path(*smooth, start, -0.068, po);
+  ASSERT_TRUE(path.success) << path.reason;
+  for (int idx : {6, 21, 68}) {
+    const MaterialState s = smooth->make_state(path.stress[idx], path.fabric[idx], 0.82);
+    const ModelEnvelope e1 = run(*smooth, s, 5e-5), e0 = run(*sharp, s, 5e-5);
+    EXPECT_LE((e1.stress - e0.stress).norm(), kExact * e0.stress.norm()) << idx;
+    const ModelEnvelope p1 = run(*smooth, s, 2e-3), p0 = run(*sharp, s, 2e-3);
+    const double ds = (p1.stress - p0.stress).norm() / p0.stress.norm();
+    const double df = (p1.fabric - p0.fabric).norm() / p0.fabric.norm();
+    EXPECT_GT(ds, 0.0) << idx;   // the transition is there
+    EXPECT_LT(ds, 1e-4) << idx;  // measured 0.7-1.6e-5
+    EXPECT_LT(df, 1e-3) << idx;  // measured 1.2-1.7e-4
+  }
+}
+
 }  // namespace
 }  // namespace rendulic::models

@@ -17,8 +17,12 @@
 // parameters whose bounds span two decades or more (moduli, rates), p itself otherwise. Bounds
 // are kept in z. Prediction: envelopes of elastic amplitude are one evaluation of the rate law
 // (exact for the incrementally linear response); larger probes and the path are integrated
-// with the models/ driver. When every block is a rate evaluation the Jacobian is automatic
-// (Ceres Jets through the law's template); otherwise central differences (Ceres numeric).
+// with the models/ driver. The Jacobian is exact: Ceres Jets through the law's template and,
+// for integrated predictions, through the driver's substeps (models/driver_core.hpp); central
+// differences remain available (Derivatives::kCentral) as the independent check.
+// Every block also carries a model-free estimate of the noise of its data (from the data's
+// own roughness), which the likelihood of the model selection uses as a floor
+// (docs/calibration.md "One yardstick").
 #pragma once
 
 #include <ceres/ceres.h>
@@ -80,6 +84,7 @@ class ParameterSpace {
 };
 
 enum class Prediction { kAuto, kRate, kIntegrated };
+enum class Derivatives { kExact, kCentral };
 
 struct ObjectiveOptions {
   bool envelope_points = true;
@@ -88,6 +93,10 @@ struct ObjectiveOptions {
   // Which envelopes enter: elastic ones (amplitude < 1e-4) and larger, elasto-plastic ones.
   bool elastic_envelopes = true;
   bool plastic_envelopes = true;
+  // A linear-response envelope above the elastic amplitude is the elastic one scaled (no
+  // contact opens, closes or slides): it repeats the elastic data and is not elasto-plastic
+  // data, so it is left out.
+  bool linear_response_elastic_only = true;
   // Block weights (see the file comment); 0 drops a block.
   double weight_stress = 1.0;
   double weight_fabric = 1.0;
@@ -100,14 +109,19 @@ struct ObjectiveOptions {
   double fabric_scale_min = 1e-14;
   // kAuto: rate evaluation for elastic amplitudes (< 1e-4), integration otherwise.
   Prediction prediction = Prediction::kAuto;
-  // Driver settings for integrated predictions. A tight tolerance keeps the objective smooth
-  // to ~1e-10 relative, which central differences with relative step 1e-6 need.
+  Derivatives derivatives = Derivatives::kExact;
+  // Driver settings for integrated predictions. The driver's local tolerance 1e-6 (relative
+  // to the stress) puts the error of a 2e-3 probe response near 1e-5 of the response, far
+  // below the noise of DEM envelopes (docs/calibration.md "Predictions and derivatives"); with
+  // central differences use 1e-10, which their relative step 1e-6 needs.
+  // A probe that needs more than 1000 substeps is at parameters where the law is pathologically
+  // stiff; failing it fast (an infinite cost) is what the optimiser needs.
   models::StepOptions step = [] {
     models::StepOptions s;
-    s.tolerance = 1e-10;
+    s.tolerance = 1e-6;
+    s.max_substeps = 1000;
     return s;
   }();
-  int path_steps = 200;  // recorded model path samples (interpolated to the data's eps_dev)
   bool IsValid(std::string* why) const;
 };
 
@@ -116,11 +130,15 @@ struct ResidualBlock {
   std::string state;  // label, or "path"
   std::string kind;   // "stress", "fabric", "features", "path_stress", "path_fabric"
   std::string envelope;
+  double amplitude = 0.0;  // of the envelope; 0 for the path
   int offset = 0;
   int size = 0;
   double scale = 1.0;  // data scale (Pa for stress, 1 for fabric)
   double weight = 1.0;
   bool integrated = false;
+  // Model-free noise of the block's data, as a relative rms pair norm (the units of the
+  // misfit): from the second differences of the data around their own smooth curve.
+  double noise = 0.0;
 };
 
 class Objective {
@@ -137,12 +155,13 @@ class Objective {
   const std::vector<ResidualBlock>& blocks() const;
   int num_residuals() const;
   int num_parameters() const;
-  bool autodiff() const;  // Jacobian by Jets through the law template
+  bool exact_derivatives() const;  // Jacobian by Jets (else central differences)
+  bool integrated() const;         // some prediction goes through the driver
 
   // Residuals at working coordinates z; false where the law cannot be evaluated (inadmissible
   // state, driver failure): back ends treat that as an infinite cost.
   bool residuals(const double* z, double* r) const;
-  // Residuals and the Jacobian dr/dz (autodiff or central differences as autodiff() says).
+  // Residuals and the Jacobian dr/dz (Jets or central differences: exact_derivatives()).
   bool jacobian(const double* z, Eigen::VectorXd* r, Eigen::MatrixXd* J) const;
   // A Ceres cost function over the one parameter block z (the caller's problem owns it).
   ceres::CostFunction* make_cost_function() const;
@@ -151,6 +170,9 @@ class Objective {
   // vector p. The returned data has stress and fabric filled in; ok=false on a model failure.
   EnvelopeData predict_envelope(const std::vector<double>& p, const StateData& state,
                                 const EnvelopeData& probes, bool* ok) const;
+  // The law's undrained path from the data's first path row, at the data's eps_dev (signed);
+  // false without a path or on a model failure.
+  bool predict_path(const std::vector<double>& p, PathData* out) const;
 
   struct Impl;
 

@@ -16,7 +16,16 @@ namespace rendulic::calibration {
 std::string to_json(const CalibrationSummary& summary);
 
 // Writes /calibration/<model>/ (attrs objective, converged, ...; datasets params, stderr,
-// correlation; per-state numbers and predicted envelopes) into an open writer.
+// correlation; the yardstick scores; per-state numbers, predicted envelopes and path) into an
+// open writer.
 void write_calibration(ResultsWriter& out, const CalibrationSummary& summary);
+
+// The yardstick scores of /calibration/<model> as written by write_calibration; false when the
+// group has none (a failed law, or a file from before the yardstick).
+bool read_model_score(const ResultsReader& in, const std::string& model, ModelScore* score);
+
+// /calibration attributes selected_model, selected_model_stress, selection (the sentence),
+// selection_rule; per law selection_note (why it is not a candidate, or empty).
+void write_selection(ResultsWriter& out, const Selection& selection);
 
 }  // namespace rendulic::calibration

@@ -1,7 +1,8 @@
 // Back ends behind the one Objective (models.md "Calibration"; docs/calibration.md "Back
 // ends"): all minimise 0.5 |r(z)|^2 inside the bounds of the ParameterSpace.
 //   kCeres      Levenberg-Marquardt (Ceres), bounds as box constraints; Jacobian by autodiff
-//               or central differences (Objective::autodiff()). Fast and precise, local.
+//               (through the driver for integrated predictions) or central differences
+//               (Objective::exact_derivatives()). Fast and precise, local.
 //   kMultiStart Ceres from the given start and from `starts - 1` points drawn uniformly in
 //               the (working-coordinate) box; the best wins. Local minima, cheap insurance.
 //   kGlobal     NLopt global stage (GN_CRS2_LM by default, or GN_ISRES, GN_MLSL_LDS) over the
@@ -25,13 +26,15 @@ enum class Backend { kCeres, kMultiStart, kGlobal, kLocalNlopt };
 std::string to_string(Backend b);
 Backend backend_from_string(const std::string& name);  // InputError on an unknown name
 
-// Ceres's function tolerance for DEM data (the `run` stage and `rendulic calibrate`): stop when
-// an iteration lowers the cost by less than 0.1 %. The integrated laws' objectives are not
-// smooth (loading/unloading switches), so after the first few iterations Levenberg-Marquardt
-// crawls (trust-region ratio ~1e-2). Measured on quick.toml's elastoplastic_fabric fit: 21 s
-// instead of 918 s for 200 iterations, cost 0.4 % higher, every parameter within 0.44 of its
-// standard error of the long fit (docs/calibration.md).
-inline constexpr double kDemFunctionTolerance = 1e-3;
+// Ceres's function tolerance for DEM data (the `run` stage and `rendulic calibrate`). With
+// exact derivatives through the driver, Levenberg-Marquardt on DEM data stops by its gradient
+// or parameter tolerance; the function tolerance is only a backstop against a crawl (an
+// iteration that lowers the cost by less than 1e-16 of it, i.e. not at all). It used to be 1e-3, when central
+// differences through the driver left the fits crawling (docs/calibration.md "When to stop").
+inline constexpr double kDemFunctionTolerance = 1e-16;
+// Gradient tolerance for DEM data, relative to the cost at the start: the gradient (per unit
+// of the working coordinates, i.e. per e-fold change of a log parameter) is 1e-8 of that cost.
+inline constexpr double kDemGradientTolerance = 1e-8;
 
 struct SolverOptions {
   Backend backend = Backend::kCeres;
@@ -41,10 +44,20 @@ struct SolverOptions {
   int starts = 8;  // kMultiStart
   std::uint64_t seed = 20261121;
   int max_iterations = 200;  // Ceres
-  // Ceres tolerances: tight, because noiseless model data must be recovered to 1e-6.
+  // Ceres tolerances: tight, because noiseless model data must be recovered to 1e-6. The
+  // parameter tolerance is relative to |z| (working coordinates): 1e-8 stops once the
+  // parameters move by less than ~1e-8 of themselves, far inside any standard error and above
+  // the objective's own noise (the driver's tolerance), which would otherwise keep rejecting
+  // steps.
+  // The gradient tolerance is relative to the cost at the start (max-norm of the gradient in
+  // working coordinates).
   double function_tolerance = 1e-15;
   double gradient_tolerance = 1e-15;
-  double parameter_tolerance = 1e-12;
+  double parameter_tolerance = 1e-8;
+  // Minimise -2 ln L of selection.hpp (each block's variance profiled, never below the data's
+  // noise) instead of 0.5 |r|^2: per-block Ceres losses, the block weights updated at every
+  // iteration; the standard errors are those of the block-weighted problem at the optimum.
+  bool likelihood = false;
   bool polish = true;     // Ceres after the NLopt stages
   bool progress = false;  // Ceres prints one line per iteration (cost, step) to stdout
   IdentifiabilityOptions identifiability;
@@ -59,13 +72,18 @@ struct FitResult {
   std::vector<double> params;      // the law's full parameter vector
   Eigen::MatrixXd correlation;
   Uncertainty uncertainty;
-  double cost = 0.0;  // 0.5 |r|^2 at the optimum
+  double cost = 0.0;  // 0.5 |r|^2 at the optimum (0.5 sum_b rho_b with the likelihood)
   double rms = 0.0;   // sqrt(|r|^2 / n): normalised rms misfit (1 = data-scale misfit)
   bool converged = false;
   std::string backend;
   std::string jacobian;  // "autodiff" or "numeric (central differences)"
   std::string report;    // one paragraph: stages, evaluations, termination
-  int evaluations = 0;   // objective evaluations (NLopt stages) + Ceres iterations
+  // What stopped the final Levenberg-Marquardt stage: "gradient", "parameter" or "function"
+  // (its tolerances), "budget" (max_iterations, or NLopt's evaluations without a polish),
+  // "failure" (the model could not be evaluated).
+  std::string termination;
+  std::vector<std::string> at_bound;  // free parameters held on a bound of their box
+  int evaluations = 0;                // objective evaluations (NLopt stages) + Ceres iterations
   double seconds = 0.0;
 };
 

@@ -34,6 +34,7 @@ struct Uncertainty {
   Eigen::VectorXd stderr_z;       // sqrt(diag); +inf for parameters in a null direction
   Eigen::MatrixXd correlation;    // of z (equals that of p: the maps are monotone, diagonal)
   std::vector<bool> determined;   // per parameter: identifiable and not flagged
+  std::vector<bool> no_effect;    // per parameter: a zero Jacobian column
   std::vector<std::string> warnings;
 };
 

@@ -35,12 +35,13 @@ struct StepOptions {
   bool IsValid(std::string* why) const;
 };
 
-struct StepResult {
+template <typename T>
+struct StepResultT {
   bool success = false;
   // Why it failed; on success empty, except when a fixed-step scheme exceeded the tolerance
   // (within_tolerance false): then it says so.
   std::string reason;
-  MaterialState end;
+  StateT<T> end;
   // Largest local error estimate over the accepted substeps (modified Euler) or over all
   // substeps (explicit). within_tolerance is false when an explicit step exceeded it.
   double error_estimate = 0.0;
@@ -49,6 +50,7 @@ struct StepResult {
   int rejected = 0;
   int rate_evaluations = 0;
 };
+using StepResult = StepResultT<double>;
 
 // Integrates `law` from `start` over the strain increment d_eps (compression positive).
 // The volume fraction follows the kinematics: d nu = nu tr(d_eps) per substep.

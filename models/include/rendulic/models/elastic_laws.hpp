@@ -114,9 +114,11 @@ struct IsotropicElastic {
     return Vector6d::Zero();
   }
   static bool admissible(const double*, const MaterialState&, std::string*) { return true; }
-  static void correct(const double*, MaterialState*, bool) {}
-  static double yield_function(const double*, const MaterialState&) {
-    return -std::numeric_limits<double>::infinity();
+  template <typename T>
+  static void correct(const T*, StateT<T>*, bool) {}
+  template <typename T>
+  static T yield_function(const T*, const StateT<T>&) {
+    return T(-std::numeric_limits<double>::infinity());
   }
 };
 
@@ -155,9 +157,11 @@ struct AnisotropicElastic {
     return Vector6d::Zero();
   }
   static bool admissible(const double*, const MaterialState&, std::string*) { return true; }
-  static void correct(const double*, MaterialState*, bool) {}
-  static double yield_function(const double*, const MaterialState&) {
-    return -std::numeric_limits<double>::infinity();
+  template <typename T>
+  static void correct(const T*, StateT<T>*, bool) {}
+  template <typename T>
+  static T yield_function(const T*, const StateT<T>&) {
+    return T(-std::numeric_limits<double>::infinity());
   }
 };
 

@@ -46,6 +46,7 @@ struct ElastoplasticFabric {
     kBetaS,
     kBetaF,
     kFmax,
+    kWyield,
     kCount
   };
   static_assert(int{kNuRef} == int{AnisotropicElastic::kNuRef} &&
@@ -56,7 +57,8 @@ struct ElastoplasticFabric {
   template <typename T>
   struct Plastic {
     bool loading = false;
-    T lambda = T(0);
+    T share = T(0);   // plastic_share of the yield function (1 on the surface)
+    T lambda = T(0);  // plastic multiplier: share times the consistent one
     T hardening = T(0);
     T denominator = T(1);
     Mat3<T> n = Mat3<T>::Zero();
@@ -73,7 +75,9 @@ struct ElastoplasticFabric {
     const Mat3<T> r = dev(s.stress) / pr;
     const Mat3<T> xi = r - tensor_of<T>(s.internal);
     const T xi_norm = safe_norm(xi);
-    if (!(xi_norm > T(0)) || xi_norm - p[kM] < -T(kYieldSurfaceBand) * p[kM]) return out;
+    if (!(xi_norm > T(0))) return out;
+    const T share = plastic_share((xi_norm - p[kM]) / p[kM], p[kWyield]);
+    if (!(share > T(0))) return out;
     out.n = xi / xi_norm;
     const T r_n = ddot(r, out.n);
     out.nf = (out.n - (r_n / T(3)) * identity3<T>()) / pr;
@@ -87,9 +91,27 @@ struct ElastoplasticFabric {
     const T lambda = ddot(out.nf, d_sigma_e) / out.denominator;
     if (lambda > T(0)) {
       out.loading = true;
-      out.lambda = lambda;
+      out.share = share;
+      out.lambda = share * lambda;
     }
     return out;
+  }
+
+  // The share of the consistent plastic multiplier at yield-function value f = (|r - alpha| -
+  // m_e) / m_e: 0 for f <= -w, 1 on and beyond the surface, in between the quintic smoothstep
+  // x^3 (10 - 15 x + 6 x^2), x = (f + w) / w (continuous with two derivatives); w = w_yield.
+  // A sharp switch at f = 0 makes the response of a finite probe a non-differentiable function
+  // of the parameters where the probe just reaches the surface; the default w = 0.02 keeps it
+  // smooth at the price of a little plastic flow within the last 2 % of the elastic range
+  // (docs/models.md, family 4). w = 0 is the sharp switch (a state within kYieldSurfaceBand of
+  // the surface counts as on it).
+  template <typename T>
+  static T plastic_share(const T& f, const T& w) {
+    const T width = w > T(kYieldSurfaceBand) ? w : T(kYieldSurfaceBand);
+    if (!(f > -width)) return T(0);
+    if (!(f < T(0)) || w <= T(kYieldSurfaceBand)) return T(1);
+    const T x = (f + width) / width;
+    return x * x * x * (T(10) - T(15) * x + T(6) * x * x);
   }
 
   template <typename T>
@@ -121,7 +143,7 @@ struct ElastoplasticFabric {
     if (!pl.loading) return d;
     const Vector6d dn = to_mandel(pl.d_n);
     const Vector6d nf = to_mandel(pl.nf);
-    return d - dn * (d.transpose() * nf).transpose() / pl.denominator;
+    return d - pl.share * dn * (d.transpose() * nf).transpose() / pl.denominator;
   }
 
   static Vector6d initial_internal(const double*, const Eigen::Matrix3d& stress,
@@ -140,24 +162,31 @@ struct ElastoplasticFabric {
   }
 
   // f = (|r - alpha| - m_e) / m_e; -infinity where P <= 0 (the law is then inadmissible).
-  static double yield_function(const double* p, const MaterialState& s) {
-    const double pr = s.stress.trace() / 3.0;
-    if (!(pr > 0.0)) return -std::numeric_limits<double>::infinity();
-    return ((deviator(s.stress) / pr - from_mandel(s.internal)).norm() - p[kM]) / p[kM];
+  // Templated so that the driver can differentiate where a substep meets the surface.
+  template <typename T>
+  static T yield_function(const T* p, const StateT<T>& s) {
+    const T pr = trace(s.stress) / T(3);
+    if (!(pr > T(0))) return T(-std::numeric_limits<double>::infinity());
+    return (safe_norm(Mat3<T>(dev(s.stress) / pr - tensor_of<T>(s.internal))) - p[kM]) / p[kM];
   }
 
-  // Drift correction after an explicit substep: alpha moves along n until |r - alpha| = m
-  // (outward drift always; inward drift only after plastic loading, `on_surface`). Only the
-  // back ratio changes, never stress or fabric, so the correction cannot create stress that
-  // the strain did not cause.
-  static void correct(const double* p, MaterialState* s, bool on_surface) {
-    const double pr = s->stress.trace() / 3.0;
-    if (!(pr > 0.0)) return;
-    const Eigen::Matrix3d r = deviator(s->stress) / pr;
-    const Eigen::Matrix3d xi = r - from_mandel(s->internal);
-    const double xi_norm = xi.norm();
-    const double f = xi_norm - p[kM];
-    if ((f > 0.0 || on_surface) && xi_norm > 0.0) s->internal += to_mandel(xi * (f / xi_norm));
+  // Drift correction after an explicit substep: a state outside the surface has its alpha moved
+  // along n until |r - alpha| = m. Only the back ratio changes, never stress or fabric, so the
+  // correction cannot create stress that the strain did not cause. Inward drift after plastic
+  // loading (`on_surface`) is corrected only with the sharp switch (w_yield = 0), where a state
+  // a hair inside would turn elastic; with the smooth transition (plastic_share) such a state
+  // is still plastic, and pulling it back onto the surface would make the step a non-smooth
+  // function of the parameters.
+  template <typename T>
+  static void correct(const T* p, StateT<T>* s, bool on_surface) {
+    const T pr = trace(s->stress) / T(3);
+    if (!(pr > T(0))) return;
+    const Mat3<T> xi = dev(s->stress) / pr - tensor_of<T>(s->internal);
+    const T xi_norm = safe_norm(xi);
+    const T f = xi_norm - p[kM];
+    const bool sharp = !(p[kWyield] > T(kYieldSurfaceBand));
+    if ((f > T(0) || (on_surface && sharp)) && xi_norm > T(0))
+      s->internal += mandel_of<T>(Mat3<T>(xi * (f / xi_norm)));
   }
 };
 

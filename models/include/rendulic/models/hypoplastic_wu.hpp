@@ -63,9 +63,11 @@ struct HypoplasticWu {
              " Pa";
     return false;
   }
-  static void correct(const double*, MaterialState*, bool) {}
-  static double yield_function(const double*, const MaterialState&) {
-    return -std::numeric_limits<double>::infinity();
+  template <typename T>
+  static void correct(const T*, StateT<T>*, bool) {}
+  template <typename T>
+  static T yield_function(const T*, const StateT<T>&) {
+    return T(-std::numeric_limits<double>::infinity());
   }
 };
 

@@ -5,11 +5,14 @@
 //   static Matrix6d tangent(const double* p, const MaterialState& s, const Matrix3d& de)
 //   static Vector6d initial_internal(const double* p, const Matrix3d& stress, const Matrix3d& F)
 //   static bool admissible(const double* p, const MaterialState& s, std::string* why)
-//   static void correct(const double* p, MaterialState* s, bool on_surface)
-//   static double yield_function(const double* p, const MaterialState& s)  (-inf: none)
+//   template <class T> static void correct(const T* p, StateT<T>* s, bool on_surface)
+//   template <class T> static T yield_function(const T* p, const StateT<T>& s)  (-inf: none)
 // so that calibration code can call M::rate<ceres::Jet<...>> directly (models.md
-// "Calibration": autodiff through the law where the law is smooth).
+// "Calibration": autodiff through the law where the law is smooth), and integrate the law with
+// Jets through the driver (driver_core.hpp) via StaticLawOps.
 #pragma once
+
+#include <string>
 
 #include "rendulic/models/law.hpp"
 
@@ -40,6 +43,28 @@ class LawModel final : public Law {
   }
   double yield_function(const MaterialState& s) const override {
     return M::yield_function(params_.data(), s);
+  }
+};
+
+// The law M with parameters p (scalar T: double, or Jets for derivatives) and their values pd,
+// as the Ops of driver_core.hpp's integrator. With T = double, p and pd are the same.
+template <class M, typename T>
+struct StaticLawOps {
+  using Scalar = T;
+  const T* p;
+  const double* pd;
+  RateT<T> rate(const StateT<T>& s, const Mat3<T>& de) const {
+    return M::template rate<T>(p, s, de);
+  }
+  void correct(StateT<T>* s, bool on_surface) const { M::correct(p, s, on_surface); }
+  T yield_function(const StateT<T>& s) const { return M::yield_function(p, s); }
+  LawRate value_rate(const MaterialState& s, const Eigen::Matrix3d& de) const {
+    return M::template rate<double>(pd, s, de);
+  }
+  void value_correct(MaterialState* s, bool on_surface) const { M::correct(pd, s, on_surface); }
+  double value_yield_function(const MaterialState& s) const { return M::yield_function(pd, s); }
+  bool admissible(const MaterialState& s, std::string* why) const {
+    return M::admissible(pd, s, why);
   }
 };
 

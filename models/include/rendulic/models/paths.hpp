@@ -31,6 +31,10 @@ struct PathSeries {
 // Isotropic compression from `start` to volumetric strain eps_v_end (> 0 compresses).
 PathSeries isotropic_compression_path(const Law& law, const MaterialState& start, double eps_v_end,
                                       const PathOptions& options = {});
+// The strain of the undrained axisymmetric path at signed deviatoric strain eps_dev: constant
+// volume, axial along x, d_eps proportional to diag(1, -1/2, -1/2).
+Eigen::Matrix3d undrained_axisymmetric_strain(double eps_dev);
+
 // Undrained axisymmetric path from `start` to signed deviatoric strain eps_dev_end
 // (negative: axial extension along x, as in the seed; e.g. -0.32).
 PathSeries undrained_axisymmetric_path(const Law& law, const MaterialState& start,
