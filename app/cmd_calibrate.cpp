@@ -3,20 +3,24 @@
 // (calibration/calibrate.hpp), prints or writes the JSON (model, params, stderr, correlation,
 // per_state.<label> with B, G, A and the plastic features) and, unless --no-write, stores
 // /calibration/<model> in the results file through ResultsWriter::update (atomic: the file is
-// replaced only once the new content is complete). Any rendulic/1 file qualifies, including
-// envelopes from another DEM code converted to the schema.
+// replaced only once the new content is complete; an unwritable --out is refused first). Any
+// rendulic/1 file qualifies, including envelopes from another DEM code converted to the schema.
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <sstream>
 
 #include "commands.hpp"
 #include "rendulic/calibration/calibrate.hpp"
 #include "rendulic/calibration/report.hpp"
+#include "rendulic/core/cleanup.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/results.hpp"
 #include "rendulic/models/law.hpp"
@@ -43,23 +47,46 @@ std::vector<std::string> split_commas(const std::vector<std::string>& in) {
   return out;
 }
 
-void write_text_atomically(const std::string& path, const std::string& text) {
-  namespace fs = std::filesystem;
-  const fs::path final_path(path);
-  const fs::path tmp = final_path.string() + ".tmp";
-  {
-    std::ofstream f(tmp);
-    if (!f) throw InputError(path + ": cannot write the JSON output");
+// The --out file, written atomically: its temporary is created before anything else, so an
+// unwritable path is refused before the calibration runs and before results.h5 is touched.
+class JsonOut {
+ public:
+  explicit JsonOut(const std::string& path) : final_(path) {
+    namespace fs = std::filesystem;
+    const fs::path folder = final_.has_parent_path() ? final_.parent_path() : fs::path(".");
+    tmp_ = folder / ("." + final_.filename().string() + ".tmp-" + std::to_string(::getpid()));
+    std::error_code ec;
+    if (fs::is_directory(final_, ec)) throw InputError(path + ": is a folder (--out names a file)");
+    handle_ = cleanup::remove_on_death(tmp_);
+    std::ofstream f(tmp_);
+    if (!f) throw InputError(path + ": cannot write the JSON output: " + std::strerror(errno));
+  }
+  JsonOut(const JsonOut&) = delete;
+  JsonOut& operator=(const JsonOut&) = delete;
+  ~JsonOut() {
+    std::error_code ec;
+    if (!done_) std::filesystem::remove(tmp_, ec);
+    cleanup::forget(handle_);
+  }
+  void write(const std::string& text) {
+    std::ofstream f(tmp_, std::ios::trunc);
     f << text;
-    if (!f.flush()) throw InputError(path + ": cannot write the JSON output");
+    if (!f.flush()) throw InputError(final_.string() + ": cannot write the JSON output");
   }
-  std::error_code ec;
-  fs::rename(tmp, final_path, ec);
-  if (ec) {
-    fs::remove(tmp, ec);
-    throw InputError(path + ": cannot move the JSON output into place");
+  void commit() {
+    std::error_code ec;
+    std::filesystem::rename(tmp_, final_, ec);
+    if (ec)
+      throw InputError(final_.string() +
+                       ": cannot move the JSON output into place: " + ec.message());
+    done_ = true;
   }
-}
+
+ private:
+  std::filesystem::path final_, tmp_;
+  int handle_ = -1;
+  bool done_ = false;
+};
 
 int run_calibrate(const CalibrateArgs& a) {
   using namespace rendulic::calibration;
@@ -94,6 +121,8 @@ int run_calibrate(const CalibrateArgs& a) {
       throw InputError("--value '" + kv + "': not a number");
     }
   }
+  std::optional<JsonOut> json_out;
+  if (!a.out.empty()) json_out.emplace(a.out);
   LoadOptions lo;
   lo.states = split_commas(a.states);
   for (const auto& h : opt.holdout)
@@ -113,6 +142,9 @@ int run_calibrate(const CalibrateArgs& a) {
   if (!a.no_write && !writable)
     std::cerr << "rendulic: " << a.results << " is read-only: /calibration/" << a.model
               << " not written\n";
+  // The JSON is complete on disk before the results file is replaced: a failure to write
+  // it must not leave the results file changed and the command failed.
+  if (json_out) json_out->write(json);
   if (!a.no_write && writable) {
     // The selection over every law now in the file (the others as stored).
     std::vector<ModelScore> scores{summary.score};
@@ -125,15 +157,16 @@ int run_calibrate(const CalibrateArgs& a) {
         }
     }
     ResultsWriter w = ResultsWriter::update(a.results);
+    for (const auto& note : w.notes()) std::cerr << "rendulic: " << note << "\n";
     write_calibration(w, summary);
     write_selection(w, select_model(scores));
     w.commit();
   }
-  if (a.out.empty()) {
-    std::cout << json;
-  } else {
-    write_text_atomically(a.out, json);
+  if (json_out) {
+    json_out->commit();
     std::cout << summary.BriefReport();
+  } else {
+    std::cout << json;
   }
   return 0;
 }

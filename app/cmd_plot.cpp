@@ -1,53 +1,102 @@
 // `rendulic plot FILE.h5 [--out DIR]` (interfaces.md; issue 8 item 2): the figures of a results
 // file as PNG and SVG, drawn by the embedded app/plot.py with Debian's python3-matplotlib and
-// python3-h5py. The file is checked to be ours first, so a bad file is the usual one-line
-// exit 2, not a Python traceback.
+// python3-h5py. The file is checked to be ours and the output folder to be writable first,
+// and the script reports data it cannot draw in one line (exit 2), so a bad file or folder is
+// the usual one-line exit 2, never a Python traceback. The script is passed on the command
+// line (no temporary script file) and its process is killed if ours is stopped by a signal.
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <memory>
+#include <sstream>
 
 #include "commands.hpp"
 #include "plot_script.hpp"
+#include "rendulic/core/cleanup.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/results.hpp"
 
 namespace rendulic::app {
 namespace {
 
-// Runs argv without a shell (no quoting issues with odd file names); returns the exit code.
-int spawn(const std::vector<std::string>& args, bool silence) {
+struct Spawned {
+  int code = -1;    // exit code, -1 if it did not exit normally
+  std::string err;  // its stderr, when captured
+};
+
+// Runs argv without a shell (no quoting issues with odd file names). With `capture`, its
+// stderr is collected; with `silence`, its output goes to /dev/null.
+Spawned spawn(const std::vector<std::string>& args, bool silence, bool capture = false) {
   std::vector<char*> argv;
   for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
   argv.push_back(nullptr);
+  int pipefd[2] = {-1, -1};
+  if (capture && ::pipe(pipefd) != 0) throw std::runtime_error("plot: cannot create a pipe");
   const pid_t pid = fork();
-  if (pid < 0) return -1;
+  if (pid < 0) throw std::runtime_error("plot: cannot start a process");
   if (pid == 0) {
     if (silence) {
       std::freopen("/dev/null", "w", stdout);
       std::freopen("/dev/null", "w", stderr);
     }
+    if (capture) {
+      ::dup2(pipefd[1], STDERR_FILENO);
+      ::close(pipefd[0]);
+      ::close(pipefd[1]);
+    }
     execvp(argv[0], argv.data());
     _exit(127);
   }
+  const int handle = cleanup::kill_on_death(pid);
+  Spawned r;
+  if (capture) {
+    ::close(pipefd[1]);
+    char buf[4096];
+    for (;;) {
+      const ssize_t n = ::read(pipefd[0], buf, sizeof buf);
+      if (n < 0 && errno == EINTR) continue;
+      if (n <= 0) break;
+      r.err.append(buf, static_cast<std::size_t>(n));
+    }
+    ::close(pipefd[0]);
+  }
   int status = 0;
-  waitpid(pid, &status, 0);
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  cleanup::forget(handle);
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+std::string last_line(const std::string& text) {
+  std::istringstream in(text);
+  std::string line, last;
+  while (std::getline(in, line))
+    if (!line.empty()) last = line;
+  return last;
 }
 
 }  // namespace
 
 int plot_results(const std::filesystem::path& file, const std::filesystem::path& out_dir) {
   { ResultsReader check(file); }
+  std::error_code ec;
+  std::filesystem::create_directories(out_dir, ec);
+  if (ec)
+    throw InputError(out_dir.string() + ": cannot create the figures folder: " + ec.message());
+  if (::access(out_dir.c_str(), W_OK) != 0)
+    throw InputError(out_dir.string() + ": cannot write figures here: " + std::strerror(errno));
   // The first interpreter that has both modules: PATH's python3 may be a private build
   // (pyenv, conda) without Debian's packages, which live under /usr/bin/python3.
   std::string python;
   for (const char* candidate : {"python3", "/usr/bin/python3"})
-    if (spawn({candidate, "-c", "import h5py, matplotlib"}, true) == 0) {
+    if (spawn({candidate, "-c", "import h5py, matplotlib"}, true).code == 0) {
       python = candidate;
       break;
     }
@@ -55,16 +104,16 @@ int plot_results(const std::filesystem::path& file, const std::filesystem::path&
     throw InputError(
         "plot: needs python3 with matplotlib and h5py (bash .ci/setup.sh installs "
         "python3-matplotlib and python3-h5py)");
-  char tmpl[] = "/tmp/rendulic-plot-XXXXXX.py";
-  const int fd = mkstemps(tmpl, 3);
-  if (fd < 0) throw std::runtime_error("plot: cannot create a temporary script");
-  close(fd);
-  { std::ofstream(tmpl) << kPlotScript; }
-  const int rc = spawn({python, tmpl, file.string(), out_dir.string()}, false);
-  std::filesystem::remove(tmpl);
-  if (rc != 0)
-    throw std::runtime_error("plot: the figure script failed (exit " + std::to_string(rc) + ")");
-  return 0;
+  const Spawned r =
+      spawn({python, "-c", kPlotScript, file.string(), out_dir.string()}, false, true);
+  if (r.code == 0) {
+    std::cerr << r.err;  // the figures it skipped, and why
+    return 0;
+  }
+  if (r.code == 2)  // plot.py's one line about data it cannot draw
+    throw InputError(file.string() + ": cannot draw the figures: " + printable(last_line(r.err)));
+  throw std::runtime_error("plot: the figure script failed (exit " + std::to_string(r.code) +
+                           "): " + printable(last_line(r.err)));
 }
 
 Subcommand add_plot(CLI::App& parent) {

@@ -1,7 +1,9 @@
 // `rendulic run SCENARIO.toml [--out DIR] [--set key=value ...] [--threads N]` (interfaces.md).
 // Validation happens in full before anything touches the disk: a bad scenario or override
 // exits 2 and writes nothing. The results file is written under a temporary name and renamed
-// to DIR/results.h5 only when every stage succeeded.
+// to DIR/results.h5 only when every stage succeeded; a run that fails (or is stopped by a
+// signal) after a stage completed keeps those stages in DIR/results.h5.partial and says so in
+// its error line (docs/usage.md "Results are atomic").
 // Under `mpirun -np K` (a build with RENDULIC_MPI) rank 0 runs all of this and alone prints and
 // writes; ranks 1..K-1 only compute their share of the probe campaigns (probe_mpi.hpp) and are
 // released when rank 0 returns or throws.
@@ -59,6 +61,8 @@ Subcommand add_run(CLI::App& parent) {
 
             const std::filesystem::path out_dir = o->out;
             ResultsWriter out(out_dir / "results.h5");
+            if (!o->quiet)
+              for (const auto& note : out.notes()) std::cerr << "rendulic: " << note << "\n";
             out.attr("/", "seed", scenario.get_int("run.seed"));
             out.attr("/", "scenario", scenario.to_toml());
             out.attr("/", "scenario_file", o->scenario);
@@ -75,8 +79,14 @@ Subcommand add_run(CLI::App& parent) {
             }
             if (mpi.size() > 1 && !o->quiet)
               std::cerr << "rendulic: " << mpi.size() << " MPI ranks share the probe campaigns\n";
-            run_pipeline(scenario, out, ctx);
-            out.commit();
+            try {
+              run_pipeline(scenario, out, ctx);
+              out.commit();
+            } catch (...) {
+              if (const std::string kept = out.keep_partial(); !kept.empty())
+                rethrow_with_note(kept);
+              throw;
+            }
             if (!o->quiet) std::cerr << "rendulic: wrote " << out.final_path().string() << "\n";
             run_post_commit(scenario, out.final_path(), ctx);
             return 0;

@@ -1,16 +1,34 @@
-// Entry point of the `rendulic` executable (interfaces.md "Command line"): parses with CLI11,
-// dispatches to one subcommand, and maps failures to exit codes: 0 success, 2 bad input
-// (one line on stderr naming the culprit), 1 an internal error.
+// Entry point of the `rendulic` executable (interfaces.md "Command line"; docs/usage.md):
+// parses with CLI11, dispatches to one subcommand, and maps failures to exit codes: 0
+// success, 2 bad input (one line on stderr naming the culprit), 1 an internal error. Nothing
+// escapes uncaught: an exception of any type (HDF5's are not std::exception) unwinds, so the
+// destructors remove temporary files, and signals tidy up through cleanup.hpp.
 #include <CLI/CLI.hpp>
+#include <cstdio>
+#include <cstdlib>
 #include <iostream>
 #include <vector>
 
 #include "commands.hpp"
+#include "rendulic/core/cleanup.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/version.hpp"
 
+namespace {
+// Ends a failed command without the libraries' exit handlers: HDF5 1.10 crashes in its own
+// shutdown (H5D_close from H5close) when a dataset's close failed before, as it does on a full
+// disk. Our streams are flushed first; the temporary files are already gone (destructors ran).
+[[noreturn]] void fail_with(int code) {
+  std::cout.flush();
+  std::cerr.flush();
+  std::fflush(nullptr);
+  std::_Exit(code);
+}
+}  // namespace
+
 int main(int argc, char** argv) {
   using namespace rendulic;
+  cleanup::install_handlers();
   CLI::App cli{"rendulic: calibrate constitutive models of granular soils from DEM envelopes"};
   cli.set_version_flag("--version", std::string("rendulic ") + kVersion + " (" + kGitSha + ")");
   cli.require_subcommand(1);
@@ -34,14 +52,14 @@ int main(int argc, char** argv) {
     for (const auto& sub : subs)
       if (sub.app->parsed()) return sub.action();
   } catch (const InputError& e) {
-    std::cerr << "rendulic: " << e.what() << "\n";
-    return kExitInput;
+    std::cerr << "rendulic: " << printable(e.what()) << "\n";
+    fail_with(kExitInput);
   } catch (const NotAvailable& e) {
-    std::cerr << "rendulic: " << e.what() << "\n";
-    return kExitInput;
-  } catch (const std::exception& e) {
-    std::cerr << "rendulic: internal error: " << e.what() << "\n";
-    return 1;
+    std::cerr << "rendulic: " << printable(e.what()) << "\n";
+    fail_with(kExitInput);
+  } catch (...) {
+    std::cerr << "rendulic: internal error: " << printable(describe_current_exception()) << "\n";
+    fail_with(1);
   }
   return 1;
 }

@@ -94,6 +94,13 @@ void register_run_keys(ScenarioSchema& schema) {
 }
 
 void check_stages_available(const Scenario& scenario) {
+  // A run that computes nothing would replace an existing results.h5 with an empty file.
+  bool computes = false;
+  for (const auto& s : stages()) computes = computes || (requested(scenario, s.name) && s.run);
+  if (!computes)
+    throw InputError("run.stages (" + scenario.origin("run.stages") +
+                     "): no stage that computes anything; the report of an existing file is "
+                     "`rendulic report FILE.h5`");
   for (const auto& s : stages())
     if (stage_requested(scenario, s.name) && !s.run && !s.post)
       throw NotAvailable(std::string("run: stage '") + s.name + "' has not landed yet (issue " +
@@ -111,6 +118,7 @@ void check_stages_available(const Scenario& scenario) {
 }
 
 void run_pipeline(const Scenario& scenario, ResultsWriter& out, const RunContext& ctx) {
+  std::string completed;
   for (const auto& s : stages()) {
     if (!stage_requested(scenario, s.name) || !s.run) continue;
     const auto t0 = std::chrono::steady_clock::now();
@@ -118,6 +126,9 @@ void run_pipeline(const Scenario& scenario, ResultsWriter& out, const RunContext
     const double secs =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     out.attr("/timings", s.name, secs);  // wall seconds, reported in report.md
+    // What a later failure keeps (results.h5.partial): hours of DEM are not thrown away.
+    completed += (completed.empty() ? "" : ", ") + std::string(s.name);
+    out.save_partial("completed stages (" + completed + ")");
   }
 }
 

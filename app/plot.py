@@ -599,4 +599,8 @@ def main():
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    try:
+        sys.exit(main())
+    except Exception as e:  # noqa: BLE001  data it cannot draw: one line, exit 2 (rendulic's)
+        print(f"{type(e).__name__}: {e}".replace("\n", " "), file=sys.stderr)
+        sys.exit(2)

@@ -420,7 +420,9 @@ std::vector<Claim> evaluate_claims(const ResultsReader& r) {
             "Near isotropy the isotropic probe (35.26 deg) maps onto the major axis (< 5 deg)", "",
             ""};
     bool measured = false, ok = false;
-    if (!el.empty() && el[0] && !el[0]->theta.empty() && std::isfinite(el[0]->stress.incl)) {
+    // One stress pair per direction, or the envelope is damaged and C3 cannot be measured.
+    if (!el.empty() && el[0] && !el[0]->theta.empty() &&
+        el[0]->stress_pairs.size() == el[0]->theta.size() && std::isfinite(el[0]->stress.incl)) {
       const auto& e = *el[0];
       std::size_t best = 0;
       for (std::size_t i = 0; i < e.theta.size(); ++i)
@@ -723,10 +725,16 @@ std::filesystem::path write_report(const std::filesystem::path& results_file, bo
     std::sort(figures.begin(), figures.end());
   }
   const fs::path out = dir / "report.md", tmp = dir / ".report.md.tmp";
+  // Made before the temporary file is: a damaged results file fails here and leaves nothing.
+  const std::string text = report_markdown(r, claims, figures);
   {
     std::ofstream f(tmp);
-    f << report_markdown(r, claims, figures);
-    if (!f) throw InputError(tmp.string() + ": cannot write report");
+    f << text;
+    if (!f) {
+      std::error_code ec;
+      fs::remove(tmp, ec);
+      throw InputError(tmp.string() + ": cannot write report");
+    }
   }
   fs::rename(tmp, out);
   return out;

@@ -197,8 +197,11 @@ CalibrationData load_calibration_data(const std::filesystem::path& file,
         data.path.stress.push_back(st[j]);
         data.path.fabric.push_back(fb[j]);
       }
-      if (r.exists("/path/volume_fraction"))
-        data.path.volume_fraction = r.read_vector("/path/volume_fraction").front();
+      if (r.exists("/path/volume_fraction")) {
+        const auto nu = r.read_vector("/path/volume_fraction");
+        if (nu.empty()) throw InputError(name + ": /path/volume_fraction is empty");
+        data.path.volume_fraction = nu.front();
+      }
       for (std::size_t k = 0; k < data.path.eps_dev.size(); ++k)
         if (!std::isfinite(data.path.eps_dev[k]) || !data.path.stress[k].allFinite() ||
             !data.path.fabric[k].allFinite())

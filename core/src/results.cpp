@@ -1,78 +1,54 @@
-// Atomic HDF5 results files, schema "rendulic/1" (interfaces.md "Results file"). See
-// results.hpp. Implementation notes:
-// - HDF5's automatic error stack printing is switched off: every failure becomes one
-//   exception with one line, which the CLI turns into exit code 2 (input) or 1 (bug).
+// Atomic HDF5 results files, schema "rendulic/1" (interfaces.md "Results file";
+// docs/results.md, docs/usage.md "Results are atomic"). See results.hpp. Implementation notes:
+// - HDF5's automatic error printing is replaced by a recorder (hdf5_reason.hpp): every
+//   failure becomes one InputError line naming the file, the object and the reason.
 // - The temporary file lives in the destination folder so that the final rename is atomic
-//   (same file system). SIGINT/SIGTERM remove live temporary files before the process dies,
-//   so an interrupted run leaves neither results.h5 nor litter.
+//   (same file system). It is registered with cleanup.hpp, so a signal removes it, and the
+//   saved copy of the completed stages becomes FINAL.partial instead.
+// - A stale temporary file (its process is gone and nobody holds HDF5's lock on it) is
+//   removed by the next writer in that folder; a stale saved copy is kept as FINAL.partial.
 // - Series are chunked with an unlimited first dimension; 64 rows a chunk keeps appends
 //   cheap without bloating short series.
 #include "rendulic/core/results.hpp"
 
 #include <H5Cpp.h>
+#include <fcntl.h>
+#include <signal.h>
+#include <sys/file.h>
 #include <unistd.h>
 
-#include <array>
-#include <atomic>
-#include <csignal>
+#include <algorithm>
+#include <cctype>
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
 #include <cstring>
-#include <fstream>
+#include <map>
 #include <optional>
 #include <sstream>
 
+#include "hdf5_reason.hpp"
+#include "rendulic/core/cleanup.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/version.hpp"
 
 namespace rendulic {
 namespace fs = std::filesystem;
+
+std::string invalid_object_name_reason(const std::string& name) {
+  if (name.empty()) return "is empty";
+  if (name == "." || name == "..") return "is reserved (HDF5 reads '.' and '..' as paths)";
+  for (const char ch : name) {
+    const auto c = static_cast<unsigned char>(ch);
+    if (c == '/') return "contains '/'";
+    if (c < 0x20 || c == 0x7f) return "contains a control character";
+  }
+  return "";
+}
+
 namespace {
 
 constexpr hsize_t kChunkRows = 64;
-
-void quiet_hdf5() {
-  static const bool done = [] {
-    H5::Exception::dontPrint();
-    return true;
-  }();
-  (void)done;
-}
-
-// --- removal of temporary files on SIGINT / SIGTERM -------------------------------------
-// A fixed table of C strings: the handler may only call async-signal-safe functions, so it
-// uses unlink() on pre-formatted paths and never allocates.
-constexpr int kSlots = 16;
-std::array<std::array<char, 4096>, kSlots> g_tmp_paths{};
-std::array<std::atomic<bool>, kSlots> g_tmp_used{};
-
-extern "C" void remove_temporaries_and_die(int sig) {
-  for (int i = 0; i < kSlots; ++i)
-    if (g_tmp_used[i].load()) ::unlink(g_tmp_paths[i].data());
-  std::signal(sig, SIG_DFL);
-  std::raise(sig);
-}
-
-int register_temporary(const fs::path& p) {
-  static const bool installed = [] {
-    std::signal(SIGINT, remove_temporaries_and_die);
-    std::signal(SIGTERM, remove_temporaries_and_die);
-    return true;
-  }();
-  (void)installed;
-  const std::string s = p.string();
-  if (s.size() >= 4096) return -1;
-  for (int i = 0; i < kSlots; ++i) {
-    bool expected = false;
-    if (!g_tmp_used[i].load()) {
-      std::memcpy(g_tmp_paths[i].data(), s.c_str(), s.size() + 1);
-      if (g_tmp_used[i].compare_exchange_strong(expected, true)) return i;
-    }
-  }
-  return -1;
-}
-
-void unregister_temporary(int slot) {
-  if (slot >= 0) g_tmp_used[slot].store(false);
-}
 
 // --- small HDF5 helpers ---------------------------------------------------------------
 std::vector<std::string> split_path(const std::string& path) {
@@ -83,23 +59,71 @@ std::vector<std::string> split_path(const std::string& path) {
   return parts;
 }
 
-bool link_exists(const H5::H5File& f, const std::string& path) {
+// An object that can be opened at `path`: every link along it exists and the last one
+// resolves (a dangling soft link does not).
+bool link_exists(hid_t file, const std::string& path) {
   // H5Lexists fails on a missing intermediate link, so check each prefix in turn.
   std::string prefix;
   for (const auto& part : split_path(path)) {
     prefix += "/" + part;
-    if (H5Lexists(f.getId(), prefix.c_str(), H5P_DEFAULT) <= 0) return false;
+    if (H5Lexists(file, prefix.c_str(), H5P_DEFAULT) <= 0) return false;
+    if (H5Oexists_by_name(file, prefix.c_str(), H5P_DEFAULT) <= 0) return false;
   }
   return true;
 }
 
-H5::Group ensure_group(H5::H5File& f, const std::string& path) {
+H5O_type_t object_type(hid_t file, const std::string& path) {
+  H5O_info_t info;
+  if (H5Oget_info_by_name(file, path.c_str(), &info, H5P_DEFAULT) < 0) return H5O_TYPE_UNKNOWN;
+  return info.type;
+}
+
+// The writer works with HDF5's C API: the C++ API's destructors print to stderr when a close
+// fails, which is what closing does on a full disk. A Handle closes without a word; a failed
+// call throws Failed, and the recorder of hdf5_reason.hpp holds why.
+struct Failed {};
+
+hid_t checked(hid_t id) {
+  if (id < 0) throw Failed{};
+  return id;
+}
+
+class Handle {
+ public:
+  explicit Handle(hid_t id) : id_(checked(id)) {}
+  Handle(const Handle&) = delete;
+  Handle& operator=(const Handle&) = delete;
+  Handle(Handle&& o) noexcept : id_(o.id_) { o.id_ = H5I_INVALID_HID; }
+  ~Handle() {
+    if (id_ >= 0) H5Idec_ref(id_);
+  }
+  hid_t get() const { return id_; }
+  // Closes now, throwing Failed if that fails (a dataset's close writes its cached chunks).
+  void close() {
+    const hid_t id = id_;
+    id_ = H5I_INVALID_HID;
+    if (H5Idec_ref(id) < 0) throw Failed{};
+  }
+
+ private:
+  hid_t id_;
+};
+
+// A path where a group must be and something else is (a damaged file being updated).
+struct NotAGroup {
+  std::string path;
+};
+
+Handle ensure_group(hid_t file, const std::string& path) {
   std::string prefix;
   for (const auto& part : split_path(path)) {
     prefix += "/" + part;
-    if (H5Lexists(f.getId(), prefix.c_str(), H5P_DEFAULT) <= 0) f.createGroup(prefix);
+    if (H5Lexists(file, prefix.c_str(), H5P_DEFAULT) <= 0)
+      Handle(H5Gcreate2(file, prefix.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT)).close();
+    else if (object_type(file, prefix) != H5O_TYPE_GROUP)
+      throw NotAGroup{prefix};
   }
-  return f.openGroup(prefix.empty() ? "/" : prefix);
+  return Handle(H5Gopen2(file, prefix.empty() ? "/" : prefix.c_str(), H5P_DEFAULT));
 }
 
 std::string parent_of(const std::string& path) {
@@ -107,90 +131,8 @@ std::string parent_of(const std::string& path) {
   return slash == std::string::npos || slash == 0 ? "/" : path.substr(0, slash);
 }
 
-H5::StrType string_type() { return H5::StrType(H5::PredType::C_S1, H5T_VARIABLE); }
+std::string shown(const std::string& s) { return printable(s); }
 
-}  // namespace
-
-// ========================================================================================
-struct ResultsWriter::Impl {
-  fs::path final_path, tmp_path;
-  // Constructed in place: HDF5 1.10's implicit H5File copy-assignment copies the id without
-  // taking a reference, so assigning a temporary would close the file under us.
-  std::optional<H5::H5File> holder;
-  int slot = -1;
-  bool committed = false;
-
-  // Runs `fn` on the object at `object` (a dataset if one exists there, else a group that is
-  // created on demand).
-  template <class Fn>
-  void on_object(const std::string& object, Fn&& fn) {
-    if (object != "/" && link_exists(*holder, object) &&
-        holder->childObjType(object) == H5O_TYPE_DATASET) {
-      H5::DataSet ds = holder->openDataSet(object);
-      fn(static_cast<H5::H5Object&>(ds));
-    } else {
-      H5::Group g = ensure_group(*holder, object);
-      fn(static_cast<H5::H5Object&>(g));
-    }
-  }
-
-  void write_attr(const std::string& object, const std::string& name, const H5::DataType& type,
-                  const H5::DataSpace& space, const void* data, bool is_string = false,
-                  const std::string* str = nullptr) {
-    on_object(object, [&](H5::H5Object& obj) {
-      if (obj.attrExists(name)) obj.removeAttr(name);
-      H5::Attribute a = obj.createAttribute(name, type, space);
-      if (is_string)
-        a.write(type, *str);
-      else
-        a.write(type, data);
-    });
-  }
-
-  void write_dataset(const std::string& path, const std::vector<hsize_t>& dims,
-                     const double* data) {
-    ensure_group(*holder, parent_of(path));
-    if (link_exists(*holder, path)) holder->unlink(path);
-    H5::DataSpace space(static_cast<int>(dims.size()), dims.data());
-    H5::DataSet ds = holder->createDataSet(path, H5::PredType::NATIVE_DOUBLE, space);
-    ds.write(data, H5::PredType::NATIVE_DOUBLE);
-  }
-
-  // One row of shape `row` (empty = scalar) appended to a growable dataset.
-  void append_row(const std::string& path, const std::vector<hsize_t>& row, const double* data) {
-    const int rank = static_cast<int>(row.size()) + 1;
-    std::vector<hsize_t> dims(rank), maxdims(rank), chunk(rank);
-    dims[0] = 0, maxdims[0] = H5S_UNLIMITED, chunk[0] = kChunkRows;
-    for (std::size_t i = 0; i < row.size(); ++i)
-      dims[i + 1] = maxdims[i + 1] = chunk[i + 1] = row[i];
-    auto open_or_create = [&]() -> H5::DataSet {
-      if (link_exists(*holder, path)) return holder->openDataSet(path);
-      ensure_group(*holder, parent_of(path));
-      H5::DSetCreatPropList plist;
-      plist.setChunk(rank, chunk.data());
-      H5::DataSpace space(rank, dims.data(), maxdims.data());
-      return holder->createDataSet(path, H5::PredType::NATIVE_DOUBLE, space, plist);
-    };
-    H5::DataSet ds = open_or_create();
-    H5::DataSpace cur = ds.getSpace();
-    if (cur.getSimpleExtentNdims() != rank)
-      throw std::logic_error("append to " + path + ": row shape differs from the series");
-    std::vector<hsize_t> size(rank);
-    cur.getSimpleExtentDims(size.data());
-    const hsize_t n = size[0];
-    size[0] = n + 1;
-    ds.extend(size.data());
-    H5::DataSpace fspace = ds.getSpace();
-    std::vector<hsize_t> start(rank, 0), count(rank);
-    start[0] = n, count[0] = 1;
-    for (std::size_t i = 0; i < row.size(); ++i) count[i + 1] = row[i];
-    fspace.selectHyperslab(H5S_SELECT_SET, count.data(), start.data());
-    H5::DataSpace mspace(rank, count.data());
-    ds.write(data, H5::PredType::NATIVE_DOUBLE, mspace, fspace);
-  }
-};
-
-namespace {
 fs::path temporary_for(const fs::path& final_path) {
   // Built with append rather than operator+ chains: GCC 12 reports a false -Wrestrict there.
   std::string name = ".";
@@ -198,88 +140,343 @@ fs::path temporary_for(const fs::path& final_path) {
   return final_path.parent_path() / name;
 }
 
-std::string h5_reason(const H5::Exception& e) {
-  std::string r = e.getDetailMsg();
-  return r.empty() ? std::string("HDF5 error") : r;
+fs::path with_suffix(const fs::path& p, const char* suffix) { return p.string() + suffix; }
+
+// Copies a file, reporting the system's reason: std::filesystem::copy_file reports a copy cut
+// short by a full disk as an "Input/output error".
+std::string copy_whole_file(const fs::path& from, const fs::path& to) {
+  const int in = ::open(from.c_str(), O_RDONLY | O_CLOEXEC);
+  if (in < 0) return std::strerror(errno);
+  const int out = ::open(to.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (out < 0) {
+    const int e = errno;
+    ::close(in);
+    return std::strerror(e);
+  }
+  std::string why;
+  std::vector<char> buf(1 << 16);
+  for (;;) {
+    const ssize_t n = ::read(in, buf.data(), buf.size());
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) {
+      why = std::strerror(errno);
+      break;
+    }
+    if (n == 0) break;
+    for (ssize_t done = 0; done < n && why.empty();) {
+      const ssize_t w = ::write(out, buf.data() + done, static_cast<std::size_t>(n - done));
+      if (w < 0 && errno == EINTR) continue;
+      if (w < 0)
+        why = std::strerror(errno);
+      else
+        done += w;
+    }
+    if (!why.empty()) break;
+  }
+  if (::close(out) != 0 && why.empty()) why = std::strerror(errno);
+  ::close(in);
+  return why;
 }
+
+// Nobody holds HDF5's lock on the file (HDF5 1.10 keeps an flock while a file is open).
+bool unlocked(const fs::path& p) {
+  const int fd = ::open(p.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK);
+  if (fd < 0) return false;
+  const bool free = ::flock(fd, LOCK_EX | LOCK_NB) == 0;
+  ::close(fd);
+  return free;
+}
+
 }  // namespace
 
-ResultsWriter::ResultsWriter(const fs::path& final_path) : impl_(std::make_unique<Impl>()) {
-  quiet_hdf5();
-  impl_->final_path = final_path;
-  std::error_code ec;
-  if (!final_path.parent_path().empty()) fs::create_directories(final_path.parent_path(), ec);
-  if (ec)
-    throw InputError(final_path.parent_path().string() +
-                     ": cannot create output folder: " + ec.message());
-  impl_->tmp_path = temporary_for(final_path);
-  impl_->slot = register_temporary(impl_->tmp_path);
-  try {
-    impl_->holder.emplace(impl_->tmp_path.string(), H5F_ACC_TRUNC);
-  } catch (const H5::Exception& e) {
-    unregister_temporary(impl_->slot);
-    throw InputError(impl_->tmp_path.string() + ": cannot create results file: " + h5_reason(e));
+// ========================================================================================
+struct ResultsWriter::Impl {
+  fs::path final_path, tmp_path;
+  fs::path partial_copy, partial_new;  // the saved copy of the completed stages, and its next
+  std::string partial_completed;       // what the saved copy holds; empty: no copy
+  std::optional<Handle> file;          // the open temporary file
+  int tmp_handle = -1, partial_handle = -1, partial_new_handle = -1;
+  bool committed = false;
+  std::vector<fs::path> created_folders;  // innermost first, removed again if left empty
+  std::vector<std::string> notes;
+
+  ~Impl() { abandon(); }
+
+  hid_t id() const { return file->get(); }
+
+  // A file HDF5 cannot close (a full disk) stays open in the library until the process ends.
+  void close_quietly() { file.reset(); }
+
+  // Without commit(): nothing half-written survives (keep_partial() has already moved the
+  // saved copy if it is wanted).
+  void abandon() {
+    if (committed) return;
+    close_quietly();
+    std::error_code ec;
+    for (const fs::path& p : {tmp_path, partial_new, partial_copy})
+      if (!p.empty()) fs::remove(p, ec);
+    for (int h : {tmp_handle, partial_handle, partial_new_handle}) cleanup::forget(h);
+    tmp_handle = partial_handle = partial_new_handle = -1;
+    for (const fs::path& d : created_folders) fs::remove(d, ec);  // fails unless empty
   }
+
+  void make_folder() {
+    const fs::path dir = final_path.parent_path();
+    if (dir.empty()) return;
+    std::error_code ec;
+    for (fs::path d = dir; !d.empty() && !fs::exists(d, ec); d = d.parent_path()) {
+      created_folders.push_back(d);
+      if (d == d.parent_path()) break;
+    }
+    fs::create_directories(dir, ec);
+    if (ec) throw InputError(dir.string() + ": cannot create output folder: " + ec.message());
+    if (!fs::is_directory(dir, ec))
+      throw InputError(dir.string() + ": cannot create output folder: not a folder");
+  }
+
+  // Temporary files of runs that were killed (SIGKILL, a power cut) before they could tidy.
+  void sweep_stale() {
+    const fs::path dir = final_path.has_parent_path() ? final_path.parent_path() : fs::path(".");
+    const std::string prefix = "." + final_path.filename().string() + ".tmp-";
+    std::vector<std::pair<fs::path, std::string>> found;  // path, pid
+    std::error_code ec;
+    for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+      const std::string name = it->path().filename().string();
+      if (!name.starts_with(prefix)) continue;
+      const std::string rest = name.substr(prefix.size());
+      std::size_t k = 0;
+      while (k < rest.size() && k < 10 && std::isdigit(static_cast<unsigned char>(rest[k]))) ++k;
+      const std::string suffix = rest.substr(k);
+      if (k == 0 || (suffix != "" && suffix != ".partial" && suffix != ".partial-new")) continue;
+      found.emplace_back(it->path(), rest.substr(0, k));
+    }
+    for (const auto& [path, pid_text] : found) {
+      const long pid = std::stol(pid_text);
+      if (pid == ::getpid()) continue;
+      if (pid > 0 && pid <= 0x7fffffff &&
+          (::kill(static_cast<pid_t>(pid), 0) == 0 || errno != ESRCH))
+        continue;  // that process still runs (or is not ours to judge)
+      const std::string suffix = path.filename().string().substr(prefix.size() + pid_text.size());
+      if (suffix.empty() && !unlocked(path)) continue;  // open in a process we cannot see
+      std::error_code rm;
+      if (suffix == ".partial") {
+        const fs::path kept = with_suffix(final_path, ".partial");
+        if (!fs::exists(kept, rm)) {
+          fs::rename(path, kept, rm);
+          if (!rm) {
+            notes.push_back(path.string() + ": the completed stages of a run that was killed " +
+                            "(process " + pid_text + ") are kept in " + kept.string());
+            continue;
+          }
+        }
+      }
+      fs::remove(path, rm);
+      if (!rm)
+        notes.push_back(path.string() + ": removed, a temporary file of a run that was killed " +
+                        "(process " + pid_text + ")");
+    }
+  }
+
+  void check_names(const std::string& object, const std::string& attribute = {}) const {
+    std::vector<std::string> parts = split_path(object);
+    if (!attribute.empty()) parts.push_back(attribute);
+    for (const auto& part : parts)
+      if (const std::string why = invalid_object_name_reason(part); !why.empty())
+        throw InputError(final_path.string() + ": cannot write " + shown(object) +
+                         (attribute.empty() ? "" : " @" + shown(attribute)) + ": the name '" +
+                         shown(part) + "' " + why);
+  }
+
+  // Runs `fn`, turning an HDF5 failure into one line naming the file and the object.
+  template <class Fn>
+  void guarded(const std::string& object, const std::string& attribute, Fn&& fn) {
+    if (committed || !file) throw std::logic_error("ResultsWriter used after commit()");
+    check_names(object, attribute);
+    detail::forget_hdf5_reason();
+    try {
+      fn();
+    } catch (const Failed&) {
+      throw InputError(final_path.string() + ": cannot write " + shown(object) +
+                       (attribute.empty() ? "" : " @" + shown(attribute)) + ": " +
+                       detail::hdf5_reason());
+    } catch (const NotAGroup& e) {
+      throw InputError(final_path.string() + ": cannot write " + shown(object) +
+                       (attribute.empty() ? "" : " @" + shown(attribute)) + ": " + shown(e.path) +
+                       " is not a group");
+    }
+  }
+
+  // Runs `fn` on the object at `object` (a dataset if one exists there, else a group that is
+  // created on demand).
+  template <class Fn>
+  void on_object(const std::string& object, Fn&& fn) {
+    if (object != "/" && link_exists(id(), object) &&
+        object_type(id(), object) == H5O_TYPE_DATASET) {
+      Handle ds(H5Dopen2(id(), object.c_str(), H5P_DEFAULT));
+      fn(ds.get());
+      ds.close();
+    } else {
+      Handle g = ensure_group(id(), object);
+      fn(g.get());
+      g.close();
+    }
+  }
+
+  // One attribute; `space` and `type` are HDF5 ids, `data` what H5Awrite takes.
+  void write_attr(const std::string& object, const std::string& name, hid_t type, hid_t space,
+                  const void* data) {
+    guarded(object, name, [&] {
+      on_object(object, [&](hid_t obj) {
+        if (H5Aexists(obj, name.c_str()) > 0) checked(H5Adelete(obj, name.c_str()));
+        Handle a(H5Acreate2(obj, name.c_str(), type, space, H5P_DEFAULT, H5P_DEFAULT));
+        checked(H5Awrite(a.get(), type, data));
+        a.close();
+      });
+    });
+  }
+
+  void write_string_attr(const std::string& object, const std::string& name,
+                         const std::string& value) {
+    if (value.find('\0') != std::string::npos)
+      throw InputError(final_path.string() + ": cannot write " + shown(object) + " @" + name +
+                       ": the text holds a NUL character, which HDF5 strings cannot");
+    guarded(object, name, [&] {
+      Handle type(H5Tcopy(H5T_C_S1));
+      checked(H5Tset_size(type.get(), H5T_VARIABLE));
+      Handle space(H5Screate(H5S_SCALAR));
+      const char* text = value.c_str();
+      write_attr(object, name, type.get(), space.get(), &text);
+    });
+  }
+
+  void write_dataset(const std::string& path, const std::vector<hsize_t>& dims,
+                     const double* data) {
+    guarded(path, {}, [&] {
+      ensure_group(id(), parent_of(path)).close();
+      if (H5Lexists(id(), path.c_str(), H5P_DEFAULT) > 0)
+        checked(H5Ldelete(id(), path.c_str(), H5P_DEFAULT));
+      Handle space(H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr));
+      Handle ds(H5Dcreate2(id(), path.c_str(), H5T_NATIVE_DOUBLE, space.get(), H5P_DEFAULT,
+                           H5P_DEFAULT, H5P_DEFAULT));
+      hsize_t n = 1;
+      for (hsize_t d : dims) n *= d;
+      if (n > 0)
+        checked(H5Dwrite(ds.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, data));
+      ds.close();
+    });
+  }
+
+  // One row of shape `row` (empty = scalar) appended to a growable dataset.
+  void append_row(const std::string& path, const std::vector<hsize_t>& row, const double* data) {
+    guarded(path, {}, [&] {
+      const int rank = static_cast<int>(row.size()) + 1;
+      std::vector<hsize_t> dims(rank), maxdims(rank), chunk(rank);
+      dims[0] = 0, maxdims[0] = H5S_UNLIMITED, chunk[0] = kChunkRows;
+      for (std::size_t i = 0; i < row.size(); ++i)
+        dims[i + 1] = maxdims[i + 1] = chunk[i + 1] = row[i];
+      auto open_or_create = [&]() -> Handle {
+        if (link_exists(id(), path)) return Handle(H5Dopen2(id(), path.c_str(), H5P_DEFAULT));
+        ensure_group(id(), parent_of(path)).close();
+        Handle plist(H5Pcreate(H5P_DATASET_CREATE));
+        checked(H5Pset_chunk(plist.get(), rank, chunk.data()));
+        Handle space(H5Screate_simple(rank, dims.data(), maxdims.data()));
+        return Handle(H5Dcreate2(id(), path.c_str(), H5T_NATIVE_DOUBLE, space.get(), H5P_DEFAULT,
+                                 plist.get(), H5P_DEFAULT));
+      };
+      Handle ds = open_or_create();
+      std::vector<hsize_t> size(rank);
+      {
+        Handle cur(H5Dget_space(ds.get()));
+        if (H5Sget_simple_extent_ndims(cur.get()) != rank)
+          throw std::logic_error("append to " + path + ": row shape differs from the series");
+        checked(H5Sget_simple_extent_dims(cur.get(), size.data(), nullptr));
+      }
+      const hsize_t n = size[0];
+      size[0] = n + 1;
+      checked(H5Dset_extent(ds.get(), size.data()));
+      Handle fspace(H5Dget_space(ds.get()));
+      std::vector<hsize_t> start(rank, 0), count(rank);
+      start[0] = n, count[0] = 1;
+      for (std::size_t i = 0; i < row.size(); ++i) count[i + 1] = row[i];
+      checked(H5Sselect_hyperslab(fspace.get(), H5S_SELECT_SET, start.data(), nullptr, count.data(),
+                                  nullptr));
+      Handle mspace(H5Screate_simple(rank, count.data(), nullptr));
+      checked(H5Dwrite(ds.get(), H5T_NATIVE_DOUBLE, mspace.get(), fspace.get(), H5P_DEFAULT, data));
+      ds.close();
+    });
+  }
+
+  void open(bool create, const std::string& what) {
+    detail::forget_hdf5_reason();
+    try {
+      file.emplace(create ? H5Fcreate(tmp_path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT)
+                          : H5Fopen(tmp_path.c_str(), H5F_ACC_RDWR, H5P_DEFAULT));
+    } catch (const Failed&) {
+      throw InputError(final_path.string() + ": " + what + ": " + detail::hdf5_reason());
+    }
+  }
+};
+
+ResultsWriter::ResultsWriter(const fs::path& final_path) : impl_(std::make_unique<Impl>()) {
+  detail::quiet_hdf5();
+  Impl& m = *impl_;
+  m.final_path = final_path;
+  m.make_folder();
+  m.sweep_stale();
+  m.tmp_path = temporary_for(final_path);
+  m.tmp_handle = cleanup::remove_on_death(m.tmp_path);
+  m.open(true, "cannot create results file");
   attr("/", "schema", kSchema);
   attr("/", "version", kVersion);
   attr("/", "git_sha", kGitSha);
 }
 
 ResultsWriter ResultsWriter::update(const fs::path& existing_path) {
-  quiet_hdf5();
+  detail::quiet_hdf5();
   { ResultsReader check(existing_path); }  // refuses files that are not ours
   ResultsWriter w;
   w.impl_ = std::make_unique<Impl>();
-  w.impl_->final_path = existing_path;
-  w.impl_->tmp_path = temporary_for(existing_path);
-  w.impl_->slot = register_temporary(w.impl_->tmp_path);
-  std::error_code ec;
-  fs::copy_file(existing_path, w.impl_->tmp_path, fs::copy_options::overwrite_existing, ec);
-  if (ec) {
-    unregister_temporary(w.impl_->slot);
-    throw InputError(existing_path.string() + ": cannot copy for update: " + ec.message());
-  }
-  try {
-    w.impl_->holder.emplace(w.impl_->tmp_path.string(), H5F_ACC_RDWR);
-  } catch (const H5::Exception& e) {
-    fs::remove(w.impl_->tmp_path, ec);
-    unregister_temporary(w.impl_->slot);
-    throw InputError(existing_path.string() + ": cannot open for update: " + h5_reason(e));
-  }
+  Impl& m = *w.impl_;
+  m.final_path = existing_path;
+  m.sweep_stale();
+  m.tmp_path = temporary_for(existing_path);
+  m.tmp_handle = cleanup::remove_on_death(m.tmp_path);
+  if (const std::string why = copy_whole_file(existing_path, m.tmp_path); !why.empty())
+    throw InputError(existing_path.string() + ": cannot copy for update: " + why);
+  m.open(false, "cannot open for update");
   return w;
 }
 
 ResultsWriter::ResultsWriter(ResultsWriter&&) noexcept = default;
 ResultsWriter& ResultsWriter::operator=(ResultsWriter&&) noexcept = default;
-
-ResultsWriter::~ResultsWriter() {
-  if (!impl_ || impl_->committed) return;
-  try {
-    impl_->holder->close();
-  } catch (...) {
-  }
-  std::error_code ec;
-  fs::remove(impl_->tmp_path, ec);
-  unregister_temporary(impl_->slot);
-}
+ResultsWriter::~ResultsWriter() = default;
 
 void ResultsWriter::attr(const std::string& object, const std::string& name, double value) {
-  impl_->write_attr(object, name, H5::PredType::NATIVE_DOUBLE, H5::DataSpace(H5S_SCALAR), &value);
+  impl_->guarded(object, name, [&] {
+    Handle space(H5Screate(H5S_SCALAR));
+    impl_->write_attr(object, name, H5T_NATIVE_DOUBLE, space.get(), &value);
+  });
 }
 void ResultsWriter::attr(const std::string& object, const std::string& name, std::int64_t value) {
-  impl_->write_attr(object, name, H5::PredType::NATIVE_INT64, H5::DataSpace(H5S_SCALAR), &value);
+  impl_->guarded(object, name, [&] {
+    Handle space(H5Screate(H5S_SCALAR));
+    impl_->write_attr(object, name, H5T_NATIVE_INT64, space.get(), &value);
+  });
 }
 void ResultsWriter::attr(const std::string& object, const std::string& name,
                          const std::string& value) {
-  impl_->write_attr(object, name, string_type(), H5::DataSpace(H5S_SCALAR), nullptr, true, &value);
+  impl_->write_string_attr(object, name, value);
 }
 void ResultsWriter::attr(const std::string& object, const std::string& name, const char* value) {
   attr(object, name, std::string(value));
 }
 void ResultsWriter::attr(const std::string& object, const std::string& name,
                          const std::vector<double>& value) {
-  const hsize_t n = value.size();
-  impl_->write_attr(object, name, H5::PredType::NATIVE_DOUBLE, H5::DataSpace(1, &n), value.data());
+  impl_->guarded(object, name, [&] {
+    const hsize_t n = value.size();
+    Handle space(H5Screate_simple(1, &n, nullptr));
+    impl_->write_attr(object, name, H5T_NATIVE_DOUBLE, space.get(), value.data());
+  });
 }
 
 void ResultsWriter::write(const std::string& path, const std::vector<double>& values) {
@@ -320,78 +517,179 @@ void ResultsWriter::append(const std::string& path, const Eigen::Matrix3d& tenso
   impl_->append_row(path, {3, 3}, rm.data());
 }
 
-void ResultsWriter::create_group(const std::string& path) { ensure_group(*impl_->holder, path); }
-
-void ResultsWriter::commit() {
-  if (impl_->committed) throw std::logic_error("ResultsWriter::commit called twice");
-  impl_->holder->flush(H5F_SCOPE_GLOBAL);
-  impl_->holder->close();
-  std::error_code ec;
-  fs::rename(impl_->tmp_path, impl_->final_path, ec);
-  if (ec) {
-    fs::remove(impl_->tmp_path);
-    unregister_temporary(impl_->slot);
-    impl_->committed = true;
-    throw InputError(impl_->final_path.string() +
-                     ": cannot move results into place: " + ec.message());
-  }
-  unregister_temporary(impl_->slot);
-  impl_->committed = true;
+void ResultsWriter::create_group(const std::string& path) {
+  impl_->guarded(path, {}, [&] { ensure_group(impl_->id(), path).close(); });
 }
 
+void ResultsWriter::commit() {
+  Impl& m = *impl_;
+  if (m.committed) throw std::logic_error("ResultsWriter::commit called twice");
+  m.guarded("/", {}, [&] {
+    checked(H5Fflush(m.id(), H5F_SCOPE_GLOBAL));
+    Handle f = std::move(*m.file);
+    m.file.reset();
+    f.close();
+  });
+  std::error_code ec;
+  fs::rename(m.tmp_path, m.final_path, ec);
+  if (ec)
+    throw InputError(m.final_path.string() + ": cannot move results into place: " + ec.message());
+  m.committed = true;
+  cleanup::forget(m.tmp_handle);
+  m.tmp_handle = -1;
+  // The saved copy of the completed stages is superseded by the whole file.
+  for (const fs::path& p : {m.partial_new, m.partial_copy})
+    if (!p.empty()) fs::remove(p, ec);
+  for (int h : {m.partial_handle, m.partial_new_handle}) cleanup::forget(h);
+}
+
+bool ResultsWriter::save_partial(const std::string& completed) {
+  Impl& m = *impl_;
+  if (m.committed || !m.file) return false;
+  // The file on disk is now whole and consistent.
+  if (H5Fflush(m.id(), H5F_SCOPE_GLOBAL) < 0) return false;
+  if (m.partial_copy.empty()) {
+    m.partial_copy = with_suffix(m.tmp_path, ".partial");
+    m.partial_new = with_suffix(m.tmp_path, ".partial-new");
+    m.partial_new_handle = cleanup::remove_on_death(m.partial_new);
+  }
+  std::error_code ec;
+  if (!copy_whole_file(m.tmp_path, m.partial_new).empty())
+    ec = std::make_error_code(std::errc::io_error);
+  if (!ec) fs::rename(m.partial_new, m.partial_copy, ec);
+  if (ec) {
+    fs::remove(m.partial_new, ec);
+    return false;
+  }
+  m.partial_completed = completed;
+  cleanup::forget(m.partial_handle);
+  const fs::path kept = with_suffix(m.final_path, ".partial");
+  m.partial_handle = cleanup::rename_on_death(
+      m.partial_copy, kept,
+      "rendulic: stopped by a signal; " + completed + " kept in " + kept.string());
+  return true;
+}
+
+std::string ResultsWriter::keep_partial() {
+  Impl& m = *impl_;
+  if (m.committed || m.partial_completed.empty()) return "";
+  const fs::path kept = with_suffix(m.final_path, ".partial");
+  std::error_code ec;
+  fs::rename(m.partial_copy, kept, ec);
+  if (ec) return "";
+  cleanup::forget(m.partial_handle);
+  m.partial_handle = -1;
+  m.partial_copy.clear();
+  return "; " + m.partial_completed + " kept in " + kept.string();
+}
+
+const std::vector<std::string>& ResultsWriter::notes() const { return impl_->notes; }
 const fs::path& ResultsWriter::final_path() const { return impl_->final_path; }
 const fs::path& ResultsWriter::temporary_path() const { return impl_->tmp_path; }
 
 // ========================================================================================
 struct ResultsReader::Impl {
   fs::path path;
-  std::optional<H5::H5File> holder;  // in place, see ResultsWriter::Impl
+  std::unique_ptr<H5::H5File> holder;  // in place, see ResultsWriter::Impl
 
-  void require(const std::string& object) const {
-    if (!link_exists(*holder, object))
-      throw InputError(path.string() + ": no '" + object + "' in results file");
+  [[noreturn]] void fail(const std::string& object, const std::string& why) const {
+    throw InputError(path.string() + ": " + shown(object) + ": " + why);
+  }
+
+  // Runs `fn`, turning an HDF5 failure into one line naming the file and the object.
+  template <class Fn>
+  auto guarded(const std::string& object, Fn&& fn) const -> decltype(fn()) {
+    detail::forget_hdf5_reason();
+    try {
+      return fn();
+    } catch (const H5::Exception& e) {
+      fail(object, "cannot be read (" + detail::hdf5_reason(e) + ")");
+    }
+  }
+
+  H5O_type_t require(const std::string& object) const {
+    if (object != "/" && !link_exists(holder->getId(), object)) fail(object, "missing");
+    return object_type(holder->getId(), object);
+  }
+  H5::Group open_group(const std::string& object) const {
+    if (require(object) != H5O_TYPE_GROUP) fail(object, "is not a group");
+    return holder->openGroup(object);
+  }
+  H5::DataSet open_dataset(const std::string& object) const {
+    if (require(object) != H5O_TYPE_DATASET) fail(object, "is not a dataset");
+    return holder->openDataSet(object);
   }
   H5::Attribute open_attr(const std::string& object, const std::string& name) const {
-    if (object != "/") require(object);
-    if (object != "/" && holder->childObjType(object) == H5O_TYPE_DATASET) {
+    const H5O_type_t t = require(object);
+    const std::string where = object + " @" + name;
+    if (t == H5O_TYPE_DATASET) {
       H5::DataSet ds = holder->openDataSet(object);
-      if (!ds.attrExists(name))
-        throw InputError(path.string() + ": no attribute '" + name + "' on " + object);
+      if (!ds.attrExists(name)) fail(where, "missing");
       return ds.openAttribute(name);
     }
+    if (t != H5O_TYPE_GROUP) fail(object, "is neither a group nor a dataset");
     H5::Group g = holder->openGroup(object);
-    if (!g.attrExists(name))
-      throw InputError(path.string() + ": no attribute '" + name + "' on " + object);
+    if (!g.attrExists(name)) fail(where, "missing");
     return g.openAttribute(name);
+  }
+  // A numeric attribute of exactly `n` values (n = 0: any number of them).
+  std::vector<double> numbers(const std::string& object, const std::string& name,
+                              hssize_t n) const {
+    const std::string where = object + " @" + name;
+    return guarded(where, [&] {
+      H5::Attribute a = open_attr(object, name);
+      const auto cls = a.getTypeClass();
+      if (cls != H5T_INTEGER && cls != H5T_FLOAT) fail(where, "is not a number");
+      const hssize_t count = a.getSpace().getSimpleExtentNpoints();
+      if (n > 0 && count != n)
+        fail(where, "holds " + std::to_string(count) + " values, not " + std::to_string(n));
+      std::vector<double> v(static_cast<std::size_t>(count));
+      if (count) a.read(H5::PredType::NATIVE_DOUBLE, v.data());
+      return v;
+    });
   }
   // A dataset's doubles (converted by HDF5 from whatever numeric type it is stored as).
   std::vector<double> read_all(const std::string& p, std::vector<hsize_t>* dims) const {
-    require(p);
-    H5::DataSet ds = holder->openDataSet(p);
-    H5::DataSpace space = ds.getSpace();
-    std::vector<hsize_t> d(space.getSimpleExtentNdims());
-    space.getSimpleExtentDims(d.data());
-    hsize_t n = 1;
-    for (auto x : d) n *= x;
-    std::vector<double> data(n);
-    if (n) ds.read(data.data(), H5::PredType::NATIVE_DOUBLE);
-    if (dims) *dims = d;
-    return data;
+    return guarded(p, [&] {
+      H5::DataSet ds = open_dataset(p);
+      const auto cls = ds.getTypeClass();
+      if (cls != H5T_INTEGER && cls != H5T_FLOAT) fail(p, "does not hold numbers");
+      H5::DataSpace space = ds.getSpace();
+      if (!space.isSimple()) fail(p, "has no simple shape");
+      std::vector<hsize_t> d(space.getSimpleExtentNdims());
+      space.getSimpleExtentDims(d.data());
+      hsize_t n = 1;
+      for (auto x : d) n *= x;
+      std::vector<double> data(n);
+      if (n) ds.read(data.data(), H5::PredType::NATIVE_DOUBLE);
+      if (dims) *dims = d;
+      return data;
+    });
   }
   void expect_shape(const std::string& p, const std::vector<hsize_t>& d,
                     std::initializer_list<long> tail) const {
     bool ok = d.size() == tail.size() + 1;
     std::size_t i = 1;
     for (long t : tail) ok = ok && i < d.size() && d[i++] == static_cast<hsize_t>(t);
-    if (!ok) throw InputError(path.string() + ": dataset " + p + " has an unexpected shape");
+    if (!ok) fail(p, "has an unexpected shape");
   }
 };
 
 ResultsReader::ResultsReader(const fs::path& path) : impl_(std::make_unique<Impl>()) {
-  quiet_hdf5();
+  detail::quiet_hdf5();
   impl_->path = path;
   std::error_code ec;
-  if (!fs::is_regular_file(path, ec)) throw InputError(path.string() + ": no such file");
+  const fs::file_status st = fs::status(path, ec);
+  if (ec && ec != std::errc::no_such_file_or_directory)
+    throw InputError(path.string() + ": cannot read: " + ec.message());
+  if (!fs::exists(st)) throw InputError(path.string() + ": no such file");
+  if (!fs::is_regular_file(st)) throw InputError(path.string() + ": not a regular file");
+  {
+    // Open it ourselves first: HDF5 reports an unreadable file as "not HDF5".
+    const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK);
+    if (fd < 0) throw InputError(path.string() + ": cannot read: " + std::strerror(errno));
+    ::close(fd);
+  }
   bool is_h5 = false;
   try {
     is_h5 = H5::H5File::isHdf5(path.string());
@@ -399,79 +697,99 @@ ResultsReader::ResultsReader(const fs::path& path) : impl_(std::make_unique<Impl
     is_h5 = false;
   }
   if (!is_h5) throw InputError(path.string() + ": not an HDF5 file");
+  detail::forget_hdf5_reason();
   try {
-    impl_->holder.emplace(path.string(), H5F_ACC_RDONLY);
+    impl_->holder = std::make_unique<H5::H5File>(path.string(), H5F_ACC_RDONLY);
   } catch (const H5::Exception& e) {
-    throw InputError(path.string() + ": cannot open (corrupt HDF5 file?): " + h5_reason(e));
+    throw InputError(path.string() +
+                     ": cannot open (corrupt HDF5 file?): " + detail::hdf5_reason(e));
   }
   std::string schema;
   try {
     schema = attr_string("/", "schema");
-  } catch (const std::exception&) {
+  } catch (const InputError&) {
     throw InputError(path.string() + ": not a rendulic results file (no schema attribute)");
   }
   if (schema != kSchema)
-    throw InputError(path.string() + ": schema '" + schema + "' is not " + kSchema);
+    throw InputError(path.string() + ": schema '" + shown(schema) + "' is not " + kSchema);
 }
 
 ResultsReader::ResultsReader(ResultsReader&&) noexcept = default;
 ResultsReader::~ResultsReader() = default;
 
 bool ResultsReader::exists(const std::string& path) const {
-  return path == "/" || link_exists(*impl_->holder, path);
+  return path == "/" ||
+         impl_->guarded(path, [&] { return link_exists(impl_->holder->getId(), path); });
+}
+
+bool ResultsReader::is_group(const std::string& path) const {
+  return exists(path) && object_type(impl_->holder->getId(), path) == H5O_TYPE_GROUP;
 }
 
 bool ResultsReader::has_attr(const std::string& object, const std::string& name) const {
   if (!exists(object)) return false;
-  try {
-    impl_->open_attr(object, name);
-    return true;
-  } catch (const InputError&) {
+  return impl_->guarded(object, [&] {
+    const H5O_type_t t = object_type(impl_->holder->getId(), object);
+    if (t == H5O_TYPE_DATASET) return impl_->holder->openDataSet(object).attrExists(name);
+    if (t == H5O_TYPE_GROUP) return impl_->holder->openGroup(object).attrExists(name);
     return false;
-  }
+  });
 }
 
 std::vector<std::string> ResultsReader::children(const std::string& group) const {
-  std::vector<std::string> out;
-  if (!exists(group)) return out;
-  H5::Group g = impl_->holder->openGroup(group);
-  for (hsize_t i = 0; i < g.getNumObjs(); ++i) out.push_back(g.getObjnameByIdx(i));
-  return out;
+  if (!exists(group)) return {};
+  return impl_->guarded(group, [&] {
+    std::vector<std::string> out;
+    H5::Group g = impl_->open_group(group);
+    for (hsize_t i = 0; i < g.getNumObjs(); ++i) out.push_back(g.getObjnameByIdx(i));
+    return out;
+  });
 }
 
 double ResultsReader::attr_double(const std::string& object, const std::string& name) const {
-  double v = 0;
-  impl_->open_attr(object, name).read(H5::PredType::NATIVE_DOUBLE, &v);
-  return v;
+  return impl_->numbers(object, name, 1)[0];
 }
 std::int64_t ResultsReader::attr_int(const std::string& object, const std::string& name) const {
-  std::int64_t v = 0;
-  impl_->open_attr(object, name).read(H5::PredType::NATIVE_INT64, &v);
-  return v;
+  const std::string where = object + " @" + name;
+  return impl_->guarded(where, [&]() -> std::int64_t {
+    H5::Attribute a = impl_->open_attr(object, name);
+    const auto cls = a.getTypeClass();
+    if (cls != H5T_INTEGER && cls != H5T_FLOAT) impl_->fail(where, "is not a number");
+    if (a.getSpace().getSimpleExtentNpoints() != 1) impl_->fail(where, "is not one number");
+    if (cls == H5T_INTEGER) {  // read as int64: a seed above 2^53 must not pass through double
+      std::int64_t i = 0;
+      a.read(H5::PredType::NATIVE_INT64, &i);
+      return i;
+    }
+    double v = 0;
+    a.read(H5::PredType::NATIVE_DOUBLE, &v);
+    if (!(v == std::floor(v)) || !(std::abs(v) < 9.2e18)) impl_->fail(where, "is not an integer");
+    return static_cast<std::int64_t>(v);
+  });
 }
 std::string ResultsReader::attr_string(const std::string& object, const std::string& name) const {
-  H5::Attribute a = impl_->open_attr(object, name);
-  if (a.getTypeClass() != H5T_STRING)
-    throw InputError(impl_->path.string() + ": attribute " + name + " is not a string");
-  std::string v;
-  a.read(a.getStrType(), v);
-  return v;
+  const std::string where = object + " @" + name;
+  return impl_->guarded(where, [&] {
+    H5::Attribute a = impl_->open_attr(object, name);
+    if (a.getTypeClass() != H5T_STRING) impl_->fail(where, "is not text");
+    if (a.getSpace().getSimpleExtentNpoints() != 1) impl_->fail(where, "is not one text");
+    std::string v;
+    a.read(a.getStrType(), v);
+    return v;
+  });
 }
 std::vector<double> ResultsReader::attr_doubles(const std::string& object,
                                                 const std::string& name) const {
-  H5::Attribute a = impl_->open_attr(object, name);
-  const hssize_t n = a.getSpace().getSimpleExtentNpoints();
-  std::vector<double> v(static_cast<std::size_t>(n));
-  if (n) a.read(H5::PredType::NATIVE_DOUBLE, v.data());
-  return v;
+  return impl_->numbers(object, name, 0);
 }
 
 std::vector<std::uint64_t> ResultsReader::shape(const std::string& path) const {
-  impl_->require(path);
-  H5::DataSpace space = impl_->holder->openDataSet(path).getSpace();
-  std::vector<hsize_t> d(space.getSimpleExtentNdims());
-  space.getSimpleExtentDims(d.data());
-  return {d.begin(), d.end()};
+  return impl_->guarded(path, [&] {
+    H5::DataSpace space = impl_->open_dataset(path).getSpace();
+    std::vector<hsize_t> d(space.getSimpleExtentNdims());
+    space.getSimpleExtentDims(d.data());
+    return std::vector<std::uint64_t>(d.begin(), d.end());
+  });
 }
 
 std::vector<double> ResultsReader::read_vector(const std::string& path) const {
@@ -500,15 +818,13 @@ std::vector<Eigen::Matrix3d> ResultsReader::read_tensors(const std::string& path
 }
 Eigen::Matrix3d ResultsReader::read_tensor(const std::string& path) const {
   const Eigen::MatrixXd m = read_matrix(path);
-  if (m.rows() != 3 || m.cols() != 3)
-    throw InputError(impl_->path.string() + ": dataset " + path + " is not 3x3");
+  if (m.rows() != 3 || m.cols() != 3) impl_->fail(path, "is not 3x3");
   return m;
 }
 Eigen::MatrixXd ResultsReader::read_matrix(const std::string& path) const {
   std::vector<hsize_t> d;
   auto data = impl_->read_all(path, &d);
-  if (d.size() != 2)
-    throw InputError(impl_->path.string() + ": dataset " + path + " is not a matrix");
+  if (d.size() != 2) impl_->fail(path, "is not a matrix");
   Eigen::MatrixXd m(d[0], d[1]);
   for (hsize_t i = 0; i < d[0]; ++i)
     for (hsize_t j = 0; j < d[1]; ++j) m(i, j) = data[i * d[1] + j];
@@ -522,15 +838,15 @@ std::string attr_text(const H5::Attribute& a) {
   std::ostringstream out;
   const auto cls = a.getTypeClass();
   const hssize_t n = a.getSpace().getSimpleExtentNpoints();
-  if (cls == H5T_STRING) {
+  if (cls == H5T_STRING && n == 1) {
     std::string s;
     a.read(a.getStrType(), s);
     const auto nl = s.find('\n');
     if (nl != std::string::npos || s.size() > 60)
-      out << '"' << s.substr(0, std::min<std::size_t>(nl, 60)) << "...\" (" << s.size()
+      out << '"' << shown(s.substr(0, std::min<std::size_t>(nl, 60))) << "...\" (" << s.size()
           << " chars)";
     else
-      out << '"' << s << '"';
+      out << '"' << shown(s) << '"';
   } else if (cls == H5T_INTEGER || cls == H5T_FLOAT) {
     std::vector<double> v(static_cast<std::size_t>(n));
     if (n) a.read(H5::PredType::NATIVE_DOUBLE, v.data());
@@ -547,44 +863,68 @@ std::string attr_text(const H5::Attribute& a) {
   return out.str();
 }
 
-void describe(const H5::H5File& f, const std::string& path, int depth, std::ostringstream& out) {
-  const std::string indent(2 * depth, ' ');
-  auto attrs = [&](H5::H5Object& obj) {
+// Address of an object in the file: two hard links to one group share it.
+haddr_t address_of(const H5::H5Object& obj) {
+  H5O_info_t info;
+  return H5Oget_info(obj.getId(), &info) < 0 ? HADDR_UNDEF : info.addr;
+}
+
+struct Describer {
+  const H5::H5File& f;
+  std::ostringstream& out;
+  std::map<haddr_t, std::string> seen;  // group address -> first path it was reached by
+
+  void attrs(H5::H5Object& obj, const std::string& indent) {
     for (int i = 0; i < obj.getNumAttrs(); ++i) {
       H5::Attribute a = obj.openAttribute(static_cast<unsigned>(i));
-      out << indent << "  @" << a.getName() << " = " << attr_text(a) << "\n";
-    }
-  };
-  H5::Group g = f.openGroup(path);
-  out << indent << (path == "/" ? "/" : split_path(path).back() + "/") << "\n";
-  attrs(g);
-  for (hsize_t i = 0; i < g.getNumObjs(); ++i) {
-    const std::string name = g.getObjnameByIdx(i);
-    const std::string child = (path == "/" ? "" : path) + "/" + name;
-    if (g.childObjType(name) == H5O_TYPE_GROUP) {
-      describe(f, child, depth + 1, out);
-    } else {
-      H5::DataSet ds = f.openDataSet(child);
-      H5::DataSpace space = ds.getSpace();
-      std::vector<hsize_t> d(space.getSimpleExtentNdims());
-      space.getSimpleExtentDims(d.data());
-      out << indent << "  " << name << " [";
-      for (std::size_t k = 0; k < d.size(); ++k) out << (k ? "," : "") << d[k];
-      out << "]\n";
-      attrs(ds);
+      out << indent << "  @" << shown(a.getName()) << " = " << attr_text(a) << "\n";
     }
   }
-}
+  void group(const std::string& path, int depth) {
+    const std::string indent(2 * depth, ' ');
+    H5::Group g = f.openGroup(path);
+    const std::string label = path == "/" ? "/" : shown(split_path(path).back()) + "/";
+    const auto [it, fresh] = seen.emplace(address_of(g), path);
+    if (!fresh) {  // a hard link back to a group already shown: a cycle or an alias
+      out << indent << label << " -> same group as " << shown(it->second) << "\n";
+      return;
+    }
+    out << indent << label << "\n";
+    attrs(g, indent);
+    for (hsize_t i = 0; i < g.getNumObjs(); ++i) {
+      const std::string name = g.getObjnameByIdx(i);
+      const std::string child = (path == "/" ? "" : path) + "/" + name;
+      if (!link_exists(f.getId(), child)) {
+        out << indent << "  " << shown(name) << " (dangling link)\n";
+        continue;
+      }
+      const H5O_type_t type = object_type(f.getId(), child);
+      if (type == H5O_TYPE_GROUP) {
+        group(child, depth + 1);
+      } else if (type == H5O_TYPE_DATASET) {
+        H5::DataSet ds = f.openDataSet(child);
+        H5::DataSpace space = ds.getSpace();
+        std::vector<hsize_t> d(std::max(0, space.getSimpleExtentNdims()));
+        space.getSimpleExtentDims(d.data());
+        out << indent << "  " << shown(name) << " [";
+        for (std::size_t k = 0; k < d.size(); ++k) out << (k ? "," : "") << d[k];
+        out << "]" << (ds.getTypeClass() == H5T_STRING ? " text" : "") << "\n";
+        attrs(ds, indent);
+      } else {
+        out << indent << "  " << shown(name) << " (not a group or dataset)\n";
+      }
+    }
+  }
+};
 }  // namespace
 
 std::string ResultsReader::summary() const {
   std::ostringstream out;
   out << impl_->path.string() << " (" << kSchema << ")\n";
-  try {
-    describe(*impl_->holder, "/", 0, out);
-  } catch (const H5::Exception& e) {
-    throw InputError(impl_->path.string() + ": corrupt results file: " + h5_reason(e));
-  }
+  impl_->guarded("/", [&] {
+    Describer d{*impl_->holder, out, {}};
+    d.group("/", 0);
+  });
   return out.str();
 }
 

@@ -5,10 +5,14 @@
 // values and never sees TOML.
 #include "rendulic/core/scenario.hpp"
 
+#include <fcntl.h>
+#include <sys/stat.h>
 #include <toml++/toml.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -63,6 +67,9 @@ std::string format_double(double v) {
   return s;
 }
 
+// A TOML basic string that parses back to exactly `s`: every control character escaped
+// (a raw one is not TOML, and a NUL would cut the text short wherever it is stored as a C
+// string, as in the results file).
 std::string quote(const std::string& s) {
   std::string out = "\"";
   for (char c : s) {
@@ -83,7 +90,13 @@ std::string quote(const std::string& s) {
         out += "\\r";
         break;
       default:
-        out += c;
+        if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) {
+          char buf[8];
+          std::snprintf(buf, sizeof buf, "\\u%04X", static_cast<unsigned>(c));
+          out += buf;
+        } else {
+          out += c;
+        }
     }
   }
   return out + "\"";
@@ -135,18 +148,57 @@ std::string check_number(const KeySpec& s, double x) {
   if (!std::isfinite(x)) return "must be a finite number, got " + format_double(x);
   const bool below = s.min_open ? !(x > s.min) : x < s.min;
   const bool above = s.max_open ? !(x < s.max) : x > s.max;
-  if (below || above)
-    return "value " +
-           (s.type == KeyType::kInt ? std::to_string(static_cast<long long>(x))
-                                    : format_double(x)) +
-           " is out of range " + format_range(s);
+  if (below || above) return "value " + format_double(x) + " is out of range " + format_range(s);
   return "";
 }
 
+// Range check of one integer, in integers: compared in double, 4e18 + 1 would pass a bound of
+// 4e18, and 2^63 - 1 would print as another number.
+std::string check_int(const KeySpec& s, std::int64_t x) {
+  constexpr double kLimit = 9.2e18;  // below 2^63: bounds beyond it bound nothing
+  bool below = false, above = false;
+  if (std::isfinite(s.min) && s.min > -kLimit) {
+    const auto lo = static_cast<std::int64_t>(s.min_open ? std::floor(s.min) : std::ceil(s.min));
+    below = s.min_open ? x <= lo : x < lo;
+  }
+  if (std::isfinite(s.max) && s.max < kLimit) {
+    const auto hi = static_cast<std::int64_t>(s.max_open ? std::ceil(s.max) : std::floor(s.max));
+    above = s.max_open ? x >= hi : x > hi;
+  }
+  if (below || above) return "value " + std::to_string(x) + " is out of range " + format_range(s);
+  return "";
+}
+
+// Where `text` stops being UTF-8 (TOML text is UTF-8; a --set value need not be), or npos.
+std::size_t invalid_utf8_at(const std::string& text) {
+  const auto* p = reinterpret_cast<const unsigned char*>(text.data());
+  const std::size_t n = text.size();
+  for (std::size_t i = 0; i < n;) {
+    const unsigned c = p[i];
+    std::size_t len = c < 0x80           ? 1
+                      : (c >> 5) == 0x6  ? 2
+                      : (c >> 4) == 0xe  ? 3
+                      : (c >> 3) == 0x1e ? 4
+                                         : 0;
+    if (len == 0 || i + len > n) return i;
+    unsigned cp = len == 1 ? c : c & (0x7f >> len);
+    for (std::size_t k = 1; k < len; ++k) {
+      if ((p[i + k] & 0xc0) != 0x80) return i;
+      cp = (cp << 6) | (p[i + k] & 0x3f);
+    }
+    const unsigned min_cp[] = {0, 0, 0x80, 0x800, 0x10000};
+    if (cp < min_cp[len] || cp > 0x10ffff || (cp >= 0xd800 && cp <= 0xdfff)) return i;
+    i += len;
+  }
+  return std::string::npos;
+}
+
 std::string check_choice(const KeySpec& s, const std::string& x) {
+  if (const auto at = invalid_utf8_at(x); at != std::string::npos)
+    return "the text is not valid UTF-8 (byte " + std::to_string(at) + ")";
   if (s.choices.empty() || std::find(s.choices.begin(), s.choices.end(), x) != s.choices.end())
     return "";
-  return "'" + x + "' is not " + format_range(s);
+  return "'" + printable(x) + "' is not " + format_range(s);
 }
 
 // Validates a value against its spec; returns the reason or "".
@@ -155,7 +207,7 @@ std::string validate(const KeySpec& s, const ScenarioValue& v) {
     case KeyType::kBool:
       return "";
     case KeyType::kInt:
-      return check_number(s, static_cast<double>(std::get<std::int64_t>(v)));
+      return check_int(s, std::get<std::int64_t>(v));
     case KeyType::kDouble:
       return check_number(s, std::get<double>(v));
     case KeyType::kString:
@@ -271,6 +323,62 @@ std::string section_of(const std::string& path) {
   return dot == std::string::npos ? std::string{} : path.substr(0, dot);
 }
 
+// toml++ builds a dotted key a.b.c... by recursion, one level per segment, so a key of
+// 50,000 segments overflows the stack before any check of ours runs. No scenario key has more
+// than a few segments: a chain of more than kMaxKeyDots dots between key segments is refused
+// first. The scan treats quoted strings and bare words as segments and skips comments; in a
+// valid value only a number (1.5) or a time (07:32:00.999) joins two words by a dot.
+void check_key_depth(std::string_view t, const std::string& source_name) {
+  constexpr int kMaxKeyDots = 16;
+  int dots = 0, line = 1;
+  bool after_segment = false, after_dot = false;
+  auto bare = [](char c) {
+    return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-';
+  };
+  for (std::size_t i = 0; i < t.size();) {
+    const char c = t[i];
+    if (c == '#') {  // comment: to the end of the line
+      while (i < t.size() && t[i] != '\n') ++i;
+      continue;
+    }
+    if (c == '"' || c == '\'' || bare(c)) {  // one segment
+      if (!after_dot) dots = 0;
+      if (bare(c)) {
+        while (i < t.size() && bare(t[i])) ++i;
+      } else {
+        const bool multi = t.substr(i, 3) == std::string(3, c);
+        const std::string close = multi ? std::string(3, c) : std::string(1, c);
+        i += close.size();
+        while (i < t.size() && t.substr(i, close.size()) != close) {
+          if (t[i] == '\n') ++line;
+          if (c == '"' && t[i] == '\\') ++i;  // escaped character
+          if (!multi && i < t.size() && t[i] == '\n') break;
+          ++i;
+        }
+        i += close.size();
+      }
+      after_segment = true, after_dot = false;
+      continue;
+    }
+    if (c == '.' && after_segment) {
+      if (++dots > kMaxKeyDots)
+        throw InputError(source_name + ":" + std::to_string(line) +
+                         ": a dotted key nested deeper than " + std::to_string(kMaxKeyDots) +
+                         " levels (scenario keys have two: section.key)");
+      after_segment = false, after_dot = true;
+      ++i;
+      continue;
+    }
+    if (c == ' ' || c == '\t') {  // allowed around the dots of a key
+      ++i;
+      continue;
+    }
+    if (c == '\n') ++line;
+    dots = 0, after_segment = false, after_dot = false;
+    ++i;
+  }
+}
+
 }  // namespace
 
 ScenarioSchema& ScenarioSchema::add(KeySpec spec) {
@@ -333,17 +441,41 @@ Scenario::Scenario(const ScenarioSchema& schema) : schema_(&schema) {
 }
 
 Scenario Scenario::from_file(const std::string& path, const ScenarioSchema& schema) {
-  std::ifstream probe(path);
-  if (!probe) throw InputError(path + ": cannot read scenario file");
-  std::stringstream text;
-  text << probe.rdbuf();
-  return from_string(text.str(), path, schema);
+  // Opened without blocking and checked on the open descriptor: a FIFO must not hang the
+  // run, a folder or a device (/dev/zero) is not a scenario, and a file too large to be one
+  // is refused before it is read.
+  const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+  if (fd < 0) throw InputError(path + ": cannot read scenario file: " + std::strerror(errno));
+  struct FdCloser {
+    int fd;
+    ~FdCloser() { ::close(fd); }
+  } closer{fd};
+  struct stat st {};
+  if (::fstat(fd, &st) != 0)
+    throw InputError(path + ": cannot read scenario file: " + std::strerror(errno));
+  if (S_ISDIR(st.st_mode)) throw InputError(path + ": is a folder, not a scenario file");
+  if (!S_ISREG(st.st_mode))
+    throw InputError(path + ": not a regular file (a scenario is a TOML text file)");
+  constexpr std::size_t kMaxBytes = std::size_t{1} << 20;  // scenarios are a few kB
+  std::string text;
+  char buf[65536];
+  for (;;) {
+    const ssize_t n = ::read(fd, buf, sizeof buf);
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) throw InputError(path + ": cannot read scenario file: " + std::strerror(errno));
+    if (n == 0) break;
+    text.append(buf, static_cast<std::size_t>(n));
+    if (text.size() > kMaxBytes)
+      throw InputError(path + ": larger than 1 MiB, not a scenario file");
+  }
+  return from_string(text, path, schema);
 }
 
 Scenario Scenario::from_string(std::string_view text, const std::string& source_name,
                                const ScenarioSchema& schema) {
   Scenario sc(schema);
   sc.source_name_ = source_name;
+  check_key_depth(text, source_name);
   toml::table root;
   try {
     root = toml::parse(text, source_name);

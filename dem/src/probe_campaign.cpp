@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <iterator>
+#include <sstream>
 
 #include "rendulic/core/conventions.hpp"
 #include "rendulic/core/errors.hpp"
@@ -389,8 +390,14 @@ Envelope minimisation_envelope(const DemSystem& state, double amplitude,
   PackingData ref = packing_of(state);
   const MinimiseSummary ref_summary = minimise_energy(ref, mo);
   if (!ref_summary.converged) {
-    throw std::runtime_error("minimisation probes: the reference state did not converge (" +
-                             ref_summary.message + ")");
+    // Bad input, not a bug: the scenario chose a state without a contact network to probe.
+    std::ostringstream why;
+    why << "minimisation probes: the state reaches no force equilibrium at probes.force_tolerance "
+        << mo.force_tolerance << " (" << ref_summary.message
+        << "); an unjammed or barely jammed state has none to probe: choose a jammed state (a "
+           "larger isotropic.nu_max), a looser tolerance, or drop minimisation from "
+           "probes.methods";
+    throw InputError(why.str());
   }
   // Contacts are those whose force the minimiser resolves: overlap above
   // force_tolerance * mean contact force / k. A particle pushed by the relaxation of its

@@ -6,8 +6,10 @@
 
 #include <limits>
 #include <set>
+#include <sstream>
 
 #include "rendulic/core/errors.hpp"
+#include "rendulic/core/results.hpp"
 
 namespace rendulic::dem {
 namespace {
@@ -207,8 +209,9 @@ DemRunOptions dem_options_from_scenario(const Scenario& sc) {
                      std::to_string(o.path.snapshot_eps_dev.size()) + ")");
   std::set<std::string> seen;
   for (const auto& l : o.state_labels) {
-    if (l.empty() || l.find('/') != std::string::npos)
-      throw InputError(where("states.labels") + ": label '" + l + "' is empty or contains '/'");
+    // Each label names the group /states/<label> of the results file.
+    if (const std::string why = invalid_object_name_reason(l); !why.empty())
+      throw InputError(where("states.labels") + ": label '" + printable(l) + "' " + why);
     if (!seen.insert(l).second)
       throw InputError(where("states.labels") + ": duplicate label '" + l + "'");
   }
@@ -217,6 +220,19 @@ DemRunOptions dem_options_from_scenario(const Scenario& sc) {
       throw InputError(where("pressure.volume_fractions") +
                        ": every entry must lie strictly between preparation.nu0 and "
                        "isotropic.nu_max");
+  {  // The preparation runs with its own background damping: its time step must be stable too.
+    Material prep = m;
+    prep.gamma_b = o.prepare_gamma_b;
+    const double dt = time_step(prep, o.system.dt_factor), limit = stability_limit(prep);
+    if (!(dt < limit)) {
+      std::ostringstream s;
+      s << where("preparation.gamma_b") << ": " << prep.gamma_b
+        << " kg/s makes the preparation's time step " << dt
+        << " s (dem.dt_factor = " << o.system.dt_factor << ") exceed its explicit stability limit "
+        << limit << " s; use a smaller preparation.gamma_b or dem.dt_factor";
+      throw InputError(s.str());
+    }
+  }
   for (double e : o.path.snapshot_eps_dev)
     if (e > o.path.eps_dev_max)
       throw InputError(where("states.eps_dev") + ": every entry must be <= path.eps_dev_max");

@@ -204,6 +204,8 @@ CurveFit solve_once(const std::vector<Eigen::Vector2d>& q, std::vector<double> p
   }
   out.converged = summary.termination_type == ceres::CONVERGENCE;
   out.iterations = static_cast<int>(summary.iterations.size());
+  point_operations() += static_cast<std::int64_t>(q.size()) *
+                        (summary.num_residual_evaluations + summary.num_jacobian_evaluations + 1);
 
   out.d.resize(q.size());
   for (std::size_t i = 0; i < q.size(); ++i) {
@@ -212,6 +214,7 @@ CurveFit solve_once(const std::vector<Eigen::Vector2d>& q, std::vector<double> p
     out.d[i] = std::hypot(r[0], r[1]);
   }
   if (covariance) {
+    point_operations() += static_cast<std::int64_t>(q.size());
     // The covariance is taken on the equivalent distance problem (5 or 3 parameters, see
     // EllipseDistanceCost) at the solution, with the same loss.
     ceres::Problem dproblem(popts);
@@ -286,26 +289,41 @@ CurveFit solve_curve(const std::vector<Eigen::Vector2d>& q, std::vector<double> 
 Normalized normalize(const std::vector<Eigen::Vector2d>& points) {
   Normalized out;
   if (points.empty()) return out;
-  for (const auto& p : points) out.origin += p;
-  out.origin /= static_cast<double>(points.size());
+  point_operations() += static_cast<std::int64_t>(points.size());
+  // A power of two first brings the largest coordinate near 1, exactly (no rounding): the
+  // sums of squares below would overflow for data near 1e300 and underflow near 1e-300.
+  double largest = 0.0;
+  for (const auto& p : points) largest = std::max({largest, std::abs(p.x()), std::abs(p.y())});
+  if (!(largest > 0.0)) return out;  // all points at the origin: scale 0, degenerate
+  int e = 0;
+  std::frexp(largest, &e);
+  const double down = std::ldexp(1.0, -e), up = std::ldexp(1.0, e);
+  Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+  for (const auto& p : points) mean += p * down;
+  mean /= static_cast<double>(points.size());
   double s2 = 0.0;
-  for (const auto& p : points) s2 += (p - out.origin).squaredNorm();
-  out.scale = std::sqrt(s2 / static_cast<double>(points.size()));
-  if (!(out.scale > 0.0)) return out;
+  for (const auto& p : points) s2 += (p * down - mean).squaredNorm();
+  const double s = std::sqrt(s2 / static_cast<double>(points.size()));
+  out.origin = mean * up;
+  out.scale = s * up;
+  if (!(s > 0.0)) return out;
   out.q.reserve(points.size());
-  for (const auto& p : points) out.q.push_back((p - out.origin) / out.scale);
+  for (const auto& p : points) out.q.push_back((p * down - mean) / s);
   return out;
 }
 
-int count_distinct(const std::vector<Eigen::Vector2d>& q, double tol) {
+int count_distinct(const std::vector<Eigen::Vector2d>& q, double tol, int enough) {
   std::vector<Eigen::Vector2d> kept;
   for (const auto& p : q) {
+    if (static_cast<int>(kept.size()) >= enough) break;
     bool seen = false;
-    for (const auto& k : kept)
+    for (const auto& k : kept) {
+      ++point_operations();
       if ((k - p).norm() <= tol) {
         seen = true;
         break;
       }
+    }
     if (!seen) kept.push_back(p);
   }
   return static_cast<int>(kept.size());
@@ -396,12 +414,12 @@ void check_points(const Envelope& env, int min_points, const char* what) {
 // shared by the circle and ellipse results.
 void fill_outcome(const CurveFit& f, double L, const FitOptions& options, bool used_theta,
                   EnvelopeFit* out) {
-  double ssr = 0.0;
+  double ssr = 0.0;  // in normalized units: finite for any finite data
   for (double d : f.d) {
     out->residuals.push_back(L * d);
-    ssr += L * L * d * d;
+    ssr += d * d;
   }
-  out->rms = std::sqrt(ssr / static_cast<double>(f.d.size()));
+  out->rms = L * std::sqrt(ssr / static_cast<double>(f.d.size()));
   out->loss = options.loss;
   out->loss_scale = L * f.loss_scale;
   out->converged = f.converged;
@@ -420,10 +438,12 @@ EnvelopeFit circle_result(const fit_detail::Normalized& nz, const CurveFit& f,
   out.a = out.b = L * std::abs(f.params[2]);
   fill_outcome(f, L, options, used_theta, &out);
   if (f.cov_ok) {
-    const Eigen::Matrix3d c3 = f.cov_unit * (f.sigma * f.sigma * L * L);
+    // Standard errors from the normalized covariance: finite where c3 itself overflows.
+    const Eigen::Matrix3d cn = f.cov_unit * (f.sigma * f.sigma);
+    const Eigen::Matrix3d c3 = cn * (L * L);
     out.has_stderr = true;
-    out.center_stderr = Eigen::Vector2d(std::sqrt(c3(0, 0)), std::sqrt(c3(1, 1)));
-    out.a_stderr = out.b_stderr = std::sqrt(c3(2, 2));
+    out.center_stderr = L * Eigen::Vector2d(std::sqrt(cn(0, 0)), std::sqrt(cn(1, 1)));
+    out.a_stderr = out.b_stderr = L * std::sqrt(cn(2, 2));
     out.covariance.topLeftCorner<3, 3>() = c3;
     out.covariance(3, 3) = c3(2, 2);
     out.covariance.block<3, 1>(0, 3) = c3.col(2);
@@ -434,7 +454,12 @@ EnvelopeFit circle_result(const fit_detail::Normalized& nz, const CurveFit& f,
 
 }  // namespace
 
+namespace {
+EnvelopeFit fit_ellipse_or_circle(const Envelope& env, const FitOptions& options);
+}  // namespace
+
 EnvelopeFit fit_circle(const Envelope& env, const FitOptions& options) {
+  const std::int64_t start = fit_detail::point_operations();
   check_points(env, 3, "a circle");
   const fit_detail::Normalized nz = fit_detail::normalize(env.response);
   if (!(nz.scale > 0.0)) throw InputError("fit: degenerate data, all points coincide");
@@ -458,10 +483,20 @@ EnvelopeFit fit_circle(const Envelope& env, const FitOptions& options) {
                                               options.compute_covariance, options.max_iterations);
   EnvelopeFit out = circle_result(nz, f, options, false);
   out.selection_note = "circle requested";
+  out.point_operations = fit_detail::point_operations() - start;
   return out;
 }
 
 EnvelopeFit fit_ellipse(const Envelope& env, const FitOptions& options) {
+  const std::int64_t start = fit_detail::point_operations();
+  EnvelopeFit f = fit_ellipse_or_circle(env, options);
+  f.point_operations = fit_detail::point_operations() - start;
+  return f;
+}
+
+namespace {
+
+EnvelopeFit fit_ellipse_or_circle(const Envelope& env, const FitOptions& options) {
   std::string why;
   if (!options.IsValid(&why)) throw InputError(why);
   check_points(env, 5, "an ellipse");
@@ -469,7 +504,7 @@ EnvelopeFit fit_ellipse(const Envelope& env, const FitOptions& options) {
   if (!(nz.scale > 0.0)) throw InputError("fit: degenerate data, all points coincide");
   // Five distinct points determine a conic; duplicates carry no shape information.
   constexpr double kDistinctTol = 1e-9;
-  if (fit_detail::count_distinct(nz.q, kDistinctTol) < 5)
+  if (fit_detail::count_distinct(nz.q, kDistinctTol, 5) < 5)
     throw InputError("fit: an ellipse needs at least 5 distinct points");
   bool used_theta = false;
   const EllipseGuess g =
@@ -509,19 +544,20 @@ EnvelopeFit fit_ellipse(const Envelope& env, const FitOptions& options) {
   constexpr double kCircleRelTol = 1e-9;
   bool circle = (a - b) <= kCircleRelTol * a;
   if (f.cov_ok) {
+    // Judged and turned into standard errors in normalized units (Cn), then scaled by L:
+    // finite for data near 1e300 even where the covariance itself overflows.
+    const Eigen::Matrix<double, 5, 5> Cn = F * f.cov_unit * F.transpose() * (f.sigma * f.sigma);
     Eigen::Matrix<double, 5, 5> D = Eigen::Matrix<double, 5, 5>::Identity();
     D.diagonal() << L, L, L, L, 1.0;
-    const Eigen::Matrix<double, 5, 5> C =
-        D * F * f.cov_unit * F.transpose() * D * (f.sigma * f.sigma);
-    const double var_diff = C(2, 2) + C(3, 3) - 2.0 * C(2, 3);
-    if (var_diff > 0.0 && out.a - out.b <= options.circle_z * std::sqrt(var_diff)) circle = true;
-    out.covariance = C;
-    out.has_stderr = C.diagonal().minCoeff() >= 0.0;
+    const double var_diff = Cn(2, 2) + Cn(3, 3) - 2.0 * Cn(2, 3);
+    if (var_diff > 0.0 && a - b <= options.circle_z * std::sqrt(var_diff)) circle = true;
+    out.covariance = D * Cn * D;
+    out.has_stderr = Cn.diagonal().minCoeff() >= 0.0;
     if (out.has_stderr) {
-      out.center_stderr = Eigen::Vector2d(std::sqrt(C(0, 0)), std::sqrt(C(1, 1)));
-      out.a_stderr = std::sqrt(C(2, 2));
-      out.b_stderr = std::sqrt(C(3, 3));
-      out.inclination_stderr_deg = rad_to_deg(std::sqrt(C(4, 4)));
+      out.center_stderr = L * Eigen::Vector2d(std::sqrt(Cn(0, 0)), std::sqrt(Cn(1, 1)));
+      out.a_stderr = L * std::sqrt(Cn(2, 2));
+      out.b_stderr = L * std::sqrt(Cn(3, 3));
+      out.inclination_stderr_deg = rad_to_deg(std::sqrt(Cn(4, 4)));
     }
   }
   if (circle) {
@@ -537,5 +573,7 @@ EnvelopeFit fit_ellipse(const Envelope& env, const FitOptions& options) {
   }
   return out;
 }
+
+}  // namespace
 
 }  // namespace rendulic

@@ -80,14 +80,36 @@ bool FitOptions::IsValid(std::string* why) const {
 
 namespace {
 
-// Cost of a fit at the ellipse's loss scale: both shapes are judged by the same rho.
-double cost_of(const EnvelopeFit& f, FitLoss loss, double scale) {
-  return fit_detail::robust_cost(f.residuals, loss, scale);
+// Cost of a fit at the ellipse's loss scale: both shapes are judged by the same rho. In units
+// of `unit` (the data's size): only ratios of costs are used, and squares of data near 1e300
+// would overflow.
+double cost_of(const EnvelopeFit& f, FitLoss loss, double scale, double unit) {
+  std::vector<double> r;
+  r.reserve(f.residuals.size());
+  for (double d : f.residuals) r.push_back(d / unit);
+  return fit_detail::robust_cost(r, loss, scale / unit);
 }
+
+double sum_of_squares(const std::vector<double>& residuals, double unit) {
+  double ssr = 0.0;
+  for (double r : residuals) ssr += (r / unit) * (r / unit);
+  return ssr;
+}
+
+EnvelopeFit select_shape(const Envelope& env, const FitOptions& options);
 
 }  // namespace
 
 EnvelopeFit fit_envelope(const Envelope& env, const FitOptions& options) {
+  const std::int64_t start = fit_detail::point_operations();
+  EnvelopeFit f = select_shape(env, options);
+  f.point_operations = fit_detail::point_operations() - start;
+  return f;
+}
+
+namespace {
+
+EnvelopeFit select_shape(const Envelope& env, const FitOptions& options) {
   std::string why;
   if (!options.IsValid(&why)) throw InputError(why);
   if (!env.IsValid(&why)) throw InputError(why);
@@ -107,12 +129,14 @@ EnvelopeFit fit_envelope(const Envelope& env, const FitOptions& options) {
   EnvelopeFit line = fit_line(env, options);
   // A line fits exactly (to rounding): nothing left for an ellipse to explain. This also
   // spares fit_ellipse the points of a zero-width curve.
+  // Sums of squares in units of the data's size L (nz.scale): scale-free, and finite for any
+  // finite data.
   const fit_detail::Normalized nz = fit_detail::normalize(env.response);
+  const double L = nz.scale;
   const double n = static_cast<double>(env.size());
   constexpr double kExactRel = 1e-9;  // rounding level of a noiseless fit, relative to size
-  const double tiny = std::pow(kExactRel * nz.scale, 2) * n;
-  double ssr_line = 0.0;
-  for (double r : line.residuals) ssr_line += r * r;
+  const double tiny = kExactRel * kExactRel * n;
+  const double ssr_line = sum_of_squares(line.residuals, L);
   if (ssr_line <= tiny) {
     line.selection_note = "auto: line (points collinear to rounding)";
     return line;
@@ -145,7 +169,8 @@ EnvelopeFit fit_envelope(const Envelope& env, const FitOptions& options) {
     // first drop points beyond 3 robust sigmas of the line (the outliers that the loss would
     // discount); an ellipse's own deviation from the line inflates that sigma, so it stays.
     std::vector<double> h;
-    for (const auto& p : env.response) h.push_back(nrm.dot(p - line.center));
+    fit_detail::point_operations() += static_cast<std::int64_t>(env.size());
+    for (const auto& p : env.response) h.push_back(nrm.dot(p - line.center) / L);
     const double cut = 3.0 * fit_detail::mad_scale(h);
     std::vector<std::size_t> keep;
     for (std::size_t i = 0; i < h.size(); ++i)
@@ -176,10 +201,8 @@ EnvelopeFit fit_envelope(const Envelope& env, const FitOptions& options) {
   }
 
   ell = fit_ellipse(env, options);
-  double ssr_ell = 0.0;
-  for (double r : ell->residuals) ssr_ell += r * r;
-  if (ssr_ell <= tiny) return choose(0.0, "exact fit to rounding");
-  const double cost_l = cost_of(line, options.loss, ell->loss_scale);
+  if (sum_of_squares(ell->residuals, L) <= tiny) return choose(0.0, "exact fit to rounding");
+  const double cost_l = cost_of(line, options.loss, ell->loss_scale, L);
 
   // Parametric bootstrap under the fitted line. Every fit of the statistic (the data's and
   // the draws') runs with the same iteration cap: on a noisy line the ellipse fit can wander
@@ -192,9 +215,9 @@ EnvelopeFit fit_envelope(const Envelope& env, const FitOptions& options) {
   const EnvelopeFit ell_capped = ell->iterations > sim_opts.max_iterations || ell->used_theta
                                      ? fit_ellipse(env, sim_opts)
                                      : *ell;
-  const double t_obs = cost_l / cost_of(ell_capped, options.loss, ell_capped.loss_scale);
+  const double t_obs = cost_l / cost_of(ell_capped, options.loss, ell_capped.loss_scale, L);
   const double sigma = options.loss == FitLoss::kNone
-                           ? std::sqrt(ssr_line / std::max(1.0, n - 2.0))
+                           ? L * std::sqrt(ssr_line / std::max(1.0, n - 2.0))
                            : fit_detail::mad_scale(line.residuals) * std::sqrt(n / (n - 2.0));
   std::vector<double> s;
   for (const auto& p : env.response) s.push_back(d.dot(p - line.center));
@@ -211,7 +234,7 @@ EnvelopeFit fit_envelope(const Envelope& env, const FitOptions& options) {
       const EnvelopeFit sl = fit_line(sim, sim_opts);
       const EnvelopeFit se = fit_ellipse(sim, sim_opts);
       const double t =
-          cost_of(sl, options.loss, se.loss_scale) / cost_of(se, options.loss, se.loss_scale);
+          cost_of(sl, options.loss, se.loss_scale, L) / cost_of(se, options.loss, se.loss_scale, L);
       if (!(t < t_obs)) ++exceed;
     } catch (const InputError&) {
       ++exceed;  // a draw that cannot be fitted counts against the ellipse (conservative)
@@ -225,6 +248,8 @@ EnvelopeFit fit_envelope(const Envelope& env, const FitOptions& options) {
   const double p = (1.0 + exceed) / (B + 1.0);
   return choose(p, "parametric bootstrap, " + std::to_string(done) + " draws");
 }
+
+}  // namespace
 
 std::string EnvelopeFit::BriefReport() const {
   std::ostringstream o;

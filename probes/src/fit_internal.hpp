@@ -11,6 +11,13 @@
 
 namespace rendulic::fit_detail {
 
+// Point operations done on this thread so far (EnvelopeFit::point_operations is the
+// difference across one fit). Per thread: fits run in parallel over envelopes.
+inline std::int64_t& point_operations() {
+  thread_local std::int64_t count = 0;
+  return count;
+}
+
 inline Eigen::Matrix2d rotation(double phi) {
   Eigen::Matrix2d r;
   r << std::cos(phi), -std::sin(phi), std::sin(phi), std::cos(phi);
@@ -100,7 +107,8 @@ EllipseGuess robust_guess(const std::vector<Eigen::Vector2d>& q, const std::vect
 // Robust cost sum rho(d^2) (plain sum of squares for kNone) at the given scale.
 double robust_cost(const std::vector<double>& d, FitLoss loss, double scale);
 
-// Count of points distinct at a relative tolerance: an ellipse needs five.
-int count_distinct(const std::vector<Eigen::Vector2d>& q, double tol);
+// Count of points distinct at a relative tolerance, up to `enough` (an ellipse needs five):
+// at most `enough` kept points to compare each point with, so linear in the points.
+int count_distinct(const std::vector<Eigen::Vector2d>& q, double tol, int enough);
 
 }  // namespace rendulic::fit_detail

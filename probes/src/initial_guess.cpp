@@ -92,6 +92,7 @@ struct GridTable {
 double nearest_latent_angle(const Eigen::Vector2d& p, const Eigen::Vector2d& c, double a, double b,
                             double phi) {
   static const GridTable grid;
+  ++point_operations();
   const Eigen::Vector2d q = rotation(phi).transpose() * (p - c);
   const NearestPoint np{q.x(), q.y(), a, b};
   // The distance has at most four stationary points on the circle of t, but near the tips
@@ -118,6 +119,7 @@ double nearest_latent_angle(const Eigen::Vector2d& p, const Eigen::Vector2d& c, 
 
 double nearest_latent_angle_from(const Eigen::Vector2d& p, const Eigen::Vector2d& c, double a,
                                  double b, double phi, double t_start) {
+  ++point_operations();
   const Eigen::Vector2d q = rotation(phi).transpose() * (p - c);
   const NearestPoint np{q.x(), q.y(), a, b};
   bool stationary = false;
@@ -186,6 +188,7 @@ EllipseGuess robust_guess(const std::vector<Eigen::Vector2d>& q, const std::vect
       std::vector<double> st = {theta[idx[0]], theta[idx[1]], theta[idx[2]]};
       const AffineFit af = fit_affine(sp, st);
       if (!af.ok) continue;
+      point_operations() += static_cast<std::int64_t>(n);
       for (std::size_t i = 0; i < n; ++i) {
         const double r = deg_to_rad(theta[i]);
         d[i] = (af.center + af.M * Eigen::Vector2d(std::cos(r), std::sin(r)) - q[i]).norm();
@@ -208,6 +211,7 @@ EllipseGuess robust_guess(const std::vector<Eigen::Vector2d>& q, const std::vect
       for (int j = 0; j < 5; ++j) sp.push_back(q[idx[static_cast<std::size_t>(j)]]);
       EllipseGuess g = ellipse_guess_algebraic(sp);
       if (!g.ok || !(g.b > 0.0)) continue;
+      point_operations() += static_cast<std::int64_t>(n);
       for (std::size_t i = 0; i < n; ++i) d[i] = sampson_distance(q[i], g);
       const double med = median_of(d);
       if (med < best) best = med, best_g = g;
@@ -229,6 +233,7 @@ AffineFit fit_affine(const std::vector<Eigen::Vector2d>& points,
   AffineFit out;
   const auto n = static_cast<Eigen::Index>(points.size());
   if (n < 3 || theta_deg.size() != points.size()) return out;
+  fit_detail::point_operations() += n;
   Eigen::MatrixXd X(n, 3), Y(n, 2);
   for (Eigen::Index i = 0; i < n; ++i) {
     const double t = deg_to_rad(theta_deg[static_cast<std::size_t>(i)]);
@@ -272,6 +277,7 @@ EllipseGuess ellipse_guess_algebraic(const std::vector<Eigen::Vector2d>& points)
   EllipseGuess g;
   const auto n = static_cast<Eigen::Index>(points.size());
   if (n < 5) return g;
+  fit_detail::point_operations() += n;
   // Centre and scale first: the scatter matrices of raw stress values (1e-4 .. 1e6) would
   // otherwise be hopelessly conditioned.
   Eigen::Vector2d mean = Eigen::Vector2d::Zero();

@@ -25,6 +25,7 @@ struct Tls {
 };
 
 Tls weighted_tls(const std::vector<Eigen::Vector2d>& q, const std::vector<double>& w) {
+  fit_detail::point_operations() += static_cast<std::int64_t>(q.size());
   Tls out;
   double wsum = 0.0;
   out.centroid.setZero();
@@ -46,6 +47,7 @@ Tls weighted_tls(const std::vector<Eigen::Vector2d>& q, const std::vector<double
 }  // namespace
 
 EnvelopeFit fit_line(const Envelope& env, const FitOptions& options) {
+  const std::int64_t start = fit_detail::point_operations();
   std::string why;
   if (!options.IsValid(&why)) throw InputError(why);
   if (!env.IsValid(&why)) throw InputError(why);
@@ -146,9 +148,9 @@ EnvelopeFit fit_line(const Envelope& env, const FitOptions& options) {
   out.b = 0.0;
   const double phi = fit_detail::fold_pi(std::atan2(tls.d.y(), tls.d.x()));
   out.inclination_deg = rad_to_deg(phi);
-  double ssr = 0.0;
-  for (double h : tls.h) out.residuals.push_back(L * std::abs(h)), ssr += L * L * h * h;
-  out.rms = std::sqrt(ssr / static_cast<double>(n));
+  double ssr = 0.0;  // in normalized units: finite for any finite data
+  for (double h : tls.h) out.residuals.push_back(L * std::abs(h)), ssr += h * h;
+  out.rms = L * std::sqrt(ssr / static_cast<double>(n));
   out.loss = options.loss;
   out.loss_scale = L * loss_scale;
   out.converged = true;
@@ -164,22 +166,26 @@ EnvelopeFit fit_line(const Envelope& env, const FitOptions& options) {
     Eigen::Matrix2d B;
     B.col(0) = tls.d;
     B.col(1) = tls.nrm;
-    const Eigen::Matrix2d cc =
-        B * Eigen::Vector2d(var_s0, var_across).asDiagonal() * B.transpose() * (L * L);
-    Eigen::Matrix<double, 5, 5> C = Eigen::Matrix<double, 5, 5>::Zero();
-    C.topLeftCorner<2, 2>() = cc;
-    C(2, 2) = var_a * L * L;
-    C(4, 4) = var_phi;
-    const Eigen::Vector2d c_phi = tls.nrm * (s0 * var_phi * L);
-    C.block<2, 1>(0, 4) = c_phi;
-    C.block<1, 2>(4, 0) = c_phi.transpose();
-    out.covariance = C;
+    // In normalized units first (Cn), then scaled by L: the standard errors stay finite for
+    // data near 1e300 even where the covariance itself overflows.
+    const Eigen::Matrix2d cc = B * Eigen::Vector2d(var_s0, var_across).asDiagonal() * B.transpose();
+    Eigen::Matrix<double, 5, 5> Cn = Eigen::Matrix<double, 5, 5>::Zero();
+    Cn.topLeftCorner<2, 2>() = cc;
+    Cn(2, 2) = var_a;
+    Cn(4, 4) = var_phi;
+    const Eigen::Vector2d c_phi = tls.nrm * (s0 * var_phi);
+    Cn.block<2, 1>(0, 4) = c_phi;
+    Cn.block<1, 2>(4, 0) = c_phi.transpose();
+    Eigen::Matrix<double, 5, 5> D = Eigen::Matrix<double, 5, 5>::Identity();
+    D.diagonal() << L, L, L, L, 1.0;
+    out.covariance = D * Cn * D;
     out.has_stderr = true;
-    out.center_stderr = Eigen::Vector2d(std::sqrt(C(0, 0)), std::sqrt(C(1, 1)));
-    out.a_stderr = std::sqrt(C(2, 2));
+    out.center_stderr = L * Eigen::Vector2d(std::sqrt(Cn(0, 0)), std::sqrt(Cn(1, 1)));
+    out.a_stderr = L * std::sqrt(Cn(2, 2));
     out.b_stderr = 0.0;
     out.inclination_stderr_deg = rad_to_deg(std::sqrt(var_phi));
   }
+  out.point_operations = fit_detail::point_operations() - start;
   return out;
 }
 

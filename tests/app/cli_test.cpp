@@ -102,8 +102,12 @@ TEST(Cli, StageFailingMidRunLeavesNoResultsFile) {
 
 TEST(Cli, EffectiveScenarioIsStoredAndInspectable) {
   const fs::path d = fresh_dir("effective");
-  const fs::path scen =
-      write_file(d / "s.toml", "[run]\nstages = []\nseed = 5\ndescription = \"cli test\"\n");
+  // The cheapest run that computes something (a run of no stage is refused): a small
+  // packing, prepared fast.
+  const fs::path scen = write_file(d / "s.toml",
+                                   "[run]\nstages = [\"prepare\"]\nseed = 5\ndescription = \"cli "
+                                   "test\"\n[dem]\nn_particles = 64\n[preparation]\nrate = "
+                                   "20000.0\ngamma_b = 5.0\n[relax]\ntime_cap = 1e-4\n");
   const fs::path out = d / "out";
   const CmdResult r =
       rendulic("run " + scen.string() + " --out " + out.string() + " --set run.seed=42");

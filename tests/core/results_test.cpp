@@ -1,10 +1,16 @@
 // Tests of core/results.hpp (issue 2, item 5): HDF5 round trip of every dataset and attribute
 // kind, growable series, and atomicity: a failure or a signal mid-write leaves no results.h5
 // (and no temporary litter), an earlier results.h5 survives a failed run, and files that are
-// not ours are refused with an InputError.
+// not ours are refused with an InputError. Faults: damaged objects, names HDF5 cannot hold, a
+// full file system (the kernel's file size limit, RLIMIT_FSIZE: a real refusal of the write,
+// and one that needs no privileges), every terminating signal, stale temporary files of
+// killed runs, a hard-link cycle, an unreadable file.
 #include "rendulic/core/results.hpp"
 
+#include <H5Cpp.h>
 #include <gtest/gtest.h>
+#include <sys/file.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -185,6 +191,264 @@ TEST(Results, RefusesFilesThatAreNotOurs) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("not an HDF5 file"), std::string::npos);
   }
+}
+
+// Runs `fn` in a child process (for limits and signals that must not touch the test runner);
+// returns its wait status.
+template <class Fn>
+int in_child(Fn&& fn) {
+  const pid_t pid = fork();
+  if (pid == 0) {
+    const rlimit no_core{0, 0};
+    setrlimit(RLIMIT_CORE, &no_core);
+    fn();
+    _exit(0);
+  }
+  int status = 0;
+  waitpid(pid, &status, 0);
+  return status;
+}
+
+// The message of the InputError `fn` throws, or "" (a test failure) if it throws none.
+template <class Fn>
+std::string input_error(Fn&& fn) {
+  try {
+    fn();
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  ADD_FAILURE() << "no InputError";
+  return "";
+}
+
+fs::path small_file(const fs::path& d) {
+  ResultsWriter w(d / "results.h5");
+  w.attr("/material", "k_star", 0.5);
+  w.write("/path/time", std::vector<double>{1, 2, 3});
+  w.write("/path/pairs", std::vector<Eigen::Vector2d>{{1, 2}, {3, 4}});
+  w.create_group("/states/a");
+  w.commit();
+  return d / "results.h5";
+}
+
+TEST(Results, EveryHdf5FailureOfTheReaderIsOneInputErrorNamingFileAndObject) {
+  // HDF5 1.10's exceptions are not std::exception: they used to abort the process.
+  const fs::path d = fresh_dir("damaged");
+  const fs::path f = small_file(d);
+  {
+    H5::H5File h(f.string(), H5F_ACC_RDWR);
+    h.openGroup("/material")
+        .createAttribute("rho", H5::StrType(H5::PredType::C_S1, 8), H5::DataSpace(H5S_SCALAR));
+    const hsize_t two = 2;
+    h.openGroup("/material")
+        .createAttribute("pair", H5::PredType::NATIVE_DOUBLE, H5::DataSpace(1, &two));
+    h.createDataSet("/path/text", H5::StrType(H5::PredType::C_S1, 4), H5::DataSpace(1, &two));
+    H5Lcreate_soft("/nowhere", h.getId(), "/path/dangling", H5P_DEFAULT, H5P_DEFAULT);
+    h.unlink("/states");
+    h.createDataSet("/states", H5::PredType::NATIVE_DOUBLE, H5::DataSpace(1, &two));
+  }
+  const ResultsReader r(f);
+  auto msg = input_error([&] { r.attr_double("/material", "rho"); });
+  EXPECT_EQ(msg, f.string() + ": /material @rho: is not a number");
+  msg = input_error([&] { r.attr_double("/material", "pair"); });  // used to overflow a double
+  EXPECT_EQ(msg, f.string() + ": /material @pair: holds 2 values, not 1");
+  msg = input_error([&] { r.attr_string("/material", "k_star"); });
+  EXPECT_EQ(msg, f.string() + ": /material @k_star: is not text");
+  msg = input_error([&] { r.read_vector("/path/text"); });
+  EXPECT_EQ(msg, f.string() + ": /path/text: does not hold numbers");
+  msg = input_error([&] { r.read_pairs("/path/time"); });
+  EXPECT_EQ(msg, f.string() + ": /path/time: has an unexpected shape");
+  EXPECT_FALSE(r.exists("/path/dangling"));
+  msg = input_error([&] { r.read_vector("/path/dangling"); });
+  EXPECT_EQ(msg, f.string() + ": /path/dangling: missing");
+  msg = input_error([&] { r.children("/states"); });
+  EXPECT_EQ(msg, f.string() + ": /states: is not a group");
+  msg = input_error([&] { r.read_vector("/material"); });
+  EXPECT_EQ(msg, f.string() + ": /material: is not a dataset");
+  EXPECT_NO_THROW(r.summary());
+}
+
+TEST(Results, NamesHdf5CannotHoldAreRefusedBeforeWriting) {
+  // A state label "." named the group itself; a NUL cut the name short.
+  const fs::path d = fresh_dir("names");
+  {
+    ResultsWriter w(d / "results.h5");
+    for (const std::string& bad : {std::string("/states/./x"), std::string("/states/.."),
+                                  std::string("/states/a\0b", 11), std::string("/a\nb")}) {
+      const auto msg = input_error([&] { w.attr(bad, "eps_dev", 1.0); });
+      EXPECT_NE(msg.find("the name '"), std::string::npos) << msg;
+      EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
+    }
+    EXPECT_NE(input_error([&] { w.attr("/", "d", std::string("a\0b", 3)); }).find("NUL"),
+              std::string::npos);
+  }
+  EXPECT_EQ(count_files(d), 0);
+  EXPECT_EQ(invalid_object_name_reason("a"), "");
+  EXPECT_NE(invalid_object_name_reason("."), "");
+  EXPECT_NE(invalid_object_name_reason(""), "");
+  EXPECT_NE(invalid_object_name_reason("a/b"), "");
+  EXPECT_NE(invalid_object_name_reason(std::string("\0", 1)), "");
+}
+
+TEST(Results, AWriteTheFileSystemRefusesIsOneInputErrorAndLeavesNothing) {
+  // The kernel's file size limit refuses the write (EFBIG) as a full disk does (ENOSPC).
+  const fs::path d = fresh_dir("full");
+  const fs::path existing = small_file(d);
+  {
+    std::ofstream pad(existing, std::ios::app | std::ios::binary);
+    pad << std::string(80 * 1024, '\0');  // larger than the limit; HDF5 ignores the tail
+  }
+  const int status = in_child([&] {
+    std::signal(SIGXFSZ, SIG_IGN);  // the write fails instead of killing the process
+    const rlimit limit{64 * 1024, 64 * 1024};
+    setrlimit(RLIMIT_FSIZE, &limit);
+    int failures = 0;
+    try {
+      ResultsWriter w(d / "big" / "results.h5");
+      w.write("/path/time", std::vector<double>(100000, 1.0));
+      w.commit();
+    } catch (const InputError& e) {
+      const std::string m = e.what();
+      failures +=
+          m.find("big/results.h5: cannot write /path/time: File too large") != std::string::npos;
+    }
+    // `calibrate` on a full disk: the copy fails; the destructor used to dereference the
+    // file it never opened (a segfault).
+    try {
+      ResultsWriter w = ResultsWriter::update(existing);
+    } catch (const InputError& e) {
+      failures += std::string(e.what()).find("cannot copy for update") != std::string::npos;
+    }
+    _exit(failures == 2 ? 0 : 3);
+  });
+  ASSERT_TRUE(WIFEXITED(status)) << "died by signal " << WTERMSIG(status);
+  EXPECT_EQ(WEXITSTATUS(status), 0) << "an expected InputError is missing";
+  EXPECT_FALSE(fs::exists(d / "big")) << "the folder it created is removed again";
+  EXPECT_EQ(count_files(d), 1) << "only the original results.h5";
+}
+
+TEST(Results, EverySignalRemovesTheTemporaryAndKeepsTheSavedStages) {
+  const fs::path d = fresh_dir("signals");
+  // -1: std::terminate (an exception nobody catches), which ends in SIGABRT.
+  for (const int sig : {SIGHUP, SIGINT, SIGQUIT, SIGTERM, SIGUSR1, SIGUSR2, SIGALRM, SIGPIPE,
+                        SIGXCPU, SIGXFSZ, SIGABRT, -1}) {
+    const int status = in_child([&] {
+      ResultsWriter w(d / "results.h5");
+      for (int i = 0; i < 10; ++i) w.append("/path/time", double(i));
+      if (!w.save_partial("completed stages (path)")) _exit(3);
+      for (int i = 0; i < 10; ++i) w.append("/path/time", double(i));
+      if (sig < 0) std::terminate();
+      std::raise(sig);
+      _exit(4);  // not reached
+    });
+    ASSERT_TRUE(WIFSIGNALED(status)) << sig;
+    EXPECT_EQ(WTERMSIG(status), sig < 0 ? SIGABRT : sig) << "the exit status tells the signal";
+    ASSERT_TRUE(fs::exists(d / "results.h5.partial")) << sig;
+    EXPECT_EQ(ResultsReader(d / "results.h5.partial").read_vector("/path/time").size(), 10u)
+        << "the copy as saved, not what followed";
+    EXPECT_EQ(count_files(d), 1) << sig << ": no temporary left";
+    fs::remove(d / "results.h5.partial");
+  }
+  // Without a saved copy nothing at all is left.
+  const int status = in_child([&] {
+    ResultsWriter w(d / "results.h5");
+    w.append("/path/time", 1.0);
+    std::raise(SIGHUP);
+  });
+  EXPECT_TRUE(WIFSIGNALED(status));
+  EXPECT_EQ(count_files(d), 0);
+}
+
+TEST(Results, AFailureKeepsTheSavedCopyAsPartialOnlyWhenAsked) {
+  const fs::path d = fresh_dir("partial");
+  std::string note;
+  {
+    ResultsWriter w(d / "results.h5");
+    w.append("/path/time", 1.0);
+    ASSERT_TRUE(w.save_partial("completed stages (prepare)"));
+    w.append("/path/time", 2.0);
+    ASSERT_TRUE(w.save_partial("completed stages (prepare, path)"));
+    w.append("/path/time", 3.0);
+    note = w.keep_partial();
+  }
+  EXPECT_EQ(note,
+            "; completed stages (prepare, path) kept in " + (d / "results.h5.partial").string());
+  EXPECT_EQ(ResultsReader(d / "results.h5.partial").read_vector("/path/time").size(), 2u);
+  EXPECT_FALSE(fs::exists(d / "results.h5")) << "never over the final name";
+  {
+    ResultsWriter w(d / "other.h5");
+    ASSERT_TRUE(w.save_partial("completed stages (prepare)"));
+    w.commit();  // a whole file supersedes the saved copy
+  }
+  EXPECT_FALSE(fs::exists(d / "other.h5.partial"));
+  EXPECT_EQ(count_files(d), 2);  // results.h5.partial, other.h5
+}
+
+TEST(Results, StaleTemporariesOfKilledRunsAreTidiedByTheNextWriter) {
+  const fs::path d = fresh_dir("stale");
+  const pid_t dead = fork();
+  if (dead == 0) _exit(0);
+  waitpid(dead, nullptr, 0);  // its pid now names no process
+  const std::string tag = std::to_string(dead);
+  std::ofstream(d / (".results.h5.tmp-" + tag)) << "half a file";
+  {
+    ResultsWriter w(d / ("stages.h5"));
+    w.append("/path/time", 1.0);
+    w.commit();
+  }
+  fs::rename(d / "stages.h5", d / (".results.h5.tmp-" + tag + ".partial"));
+  std::ofstream(d / ".results.h5.tmp-1") << "pid 1 lives";
+  // Held open and locked, as HDF5 does for a file it writes: a run we cannot see (another
+  // PID namespace) is left alone even though its pid looks dead here.
+  const pid_t dead2 = fork();
+  if (dead2 == 0) _exit(0);
+  waitpid(dead2, nullptr, 0);
+  const fs::path locked = d / (".results.h5.tmp-" + std::to_string(dead2));
+  std::ofstream(locked) << "locked";
+  const int fd = ::open(locked.c_str(), O_RDONLY);
+  ASSERT_EQ(flock(fd, LOCK_EX), 0);
+  {
+    ResultsWriter w(d / "results.h5");
+    ASSERT_EQ(w.notes().size(), 2u);
+    EXPECT_NE(w.notes()[0].find("process " + tag), std::string::npos) << w.notes()[0];
+  }
+  ::close(fd);
+  EXPECT_FALSE(fs::exists(d / (".results.h5.tmp-" + tag)));
+  EXPECT_TRUE(fs::exists(d / ".results.h5.tmp-1"));
+  EXPECT_TRUE(fs::exists(locked));
+  EXPECT_EQ(ResultsReader(d / "results.h5.partial").read_vector("/path/time").size(), 1u);
+}
+
+TEST(Results, SummaryOfAHardLinkCycleEnds) {
+  const fs::path d = fresh_dir("cycle");
+  const fs::path f = small_file(d);
+  {
+    H5::H5File h(f.string(), H5F_ACC_RDWR);
+    ASSERT_GE(
+        H5Lcreate_hard(h.getId(), "/states", h.getId(), "/states/a/loop", H5P_DEFAULT, H5P_DEFAULT),
+        0);
+  }
+  const std::string s = ResultsReader(f).summary();
+  EXPECT_NE(s.find("loop/ -> same group as /states"), std::string::npos) << s;
+}
+
+TEST(Results, AnUnreadableFileIsSaidToBeUnreadable) {
+  const fs::path d = fresh_dir("unreadable");
+  const fs::path f = small_file(d);
+  fs::permissions(f, fs::perms::none);
+  fs::permissions(d, fs::perms::owner_all | fs::perms::others_exec | fs::perms::group_exec);
+  const int status = in_child([&] {
+    if (geteuid() == 0 && setuid(65534) != 0) _exit(5);  // root reads anything: be nobody
+    try {
+      ResultsReader r(f);
+    } catch (const InputError& e) {
+      _exit(std::string(e.what()) == f.string() + ": cannot read: Permission denied" ? 0 : 3);
+    }
+    _exit(4);
+  });
+  fs::permissions(f, fs::perms::owner_read | fs::perms::owner_write);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 0) << "3: another message, 4: no error, 5: cannot drop root";
 }
 
 }  // namespace

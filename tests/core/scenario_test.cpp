@@ -1,9 +1,14 @@
 // Tests of core/scenario.hpp (issue 2, item 4): strict parsing, one-line errors naming the key
 // and file:line, --set overrides with the same validation, and the effective scenario
-// round-tripping through its TOML text.
+// round-tripping through its TOML text. Hostile input: a folder, a device or a FIFO as the
+// scenario, a key nested 50,000 deep, control characters, integers at the edge of int64.
 #include "rendulic/core/scenario.hpp"
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
+
+#include <filesystem>
+#include <fstream>
 
 #include "rendulic/core/errors.hpp"
 
@@ -51,6 +56,18 @@ ScenarioSchema make_schema() {
          .default_value = true,
          .unit = "-",
          .help = "report"});
+  s.add({.path = "run.big",
+         .type = KeyType::kInt,
+         .default_value = std::int64_t{1},
+         .unit = "-",
+         .help = "an integer bounded as the seed is",
+         .min = 0,
+         .max = 4.0e18});
+  s.add({.path = "run.description",
+         .type = KeyType::kString,
+         .default_value = std::string{},
+         .unit = "-",
+         .help = "free text"});
   s.add({.path = "run.stages",
          .type = KeyType::kStringList,
          .default_value = std::vector<std::string>{"a"},
@@ -215,6 +232,96 @@ TEST(Scenario, MarkdownReferenceListsEveryKey) {
   for (const auto& k : schema.keys()) EXPECT_NE(md.find("`" + k.path + "`"), std::string::npos);
   EXPECT_NE(md.find("kg/s^2"), std::string::npos);
   EXPECT_NE(md.find("(0.0, inf)"), std::string::npos);
+}
+
+TEST(Scenario, OnlyARegularFileIsAScenario) {
+  // A folder used to run the defaults, /dev/zero to read without end, a FIFO to hang.
+  namespace fs = std::filesystem;
+  const auto schema = make_schema();
+  const fs::path d = fs::path(RENDULIC_TEST_TMP) / "core_scenario" / "not_files";
+  fs::remove_all(d);
+  fs::create_directories(d);
+  auto msg = input_error([&] { Scenario::from_file(d.string(), schema); });
+  EXPECT_NE(msg.find("is a folder"), std::string::npos) << msg;
+  msg = input_error([&] { Scenario::from_file("/dev/zero", schema); });
+  EXPECT_NE(msg.find("/dev/zero: not a regular file"), std::string::npos) << msg;
+  const fs::path fifo = d / "fifo.toml";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  msg = input_error([&] { Scenario::from_file(fifo.string(), schema); });
+  EXPECT_NE(msg.find("not a regular file"), std::string::npos) << msg;
+  {
+    std::ofstream big(d / "big.toml");
+    const std::string comment = "# " + std::string(1022, 'x') + "\n";
+    for (int i = 0; i < 1100; ++i) big << comment;  // 1.1 MiB of valid TOML
+  }
+  msg = input_error([&] { Scenario::from_file((d / "big.toml").string(), schema); });
+  EXPECT_NE(msg.find("larger than 1 MiB"), std::string::npos) << msg;
+}
+
+TEST(Scenario, DeepDottedKeyIsRefusedBeforeTheParserRecurses) {
+  // toml++ recurses once per segment: 50,000 segments overflowed the stack.
+  const auto schema = make_schema();
+  std::string key = "run";
+  for (int i = 0; i < 50000; ++i) key += ".a";
+  for (const std::string& text :
+       {"\n" + key + " = 1\n", "\n[" + key + "]\n", "\nx = {" + key + " = 1}\n"}) {
+    const auto msg = input_error([&] { Scenario::from_string(text, "deep.toml", schema); });
+    EXPECT_NE(msg.find("deep.toml:2: a dotted key nested deeper than 16 levels"), std::string::npos)
+        << msg.substr(0, 200);
+  }
+  // What a scenario holds is untouched by the check: numbers, times, dotted strings.
+  const auto sc = Scenario::from_string(
+      "# a.b.c.d.e.f.g.h.i.j.k.l.m.n.o.p.q.r.s\n[material]\nk = 1.5e8\n[run]\n"
+      "description = \"a.b.c.d.e.f.g.h.i.j.k.l.m.n.o.p.q.r.s\"\n",
+      "ok.toml", schema);
+  EXPECT_EQ(sc.get_double("material.k"), 1.5e8);
+}
+
+TEST(Scenario, EveryCharacterOfAStringRoundTripsThroughTheStoredToml) {
+  // \u0000 used to cut the stored text short (HDF5 strings end at a NUL) and \u0001 was
+  // written raw, which TOML does not allow.
+  const auto schema = make_schema();
+  std::string all;
+  for (int c = 0; c < 0x80; ++c) all += static_cast<char>(c);
+  all += "\xc3\xa9\xe2\x82\xac";  // é, €
+  Scenario sc(schema);
+  sc.set("run.description", all);
+  const std::string text = sc.to_toml();
+  EXPECT_EQ(text.find('\0'), std::string::npos);
+  for (char c = 1; c < 0x20; ++c) {
+    if (c != '\n') {
+      EXPECT_EQ(text.find(c), std::string::npos) << int(c);
+    }
+  }
+  const auto back = Scenario::from_string(text, "stored", schema);
+  EXPECT_EQ(back.get_string("run.description"), all);
+}
+
+TEST(Scenario, IntegersAreComparedAsIntegers) {
+  // Compared in double, 4e18 + 1 rounded to 4e18 and passed; 2^63 - 1 printed as -2^63.
+  const auto schema = make_schema();
+  auto sc = Scenario::from_string("[run]\nbig = 4000000000000000000\n", "s.toml", schema);
+  EXPECT_EQ(sc.get_int("run.big"), 4000000000000000000);
+  auto msg = input_error(
+      [&] { Scenario::from_string("[run]\nbig = 4000000000000000001\n", "s.toml", schema); });
+  EXPECT_NE(msg.find("value 4000000000000000001 is out of range [0, 4000000000000000000]"),
+            std::string::npos)
+      << msg;
+  msg = input_error([&] { sc.apply_override("run.big=9223372036854775807"); });
+  EXPECT_NE(msg.find("value 9223372036854775807 is out of range"), std::string::npos) << msg;
+  msg = input_error([&] { sc.apply_override("run.seed=-9223372036854775808"); });
+  EXPECT_NE(msg.find("value -9223372036854775808 is out of range [0, inf)"), std::string::npos)
+      << msg;
+}
+
+TEST(Scenario, TextMustBeUtf8AndMessagesStayOnOneLine) {
+  const auto schema = make_schema();
+  Scenario sc(schema);
+  auto msg = input_error([&] { sc.apply_override("run.description=caf\xe9"); });
+  EXPECT_NE(msg.find("not valid UTF-8"), std::string::npos) << msg;
+  msg = input_error([&] { sc.apply_override("probes.method=\"dyn\\namic\""); });
+  EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
+  EXPECT_NE(msg.find("'dyn\\x0aamic' is not one of"), std::string::npos) << msg;
 }
 
 }  // namespace

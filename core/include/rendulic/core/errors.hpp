@@ -1,6 +1,7 @@
 // Error types shared by every module (architecture.md "Errors"). InputError is bad input from
-// the user (a file, a scenario key, a value out of range, a non-physical time step): the CLI
-// prints its one-line message and exits with code 2. Anything else escaping to main is a bug.
+// the user (a file, a scenario key, a value out of range, a non-physical time step, a damaged
+// results file, an output folder that cannot be written): the CLI prints its one-line message
+// and exits with code 2. Anything else escaping to main is a bug (exit 1).
 #pragma once
 
 #include <stdexcept>
@@ -20,5 +21,18 @@ class NotAvailable : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
 };
+
+// `text` fit for a one-line message: control characters (a newline, a NUL) shown as \xNN.
+std::string printable(const std::string& text);
+
+// One line describing the exception in flight (call inside a catch block): the message of a
+// std::exception, the innermost reason of an HDF5 exception (which is not a std::exception),
+// or "unknown exception".
+std::string describe_current_exception();
+
+// Rethrows the exception in flight (call inside a catch block) with `note` appended to its
+// message, keeping its kind: InputError stays InputError (exit 2), NotAvailable stays
+// NotAvailable, anything else becomes std::runtime_error (exit 1).
+[[noreturn]] void rethrow_with_note(const std::string& note);
 
 }  // namespace rendulic

@@ -1,9 +1,12 @@
-// Results files (HDF5 C++ API), schema "rendulic/1" of interfaces.md. The writer builds the
-// file under a temporary name in the output folder and renames it onto the final name only
-// in commit(): a run that fails or is interrupted leaves no file that looks complete, and a
-// results file from an earlier run stays untouched until the new one is whole. Groups along
-// a dataset path are created on demand. The reader refuses files that are not HDF5 or not
-// ours with an InputError, never an HDF5 error stack.
+// Results files (HDF5 C++ API), schema "rendulic/1" of interfaces.md; docs/results.md. The
+// writer builds the file under a temporary name in the output folder and renames it onto the
+// final name only in commit(): a run that fails or is interrupted leaves no file that looks
+// complete, and a results file from an earlier run stays untouched until the new one is
+// whole. A run may save a consistent copy of what its completed stages wrote (save_partial);
+// on failure that copy becomes FINAL.partial (docs/usage.md "Results are atomic"). Groups
+// along a dataset path are created on demand. Every HDF5 failure, of the writer (a full
+// disk) or of the reader (a file that is not ours, damaged, or of the wrong shape or type),
+// is an InputError of one line naming the file and the object, never an HDF5 exception.
 #pragma once
 
 #include <Eigen/Dense>
@@ -14,6 +17,11 @@
 #include <vector>
 
 namespace rendulic {
+
+// Whether `name` may be one component of an HDF5 path in a results file: not empty, not "."
+// or "..", no '/', no control characters (HDF5 names are C strings; "." is the group itself).
+// Returns the reason it may not, or "".
+std::string invalid_object_name_reason(const std::string& name);
 
 class ResultsWriter {
  public:
@@ -51,6 +59,21 @@ class ResultsWriter {
   // Flushes, closes, renames the temporary file onto the final path. Once only.
   void commit();
 
+  // Saves a consistent copy of everything written so far (flush, then copy beside the
+  // temporary file), replacing the previous copy; `completed` says what it holds (e.g. "the
+  // stages prepare, isotropic"). If the process is then stopped by a signal, the copy is
+  // renamed to FINAL.partial and a line saying so goes to stderr. Returns false (keeping the
+  // previous copy) if the copy cannot be made, e.g. on a full disk.
+  bool save_partial(const std::string& completed);
+  // After a failure, before the writer is destroyed: moves the last saved copy onto
+  // FINAL.partial (never onto FINAL) and returns a note for the error line ("; the stages
+  // prepare, isotropic are kept in out/results.h5.partial"), or "" if nothing was saved.
+  std::string keep_partial();
+
+  // Lines about stale temporary files of killed runs that the constructor found in the
+  // output folder and removed (or kept as FINAL.partial); for the caller to print.
+  const std::vector<std::string>& notes() const;
+
   const std::filesystem::path& final_path() const;
   const std::filesystem::path& temporary_path() const;
 
@@ -62,12 +85,17 @@ class ResultsWriter {
 
 class ResultsReader {
  public:
-  // InputError naming the file if it is missing, not HDF5, corrupt, or lacks schema rendulic/1.
+  // InputError naming the file if it is missing, unreadable, not HDF5, corrupt, or lacks
+  // schema rendulic/1. Every accessor below throws an InputError naming the file and the
+  // object when it is missing, of the wrong kind (a group for a dataset), type (text for
+  // numbers) or shape, or cannot be read.
   explicit ResultsReader(const std::filesystem::path& path);
   ResultsReader(ResultsReader&&) noexcept;
   ~ResultsReader();
 
+  // True if `path` names an object that can be opened (a dangling link does not exist).
   bool exists(const std::string& path) const;
+  bool is_group(const std::string& path) const;
   bool has_attr(const std::string& object, const std::string& name) const;
   std::vector<std::string> children(const std::string& group) const;
 
@@ -83,7 +111,8 @@ class ResultsReader {
   Eigen::Matrix3d read_tensor(const std::string& path) const;
   Eigen::MatrixXd read_matrix(const std::string& path) const;
 
-  // Human summary for `rendulic inspect`: every group, its attributes, dataset shapes.
+  // Human summary for `rendulic inspect`: every group, its attributes, dataset shapes; a
+  // group reached a second time (a hard-link cycle) is named, not descended into again.
   std::string summary() const;
   const std::filesystem::path& path() const;
 

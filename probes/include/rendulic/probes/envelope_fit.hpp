@@ -88,6 +88,10 @@ struct EnvelopeFit {
   bool converged = false;
   int iterations = 0;
   bool used_theta = false;
+  // Work of the fit in point operations (one point's distance, residual or Jacobian
+  // evaluation, or one comparison of two points): a machine-independent cost, which grows
+  // linearly with n_points (docs/fitting.md "Cost").
+  std::int64_t point_operations = 0;
 
   // Brief one-paragraph text report (for `rendulic fit` without --json).
   std::string BriefReport() const;

@@ -1,0 +1,264 @@
+// Hostile input and faults that the real `rendulic` binary meets before or without any DEM
+// (docs/usage.md: exit 2 and one line naming the culprit, nothing written, never a crash):
+// state labels HDF5 cannot hold, a folder, device or FIFO as the scenario, a key nested 50,000
+// deep, integers at the edge of int64, an unstable preparation damping, a run that computes
+// nothing, damaged results files (a wrongly typed attribute, /states as a dataset, a dangling
+// link, an envelope without stress pairs, a hard-link cycle), `calibrate --out` to a path it
+// cannot write, report and plot into a folder it cannot write, stale temporary files.
+// Synthetic results files (synthetic_results.hpp) stand in for a run's; the damage is done with
+// HDF5's own API.
+#include <H5Cpp.h>
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "cli_runner.hpp"
+#include "rendulic/core/results.hpp"
+#include "synthetic_results.hpp"
+
+namespace {
+namespace fs = std::filesystem;
+using rendulic::testing::CliResult;
+
+fs::path fresh_dir(const std::string& name) {
+  return rendulic::testing::fresh_dir("app_faults/" + name);
+}
+
+fs::path write_file(const fs::path& p, const std::string& text) {
+  std::ofstream(p, std::ios::binary) << text;
+  return p;
+}
+
+std::string read_file(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), {}};
+}
+
+int lines(const std::string& s) { return static_cast<int>(std::count(s.begin(), s.end(), '\n')); }
+
+// Runs `rendulic ARGS` with stderr apart from stdout.
+CliResult rendulic(const std::string& args) { return rendulic::testing::run_rendulic(args, false); }
+
+// The refusal every bad input gets: exit 2, one line on stderr that says `what`.
+void expect_refusal(const CliResult& r, const std::string& what) {
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_EQ(lines(r.err), 1) << r.err;
+  EXPECT_EQ(r.err.rfind("rendulic: ", 0), 0u) << r.err;
+  EXPECT_NE(r.err.find(what), std::string::npos) << "expected '" << what << "' in: " << r.err;
+}
+
+// A seed-like results file that `calibrate` accepts (it needs /material k_star and each
+// state's stress).
+fs::path calibratable(const std::string& name) {
+  const fs::path f = rendulic::app::testing::seed_like("faults_" + name, false);
+  rendulic::ResultsWriter w = rendulic::ResultsWriter::update(f);
+  w.attr("/material", "k_star", 1.0);
+  for (int s = 1; s <= 5; ++s)
+    w.write("/states/s" + std::to_string(s) + "/stress", Eigen::Matrix3d::Identity().eval());
+  w.commit();
+  return f;
+}
+
+TEST(Faults, StateLabelsHdf5CannotHoldAreRefusedBeforeAnythingIsWritten) {
+  // "." named /states itself and aborted the run with an HDF5 exception (exit 134), leaving
+  // its temporary file; a NUL cut the label short.
+  const fs::path d = fresh_dir("labels");
+  const fs::path out = d / "out";
+  expect_refusal(
+      rendulic("run " + (fs::path(RENDULIC_SOURCE_DIR) / "data/scenarios/quick.toml").string() +
+               " --out " + out.string() + " --set states.labels=a,.,c,d,e"),
+      "states.labels (--set): label '.' is reserved");
+  const fs::path s =
+      write_file(d / "nul.toml", "[states]\neps_dev = [0.01]\nlabels = [\"b\\u0000c\"]\n");
+  expect_refusal(rendulic("run " + s.string() + " --out " + out.string()),
+                 "nul.toml:3): label 'b\\x00c' contains a control character");
+  EXPECT_FALSE(fs::exists(out));
+}
+
+TEST(Faults, AScenarioMustBeARegularTextFile) {
+  // A folder ran the default scenario (N = 9261) and exited 0; /dev/zero read without end.
+  const fs::path d = fresh_dir("scenario_files");
+  const fs::path out = d / "out";
+  expect_refusal(rendulic("run " + d.string() + " --out " + out.string()), "is a folder");
+  expect_refusal(rendulic("run /dev/zero --out " + out.string()), "/dev/zero: not a regular file");
+  ASSERT_EQ(::mkfifo((d / "fifo.toml").c_str(), 0600), 0);
+  expect_refusal(rendulic("run " + (d / "fifo.toml").string() + " --out " + out.string()),
+                 "fifo.toml: not a regular file");
+  std::string deep = "run";
+  for (int i = 0; i < 50000; ++i) deep += ".a";
+  const fs::path s = write_file(d / "deep.toml", deep + " = 1\n");
+  expect_refusal(rendulic("run " + s.string() + " --out " + out.string()),
+                 "deep.toml:1: a dotted key nested deeper than 16 levels");
+  EXPECT_FALSE(fs::exists(out));
+}
+
+TEST(Faults, ValidationGapsAreClosedBeforeAnythingIsWritten) {
+  const fs::path d = fresh_dir("validation");
+  const fs::path out = d / "out";
+  const std::string quick = (fs::path(RENDULIC_SOURCE_DIR) / "data/scenarios/quick.toml").string();
+  const std::string run = "run " + quick + " --out " + out.string() + " --set ";
+  // Seeds compared in double: 4e18 + 1 passed, and 2^63 - 1 was printed as another number.
+  expect_refusal(rendulic(run + "run.seed=4000000000000000001"),
+                 "value 4000000000000000001 is out of range [0, 4000000000000000000]");
+  expect_refusal(rendulic(run + "run.seed=9223372036854775807"),
+                 "value 9223372036854775807 is out of range");
+  // Checked only when the prepare stage started (an empty output folder was left), and the
+  // message printed dem.dt_factor's value as preparation.gamma_b's.
+  expect_refusal(rendulic(run + "preparation.gamma_b=5000"),
+                 "preparation.gamma_b (--set): 5000 kg/s makes the preparation's time step");
+  EXPECT_FALSE(fs::exists(out));
+  // A run that computes nothing replaced an existing results.h5 with an empty one.
+  {
+    rendulic::ResultsWriter w(out / "results.h5");
+    w.attr("/", "marker", std::string("earlier run"));
+    w.commit();
+  }
+  const std::string before = read_file(out / "results.h5");
+  expect_refusal(rendulic(run + "run.stages=[]"), "run.stages (--set): no stage that computes");
+  expect_refusal(rendulic(run + "run.stages=report"), "run.stages (--set): no stage that computes");
+  EXPECT_EQ(read_file(out / "results.h5"), before);
+}
+
+TEST(Faults, DamagedResultsFilesAreOneLineNeverACrash) {
+  const fs::path f = calibratable("damaged");
+  const fs::path d = f.parent_path();
+  auto damaged = [&](const std::string& name, auto&& damage) {
+    const fs::path g = d / name / "results.h5";
+    fs::create_directories(g.parent_path());
+    fs::copy_file(f, g, fs::copy_options::overwrite_existing);
+    H5::H5File h(g.string(), H5F_ACC_RDWR);
+    damage(h);
+    return g.string();
+  };
+  // A wrongly typed attribute: HDF5's exception escaped main (abort, exit 134).
+  const std::string typed = damaged("typed", [](H5::H5File& h) {
+    H5::Group m = h.openGroup("/material");
+    m.removeAttr("k_star");
+    m.createAttribute("k_star", H5::StrType(H5::PredType::C_S1, 3), H5::DataSpace(H5S_SCALAR));
+  });
+  expect_refusal(
+      rendulic("calibrate --no-write --no-path --model isotropic_elastic --results " + typed),
+      typed + ": /material @k_star: is not a number");
+  // /states stored as a dataset.
+  const std::string states = damaged("states", [](H5::H5File& h) {
+    h.unlink("/states");
+    const hsize_t n = 3;
+    h.createDataSet("/states", H5::PredType::NATIVE_DOUBLE, H5::DataSpace(1, &n));
+  });
+  expect_refusal(rendulic("report --no-figures " + states), states + ": /states: is not a group");
+  expect_refusal(rendulic("calibrate --no-write --model isotropic_elastic --results " + states),
+                 states + ": /states: is not a group");
+  EXPECT_EQ(rendulic("inspect " + states).code, 0);
+  // A dangling link where an envelope's stress pairs should be.
+  const std::string dangling = damaged("dangling", [](H5::H5File& h) {
+    const std::string e = "/states/s1/envelopes/dynamic_elastic/stress_star";
+    h.unlink(e);
+    H5Lcreate_soft("/nowhere", h.getId(), e.c_str(), H5P_DEFAULT, H5P_DEFAULT);
+  });
+  expect_refusal(
+      rendulic("calibrate --no-write --no-path --model isotropic_elastic --results " + dangling),
+      "neither stress_star nor d_stress");
+  const CliResult ins = rendulic("inspect " + dangling);
+  EXPECT_EQ(ins.code, 0) << ins.err;
+  EXPECT_NE(ins.out.find("stress_star (dangling link)"), std::string::npos) << ins.out;
+  // A hard-link cycle: inspect never returned and grew its memory.
+  const std::string cycle = damaged("cycle", [](H5::H5File& h) {
+    H5Lcreate_hard(h.getId(), "/states", h.getId(), "/states/s1/loop", H5P_DEFAULT, H5P_DEFAULT);
+  });
+  const CliResult cyc = rendulic("inspect " + cycle);
+  EXPECT_EQ(cyc.code, 0) << cyc.err;
+  EXPECT_NE(cyc.out.find("loop/ -> same group as /states"), std::string::npos) << cyc.out;
+}
+
+TEST(Faults, AnEnvelopeWithoutStressPairsIsNotMeasuredNotReadOutOfBounds) {
+  // C3 indexed the stress pairs by the directions: absent or empty pairs were read out of
+  // bounds (AddressSanitizer: heap-buffer-overflow in app/report.cpp).
+  const fs::path f = calibratable("no_pairs");
+  for (const bool empty : {false, true}) {
+    {
+      H5::H5File h(f.string(), H5F_ACC_RDWR);
+      for (int s = 1; s <= 5; ++s) {
+        const std::string e =
+            "/states/s" + std::to_string(s) + "/envelopes/dynamic_elastic/stress_star";
+        if (H5Lexists(h.getId(), e.c_str(), H5P_DEFAULT) > 0) h.unlink(e);
+        if (empty) {
+          const hsize_t dims[2] = {0, 2};
+          h.createDataSet(e, H5::PredType::NATIVE_DOUBLE, H5::DataSpace(2, dims));
+        }
+      }
+    }
+    const CliResult r = rendulic("report --no-figures " + f.string());
+    ASSERT_EQ(r.code, 0) << r.err;
+    const std::string md = read_file(f.parent_path() / "report.md");
+    EXPECT_NE(md.find("| C3 | Near isotropy the isotropic probe (35.26 deg) maps onto the major "
+                      "axis (< 5 deg) | - | **not measured** |"),
+              std::string::npos)
+        << md;
+  }
+}
+
+TEST(Faults, CalibrateOutToAPathItCannotWriteTouchesNothing) {
+  // It used to rewrite results.h5 first and then fail on --out with exit 2.
+  const fs::path f = calibratable("out");
+  const std::string before = read_file(f);
+  const std::string calibrate =
+      "calibrate --no-path --model isotropic_elastic --results " + f.string() + " --out ";
+  expect_refusal(rendulic(calibrate + (f.parent_path() / "no/such/folder/x.json").string()),
+                 "cannot write the JSON output");
+  expect_refusal(rendulic(calibrate + f.parent_path().string()), "is a folder");
+  EXPECT_EQ(read_file(f), before) << "results.h5 unchanged";
+  const fs::path json = f.parent_path() / "fit.json";
+  const CliResult ok = rendulic(calibrate + json.string());
+  ASSERT_EQ(ok.code, 0) << ok.err;
+  EXPECT_NE(read_file(json).find("\"model\""), std::string::npos);
+  EXPECT_TRUE(rendulic::ResultsReader(f).exists("/calibration/isotropic_elastic"));
+  for (const auto& e : fs::directory_iterator(f.parent_path()))
+    EXPECT_EQ(e.path().filename().string().find(".tmp"), std::string::npos) << e.path();
+}
+
+TEST(Faults, ReportAndPlotIntoAFolderTheyCannotWriteExitTwo) {
+  // A Python traceback and exit 1 before. Root writes anywhere but a read-only mount, so the
+  // commands run as nobody when the test runs as root (setpriv, util-linux).
+  const fs::path f = calibratable("readonly");
+  const fs::path dir = f.parent_path();
+  const auto read_only = fs::perms::owner_read | fs::perms::owner_exec | fs::perms::group_read |
+                         fs::perms::group_exec | fs::perms::others_read | fs::perms::others_exec;
+  fs::create_directories(dir / "figures");
+  fs::permissions(f, fs::perms::owner_read | fs::perms::owner_write | fs::perms::group_read |
+                         fs::perms::others_read);
+  fs::permissions(dir / "figures", read_only);
+  fs::permissions(dir, read_only);
+  const std::string as =
+      geteuid() == 0 ? "setpriv --reuid=65534 --regid=65534 --clear-groups " : "";
+  auto run = [&](const std::string& args) {
+    return rendulic::testing::run_command(as + RENDULIC_EXE + " " + args, false);
+  };
+  expect_refusal(run("report " + f.string()), "figures: cannot write figures here");
+  expect_refusal(run("plot " + f.string()), "figures: cannot write figures here");
+  expect_refusal(run("report --no-figures " + f.string()), "cannot write report");
+  fs::permissions(dir, fs::perms::owner_all);
+  fs::permissions(dir / "figures", fs::perms::owner_all);
+}
+
+TEST(Faults, AStaleTemporaryOfAKilledRunIsRemovedAndSaidSo) {
+  const fs::path f = calibratable("stale");
+  const pid_t dead = fork();
+  if (dead == 0) _exit(0);
+  waitpid(dead, nullptr, 0);
+  const fs::path stale = f.parent_path() / (".results.h5.tmp-" + std::to_string(dead));
+  write_file(stale, "the half-written file of a killed run");
+  const CliResult r =
+      rendulic("calibrate --no-path --model isotropic_elastic --results " + f.string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find(stale.string() + ": removed, a temporary file of a run that was killed"),
+            std::string::npos)
+      << r.err;
+  EXPECT_FALSE(fs::exists(stale));
+}
+
+}  // namespace
