@@ -154,8 +154,11 @@ TEST(Yardstick, SelectionRule) {
   s = select_model({fake("rich", 6, 0.02, 0.02), fake("nofabric", 2, 0.01, 0.01, false)});
   EXPECT_EQ(s.selected, "rich");
   EXPECT_EQ(s.selected_stress, "nofabric");
-  for (const auto& r : s.rows)
-    if (r.model == "nofabric") EXPECT_FALSE(r.covers_all);
+  for (const auto& r : s.rows) {
+    if (r.model == "nofabric") {
+      EXPECT_FALSE(r.covers_all);
+    }
+  }
   // Laws fitted on other states are left out of the comparison.
   ModelScore other = fake("other", 1, 0.001, 0.001);
   other.fitted_states = {"b"};
