@@ -41,7 +41,12 @@ struct EnvInfo {
   // The fabric split (docs/probes.md "Fabric split"); empty when not stored.
   std::vector<Eigen::Matrix3d> f_volume, f_rotation, f_contacts;
   double mean_flips = kNaN;  // contacts opened + closed per probe (all contacts), if stored
-  bool has_split() const { return !f_contacts.empty() && f_contacts.size() == theta.size(); }
+  // The fabric split and the stress pairs of every direction (what C2 compares probe by probe).
+  bool has_split() const {
+    const std::size_t n = theta.size();
+    return n > 0 && f_contacts.size() == n && f_volume.size() == n && f_rotation.size() == n &&
+           stress_pairs.size() == n;
+  }
 };
 
 struct StateInfo {
