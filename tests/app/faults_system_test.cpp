@@ -567,8 +567,13 @@ TEST(FaultsSystem, AnInterruptedPlotLeavesNoFigureScriptRunningNorItsFile) {
   pid_t script = 0;
   auto script_started = [&] {
     for (pid_t c : children_of(pid)) {
+      // Between fork and exec the child still shows rendulic's own command line: wait for
+      // the interpreter's.
       const std::string cmd = read_file("/proc/" + std::to_string(c) + "/cmdline");
-      if (cmd.find((d / "results.h5").string()) != std::string::npos) script = c;
+      const std::string argv0 = cmd.substr(0, cmd.find('\0'));
+      if (argv0.find("python") != std::string::npos &&
+          cmd.find((d / "results.h5").string()) != std::string::npos)
+        script = c;
     }
     return script != 0;
   };
