@@ -7,7 +7,8 @@
 # enough for the stack traces. MPI and the benchmarks are off (the MPI tests skip without it),
 # -march=native is off so that the binary runs wherever the job does.
 # Run after .ci/setup.sh (same Debian packages). Environment: BUILD_DIR (default build-asan),
-# JOBS (default: all cores).
+# JOBS (default: all cores), SANITIZERS_BUILD_ONLY (set: build, run nothing; .ci/setup.sh
+# does that under CI, and the default suite's ci.SanitizedUnitAndSystemTests runs the tests).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -19,17 +20,18 @@ start=$(date +%s)
 cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
       -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g" -DCMAKE_CXX_FLAGS="$sanitize" \
       -DCMAKE_EXE_LINKER_FLAGS="$sanitize" -DCMAKE_SHARED_LINKER_FLAGS="$sanitize" \
-      -DRENDULIC_MPI=OFF -DRENDULIC_BENCH=OFF -DRENDULIC_NATIVE=OFF >/dev/null
+      -DRENDULIC_MPI=OFF -DRENDULIC_BENCH=OFF -DRENDULIC_NATIVE=OFF \
+      -DRENDULIC_SANITIZER_BUILD= >/dev/null
 cmake --build "$build_dir" -j "$jobs"
 built=$(date +%s)
+if [ -n "${SANITIZERS_BUILD_ONLY:-}" ]; then
+  echo "sanitizers: build $((built - start)) s (wall, $jobs jobs)" >&2
+  exit 0
+fi
 
-# detect_leaks: a leak is a finding. The suppressions name leaks of the libraries we link
-# (not ours), each with its reason. UBSan prints the stack of what it finds.
-export ASAN_OPTIONS="detect_leaks=1:strict_string_checks=1:check_initialization_order=1"
-export LSAN_OPTIONS="suppressions=$PWD/.ci/lsan.supp:print_suppressions=0"
-export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
+# The sanitizer options and the test selection live with the suite's own entry.
 status=0
-ctest --test-dir "$build_dir" -LE validate -j "$jobs" --output-on-failure || status=$?
+JOBS=$jobs bash tests/style/sanitized_suite.sh "$build_dir" "$PWD" || status=$?
 done=$(date +%s)
 echo "sanitizers: build $((built - start)) s, tests $((done - built)) s (wall, $jobs jobs)" >&2
 exit $status

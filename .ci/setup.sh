@@ -5,7 +5,9 @@
 # Environment: BUILD_DIR (default build), BUILD_TYPE (default Release), JOBS (default nproc),
 # RENDULIC_MPI (default ON: installs OpenMPI and builds with it, so that CI runs the
 # across-ranks tests; OFF builds without MPI and installs no MPI package), CI set -> warnings
-# are errors.
+# are errors and the sanitizer build (.ci/sanitizers.sh, build-asan) is made as well, so that
+# the default suite runs its tests (ci.SanitizedUnitAndSystemTests; RENDULIC_SANITIZERS=OFF
+# skips it).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -13,7 +15,7 @@ pkgs=(g++ make cmake pkg-config git ca-certificates
       libeigen3-dev libceres-dev libgoogle-glog-dev libgflags-dev
       libnlopt-dev libnlopt-cxx-dev libhdf5-dev hdf5-tools libsuitesparse-dev
       libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev libtomlplusplus-dev
-      python3 python3-matplotlib python3-h5py python3-numpy)
+      python3 python3-matplotlib python3-h5py python3-numpy clang-format)
 mpi=${RENDULIC_MPI:-ON}
 if [ "$mpi" = "ON" ]; then pkgs+=(libopenmpi-dev openmpi-bin); fi
 
@@ -33,3 +35,6 @@ build_dir=${BUILD_DIR:-build}
 cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE="${BUILD_TYPE:-Release}" \
       -DRENDULIC_MPI="$mpi" >/dev/null
 cmake --build "$build_dir" -j "${JOBS:-$(nproc)}"
+if [ -n "${CI:-}" ] && [ "${RENDULIC_SANITIZERS:-ON}" = "ON" ]; then
+  SANITIZERS_BUILD_ONLY=1 bash .ci/sanitizers.sh
+fi

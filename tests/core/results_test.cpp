@@ -274,7 +274,7 @@ TEST(Results, NamesHdf5CannotHoldAreRefusedBeforeWriting) {
   {
     ResultsWriter w(d / "results.h5");
     for (const std::string& bad : {std::string("/states/./x"), std::string("/states/.."),
-                                  std::string("/states/a\0b", 11), std::string("/a\nb")}) {
+                                   std::string("/states/a\0b", 11), std::string("/a\nb")}) {
       const auto msg = input_error([&] { w.attr(bad, "eps_dev", 1.0); });
       EXPECT_NE(msg.find("the name '"), std::string::npos) << msg;
       EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;

@@ -29,8 +29,9 @@ Backend backend_from_string(const std::string& name);  // InputError on an unkno
 // Ceres's function tolerance for DEM data (the `run` stage and `rendulic calibrate`). With
 // exact derivatives through the driver, Levenberg-Marquardt on DEM data stops by its gradient
 // or parameter tolerance; the function tolerance is only a backstop against a crawl (an
-// iteration that lowers the cost by less than 1e-16 of it, i.e. not at all). It used to be 1e-3, when central
-// differences through the driver left the fits crawling (docs/calibration.md "When to stop").
+// iteration that lowers the cost by less than 1e-16 of it, i.e. not at all). It used to be 1e-3,
+// when central differences through the driver left the fits crawling (docs/calibration.md "When to
+// stop").
 inline constexpr double kDemFunctionTolerance = 1e-16;
 // Gradient tolerance for DEM data, relative to the cost at the start: the gradient (per unit
 // of the working coordinates, i.e. per e-fold change of a log parameter) is 1e-8 of that cost.
