@@ -39,6 +39,10 @@ ObjectiveOptions yardstick_options(const models::StepOptions& step, bool path) {
   o.linear_response_elastic_only = true;
   o.prediction = Prediction::kAuto;
   o.step = step;
+  // The fit fails a probe that needs more than the objective's substep budget fast (an
+  // infinite cost steers the optimiser away); the yardstick measures the law where the fit
+  // ended, so it takes the driver's own budget: a law merely stiff there is scored, not lost.
+  o.step.max_substeps = std::max(step.max_substeps, models::StepOptions{}.max_substeps);
   return o;
 }
 
