@@ -75,7 +75,7 @@ Subcommand add_run(CLI::App& parent) {
               std::cerr << "rendulic: " << o->scenario
                         << ": N = " << scenario.get_int("dem.n_particles") << ", stages " << plan
                         << "; writing " << (out_dir / "results.h5").string()
-                        << " (on 2 idle cores quick.toml takes ~2 min, paper.toml ~20 min)\n";
+                        << " (on 2 idle cores quick.toml takes ~2 min, paper.toml ~25 min)\n";
             }
             if (mpi.size() > 1 && !o->quiet)
               std::cerr << "rendulic: " << mpi.size() << " MPI ranks share the probe campaigns\n";
