@@ -1,5 +1,5 @@
 // Stage table of `rendulic run` (see pipeline.hpp). Stages are added here as their modules
-// land; the names and their order are fixed by physics.md section 4 and issue 8.
+// land; the names and their order are fixed by docs/physics.md section 4.
 #include "pipeline.hpp"
 
 #include <chrono>

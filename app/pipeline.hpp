@@ -1,6 +1,6 @@
-// The stages of `rendulic run` (interfaces.md, physics.md section 4): a table from stage name
-// to the function that runs it against the open results file. The scenario key run.stages
-// picks which run, in the table's order. A stage with no implementation yet is refused
+// The stages of `rendulic run` (docs/usage.md, docs/dem.md; docs/physics.md section 4): a table
+// from stage name to the function that runs it against the open results file. The scenario key
+// run.stages picks which run, in the table's order. A stage with no implementation yet is refused
 // before anything is written.
 #pragma once
 

@@ -1,4 +1,4 @@
-// Cell controls and the stress servo (physics.md section 2; gains justified in cell.hpp).
+// Cell controls and the stress servo (docs/physics.md section 2; gains justified in cell.hpp).
 #include "rendulic/dem/cell.hpp"
 
 #include <algorithm>

@@ -19,7 +19,7 @@ inline std::string fmt_g(double v) {
 }
 }  // namespace
 
-// Elastic defaults are of the order of the frictionless DEM of physics.md at nu = 0.82
+// Elastic defaults are of the order of the frictionless DEM of docs/physics.md at nu = 0.82
 // (k* = k / 2<r> = 5e10 Pa; B/k* = 0.4, G/k* = 0.05: narrow envelopes, seed section 4); they
 // are starting points for the calibration, not measured values.
 const std::vector<ParameterInfo>& IsotropicElastic::parameter_info() {

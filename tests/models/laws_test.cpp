@@ -1,4 +1,4 @@
-// Unit tests of the four laws (models.md "Families"; issue 6 item 1): parameter tables,
+// Unit tests of the four laws (docs/models.md sections 1-4): parameter tables,
 // tangents against central finite differences and against automatic differentiation
 // (ceres::Jet through the templated laws), the pinned anisotropic form against its scalar
 // form, and the loading/unloading behaviour of elastoplastic_fabric.

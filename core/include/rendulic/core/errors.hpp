@@ -1,7 +1,7 @@
-// Error types shared by every module (architecture.md "Errors"). InputError is bad input from
-// the user (a file, a scenario key, a value out of range, a non-physical time step, a damaged
-// results file, an output folder that cannot be written): the CLI prints its one-line message
-// and exits with code 2. Anything else escaping to main is a bug (exit 1).
+// Error types shared by every module (docs/architecture.md "Conventions"). InputError is bad input
+// from the user (a file, a scenario key, a value out of range, a non-physical time step, a damaged
+// results file, an output folder that cannot be written): the CLI prints its one-line message and
+// exits with code 2. Anything else escaping to main is a bug (exit 1).
 #pragma once
 
 #include <stdexcept>

@@ -1,4 +1,4 @@
-// Orthorhombic periodic cell and its driver (physics.md section 2). The cell is a small value
+// Orthorhombic periodic cell and its driver (docs/physics.md section 2). The cell is a small value
 // type (three lengths); changing it is the driver's job. The driver turns each axis's control
 // (strain rate, or a stress target held by a servo) into the diagonal velocity gradient D of
 // the step; the system then updates lengths with L_a <- L_a exp(D_aa dt), so that a trace-free

@@ -1,4 +1,4 @@
-// Family 4 of models.md: an elasto-plastic rate law with fabric evolution, in the spirit of
+// Family 4 of docs/models.md: an elasto-plastic rate law with fabric evolution, in the spirit of
 // Imole et al. (2013) and Kumar et al. (2014). Our own minimal design, documented in
 // docs/models.md:
 // - elastic part: the anisotropic_elastic operator (same first nine parameters);
@@ -10,8 +10,9 @@
 // - hardening makes the deviatoric stress ratio approach its steady value M exponentially
 //   with plastic deviatoric strain: n : dr = beta_s (M - r : n) lambda (alpha follows,
 //   d_alpha = beta_s (M - r : n) lambda n, so |r - alpha| stays m);
-// - fabric: d_F = c_F tr(d_eps) F/tr(F) + beta_F (F_dev_max n - F^D) lambda, i.e. the spec's
-//   dF_dev = beta_F (F_dev_max - F_dev) |d_eps_dev| driven by the plastic deviatoric strain
+// - fabric: d_F = c_F tr(d_eps) F/tr(F) + beta_F (F_dev_max n - F^D) lambda, i.e. the fabric
+//   deviator approaches its steady value exponentially,
+//   dF_dev = beta_F (F_dev_max - F_dev) |d_eps_dev|, driven by the plastic deviatoric strain
 //   (no deviatoric fabric change while elastic, seed Fig. 4).
 // At the steady state (r : n = M) the plastic modulus vanishes: loading probes give no change
 // of the stress ratio, so the envelope collapses toward a line (seed Fig. 5e).
@@ -103,7 +104,7 @@ struct ElastoplasticFabric {
   // A sharp switch at f = 0 makes the response of a finite probe a non-differentiable function
   // of the parameters where the probe just reaches the surface; the default w = 0.02 keeps it
   // smooth at the price of a little plastic flow within the last 2 % of the elastic range
-  // (docs/models.md, family 4). w = 0 is the sharp switch (a state within kYieldSurfaceBand of
+  // (docs/models.md section 4). w = 0 is the sharp switch (a state within kYieldSurfaceBand of
   // the surface counts as on it).
   template <typename T>
   static T plastic_share(const T& f, const T& w) {

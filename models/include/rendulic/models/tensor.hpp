@@ -1,4 +1,4 @@
-// Scalar-generic tensor helpers for the constitutive laws (models.md "Coordinates"). The laws
+// Scalar-generic tensor helpers for the constitutive laws (docs/models.md "Coordinates"). The laws
 // are templates on the scalar type so that the calibration layer can push Ceres Jets through
 // them; core/conventions.hpp is the reference for doubles and these helpers follow it exactly
 // (trace, deviator, double contraction, Mandel order xx, yy, zz, sqrt2 yz, sqrt2 xz, sqrt2 xy).
