@@ -54,9 +54,6 @@ int main(int argc, char** argv) {
   } catch (const InputError& e) {
     std::cerr << "rendulic: " << printable(e.what()) << "\n";
     fail_with(kExitInput);
-  } catch (const NotAvailable& e) {
-    std::cerr << "rendulic: " << printable(e.what()) << "\n";
-    fail_with(kExitInput);
   } catch (...) {
     std::cerr << "rendulic: internal error: " << printable(describe_current_exception()) << "\n";
     fail_with(1);

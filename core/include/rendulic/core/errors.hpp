@@ -16,12 +16,6 @@ class InputError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-// A capability whose issue has not landed yet: it says so instead of pretending to work.
-class NotAvailable : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
-
 // `text` fit for a one-line message: control characters (a newline, a NUL) shown as \xNN.
 std::string printable(const std::string& text);
 
@@ -31,8 +25,8 @@ std::string printable(const std::string& text);
 std::string describe_current_exception();
 
 // Rethrows the exception in flight (call inside a catch block) with `note` appended to its
-// message, keeping its kind: InputError stays InputError (exit 2), NotAvailable stays
-// NotAvailable, anything else becomes std::runtime_error (exit 1).
+// message, keeping its kind: InputError stays InputError (exit 2), anything else becomes
+// std::runtime_error (exit 1).
 [[noreturn]] void rethrow_with_note(const std::string& note);
 
 }  // namespace rendulic
