@@ -29,9 +29,6 @@ CellControl CellControl::isotropic_compression(double rate) {
 CellControl CellControl::undrained_axisymmetric(double rate) {
   return strain_rate(Eigen::Vector3d(rate, -0.5 * rate, -0.5 * rate));
 }
-CellControl CellControl::plane_strain(double rate) {
-  return strain_rate(Eigen::Vector3d(rate, -rate, 0.0));
-}
 CellControl CellControl::drained_triaxial(double axial_rate, double lateral_stress) {
   CellControl c;
   c.axis[0].rate = axial_rate;

@@ -51,8 +51,6 @@ struct CellControl {
   static CellControl isotropic_compression(double rate);
   // Constant-volume axisymmetric along x: D = rate diag(1, -1/2, -1/2) (rate > 0: extension).
   static CellControl undrained_axisymmetric(double rate);
-  // Plane strain in x-y at constant volume: D = rate diag(1, -1, 0).
-  static CellControl plane_strain(double rate);
   // Drained triaxial: axial (x) strain rate imposed, lateral stress held at `lateral_stress`.
   static CellControl drained_triaxial(double axial_rate, double lateral_stress);
 
