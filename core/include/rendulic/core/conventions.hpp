@@ -109,17 +109,26 @@ inline Eigen::VectorXd probe_directions_deg(int m) {
   return d;
 }
 
-// Mandel form of a symmetric tensor and back.
-inline Vector6d to_mandel(const Eigen::Matrix3d& Q) {
-  Vector6d v;
-  v << Q(0, 0), Q(1, 1), Q(2, 2), kSqrt2 * Q(1, 2), kSqrt2 * Q(0, 2), kSqrt2 * Q(0, 1);
+// Mandel form of a symmetric tensor (xx, yy, zz, sqrt2 yz, sqrt2 xz, sqrt2 xy) and back: the
+// dot product of two Mandel vectors is the double contraction of the tensors. Templates on the
+// scalar so that the constitutive laws push automatic-differentiation types through the same
+// code; the double overloads also take Eigen expressions.
+template <typename T>
+Eigen::Matrix<T, 6, 1> to_mandel(const Eigen::Matrix<T, 3, 3>& Q) {
+  const T r2 = T(kSqrt2);
+  Eigen::Matrix<T, 6, 1> v;
+  v << Q(0, 0), Q(1, 1), Q(2, 2), r2 * Q(1, 2), r2 * Q(0, 2), r2 * Q(0, 1);
   return v;
 }
-inline Eigen::Matrix3d from_mandel(const Vector6d& v) {
-  Eigen::Matrix3d Q;
-  const double yz = v(3) / kSqrt2, xz = v(4) / kSqrt2, xy = v(5) / kSqrt2;
+template <typename T>
+Eigen::Matrix<T, 3, 3> from_mandel(const Eigen::Matrix<T, 6, 1>& v) {
+  const T r2 = T(kSqrt2);
+  const T yz = v(3) / r2, xz = v(4) / r2, xy = v(5) / r2;
+  Eigen::Matrix<T, 3, 3> Q;
   Q << v(0), xy, xz, xy, v(1), yz, xz, yz, v(2);
   return Q;
 }
+inline Vector6d to_mandel(const Eigen::Matrix3d& Q) { return to_mandel<double>(Q); }
+inline Eigen::Matrix3d from_mandel(const Vector6d& v) { return from_mandel<double>(v); }
 
 }  // namespace rendulic

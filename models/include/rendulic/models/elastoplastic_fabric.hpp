@@ -74,7 +74,7 @@ struct ElastoplasticFabric {
     const T pr = trace(s.stress) / T(3);
     if (!(pr > T(0))) return out;
     const Mat3<T> r = dev(s.stress) / pr;
-    const Mat3<T> xi = r - tensor_of<T>(s.internal);
+    const Mat3<T> xi = r - from_mandel<T>(s.internal);
     const T xi_norm = safe_norm(xi);
     if (!(xi_norm > T(0))) return out;
     const T share = plastic_share((xi_norm - p[kM]) / p[kM], p[kWyield]);
@@ -127,7 +127,7 @@ struct ElastoplasticFabric {
     if (pl.loading) {
       r.plastic = true;
       r.d_stress -= pl.lambda * pl.d_n;
-      r.d_internal = mandel_of<T>((pl.hardening * pl.lambda) * pl.n);
+      r.d_internal = to_mandel<T>((pl.hardening * pl.lambda) * pl.n);
       r.d_fabric += (p[kBetaF] * pl.lambda) * (p[kFmax] * pl.n - f_dev);
     }
     return r;
@@ -168,7 +168,7 @@ struct ElastoplasticFabric {
   static T yield_function(const T* p, const StateT<T>& s) {
     const T pr = trace(s.stress) / T(3);
     if (!(pr > T(0))) return T(-std::numeric_limits<double>::infinity());
-    return (safe_norm(Mat3<T>(dev(s.stress) / pr - tensor_of<T>(s.internal))) - p[kM]) / p[kM];
+    return (safe_norm(Mat3<T>(dev(s.stress) / pr - from_mandel<T>(s.internal))) - p[kM]) / p[kM];
   }
 
   // Drift correction after an explicit substep: a state outside the surface has its alpha moved
@@ -182,12 +182,12 @@ struct ElastoplasticFabric {
   static void correct(const T* p, StateT<T>* s, bool on_surface) {
     const T pr = trace(s->stress) / T(3);
     if (!(pr > T(0))) return;
-    const Mat3<T> xi = dev(s->stress) / pr - tensor_of<T>(s->internal);
+    const Mat3<T> xi = dev(s->stress) / pr - from_mandel<T>(s->internal);
     const T xi_norm = safe_norm(xi);
     const T f = xi_norm - p[kM];
     const bool sharp = !(p[kWyield] > T(kYieldSurfaceBand));
     if ((f > T(0) || (on_surface && sharp)) && xi_norm > T(0))
-      s->internal += mandel_of<T>(Mat3<T>(xi * (f / xi_norm)));
+      s->internal += to_mandel<T>(Mat3<T>(xi * (f / xi_norm)));
   }
 };
 
