@@ -1,4 +1,4 @@
-// `rendulic calibrate` (interfaces.md "Command line"; issue 7): fits a constitutive law to the
+// `rendulic calibrate` (docs/calibration.md): fits a constitutive law to the
 // envelopes (and main path) of a results file, per state and across states
 // (calibration/calibrate.hpp), prints or writes the JSON (model, params, stderr, correlation,
 // per_state.<label> with B, G, A and the plastic features) and, unless --no-write, stores
@@ -133,7 +133,7 @@ int run_calibrate(const CalibrateArgs& a) {
   const CalibrationData data = load_calibration_data(a.results, lo);
   const CalibrationSummary summary = calibrate(data, opt);
   const std::string json = to_json(summary);
-  // "When the file is ours" (issue 7): a rendulic/1 file (the reader refused anything else)
+  // "When the file is ours": a rendulic/1 file (the reader refused anything else)
   // that we may replace. A read-only file or folder is still calibrated, just not written to.
   const std::filesystem::path rp(a.results);
   const std::filesystem::path folder = rp.has_parent_path() ? rp.parent_path() : ".";

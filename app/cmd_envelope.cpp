@@ -1,7 +1,8 @@
-// `rendulic envelope` (interfaces.md "Command line"; issue 6 item 3): the response envelope a
-// constitutive model predicts at a given state, over the DEM probe set (physics.md section 5).
-// Parameters and state come from small TOML files (models/material_io.hpp); `--json` prints
-// theta_deg, strain, stress (Pa) and fabric as Rendulic pairs, plus the driver's error report.
+// `rendulic envelope` (docs/models.md "Model envelopes and `rendulic envelope`"): the response
+// envelope a constitutive model predicts at a given state, over the DEM probe set (docs/physics.md
+// section 5). Parameters and state come from small TOML files (models/material_io.hpp); `--json`
+// prints theta_deg, strain, stress (Pa) and fabric as Rendulic pairs, plus the driver's error
+// report.
 #include <cstdio>
 #include <iostream>
 #include <memory>

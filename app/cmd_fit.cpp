@@ -1,6 +1,6 @@
 // `rendulic fit --in FILE.csv [--shape ellipse|line|auto] [--loss none|huber|cauchy] [--json]`
-// (interfaces.md): fits one envelope from a CSV file (issue 5). --json prints one object with
-// shape, center, semi_axes, inclination_deg (null for a circle: undefined), rms and stderr
+// (docs/fitting.md "The fit command"): fits one envelope from a CSV file. --json prints one object
+// with shape, center, semi_axes, inclination_deg (null for a circle: undefined), rms and stderr
 // (same keys, where defined), plus n_points, loss, loss_scale, converged, selection and
 // line_p_value. Bad input is an InputError (exit 2) naming the culprit.
 #include <cmath>

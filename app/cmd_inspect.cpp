@@ -1,4 +1,4 @@
-// `rendulic inspect FILE.h5` (interfaces.md): human summary of a results file. A file that is
+// `rendulic inspect FILE.h5` (docs/results.md): human summary of a results file. A file that is
 // missing, not HDF5, corrupt or not ours is an InputError (exit 2), never an HDF5 stack dump.
 #include <iostream>
 #include <memory>

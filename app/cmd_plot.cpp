@@ -1,4 +1,4 @@
-// `rendulic plot FILE.h5 [--out DIR]` (interfaces.md; issue 8 item 2): the figures of a results
+// `rendulic plot FILE.h5 [--out DIR]` (docs/usage.md): the figures of a results
 // file as PNG and SVG, drawn by the embedded app/plot.py with Debian's python3-matplotlib and
 // python3-h5py. The file is checked to be ours and the output folder to be writable first,
 // and the script reports data it cannot draw in one line (exit 2), so a bad file or folder is

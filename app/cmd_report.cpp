@@ -1,4 +1,4 @@
-// `rendulic report FILE.h5 [--no-figures]` (issue 8 item 1): writes report.md (and the figures)
+// `rendulic report FILE.h5 [--no-figures]`: writes report.md (and the figures)
 // beside an existing results file, as the run's report stage does: for a file from an earlier
 // version, another machine or an interrupted session, without re-running anything. The file
 // is only read; report.md is replaced atomically.

@@ -1,4 +1,4 @@
-// `rendulic run SCENARIO.toml [--out DIR] [--set key=value ...] [--threads N]` (interfaces.md).
+// `rendulic run SCENARIO.toml [--out DIR] [--set key=value ...] [--threads N]` (docs/usage.md).
 // Validation happens in full before anything touches the disk: a bad scenario or override
 // exits 2 and writes nothing. The results file is written under a temporary name and renamed
 // to DIR/results.h5 only when every stage succeeded; a run that fails (or is stopped by a
@@ -68,7 +68,7 @@ Subcommand add_run(CLI::App& parent) {
             out.attr("/", "scenario_file", o->scenario);
             RunContext ctx{out_dir, o->threads, o->quiet};
             if (!o->quiet) {
-              // Say first what will run, on what, and where it goes (issue 8).
+              // Say first what will run, on what, and where it goes.
               std::string plan;
               for (const auto& st : scenario.get_strings("run.stages"))
                 plan += (plan.empty() ? "" : ", ") + st;

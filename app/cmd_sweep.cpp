@@ -1,9 +1,9 @@
-// `rendulic sweep [SCENARIO] [--out DIR] [--set key=value ...] [--threads T] [--quick]
-// [--factors F,...] [--target E] [--path-rates R,...] [--path-seeds S] [--base-n N]` (issue 8 item
-// 3): the speed-versus-accuracy sweep of the probe methods and of the path's rate (sweep.hpp)
-// around the scenario's settings; writes DIR/sweep.h5 (atomically), DIR/sweep.csv
-// (DIR/sweep_path.csv for the path's rate) and the Pareto chart DIR/pareto.png / .svg (the embedded
-// plot script). All input is validated before any simulation: bad input exits 2 and writes nothing.
+// `rendulic sweep [SCENARIO] [--out DIR] [--set key=value ...] [--threads T] [--quick] [--factors
+// F,...] [--target E] [--path-rates R,...] [--path-seeds S] [--base-n N]` (docs/accuracy.md): the
+// speed-versus-accuracy sweep of the probe methods and of the path's rate (sweep.hpp) around the
+// scenario's settings; writes DIR/sweep.h5 (atomically), DIR/sweep.csv (DIR/sweep_path.csv for the
+// path's rate) and the Pareto chart DIR/pareto.png / .svg (the embedded plot script). All input is
+// validated before any simulation: bad input exits 2 and writes nothing.
 #include <omp.h>
 
 #include <filesystem>

@@ -1,4 +1,4 @@
-// Subcommand registry of the `rendulic` CLI (interfaces.md "Command line"). Each cmd_*.cpp
+// Subcommand registry of the `rendulic` CLI (docs/usage.md). Each cmd_*.cpp
 // adds its options to the parent app and returns the action main() runs when it is chosen;
 // options live in objects owned by the action, so registration has no globals.
 #pragma once

@@ -1,4 +1,4 @@
-// Entry point of the `rendulic` executable (interfaces.md "Command line"; docs/usage.md):
+// Entry point of the `rendulic` executable (docs/usage.md):
 // parses with CLI11, dispatches to one subcommand, and maps failures to exit codes: 0
 // success, 2 bad input (one line on stderr naming the culprit), 1 an internal error. Nothing
 // escapes uncaught: an exception of any type (HDF5's are not std::exception) unwinds, so the
@@ -52,9 +52,6 @@ int main(int argc, char** argv) {
     for (const auto& sub : subs)
       if (sub.app->parsed()) return sub.action();
   } catch (const InputError& e) {
-    std::cerr << "rendulic: " << printable(e.what()) << "\n";
-    fail_with(kExitInput);
-  } catch (const NotAvailable& e) {
     std::cerr << "rendulic: " << printable(e.what()) << "\n";
     fail_with(kExitInput);
   } catch (...) {

@@ -1,7 +1,6 @@
-// The stages of `rendulic run` (interfaces.md, physics.md section 4): a table from stage name
-// to the function that runs it against the open results file. The scenario key run.stages
-// picks which run, in the table's order. A stage with no implementation yet is refused
-// before anything is written.
+// The stages of `rendulic run` (docs/usage.md, docs/dem.md; docs/physics.md section 4): a table
+// from stage name to the function that runs it against the open results file. The scenario key
+// run.stages picks which run, in the table's order.
 #pragma once
 
 #include <filesystem>
@@ -21,7 +20,8 @@ struct RunContext {
 bool stage_requested(const Scenario& scenario, const std::string& name);
 // Registers the run.* keys (seed, stages, ...).
 void register_run_keys(ScenarioSchema& schema);
-// NotAvailable naming the first requested stage that has not landed.
+// Checks, before the first stage runs, that the stage list computes something and that the
+// cross-key rules of the requested stages hold (InputError otherwise).
 void check_stages_available(const Scenario& scenario);
 // Runs every requested stage, in order, writing into `out`; wall time per stage goes to the
 // attributes of /timings.

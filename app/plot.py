@@ -1,6 +1,6 @@
-# Figures of a rendulic results file (issue 8; seed paper Figs. 1-7 and the isotropic branch).
+# Figures of a rendulic results file (seed paper Figs. 1-7 and the isotropic branch).
 # Embedded into the `rendulic` binary at build time and run by `rendulic plot FILE.h5 --out DIR`
-# with Debian's python3-matplotlib and python3-h5py. Reads only the names of interfaces.md
+# with Debian's python3-matplotlib and python3-h5py. Reads only the names of docs/results.md
 # (schema rendulic/1), so it works on any conforming file; a figure whose data is absent is
 # skipped with a note, never faked. Writes each figure as PNG and SVG.
 import math
@@ -17,7 +17,7 @@ import numpy as np  # noqa: E402
 ISO = math.degrees(math.atan(1 / math.sqrt(2)))  # 35.26 deg
 SPECIAL = {"I.C.": ISO, "I.E.": ISO + 180, "U.C.": 90.0, "U.E.": 270.0,
            "D.C.": ISO + 90, "D.E.": ISO + 270}
-ELASTIC_MAX, PLASTIC_MIN = 1e-4, 1e-3  # physics.md section 5
+ELASTIC_MAX, PLASTIC_MIN = 1e-4, 1e-3  # docs/physics.md section 5
 
 
 def save(fig, out, name, written, description=None):

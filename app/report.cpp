@@ -22,7 +22,7 @@ namespace rendulic::app {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-// physics.md section 5: elastic probes below 1e-4, elasto-plastic above 1e-3.
+// docs/physics.md section 5: elastic probes below 1e-4, elasto-plastic above 1e-3.
 constexpr double kElasticMax = 1e-4, kPlasticMin = 1e-3;
 
 struct FitInfo {
@@ -641,7 +641,7 @@ std::string report_markdown(const ResultsReader& r, const std::vector<Claim>& cl
       if (r.has_attr("/timings", st))
         md << "| " << st << " | " << fmt(r.attr_double("/timings", st), 4) << " |\n";
   }
-  md << "\n## The seed's claims (physics.md section 5)\n\n"
+  md << "\n## The seed's claims (docs/claims.md)\n\n"
      << "| claim | statement | measured | verdict |\n|---|---|---|---|\n";
   for (const auto& c : claims)
     md << "| " << c.id << " | " << c.claim << " | " << (c.measured.empty() ? "-" : c.measured)
@@ -676,7 +676,7 @@ std::string report_markdown(const ResultsReader& r, const std::vector<Claim>& cl
           "strain | elastic to |\n|---|---|---|---|---|---|\n"
        << range.str();
   if (r.exists("/calibration")) {
-    md << "\n## Calibration (models.md)\n\n"
+    md << "\n## Calibration (docs/calibration.md)\n\n"
        << "| model | converged | objective | fitted misfit | held-out misfit | parameters "
           "(+- standard error) |\n|---|---|---|---|---|---|\n";
     for (const std::string& m : r.children("/calibration")) {

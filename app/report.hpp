@@ -1,5 +1,5 @@
-// The run report (issue 8 item 1): report.md beside results.h5, with the table of the seed's
-// claims C1-C8 (physics.md section 5, seed paper section 4) evaluated on the file's own
+// The run report: report.md beside results.h5, with the table of the seed's
+// claims C1-C8 (docs/claims.md, seed paper section 4) evaluated on the file's own
 // numbers, and the figures. Reads a committed results file only (ResultsReader), so it works
 // on any conforming file and never on half-written data.
 #pragma once

@@ -42,12 +42,12 @@ std::vector<std::pair<dem::DemSystem, dem::RestSummary>> rest_states(
 void write_state(ResultsWriter& out, const std::string& group, const dem::DemSystem& sys,
                  const dem::RestSummary& rest, double force_tolerance, bool with_configuration);
 
-// DEM (stages_dem.cpp, issue 3).
+// DEM (stages_dem.cpp).
 void stage_prepare(const Scenario&, ResultsWriter&, const RunContext&);
 void stage_isotropic(const Scenario&, ResultsWriter&, const RunContext&);
 void stage_path(const Scenario&, ResultsWriter&, const RunContext&);
 void stage_states(const Scenario&, ResultsWriter&, const RunContext&);
-// Probe campaigns and linear response (stages_probes.cpp, issue 4).
+// Probe campaigns and linear response (stages_probes.cpp).
 void stage_probes(const Scenario&, ResultsWriter&, const RunContext&);
 void stage_linear_response(const Scenario&, ResultsWriter&, const RunContext&);
 // The elastic range of every state (probe_elastic_range.hpp): /states/<label>/elastic_range.
@@ -55,7 +55,7 @@ void stage_elastic_range(const Scenario&, ResultsWriter&, const RunContext&);
 // The pressure branches (stages_pressure.cpp): path, states at rest, elastic range, probes,
 // linear response and fits from each of the loading's snapshots, under /pressure/nu<nu>.
 void stage_pressure(const Scenario&, ResultsWriter&, const RunContext&);
-// Envelope fits (stages_probes.cpp, issue 5): fit_stress / fit_fabric of every envelope.
+// Envelope fits (stages_probes.cpp): fit_stress / fit_fabric of every envelope.
 void register_fit_keys(ScenarioSchema& schema);
 void stage_fits(const Scenario&, ResultsWriter&, const RunContext&);
 // The fits of every envelope under <state_group>/envelopes, with the fits.* options.

@@ -1,4 +1,4 @@
-// The `calibration` run stage (stages_calibration.hpp; issue 7, models.md "Calibration").
+// The `calibration` run stage (stages_calibration.hpp, docs/calibration.md "Two levels").
 // It reads the states and envelopes through a ResultsReader on the writer's temporary file
 // (same process: HDF5 shares the open file, so everything written so far is visible) and
 // writes /calibration/<model> through the same writer.

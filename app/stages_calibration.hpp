@@ -1,4 +1,4 @@
-// The `calibration` stage of `rendulic run` (issue 7; pipeline.hpp): calibrates a model
+// The `calibration` stage of `rendulic run` (pipeline.hpp): calibrates a model
 // against the states and envelopes already written by the earlier stages of the same run and
 // stores /calibration/<model>. Its scenario keys are calibration.*.
 #pragma once

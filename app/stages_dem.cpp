@@ -1,4 +1,4 @@
-// The DEM stages of `rendulic run` (physics.md section 4; interfaces.md results schema):
+// The DEM stages of `rendulic run` (docs/physics.md section 4; docs/results.md):
 //   prepare   -> /material, /preparation : random gas, compression to nu0, relaxation
 //   isotropic -> /isotropic : loading nu0 -> nu_max (>= 50 samples), relaxation at nu_max
 //   path      -> /path      : constant-volume axisymmetric extension, snapshots in memory

@@ -1,4 +1,4 @@
-// The `pressure` stage of `rendulic run` (physics.md section 5, "beyond the seed": the elastic
+// The `pressure` stage of `rendulic run` (docs/physics.md section 5, "beyond the seed": the elastic
 // range and its dependence on pressure; docs/dem.md "Pressure branches"). The isotropic stage
 // snapshots the loading at pressure.volume_fractions on its way to nu_max; from each snapshot
 // this stage repeats, under /pressure/nu<nu>, what the run does at nu_max: relaxation, the

@@ -1,8 +1,8 @@
-// The `probes`, `linear_response` and `fits` stages of `rendulic run` (issues 4 and 5;
-// physics.md sections 5-6). Probes and linear response work on the relaxed states the
-// `states` stage left in memory; fits read every envelope already written (through a reader
-// on the writer's temporary file) and add fit_stress / fit_fabric beside it. An envelope that
-// cannot be fitted (no fabric change at all, a degenerate set) gets shape "none" and the
+// The `probes`, `linear_response` and `fits` stages of `rendulic run` (docs/probes.md,
+// docs/fitting.md; docs/physics.md sections 5-6). Probes and linear response work on the relaxed
+// states the `states` stage left in memory; fits read every envelope already written (through a
+// reader on the writer's temporary file) and add fit_stress / fit_fabric beside it. An envelope
+// that cannot be fitted (no fabric change at all, a degenerate set) gets shape "none" and the
 // reason, never an invented fit.
 #include <iostream>
 #include <tuple>

@@ -1,4 +1,4 @@
-// The speed-versus-accuracy sweep (issue 8 item 3): preparation of the probed states, the
+// The speed-versus-accuracy sweep: preparation of the probed states, the
 // points of each factor, their errors against the converged references, the Pareto front and
 // the account of where each method breaks. See sweep.hpp; the findings are in docs/accuracy.md.
 #include "sweep.hpp"

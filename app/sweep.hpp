@@ -1,4 +1,4 @@
-// The speed-versus-accuracy sweep of the probe methods (issue 8 item 3; physics.md section 5,
+// The speed-versus-accuracy sweep of the probe methods (docs/physics.md section 5,
 // docs/accuracy.md). From the first relaxed state of a scenario's own protocol (gas, nu0,
 // isotropic loading to nu_max, undrained path to the first states.eps_dev, relaxation), one
 // factor at a time is varied around the scenario's settings: the DEM time-step factor, the

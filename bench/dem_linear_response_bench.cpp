@@ -1,4 +1,4 @@
-// Linear response of the contact network (issue 4 item 3: "seconds at N = 9261") and its
+// Linear response of the contact network (it should take seconds at N = 9261) and its
 // building blocks: pair search and one FIRE iteration's worth of force evaluation are
 // reported per particle. The packings are generated once per size (random spheres, w = 3,
 // nu = 0.70, FIRE to 1e-9 of the mean contact force; ~1 min of set-up at N = 9261).

@@ -1,4 +1,4 @@
-// Cost of one envelope fit (issue 5 "benchmark"): 36-point ellipse fits with and without the
+// Cost of one envelope fit: 36-point ellipse fits with and without the
 // probe directions, with and without the covariance, a thin ellipse, a robust fit, the
 // line fit, and the automatic shape choice (whose bootstrap dominates its cost).
 // Run: build/fit_ellipse_bench --benchmark_min_time=0.5

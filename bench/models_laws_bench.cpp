@@ -1,4 +1,4 @@
-// Benchmarks of the constitutive laws (issue 6 "Benchmark: increments per second per law"):
+// Benchmarks of the constitutive laws:
 // one rate evaluation, one analytic tangent, and one driver-integrated probe increment
 // (modified Euler, tolerance 1e-6) at elastic (5e-5) and elasto-plastic (2e-3) amplitudes, from
 // the example states of data/models (DEM scale for the elastic laws, sand for hypoplastic_wu).

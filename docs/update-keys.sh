@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Regenerates the key tables of docs/scenario-keys.md from the code (`rendulic keys`), so the
-# reference can never drift from what the parser accepts (tests/app/cli_test.cpp checks it).
+# reference can never drift from what the parser accepts (tests/app/cli_system_test.cpp checks it).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 exe=${1:-build/rendulic}

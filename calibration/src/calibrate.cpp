@@ -1,4 +1,4 @@
-// Two-level calibration with held-out check (calibrate.hpp; models.md "Calibration").
+// Two-level calibration with held-out check (calibrate.hpp; docs/calibration.md "Two levels").
 #include "rendulic/calibration/calibrate.hpp"
 
 #include <algorithm>
@@ -177,7 +177,7 @@ CalibrationSummary calibrate(const CalibrationData& data, const CalibrationOptio
       bs.push_back(st.elastic.B);
       if (st.pressure > 0.0) b_over_p.push_back(st.elastic.B / st.pressure);
       gs.push_back(st.elastic.G);
-      // A = beta_A F_dev B (models.md family 2): least squares through the origin.
+      // A = beta_A F_dev B (docs/models.md section 2): least squares through the origin.
       num += st.elastic.A * st.f_dev * st.elastic.B;
       den += std::pow(st.f_dev * st.elastic.B, 2);
     }

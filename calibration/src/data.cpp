@@ -1,4 +1,4 @@
-// Loading calibration data from a results file (data.hpp; interfaces.md "Results file").
+// Loading calibration data from a results file (data.hpp; docs/results.md).
 #include "rendulic/calibration/data.hpp"
 
 #include <algorithm>
@@ -120,7 +120,8 @@ EnvelopeData read_envelope(const ResultsReader& r, const std::string& group,
   } else {
     for (const auto& s : e.strain) e.theta_deg.push_back(probe_direction_deg(s));
   }
-  // The probe is axisymmetric (physics.md 5), so its tensor is fixed by its Rendulic pair.
+  // The probe is axisymmetric (docs/physics.md section 5), so its tensor is fixed by its Rendulic
+  // pair.
   for (const auto& s : e.strain) e.d_eps.push_back(from_rendulic_pair(s));
   std::string why;
   if (!e.IsValid(&why)) throw InputError(file + ": " + group + ": " + why);

@@ -1,7 +1,7 @@
-// Compile-time access to the scalar-generic laws of models/ (law_model.hpp) from a run-time
-// name, so that calibration can push Ceres Jets through M::rate<T> (models.md "Calibration":
-// autodiff through the law where the law is smooth), and a Law whose parameters calibration
-// sets without the bound check (central differences step a hair past a bound).
+// Compile-time access to the scalar-generic laws of models/ (law_model.hpp) from a run-time name,
+// so that calibration can push Ceres Jets through M::rate<T> (docs/calibration.md "Predictions and
+// derivatives": autodiff through the law where the law is smooth), and a Law whose parameters
+// calibration sets without the bound check (central differences step a hair past a bound).
 #pragma once
 
 #include <string_view>

@@ -1,5 +1,6 @@
-// The calibration objective and its parameter space (objective.hpp; models.md "Calibration";
-// the weighting and normalisation are documented in docs/calibration.md "Objectives").
+// The calibration objective and its parameter space (objective.hpp): the
+// weighting and normalisation are documented in docs/calibration.md "Objectives, weights and
+// normalisation".
 #include "rendulic/calibration/objective.hpp"
 
 #include <algorithm>

@@ -1,4 +1,4 @@
-// JSON and HDF5 output of a calibration (report.hpp; interfaces.md).
+// JSON and HDF5 output of a calibration (report.hpp; docs/calibration.md).
 #include "rendulic/calibration/report.hpp"
 
 #include <cmath>

@@ -1,5 +1,5 @@
-// Per-state Rendulic stiffness and plastic envelope features (stiffness.hpp; models.md
-// "Calibration", physics.md sections 5-6).
+// Per-state Rendulic stiffness and plastic envelope features (stiffness.hpp; docs/calibration.md
+// "Two levels", docs/physics.md sections 5-6).
 #include "rendulic/calibration/stiffness.hpp"
 
 #include <cmath>

@@ -110,8 +110,6 @@ void rethrow_with_note(const std::string& note) {
     throw;
   } catch (const InputError& e) {
     throw InputError(e.what() + note);
-  } catch (const NotAvailable& e) {
-    throw NotAvailable(e.what() + note);
   } catch (...) {
     throw std::runtime_error(describe_current_exception() + note);
   }

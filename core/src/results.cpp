@@ -1,5 +1,5 @@
-// Atomic HDF5 results files, schema "rendulic/1" (interfaces.md "Results file";
-// docs/results.md, docs/usage.md "Results are atomic"). See results.hpp. Implementation notes:
+// Atomic HDF5 results files, schema "rendulic/1" (docs/results.md,
+// docs/usage.md "Results are atomic"). See results.hpp. Implementation notes:
 // - HDF5's automatic error printing is replaced by a recorder (hdf5_reason.hpp): every
 //   failure becomes one InputError line naming the file, the object and the reason.
 // - The temporary file lives in the destination folder so that the final rename is atomic

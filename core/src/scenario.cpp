@@ -1,4 +1,4 @@
-// Strict scenario parsing and validation (see scenario.hpp; interfaces.md `rendulic run`).
+// Strict scenario parsing and validation (see scenario.hpp; docs/usage.md).
 // The TOML tree is walked against the schema: a table is descended only if some declared key
 // lives below it, so an unknown key is reported at its own line with the closest declared
 // key as a suggestion. Values are converted once, here; the rest of the code reads typed

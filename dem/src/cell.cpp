@@ -1,4 +1,4 @@
-// Cell controls and the stress servo (physics.md section 2; gains justified in cell.hpp).
+// Cell controls and the stress servo (docs/physics.md section 2; gains justified in cell.hpp).
 #include "rendulic/dem/cell.hpp"
 
 #include <algorithm>
@@ -28,9 +28,6 @@ CellControl CellControl::isotropic_compression(double rate) {
 }
 CellControl CellControl::undrained_axisymmetric(double rate) {
   return strain_rate(Eigen::Vector3d(rate, -0.5 * rate, -0.5 * rate));
-}
-CellControl CellControl::plane_strain(double rate) {
-  return strain_rate(Eigen::Vector3d(rate, -rate, 0.0));
 }
 CellControl CellControl::drained_triaxial(double axial_rate, double lateral_stress) {
   CellControl c;

@@ -1,4 +1,4 @@
-// Closed forms of the linear spring-dashpot contact and the time-step rules (physics.md
+// Closed forms of the linear spring-dashpot contact and the time-step rules (docs/physics.md
 // section 1). See contact.hpp for the derivation of the stability bound.
 #include "rendulic/dem/contact.hpp"
 

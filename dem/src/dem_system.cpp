@@ -1,4 +1,4 @@
-// The DEM engine's step, forces and measures (physics.md sections 1-3; scheme in
+// The DEM engine's step, forces and measures (docs/physics.md sections 1-3; scheme in
 // dem_system.hpp). The contact loop is the hot path: a per-particle gather over the half
 // neighbour list from packed records (position + radius, velocity, force accumulator: three
 // cache lines per partner), with the periodic image taken from a 27-entry shift table rather

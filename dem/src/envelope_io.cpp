@@ -1,4 +1,4 @@
-// Envelopes to and from the results file (interfaces.md /states/<label>/envelopes/<name>).
+// Envelopes to and from the results file (docs/results.md /states/<label>/envelopes/<name>).
 // See envelope_io.hpp.
 #include "rendulic/dem/envelope_io.hpp"
 

@@ -1,4 +1,4 @@
-// Linear response of the contact network (issue 4 item 3): rattler removal, sparse Hessian
+// Linear response of the contact network: rattler removal, sparse Hessian
 // with the geometric term, one LDL^T factorisation for the six strain components, stiffness
 // and fabric rates. The derivation is in linear_response.hpp.
 #include "rendulic/dem/linear_response.hpp"

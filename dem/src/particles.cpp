@@ -1,4 +1,4 @@
-// Particle arrays and seeded radii (physics.md section 1).
+// Particle arrays and seeded radii (docs/physics.md section 1).
 #include "rendulic/dem/particles.hpp"
 
 #include <cmath>

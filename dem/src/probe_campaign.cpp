@@ -1,5 +1,5 @@
 // Probe campaigns by the dynamic, minimisation and linear-response methods, and their
-// scenario keys (physics.md section 5, issue 4). See probe_campaign.hpp.
+// scenario keys (docs/physics.md section 5). See probe_campaign.hpp.
 #include "rendulic/dem/probe_campaign.hpp"
 
 #include <omp.h>

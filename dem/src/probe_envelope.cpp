@@ -1,5 +1,5 @@
 // Envelope data, the linear-response envelope and the Rendulic map of an envelope
-// (physics.md sections 5 and 6). See probe_envelope.hpp.
+// (docs/physics.md sections 5 and 6). See probe_envelope.hpp.
 #include "rendulic/dem/probe_envelope.hpp"
 
 #include <cmath>

@@ -1,4 +1,4 @@
-// Contact geometry of a periodic packing for the probe tools (physics.md sections 1-3): cell
+// Contact geometry of a periodic packing for the probe tools (docs/physics.md sections 1-3): cell
 // lists over fractional coordinates, minimum image, static stress and fabric. See
 // probe_geometry.hpp.
 #include "rendulic/dem/probe_geometry.hpp"

@@ -1,5 +1,5 @@
 // FIRE 2.0 energy minimisation of a periodic frictionless sphere packing at fixed cell, affine
-// strain steps and generated jammed packings (physics.md sections 1, 2, 5; issue 4 item 2).
+// strain steps and generated jammed packings (docs/physics.md sections 1, 2, 5).
 // See probe_minimise.hpp.
 #include "rendulic/dem/probe_minimise.hpp"
 

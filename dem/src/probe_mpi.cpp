@@ -1,4 +1,4 @@
-// Probe campaigns across MPI ranks (issue 4 item 1): the session, the worker loop and the
+// Probe campaigns across MPI ranks: the session, the worker loop and the
 // task/reply messages of probe_mpi.hpp. Point-to-point messages only, always in the same
 // pattern (rank 0 sends one task to every worker, every worker sends exactly one reply,
 // success or error), so an error on either side can never leave a rank waiting in a

@@ -1,4 +1,4 @@
-// Protocols of physics.md section 4 and the probe primitives of section 5 (see protocols.hpp).
+// Protocols of docs/physics.md section 4 and the probe primitives of section 5 (see protocols.hpp).
 #include "rendulic/dem/protocols.hpp"
 
 #include <algorithm>

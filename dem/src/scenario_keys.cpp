@@ -1,5 +1,5 @@
 // Declaration of the DEM scenario keys and their conversion to protocol options (see
-// scenario_keys.hpp). Defaults are the seed study's (physics.md sections 1 and 4) except where
+// scenario_keys.hpp). Defaults are the seed study's (docs/physics.md sections 1 and 4) except where
 // the seed gives no number (rates, relaxation thresholds), where the choice is explained in
 // the help text and docs/dem.md.
 #include "rendulic/dem/scenario_keys.hpp"

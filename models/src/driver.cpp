@@ -1,5 +1,5 @@
 // Material-point driver: modified Euler with error control, the plain explicit scheme with an
-// error report, and mixed strain/stress control (models.md "Material-point driver"; see
+// error report, and mixed strain/stress control (docs/models.md "Material-point driver"; see
 // driver.hpp for the schemes and their sources).
 #include "rendulic/models/driver.hpp"
 

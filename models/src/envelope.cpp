@@ -1,4 +1,4 @@
-// Model envelopes over the DEM probe set (envelope.hpp; physics.md section 5).
+// Model envelopes over the DEM probe set (envelope.hpp; docs/physics.md section 5).
 #include "rendulic/models/envelope.hpp"
 
 #include <cmath>

@@ -10,16 +10,8 @@
 #include "rendulic/models/law_model.hpp"
 
 namespace rendulic::models {
-namespace {
-// Numbers in messages: shortest readable form (1e+13, not 10000000000000.000000).
-inline std::string fmt_g(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%g", v);
-  return buf;
-}
-}  // namespace
 
-// Elastic defaults are of the order of the frictionless DEM of physics.md at nu = 0.82
+// Elastic defaults are of the order of the frictionless DEM of docs/physics.md at nu = 0.82
 // (k* = k / 2<r> = 5e10 Pa; B/k* = 0.4, G/k* = 0.05: narrow envelopes, seed section 4); they
 // are starting points for the calibration, not measured values.
 const std::vector<ParameterInfo>& IsotropicElastic::parameter_info() {
@@ -110,8 +102,8 @@ bool Law::set_parameters(const std::vector<double>& values, std::string* why) {
     const double v = values[i];
     if (!std::isfinite(v) || v < info[i].lower || v > info[i].upper) {
       if (why)
-        *why = "parameter " + info[i].name + " = " + fmt_g(v) + " is outside its bounds [" +
-               fmt_g(info[i].lower) + ", " + fmt_g(info[i].upper) + "]";
+        *why = "parameter " + info[i].name + " = " + format_g(v) + " is outside its bounds [" +
+               format_g(info[i].lower) + ", " + format_g(info[i].upper) + "]";
       return false;
     }
   }
@@ -158,7 +150,12 @@ MaterialState Law::make_state(const Eigen::Matrix3d& stress, const Eigen::Matrix
   return s;
 }
 
-std::string format_g(double v) { return fmt_g(v); }
+// Numbers in messages: shortest readable form (1e+13, not 10000000000000.000000).
+std::string format_g(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%g", v);
+  return buf;
+}
 
 std::vector<std::string> law_names() {
   return {std::string(IsotropicElastic::kName), std::string(AnisotropicElastic::kName),

@@ -4,19 +4,11 @@
 #include <toml++/toml.h>
 
 #include <cmath>
-#include <cstdio>
 
 #include "rendulic/core/errors.hpp"
 
 namespace rendulic::models {
 namespace {
-
-// Numbers in messages: shortest readable form (1e+13, not 10000000000000.000000).
-inline std::string fmt_g(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%g", v);
-  return buf;
-}
 
 toml::table parse(const std::string& path) {
   try {
@@ -71,9 +63,9 @@ void load_parameters_toml(const std::string& path, Law* law) {
     const double v = number(node, key, path);
     const ParameterInfo& info = law->parameter_info()[i];
     if (v < info.lower || v > info.upper)
-      throw InputError(path + ": parameter '" + key + "' = " + fmt_g(v) +
-                       " is outside its bounds [" + fmt_g(info.lower) + ", " + fmt_g(info.upper) +
-                       "] " + info.unit);
+      throw InputError(path + ": parameter '" + key + "' = " + format_g(v) +
+                       " is outside its bounds [" + format_g(info.lower) + ", " +
+                       format_g(info.upper) + "] " + info.unit);
     values[i] = v;
   }
   std::string why;

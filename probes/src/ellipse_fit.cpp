@@ -1,4 +1,4 @@
-// Geometric ellipse and circle fits with Ceres (physics.md section 6, issue 5 items 1, 3, 4).
+// Geometric ellipse and circle fits with Ceres (docs/physics.md section 6).
 // Each point p_i gets a latent angle t_i and two residuals p(t_i) - p_i, so the cost is the
 // sum of squared orthogonal distances at the optimum (Gander, Golub and Strebel 1994), not
 // the algebraic conic residual that biases thin ellipses. The semi-axes are free reals: the

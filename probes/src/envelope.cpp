@@ -1,4 +1,4 @@
-// Envelope validation and strain points (physics.md section 5; see envelope.hpp).
+// Envelope validation and strain points (docs/physics.md section 5; see envelope.hpp).
 #include "rendulic/probes/envelope.hpp"
 
 #include <cmath>

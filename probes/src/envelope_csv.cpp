@@ -1,4 +1,4 @@
-// CSV reader of one envelope (interfaces.md `rendulic fit`); see envelope_csv.hpp.
+// CSV reader of one envelope (docs/fitting.md "The fit command"); see envelope_csv.hpp.
 #include "rendulic/probes/envelope_csv.hpp"
 
 #include <cerrno>

@@ -1,4 +1,4 @@
-// Shape selection of the envelope fit (issue 5 item 2): line or ellipse, then the circle flag
+// Shape selection of the envelope fit: line or ellipse, then the circle flag
 // (in fit_ellipse). The criterion, stated in docs/fitting.md:
 // - With the probe directions: an F-test. For an envelope c + M u(theta), the distance of a
 //   point from the best line is n . M u(theta) (n the line's normal), a combination of

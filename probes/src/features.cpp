@@ -1,4 +1,4 @@
-// Envelope features (physics.md section 6, issue 5 item 5); see features.hpp. Errors are
+// Envelope features (docs/physics.md section 6); see features.hpp. Errors are
 // first-order propagations of the fits' covariances (delta method).
 #include "rendulic/probes/features.hpp"
 

@@ -1,4 +1,4 @@
-// Envelope fits as HDF5 attributes (interfaces.md "Results file"); see fit_io.hpp.
+// Envelope fits as HDF5 attributes (docs/results.md); see fit_io.hpp.
 #include "rendulic/probes/fit_io.hpp"
 
 #include <cmath>

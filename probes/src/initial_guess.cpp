@@ -1,4 +1,4 @@
-// Initial guesses of the ellipse fit (issue 5 item 1): the affine fit R(theta) = c + M u(theta)
+// Initial guesses of the ellipse fit: the affine fit R(theta) = c + M u(theta)
 // when the probe directions are known, and the direct algebraic fit of Halir and Flusser
 // (1998, a numerically stable form of Fitzgibbon's ellipse-specific fit) when they are not.
 // Both are linear algebra only; the geometric refinement is in ellipse_fit.cpp.

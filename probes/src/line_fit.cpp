@@ -1,5 +1,5 @@
-// Line fit of an envelope (physics.md section 6: the line is the degenerate ellipse b = 0;
-// issue 5 item 2). Direction and offset by total least squares (principal axis of the
+// Line fit of an envelope (docs/physics.md section 6: the line is the degenerate ellipse b = 0;
+// docs/fitting.md "Method"). Direction and offset by total least squares (principal axis of the
 // scatter), iteratively reweighted for the robust losses. The segment's centre and half
 // length a (the envelope's extent, hence its directional stiffness) come from the probe
 // directions when known (the along-line coordinate regressed on cos, sin theta, exact for a

@@ -1,4 +1,4 @@
-// System test of `rendulic plot` (issue 8 item 2): the real binary draws every figure of a
+// System test of `rendulic plot`: the real binary draws every figure of a
 // synthetic results file as PNG and SVG; a file that is not ours is refused with exit 2.
 #include <gtest/gtest.h>
 #include <sys/wait.h>

@@ -44,8 +44,14 @@ TEST(Report, AbsentDataIsNotMeasured) {
     ResultsWriter w(dir / "results.h5");
     w.commit();
   }
-  for (const auto& c : evaluate_claims(ResultsReader(dir / "results.h5")))
-    EXPECT_EQ(c.verdict, "not measured") << c.id;
+  // Every claim comes back, in order, and none is judged: an empty list would pass a loop.
+  const std::vector<Claim> claims = evaluate_claims(ResultsReader(dir / "results.h5"));
+  const std::vector<std::string> ids = {"C1", "C2", "C3", "C4", "C5", "C6", "C7", "C8"};
+  ASSERT_EQ(claims.size(), ids.size());
+  for (std::size_t i = 0; i < claims.size(); ++i) {
+    EXPECT_EQ(claims[i].id, ids[i]);
+    EXPECT_EQ(claims[i].verdict, "not measured") << claims[i].id << ": " << claims[i].measured;
+  }
 }
 
 // A linear response at 2e-3 is the elastic response scaled (the paper run without dynamic

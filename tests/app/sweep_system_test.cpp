@@ -1,4 +1,4 @@
-// System test of `rendulic sweep --quick` (issue 8 item 3): the real binary sweeps the quick
+// System test of `rendulic sweep --quick`: the real binary sweeps the quick
 // scenario's first state (N 250/500, 8 directions, about 15 s on one core) and writes
 // sweep.h5, sweep.csv and the Pareto chart. Checked on the file's own numbers: the linear
 // response, the elastic reference, has zero error against itself, the minimisation probes (an

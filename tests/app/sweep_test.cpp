@@ -1,4 +1,4 @@
-// Unit tests of the sweep's bookkeeping (app/sweep.hpp, issue 8 item 3): the Pareto front
+// Unit tests of the sweep's bookkeeping (app/sweep.hpp): the Pareto front
 // against a brute-force definition, the account of where methods break (refused steps, the
 // relaxation's noise floor, the onset of rate effects, the cheapest setting that meets the
 // target) on hand-made points whose answers are known, the option checks and the CSV.

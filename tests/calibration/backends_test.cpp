@@ -13,7 +13,7 @@ namespace {
 
 using testing::law_with;
 
-// Noiseless and exact: 1e-6 relative (issue 7).
+// Noiseless and exact: 1e-6 relative.
 constexpr double kNoiseless = 1e-6;
 
 class Backends : public ::testing::Test {

@@ -1,4 +1,4 @@
-// `rendulic calibrate` end to end (interfaces.md): a results file built here with
+// `rendulic calibrate` end to end (docs/calibration.md): a results file built here with
 // ResultsWriter from model-generated envelopes (the layout another DEM code would convert to),
 // the JSON keys users rely on, /calibration/<model> written back, exit code 2 with the file
 // untouched (byte for byte, no temporary left behind) on bad input.
@@ -17,7 +17,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const double kKStar = 5e10;  // Pa: k / (2 <r>) of physics.md
+const double kKStar = 5e10;  // Pa: k / (2 <r>) of docs/physics.md
 
 fs::path make_results_file(const std::string& name) {
   const fs::path dir = fs::path(RENDULIC_TEST_TMP) / "calibration_cli";

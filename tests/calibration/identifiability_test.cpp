@@ -1,4 +1,4 @@
-// Set-ups the data cannot determine are detected and reported (issue 7 tests): states all at
+// Set-ups the data cannot determine are detected and reported: states all at
 // one pressure cannot separate B from its pressure exponent n_p (rank-deficient Jacobian); an
 // isotropic fabric makes beta_A invisible (zero Jacobian column); near-collinear columns give a
 // correlation warning. The detector itself is checked on matrices with a known rank.

@@ -1,5 +1,5 @@
 // Level-one calibration (stiffness.hpp) against closed forms: the isotropic law's ellipse of
-// models.md "Coordinates" (D = diag(3K, 2G), semi-axes 3K|de| and 2G|de|, major axis at
+// docs/models.md "Coordinates" (D = diag(3K, 2G), semi-axes 3K|de| and 2G|de|, major axis at
 // 35.26 deg), the anisotropic law's A = beta_A F_dev B and tilt (1/2) atan2(2 sqrt3 A, 3B - 2G),
 // an independent estimator (probes/ fit_affine), the hypoplastic centre shift N |d_eps|, and
 // the reported standard errors against the scatter of repeated noisy fits.

@@ -1,4 +1,4 @@
-// The /calibration/<model> group (interfaces.md; calibration/report.hpp): every parameter's
+// The /calibration/<model> group (docs/results.md; calibration/report.hpp): every parameter's
 // standard error lands beside that parameter. The free parameters come out of the solver in
 // their own order (B, G, beta_A, c_F, n_p, a_G), not the law's (..., n_p, p_ref, a_G, c_F), so
 // a positional copy would pair values with the wrong errors; this reads the file back.

@@ -1,6 +1,6 @@
-// Tests of core/conventions.hpp: sign rules and invariants of physics.md section 3, the
-// Rendulic pair and (iso, dev) frame of models.md, probe strains and special directions of
-// physics.md section 5. Closed forms and round trips; tolerances are a few ulps of O(1)
+// Tests of core/conventions.hpp: sign rules and invariants of docs/physics.md section 3, the
+// Rendulic pair and (iso, dev) frame of docs/models.md, probe strains and special directions of
+// docs/physics.md section 5. Closed forms and round trips; tolerances are a few ulps of O(1)
 // numbers (kTight) because every function is a handful of exact-ish floating operations.
 #include "rendulic/core/conventions.hpp"
 
@@ -93,7 +93,7 @@ TEST(Conventions, J2IsHalfTheSumOfSquaredDeviatorEigenvalues) {
 }
 
 TEST(Conventions, IsoDevFrameMatchesModelsSpec) {
-  // models.md: eps_iso = eps_v / sqrt(3), eps_d = sqrt(2/3) (eps_xx - eps_yy).
+  // docs/models.md: eps_iso = eps_v / sqrt(3), eps_d = sqrt(2/3) (eps_xx - eps_yy).
   const Eigen::Matrix3d e = Eigen::Vector3d(0.3, -0.1, -0.1).asDiagonal();
   const Eigen::Vector2d q = iso_dev_from_rendulic(rendulic_pair(e));
   EXPECT_NEAR(q.x(), volumetric_strain(e) / kSqrt3, kTight);

@@ -1,4 +1,4 @@
-// Tests of core/results.hpp (issue 2, item 5): HDF5 round trip of every dataset and attribute
+// Tests of core/results.hpp (docs/results.md): HDF5 round trip of every dataset and attribute
 // kind, growable series, and atomicity: a failure or a signal mid-write leaves no results.h5
 // (and no temporary litter), an earlier results.h5 survives a failed run, and files that are
 // not ours are refused with an InputError. Faults: damaged objects, names HDF5 cannot hold, a

@@ -1,5 +1,5 @@
-// Tests of core/scenario.hpp (issue 2, item 4): strict parsing, one-line errors naming the key
-// and file:line, --set overrides with the same validation, and the effective scenario
+// Tests of core/scenario.hpp (docs/scenario-keys.md): strict parsing, one-line errors naming the
+// key and file:line, --set overrides with the same validation, and the effective scenario
 // round-tripping through its TOML text. Hostile input: a folder, a device or a FIFO as the
 // scenario, a key nested 50,000 deep, control characters, integers at the edge of int64.
 #include "rendulic/core/scenario.hpp"

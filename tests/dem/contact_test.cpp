@@ -1,8 +1,10 @@
-// Contact law and integrator against closed forms (physics.md section 1, issue 3 tests):
+// Contact law and integrator against closed forms (docs/physics.md section 1):
 // binary collision of the smallest pair (t_c = 0.2279 us, e = 0.804), the stability limit
-// refusing a too-large time step, and the seed's numbers.
+// refusing a too-large time step, the integrator failing exactly at omega dt = 2 and the
+// engine's bound staying below that, and the seed's numbers.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "dem_helpers.hpp"
@@ -43,7 +45,8 @@ Collision collide(const Material& mat, double dt_factor) {
 TEST(Contact, SmallestPairClosedFormsMatchTheSeed) {
   Material mat;
   const double m_red = 0.5 * mat.sphere_mass(mat.r_min());
-  // The issue quotes t_c = 0.2279 us and e = 0.804 (4 and 3 significant digits).
+  // Closed forms for the seed material: t_c = 0.2279 us (docs/dem.md) and e = 0.804, checked to
+  // the 4 and 3 significant digits they are quoted with.
   EXPECT_NEAR(contact_time(mat.contact(), m_red), 0.2279e-6, 0.00005e-6);
   EXPECT_NEAR(restitution(mat.contact(), m_red), 0.804, 0.0005);
   EXPECT_NEAR(mat.r_min(), 0.5e-3, 1e-15);
@@ -78,15 +81,66 @@ TEST(Contact, TimeStepBeyondStabilityIsRefused) {
   }
 }
 
-TEST(Contact, StabilityLimitIsReallyWhereVerletFails) {
-  // The bound is sufficient, not tight: two smallest spheres stay stable at it, and the
-  // undamped Verlet oscillator is known to blow up beyond omega dt = 2, which we detect.
+// A ring of four equal spheres on the x axis, each pressed on its two neighbours (one of them
+// through the periodic boundary), integrated by the engine from the ring's highest mode
+// (neighbours moving against each other, omega = 2 sqrt(k/m)) at omega dt = h. Returns the
+// largest kinetic energy over `steps` steps over the initial one, stopping once it passes 1e6.
+// Undamped velocity Verlet conserves v^2 + omega^2 (1 - h^2/4) x^2 on this mode, so for h < 2
+// the kinetic energy never exceeds its start (displacement starts at zero); for h > 2 the mode
+// grows by |lambda| > 1 per step. The spheres are a quarter of the material's smallest radius
+// (their true masses): the engine's bound, made for the material's r_min, then admits a dt on
+// either side of 2 / omega.
+double ring_energy_growth(double h, int steps) {
   Material mat;
   mat.gamma = 0;
   mat.gamma_b = 0;
-  const double m_red = 0.5 * mat.sphere_mass(mat.r_min());
-  const double omega = std::sqrt(mat.k / m_red);
-  EXPECT_LT(stability_limit(mat), 2.0 / omega);
+  const double r = 0.25 * mat.r_min(), m = mat.sphere_mass(r);
+  const double omega = 2.0 * std::sqrt(mat.k / m);
+  const double overlap = 0.01 * r, spacing = 2 * r - overlap, L = 4 * spacing;
+  // Displacement amplitude 1e-5 of the overlap: even the 1 / sqrt(1 - h^2/4) swing of h = 1.98
+  // keeps every contact closed, so the ring stays the linear system the mode belongs to.
+  const double v = 1e-5 * overlap * omega;
+  Particles p;
+  p.resize(4);
+  for (int i = 0; i < 4; ++i) {
+    p.radius[i] = r;
+    p.inv_mass[i] = 1.0 / m;
+    p.x[i] = (i + 0.5) * spacing;
+    p.y[i] = p.z[i] = 0.5 * L;
+    p.vx[i] = (i % 2 == 0) ? v : -v;
+  }
+  SystemOptions o;
+  o.material = mat;
+  o.skin = 0.05;  // in <r>: the cell of four small spheres must exceed twice the list's range
+  o.dt_factor = h / omega / time_step(mat, 1.0);
+  DemSystem s(p, PeriodicCell{Eigen::Vector3d::Constant(L)}, o);
+  EXPECT_NEAR(s.dt() * omega, h, 1e-12 * h);
+  const double k0 = s.kinetic_energy();
+  const Eigen::Vector3d still = Eigen::Vector3d::Zero();
+  double worst = 1.0;
+  for (int n = 0; n < steps && worst < 1e6; ++n) {
+    s.step(still);
+    worst = std::max(worst, s.kinetic_energy() / k0);
+  }
+  return worst;
+}
+
+TEST(Contact, StabilityLimitIsReallyWhereVerletFails) {
+  // The engine's integrator fails exactly where velocity Verlet does, at omega dt = 2: 1 %
+  // below, 20,000 steps leave the energy of the highest mode bounded; 1 % above,
+  // it grows past a million times its start within 200 steps (|lambda| = 1.22 per step). The
+  // bounded side allows 1 % for rounding, which a near-resonant step amplifies.
+  EXPECT_LT(ring_energy_growth(0.99 * 2.0, 20000), 1.01);
+  EXPECT_GT(ring_energy_growth(1.01 * 2.0, 200), 1e6);
+  // The engine's bound (Gershgorin, at most 12 contacts on a smallest sphere) keeps omega dt
+  // below 2 for the stiffest real arrangements of the material's smallest spheres: the pair
+  // (omega^2 = 2k/m) and the same ring of smallest spheres (omega^2 = 4k/m).
+  Material mat;
+  mat.gamma = 0;
+  mat.gamma_b = 0;
+  const double m_min = mat.sphere_mass(mat.r_min());
+  EXPECT_LT(stability_limit(mat), 2.0 / std::sqrt(2.0 * mat.k / m_min));
+  EXPECT_LT(stability_limit(mat), 2.0 / std::sqrt(4.0 * mat.k / m_min));
 }
 
 }  // namespace

@@ -1,4 +1,4 @@
-// Energy conservation without damping (issue 3 test list): a compressed random packing with
+// Energy conservation without damping: a compressed random packing with
 // gamma = gamma_b = 0 keeps E_kin + E_el over 1e5 steps; velocity Verlet is symplectic for
 // the conservative part, so the energy error stays bounded (O((dt omega)^2)) instead of
 // drifting. Also checks that the rebuilds happened (the list upkeep is part of the test).

@@ -1,4 +1,4 @@
-// Engine invariants with closed forms (physics.md sections 1-3, issue 3 tests): stress, fabric
+// Engine invariants with closed forms (docs/physics.md sections 1-3): stress, fabric
 // and coordination of a lattice with known forces; affine deformation of a non-touching
 // lattice creates no forces; volume conserved on a constant-volume path; momentum
 // conservation; rattler removal; bit-identical restart; thread-count independence.

@@ -1,5 +1,5 @@
-// Isotropic jamming of the seed's w = 3 packing (physics.md section 4: nu_c ~ 0.658; issue 3
-// test list): a small system is compressed in small volume steps, each followed by a
+// Isotropic jamming of the seed's w = 3 packing (docs/physics.md section 4: nu_c ~ 0.658):
+// a small system is compressed in small volume steps, each followed by a
 // relaxation at fixed cell; the first relaxed state that keeps a pressure is jammed. Checks
 // nu_c in [0.65, 0.67] and that the non-rattler coordination just above it is near the
 // isostatic value 6 of frictionless spheres.

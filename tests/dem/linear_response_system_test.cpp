@@ -1,4 +1,4 @@
-// Finite-difference check of the linear response (issue 4 item 3) by an independent method:
+// Finite-difference check of the linear response by an independent method:
 // a jammed random packing (generated and minimised here, no DEM engine), six strain
 // components applied affinely with both signs, each followed by FIRE energy minimisation at
 // fixed cell; the central difference of the measured stress and fabric must equal C d_eps and

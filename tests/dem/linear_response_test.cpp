@@ -1,4 +1,4 @@
-// Linear response of the contact network (issue 4 item 3): closed-form elastic constants of a
+// Linear response of the contact network: closed-form elastic constants of a
 // compressed FCC lattice including the pre-stress terms, detection of an unstable lattice,
 // symmetries and positive definiteness on a jammed random packing, rattler handling.
 #include "rendulic/dem/linear_response.hpp"

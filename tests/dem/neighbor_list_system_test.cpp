@@ -1,4 +1,4 @@
-// The Verlet list with per-particle skins (neighbor_list.hpp, issue 3 item 4): its rebuild rule
+// The Verlet list with per-particle skins (neighbor_list.hpp): its rebuild rule
 // must be exact, i.e. the list-based contact set equals a brute-force all-pairs search after
 // every single step, in a hot, dense packing that is being deformed (the case where a too-loose
 // rule would miss contacts), while the skins actually differ between particles. Also the bounds of

@@ -1,4 +1,4 @@
-// Probe campaigns on a small jammed packing with the DEM engine (issue 4 tests): the linear
+// Probe campaigns on a small jammed packing with the DEM engine: the linear
 // response equals the dynamic elastic probes (envelope axes within 1 %, inclination within
 // 0.5 deg, from the least-squares Rendulic map of the pairs and its SVD); minimisation and
 // dynamic probes agree on the elastic envelope; an elastic probe opens or closes no contact
@@ -14,8 +14,8 @@
 namespace rendulic::dem {
 namespace {
 
-// Tolerances of the issue: semi-axes within 1 % (each relative to itself, so the narrow minor
-// axis is held to 1 % too), inclination within 0.5 deg.
+// Tolerances for two methods that should agree on an elastic envelope: semi-axes within 1 % (each
+// relative to itself, so the narrow minor axis is held to 1 % too), inclination within 0.5 deg.
 constexpr double kAxisTol = 0.01;
 constexpr double kInclinationTolDeg = 0.5;
 constexpr double kFabricMapTol = 0.02;

@@ -1,4 +1,4 @@
-// Envelopes in the results file (interfaces.md /states/<label>/envelopes/<name>): the
+// Envelopes in the results file (docs/results.md /states/<label>/envelopes/<name>): the
 // datasets and attributes of the contract, and an exact round trip including diagnostics.
 #include <gtest/gtest.h>
 

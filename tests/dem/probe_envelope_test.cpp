@@ -1,4 +1,4 @@
-// Probe directions and envelopes (physics.md sections 5 and 6): unit-norm probe strains and
+// Probe directions and envelopes (docs/physics.md sections 5 and 6): unit-norm probe strains and
 // the special directions, the linear-response envelope of a lattice with a closed-form
 // stiffness, the Rendulic map fit and its ellipse (semi-axes = singular values).
 #include "rendulic/dem/probe_envelope.hpp"

@@ -1,4 +1,4 @@
-// Probe campaigns across MPI ranks through the real binary (issue 4 item 1, probe_mpi.hpp):
+// Probe campaigns across MPI ranks through the real binary (probe_mpi.hpp):
 // `mpirun -np 2 rendulic run` writes envelopes bitwise equal to a plain single-process run of
 // the same scenario (each probe is a function of state, direction and options only, and the
 // workers get the state bit for bit), only rank 0 prints and writes, and an error on rank 0

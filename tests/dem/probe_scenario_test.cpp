@@ -1,4 +1,4 @@
-// Scenario keys of the probe campaigns (issue 4 item 4): defaults equal the documented
+// Scenario keys of the probe campaigns: defaults equal the documented
 // ProbeOptions, values reach the options, and out-of-range values are refused naming the key.
 #include <gtest/gtest.h>
 

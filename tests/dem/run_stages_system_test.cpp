@@ -1,4 +1,4 @@
-// The DEM stages through the real `rendulic run` (interfaces.md results schema): a tiny fast
+// The DEM stages through the real `rendulic run` (docs/results.md): a tiny fast
 // scenario writes /material, /isotropic, /path and /states with the documented datasets, its
 // states at rest (the net-force bound recomputed from the stored positions) with their
 // elastic range; the stored checkpoint restores a state whose measures reproduce the

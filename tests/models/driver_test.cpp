@@ -1,4 +1,4 @@
-// Unit tests of the material-point driver (models.md "Material-point driver"; issue 6 item 2):
+// Unit tests of the material-point driver (docs/models.md "Material-point driver"):
 // exactness on a linear law, orders of convergence of the explicit and modified Euler schemes,
 // error control holding its tolerance where the explicit scheme does not (and says so), mixed
 // control against a closed form and meeting its stress target, and failures reported as reasons.

@@ -2,7 +2,7 @@
 // from a least-squares fit of the affine map (c, M) and the SVD of M. It is an independent
 // route to the envelope features (does not use probes/): for an incrementally linear law the
 // response is exactly affine in the probe, and the ellipse's semi-axes are the singular values
-// of M and its major axis is M's first left singular vector (physics.md section 6).
+// of M and its major axis is M's first left singular vector (docs/physics.md section 6).
 #pragma once
 
 #include <Eigen/Dense>

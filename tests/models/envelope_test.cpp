@@ -1,5 +1,5 @@
-// Unit tests of model envelopes (issue 6 item 3 and its tests; models.md "Families",
-// physics.md section 5): the ellipses of the elastic laws against their closed forms, the
+// Unit tests of model envelopes (docs/models.md sections 1-4,
+// docs/physics.md section 5): the ellipses of the elastic laws against their closed forms, the
 // pinned anisotropic tilt, the shifted hypoplastic ellipse and its linear scaling with the
 // amplitude, and the elastic/elasto-plastic behaviour of elastoplastic_fabric. Envelope
 // features come from tests/models/ellipse_of.hpp (affine fit + SVD), not from probes/.
@@ -68,7 +68,7 @@ TEST(Envelope, IsotropicElasticIsTheClosedFormEllipse) {
   EXPECT_NEAR(f.a, law->parameter("c_F") * amp, kExact * f.a);
 }
 
-// Rendulic stiffness of the pinned form in the (iso, dev) frame, models.md.
+// Rendulic stiffness of the pinned form in the (iso, dev) frame, docs/models.md.
 Eigen::Matrix2d pinned_d(double b, double g, double a) {
   Eigen::Matrix2d d;
   d << 3 * b, kSqrt3 * a, kSqrt3 * a, 2 * g;
@@ -209,7 +209,7 @@ TEST(Envelope, ElastoplasticSmallProbesElasticLargeProbesShiftedAndThinner) {
 }
 
 // The smooth elastic-to-plastic transition of elastoplastic_fabric (w_yield, docs/models.md
-// family 4) against the sharp switch (w_yield = 0): the elastic probes are the same to rounding
+// section 4) against the sharp switch (w_yield = 0): the elastic probes are the same to rounding
 // (the relaxed state is the centre of the elastic domain, far below the transition), and the
 // 2e-3 envelopes of the law's own path states move by far less than DEM noise (about 1e-3 of
 // a stress envelope, 0.07 of a fabric one): the transition takes the last 2 % of the elastic

@@ -1,4 +1,4 @@
-// Unit tests of the four laws (models.md "Families"; issue 6 item 1): parameter tables,
+// Unit tests of the four laws (docs/models.md sections 1-4): parameter tables,
 // tangents against central finite differences and against automatic differentiation
 // (ceres::Jet through the templated laws), the pinned anisotropic form against its scalar
 // form, and the loading/unloading behaviour of elastoplastic_fabric.
@@ -135,8 +135,8 @@ Matrix6d jet_tangent(const std::vector<double>& params, const MaterialState& s,
   Vec6<J> e;
   const Vector6d e0 = to_mandel(de);
   for (int i = 0; i < 6; ++i) e(i) = J(e0(i), i);
-  const RateT<J> r = M::template rate<J>(p.data(), sj, tensor_of<J>(e));
-  const Vec6<J> ds = mandel_of<J>(r.d_stress);
+  const RateT<J> r = M::template rate<J>(p.data(), sj, from_mandel<J>(e));
+  const Vec6<J> ds = to_mandel<J>(r.d_stress);
   Matrix6d t;
   for (int i = 0; i < 6; ++i) t.row(i) = ds(i).v.transpose();
   return t;
@@ -189,7 +189,7 @@ void expect_parameter_jacobian(const Law& law, const MaterialState& s, const Eig
   sj.internal = s.internal.cast<J>();
   sj.volume_fraction = J(s.volume_fraction);
   const Mat3<J> dej = de.cast<J>();
-  const Vec6<J> ds = mandel_of<J>(M::template rate<J>(p.data(), sj, dej).d_stress);
+  const Vec6<J> ds = to_mandel<J>(M::template rate<J>(p.data(), sj, dej).d_stress);
   for (size_t k = 0; k < p0.size(); ++k) {
     const double h = 1e-6 * std::max(std::abs(p0[k]), 1e-3);
     std::vector<double> pp = p0, pm = p0;

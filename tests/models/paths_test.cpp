@@ -1,4 +1,4 @@
-// Unit tests of the main paths driven through the laws (issue 6 item 4): isotropic compression
+// Unit tests of the main paths driven through the laws: isotropic compression
 // and undrained axisymmetric extension, against closed forms for the linear law and against
 // the steady state that elastoplastic_fabric is built to reach.
 #include "rendulic/models/paths.hpp"

@@ -1,4 +1,4 @@
-// Honesty of the reported standard errors (issue 5 item 4): over many noisy synthetic
+// Honesty of the reported standard errors: over many noisy synthetic
 // envelopes the true value lies within two reported standard errors in about 95% of cases.
 // Accepted band: [0.90, 0.99] per parameter. With 300 trials the binomial standard deviation
 // of a 95.4% coverage is 1.2%, so the band is about 4 standard deviations wide each side: a

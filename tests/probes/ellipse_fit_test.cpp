@@ -1,4 +1,4 @@
-// Tests of the geometric ellipse fit (physics.md section 6, issue 5 item 1): exact recovery,
+// Tests of the geometric ellipse fit (docs/physics.md section 6): exact recovery,
 // thin ellipses down to b/a = 0.001, half arcs, few points, noise, the two initial guesses,
 // and the closed form "axes of the envelope of a linear law = singular values of D".
 #include <gtest/gtest.h>
@@ -129,7 +129,7 @@ TEST(EllipseFit, NoisyHalfArcWithDirections) {
 }
 
 TEST(EllipseFit, LinearLawEnvelopeAxesAreSingularValues) {
-  // physics.md section 6: response = c + D * strain, strain = A (cos theta, sin theta) gives
+  // docs/physics.md section 6: response = c + D * strain, strain = A (cos theta, sin theta) gives
   // an ellipse with semi-axes A * singular values of D. D symmetric, like a Rendulic
   // stiffness of a hyperelastic law, but far from diagonal.
   Eigen::Matrix2d D;

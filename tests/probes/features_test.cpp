@@ -1,4 +1,4 @@
-// Tests of the envelope features (issue 5 item 5) against closed forms: the stiffness of a
+// Tests of the envelope features against closed forms: the stiffness of a
 // linear law recovered by the affine fit and by the ellipse's axes (two independent routes
 // to the singular values of D), centre shift, and the elastic/plastic comparison.
 #include "rendulic/probes/features.hpp"

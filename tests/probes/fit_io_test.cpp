@@ -1,4 +1,4 @@
-// Envelope fits in results files (interfaces.md fit_stress / fit_fabric): attributes written
+// Envelope fits in results files (docs/results.md fit_stress / fit_fabric): attributes written
 // through core's ResultsWriter read back equal through ResultsReader; a circle stores no
 // inclination; fit_all_envelopes fits every envelope of a file and marks the unfittable.
 #include "rendulic/probes/fit_io.hpp"

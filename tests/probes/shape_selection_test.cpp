@@ -1,5 +1,5 @@
 // Tests of the line fit, the shape criterion (parametric-bootstrap test of line against
-// ellipse), the circle flag and the robust losses (issue 5 items 2 and 3).
+// ellipse), the circle flag and the robust losses.
 #include <gtest/gtest.h>
 
 #include "rendulic/core/errors.hpp"

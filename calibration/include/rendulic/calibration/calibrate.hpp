@@ -1,4 +1,4 @@
-// The two-level calibration of models.md "Calibration" (docs/calibration.md):
+// The two-level calibration of docs/calibration.md "Two levels":
 //  1. per state, model-free: B, G, A of the symmetric Rendulic stiffness from the elastic
 //     envelope (stiffness.hpp), shift and thinning from the elasto-plastic one;
 //  2. across states: the law's free parameters (state dependence of the moduli, anisotropy
@@ -61,7 +61,7 @@ struct StateSummary {
   std::string label;
   bool held_out = false;
   double pressure = 0.0;  // Pa
-  double f_dev = 0.0;     // signed fabric deviator (physics.md 3)
+  double f_dev = 0.0;     // signed fabric deviator (docs/physics.md section 3)
   double eps_dev = 0.0, volume_fraction = 0.0;
   bool has_elastic = false, has_plastic = false;
   RendulicStiffness elastic;  // level 1 from the data

@@ -1,9 +1,9 @@
-// What calibration fits against (models.md "Calibration", interfaces.md "Results file"): per
+// What calibration fits against (docs/calibration.md "Two levels", docs/results.md): per
 // state the relaxed stress and fabric and its probe envelopes (Rendulic pairs of d_sigma in Pa
 // and of d_F, one per probe direction), and the main undrained path (stress and fabric versus
 // eps_dev). The loader reads any results file with /material and /states/<label>/envelopes, so
 // envelopes from another DEM code converted to our schema calibrate the same way as ours.
-// Stress pairs are converted to Pa with /material k_star (interfaces.md: *_star datasets are
+// Stress pairs are converted to Pa with /material k_star (docs/results.md: *_star datasets are
 // divided by k*). No physics here, only data and its provenance.
 #pragma once
 
@@ -14,7 +14,7 @@
 
 namespace rendulic::calibration {
 
-// physics.md section 5: elastic probes have |d_eps| < 1e-4, elasto-plastic ones > 1e-3.
+// docs/physics.md section 5: elastic probes have |d_eps| < 1e-4, elasto-plastic ones > 1e-3.
 inline constexpr double kElasticAmplitudeMax = 1e-4;
 inline constexpr double kPlasticAmplitudeMin = 1e-3;
 
@@ -51,7 +51,8 @@ struct StateData {
 
 // The main path, subsampled; row 0 is the start state of the model path.
 struct PathData {
-  std::vector<double> eps_dev;          // signed (physics.md 3), relative to row 0 after loading
+  // Signed (docs/physics.md section 3), relative to row 0 after loading.
+  std::vector<double> eps_dev;
   std::vector<Eigen::Matrix3d> stress;  // Pa
   std::vector<Eigen::Matrix3d> fabric;
   double volume_fraction = 0.0;  // at row 0

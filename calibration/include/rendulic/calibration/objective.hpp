@@ -1,4 +1,4 @@
-// The calibration objective (models.md "Calibration"; docs/calibration.md "Objectives"): one
+// The calibration objective (docs/calibration.md "Objectives, weights and normalisation"): one
 // residual vector over the free parameters of a law, built from blocks
 //   - envelope points: per state and envelope, the predicted minus measured Rendulic pair of
 //     d_sigma (and, as a separate block, of d_F) for every probe direction;

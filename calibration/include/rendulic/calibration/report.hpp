@@ -1,4 +1,4 @@
-// Output of a calibration (interfaces.md `rendulic calibrate` and /calibration/<model>): the
+// Output of a calibration (docs/calibration.md; /calibration/<model> in docs/results.md): the
 // JSON object (model, params, stderr, correlation, per_state.<label> with B, G, A and the
 // plastic features, and diagnostics), and the HDF5 group written into a results file. Kept
 // apart from the numerics (no I/O inside the calibration classes). Non-finite numbers (an

@@ -1,4 +1,4 @@
-// Back ends behind the one Objective (models.md "Calibration"; docs/calibration.md "Back
+// Back ends behind the one Objective (docs/calibration.md "Back
 // ends"): all minimise 0.5 |r(z)|^2 inside the bounds of the ParameterSpace.
 //   kCeres      Levenberg-Marquardt (Ceres), bounds as box constraints; Jacobian by autodiff
 //               (through the driver for integrated predictions) or central differences

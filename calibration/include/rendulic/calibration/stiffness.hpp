@@ -1,10 +1,10 @@
-// Level one of the calibration (models.md "Calibration", per state): the elastic envelope
+// Level one of the calibration (docs/calibration.md "Two levels", per state): the elastic envelope
 // determines the symmetric 2x2 Rendulic stiffness in the (iso, dev) frame,
 //   D = [[3B, sqrt(3) A], [sqrt(3) A, 2G]],  (d_sigma_iso, d_sigma_dev) = D (d_eps_iso, d_eps_dev),
 // three numbers B, G, A fitted by linear least squares to every probe (and, optionally, a
 // centre c that an elastic envelope should not have: its size is a check of linearity). The
 // elasto-plastic envelope adds the features the elastic one lacks: the centre shift
-// (incremental non-linearity) and the thinning b/a (physics.md section 5), from the affine
+// (incremental non-linearity) and the thinning b/a (docs/physics.md section 5), from the affine
 // envelope fit of probes/ (R(theta) = c + M u(theta)). Model-free: no constitutive law here.
 #pragma once
 
@@ -25,8 +25,9 @@ struct RendulicStiffness {
   Eigen::Vector2d center = Eigen::Vector2d::Zero();      // Pa, Rendulic frame (0 if not fitted)
   double rms = 0.0;                                      // Pa, rms of the residual components
   int n_points = 0;
-  // The ellipse this stiffness draws at the envelope's amplitude (physics.md 6: semi-axes are
-  // singular values of D times |d_eps|; inclination of the major axis in the Rendulic frame).
+  // The ellipse this stiffness draws at the envelope's amplitude (docs/physics.md section 6:
+  // semi-axes are singular values of D times |d_eps|; inclination of the major axis in the Rendulic
+  // frame).
   double a = 0.0, b = 0.0, inclination_deg = 0.0;
 
   Eigen::Matrix2d iso_dev_matrix() const;   // D in the (iso, dev) frame

@@ -1,9 +1,9 @@
-// Parameter uncertainty and identifiability from the Jacobian at the optimum (models.md
-// "Calibration": standard errors and correlations from the Jacobian; docs/calibration.md
-// "Uncertainty"). Covariance C = s^2 (J^T J)^+ with s^2 = SSR / (n - p), computed through the
-// SVD of the column-normalised Jacobian so that a rank-deficient problem gives a pseudo-inverse,
-// its null directions, and a plain-language warning instead of a huge or NaN number. The same
-// numbers as ceres::Covariance where J has full rank (tests/calibration cross-check them).
+// Parameter uncertainty and identifiability from the Jacobian at the optimum (docs/calibration.md
+// "Uncertainty and identifiability"). Covariance C = s^2 (J^T J)^+
+// with s^2 = SSR / (n - p), computed through the SVD of the column-normalised Jacobian so that a
+// rank-deficient problem gives a pseudo-inverse, its null directions, and a plain-language warning
+// instead of a huge or NaN number. The same numbers as ceres::Covariance where J has full rank
+// (tests/calibration cross-check them).
 #pragma once
 
 #include <Eigen/Dense>

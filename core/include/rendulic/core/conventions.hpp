@@ -1,5 +1,5 @@
-// Sign conventions, tensor invariants and Rendulic coordinates: the one place that defines
-// them (physics.md sections 2, 3 and 5; models.md "Coordinates"). Everything else calls these
+// Sign conventions, tensor invariants and Rendulic coordinates: the one place that defines them
+// (docs/physics.md sections 2, 3 and 5; docs/models.md "Coordinates"). Everything else calls these
 // functions instead of re-deriving a sign or a sqrt(2).
 //
 // - Strain epsilon = -E: compression positive. Stress: compression positive.
@@ -26,7 +26,7 @@ inline constexpr double kPi = std::numbers::pi;
 inline constexpr double deg_to_rad(double deg) { return deg * kPi / 180.0; }
 inline constexpr double rad_to_deg(double rad) { return rad * 180.0 / kPi; }
 
-// Special directions of the strain Rendulic plane (physics.md section 5), in degrees.
+// Special directions of the strain Rendulic plane (docs/physics.md section 5), in degrees.
 // atan(1/sqrt(2)) is the angle of the isotropic axis (1, 1, 1) in the (sqrt2 lat, ax) plane.
 inline const double kIsoCompressionDeg = rad_to_deg(std::atan(1.0 / kSqrt2));  // 35.26
 inline const double kIsoExtensionDeg = kIsoCompressionDeg + 180.0;             // 215.26
@@ -71,7 +71,7 @@ inline Eigen::Matrix3d from_rendulic_pair(const Eigen::Vector2d& r) {
   return Eigen::Vector3d(r.y(), lat, lat).asDiagonal();
 }
 
-// Rotation from Rendulic (sqrt2 lat, ax) to the (iso, dev) frame of models.md:
+// Rotation from Rendulic (sqrt2 lat, ax) to the (iso, dev) frame of docs/models.md:
 // iso = tr(Q)/sqrt(3), dev = sqrt(2/3) (ax - lat). Orthonormal, so it preserves norms.
 inline Eigen::Matrix2d rendulic_to_iso_dev() {
   const double c = std::sqrt(2.0 / 3.0), s = 1.0 / kSqrt3;  // cos, sin of 35.26 deg
@@ -86,7 +86,7 @@ inline Eigen::Vector2d rendulic_from_iso_dev(const Eigen::Vector2d& q) {
   return rendulic_to_iso_dev().transpose() * q;
 }
 
-// Probe strain (compression positive) for direction theta (physics.md section 5):
+// Probe strain (compression positive) for direction theta (docs/physics.md section 5):
 // amplitude * diag(sin theta, cos theta / sqrt2, cos theta / sqrt2). Its Frobenius norm is
 // the amplitude and its Rendulic pair is amplitude * (cos theta, sin theta).
 inline Eigen::Matrix3d probe_strain(double theta_deg, double amplitude) {
@@ -101,7 +101,7 @@ inline double probe_direction_deg(const Eigen::Vector2d& strain_pair) {
 }
 // M equally spaced directions starting at isotropic compression (35.26 deg), wrapped into
 // [0, 360): whenever M is a multiple of 4 the set holds the isotropic and the deviatoric
-// (constant-volume) directions of physics.md section 5 exactly, so the seed's special points
+// (constant-volume) directions of docs/physics.md section 5 exactly, so the seed's special points
 // of Figs. 3-6 are probes, not interpolations.
 inline Eigen::VectorXd probe_directions_deg(int m) {
   Eigen::VectorXd d(m);
@@ -109,17 +109,26 @@ inline Eigen::VectorXd probe_directions_deg(int m) {
   return d;
 }
 
-// Mandel form of a symmetric tensor and back.
-inline Vector6d to_mandel(const Eigen::Matrix3d& Q) {
-  Vector6d v;
-  v << Q(0, 0), Q(1, 1), Q(2, 2), kSqrt2 * Q(1, 2), kSqrt2 * Q(0, 2), kSqrt2 * Q(0, 1);
+// Mandel form of a symmetric tensor (xx, yy, zz, sqrt2 yz, sqrt2 xz, sqrt2 xy) and back: the
+// dot product of two Mandel vectors is the double contraction of the tensors. Templates on the
+// scalar so that the constitutive laws push automatic-differentiation types through the same
+// code; the double overloads also take Eigen expressions.
+template <typename T>
+Eigen::Matrix<T, 6, 1> to_mandel(const Eigen::Matrix<T, 3, 3>& Q) {
+  const T r2 = T(kSqrt2);
+  Eigen::Matrix<T, 6, 1> v;
+  v << Q(0, 0), Q(1, 1), Q(2, 2), r2 * Q(1, 2), r2 * Q(0, 2), r2 * Q(0, 1);
   return v;
 }
-inline Eigen::Matrix3d from_mandel(const Vector6d& v) {
-  Eigen::Matrix3d Q;
-  const double yz = v(3) / kSqrt2, xz = v(4) / kSqrt2, xy = v(5) / kSqrt2;
+template <typename T>
+Eigen::Matrix<T, 3, 3> from_mandel(const Eigen::Matrix<T, 6, 1>& v) {
+  const T r2 = T(kSqrt2);
+  const T yz = v(3) / r2, xz = v(4) / r2, xy = v(5) / r2;
+  Eigen::Matrix<T, 3, 3> Q;
   Q << v(0), xy, xz, xy, v(1), yz, xz, yz, v(2);
   return Q;
 }
+inline Vector6d to_mandel(const Eigen::Matrix3d& Q) { return to_mandel<double>(Q); }
+inline Eigen::Matrix3d from_mandel(const Vector6d& v) { return from_mandel<double>(v); }
 
 }  // namespace rendulic

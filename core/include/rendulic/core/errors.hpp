@@ -1,7 +1,7 @@
-// Error types shared by every module (architecture.md "Errors"). InputError is bad input from
-// the user (a file, a scenario key, a value out of range, a non-physical time step, a damaged
-// results file, an output folder that cannot be written): the CLI prints its one-line message
-// and exits with code 2. Anything else escaping to main is a bug (exit 1).
+// Error types shared by every module (docs/architecture.md "Conventions"). InputError is bad input
+// from the user (a file, a scenario key, a value out of range, a non-physical time step, a damaged
+// results file, an output folder that cannot be written): the CLI prints its one-line message and
+// exits with code 2. Anything else escaping to main is a bug (exit 1).
 #pragma once
 
 #include <stdexcept>
@@ -16,12 +16,6 @@ class InputError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-// A capability whose issue has not landed yet: it says so instead of pretending to work.
-class NotAvailable : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
-
 // `text` fit for a one-line message: control characters (a newline, a NUL) shown as \xNN.
 std::string printable(const std::string& text);
 
@@ -31,8 +25,8 @@ std::string printable(const std::string& text);
 std::string describe_current_exception();
 
 // Rethrows the exception in flight (call inside a catch block) with `note` appended to its
-// message, keeping its kind: InputError stays InputError (exit 2), NotAvailable stays
-// NotAvailable, anything else becomes std::runtime_error (exit 1).
+// message, keeping its kind: InputError stays InputError (exit 2), anything else becomes
+// std::runtime_error (exit 1).
 [[noreturn]] void rethrow_with_note(const std::string& note);
 
 }  // namespace rendulic

@@ -1,4 +1,4 @@
-// Results files (HDF5 C++ API), schema "rendulic/1" of interfaces.md; docs/results.md. The
+// Results files (HDF5 C++ API), schema "rendulic/1" of docs/results.md. The
 // writer builds the file under a temporary name in the output folder and renames it onto the
 // final name only in commit(): a run that fails or is interrupted leaves no file that looks
 // complete, and a results file from an earlier run stays untouched until the new one is

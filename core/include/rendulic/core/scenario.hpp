@@ -1,4 +1,4 @@
-// Strict scenario files (TOML, toml++) and `--set` overrides (interfaces.md `rendulic run`).
+// Strict scenario files (TOML, toml++) and `--set` overrides (docs/usage.md).
 // Every key a scenario may hold is declared once in a ScenarioSchema (type, unit, default,
 // range, help): modules register their own keys (e.g. dem::register_scenario_keys), the app
 // combines them. An unknown key, a wrong type or a value out of range is an InputError whose

@@ -1,4 +1,4 @@
-// Orthorhombic periodic cell and its driver (physics.md section 2). The cell is a small value
+// Orthorhombic periodic cell and its driver (docs/physics.md section 2). The cell is a small value
 // type (three lengths); changing it is the driver's job. The driver turns each axis's control
 // (strain rate, or a stress target held by a servo) into the diagonal velocity gradient D of
 // the step; the system then updates lengths with L_a <- L_a exp(D_aa dt), so that a trace-free
@@ -51,8 +51,6 @@ struct CellControl {
   static CellControl isotropic_compression(double rate);
   // Constant-volume axisymmetric along x: D = rate diag(1, -1/2, -1/2) (rate > 0: extension).
   static CellControl undrained_axisymmetric(double rate);
-  // Plane strain in x-y at constant volume: D = rate diag(1, -1, 0).
-  static CellControl plane_strain(double rate);
   // Drained triaxial: axial (x) strain rate imposed, lateral stress held at `lateral_stress`.
   static CellControl drained_triaxial(double axial_rate, double lateral_stress);
 

@@ -1,4 +1,4 @@
-// Contact law, time scales and the time step of the DEM engine (physics.md section 1, seed
+// Contact law, time scales and the time step of the DEM engine (docs/physics.md section 1, seed
 // paper section 2.1). NormalContact is a pure kernel: the normal force from the overlap and
 // its rate, nothing else; the contact loop (dem_system.cpp) owns minimum image, the affine
 // relative velocity and the sums. The closed forms here (contact duration, restitution) are
@@ -20,7 +20,7 @@ struct NormalContact {
   double force(double delta, double delta_dot) const { return k * delta + gamma * delta_dot; }
 };
 
-// Material of the seed study (physics.md section 1), SI units.
+// Material of the seed study (docs/physics.md section 1), SI units.
 struct Material {
   double k = 1e8;         // normal stiffness, kg/s^2
   double gamma = 1.0;     // contact viscosity, kg/s
@@ -43,7 +43,7 @@ double contact_time(const NormalContact& c, double m_reduced);
 // Coefficient of normal restitution, e = exp(-gamma t_c / (2 m_red)).
 double restitution(const NormalContact& c, double m_reduced);
 
-// Time step: dt = factor * t_c of the two smallest particles (physics.md section 1).
+// Time step: dt = factor * t_c of the two smallest particles (docs/physics.md section 1).
 double time_step(const Material& m, double factor);
 // A sufficient bound for the stability of the explicit scheme on any packing of this
 // material. Springs: Gershgorin on the mass-weighted stiffness matrix bounds the highest

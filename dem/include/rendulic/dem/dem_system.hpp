@@ -1,5 +1,5 @@
 // The DEM engine: particles in a deforming orthorhombic periodic cell, integrated with
-// velocity Verlet in peculiar-velocity form (physics.md sections 1-3, seed paper section 2).
+// velocity Verlet in peculiar-velocity form (docs/physics.md sections 1-3, seed paper section 2).
 //
 // Scheme (one step of length dt, imposed diagonal velocity gradient D, S = exp(D dt)):
 //   1. v' <- v' + dt/2 * F(t)/m                       (half kick)

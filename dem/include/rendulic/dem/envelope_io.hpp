@@ -1,4 +1,4 @@
-// Envelopes in the results file (interfaces.md, /states/<label>/envelopes/<name>): attrs
+// Envelopes in the results file (docs/results.md, /states/<label>/envelopes/<name>): attrs
 // amplitude, method, directions (and k_star plus the envelope's own scalar attributes);
 // datasets theta_deg[m], strain[m,2], stress_star[m,2], fabric[m,2], d_stress[m,3,3] (Pa),
 // d_fabric[m,3,3], and one [m] dataset per probe diagnostic. The names of the diagnostics and

@@ -1,5 +1,6 @@
-// Exact small-strain response of the contact network of a relaxed packing (issue 4 item 3,
-// physics.md sections 1, 3, 5): no dynamics, one sparse factorisation.
+// Exact small-strain response of the contact network of a relaxed packing (docs/probes.md "Linear
+// response: what exactly is computed"; docs/physics.md sections 1, 3, 5): no dynamics, one sparse
+// factorisation.
 //
 // Energy U = sum_c phi(|l_c|), phi = k delta^2 / 2, with l_c = (I + E) l_c0 + u_i - u_j for a
 // homogeneous kinematic strain E (extension positive) and non-affine displacements u. For a
@@ -10,7 +11,7 @@
 //   V d sigma_T = sum_c [(k |l| + f)(n.dl) n n - f (dl (x) n + n (x) dl)] - V sigma_T tr dE
 // with dl = dE l + du_i - du_j: the Born term (k l^2 + f l) nnnn, the pre-stress terms
 // -(dE sigma_T + sigma_T dE) + sigma_T tr dE (volume change of the cell), and the non-affine
-// relaxation -Xi^T H^-1 Xi. Converted to the conventions of physics.md (strain and stress
+// relaxation -Xi^T H^-1 Xi. Converted to the conventions of docs/physics.md (strain and stress
 // compression positive) the matrix keeps its entries: d_sigma = C d_eps (Mandel).
 // So C is the rate of the Cauchy stress as a dynamic probe measures it, sigma_after -
 // sigma_before with sigma evaluated in the deformed cell, NOT the second derivative of the
@@ -49,7 +50,7 @@ bool linear_response_has_cholmod();
 struct LinearResponseOptions {
   double k = 1e8;  // normal stiffness, kg/s^2
   LinearSolver solver = LinearSolver::kAuto;
-  // A particle with fewer contacts is a rattler (physics.md section 3).
+  // A particle with fewer contacts is a rattler (docs/physics.md section 3).
   int min_contacts = 4;
   // A particle whose local block sum_c K_c has its smallest eigenvalue below
   // floppy_tolerance * k cannot be held by its contacts (e.g. 4 coplanar contacts) and is

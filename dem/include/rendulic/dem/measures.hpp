@@ -1,4 +1,4 @@
-// Measured quantities of a packing (physics.md section 3; seed paper eqs. 1 and 2): static
+// Measured quantities of a packing (docs/physics.md section 3; seed paper eqs. 1 and 2): static
 // stress, fabric, coordination C and C* (rattlers, fewer than 4 contacts, removed
 // iteratively), volume fraction, kinetic and elastic energy, inertial number and the strains.
 // Plain data, filled by DemSystem::measure(); signs follow core/conventions.hpp.

@@ -1,10 +1,10 @@
-// Neighbour search for strongly polydisperse packings (w = 3), physics.md section 1 and issue 3
-// item 4. A half Verlet list (each pair once, found through a half stencil of bins; the force
-// loop adds the pair force to both ends) built from a cell list whose bins are at least the largest
-// interaction range max_i 2 (r_i + h_i) wide. Each entry keeps the periodic image (a shift code) of
-// its pair at build time; positions are not wrapped between builds, and since the affine remap
-// scales positions and cell lengths alike, the stored image stays the right one until the next
-// build.
+// Neighbour search for strongly polydisperse packings (w = 3), docs/physics.md section 1 and
+// docs/dem.md "Physics and numerics". A half Verlet list (each pair once, found through a half
+// stencil of bins; the force loop adds the pair force to both ends) built from a cell list whose
+// bins are at least the largest interaction range max_i 2 (r_i + h_i) wide. Each entry keeps the
+// periodic image (a shift code) of its pair at build time; positions are not wrapped between
+// builds, and since the affine remap scales positions and cell lengths alike, the stored image
+// stays the right one until the next build.
 //
 // Per-particle skins. Particle i carries a half skin h_i >= skin / 2, and a pair is listed when
 // |l| < r_i + r_j + h_i + h_j. At nu = 0.82 under loading a few particles (rattlers, small

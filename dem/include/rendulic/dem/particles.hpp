@@ -1,7 +1,7 @@
-// Particle data of the DEM engine as separate arrays (structure of arrays, architecture.md
-// "HOOMD-blue"): positions, peculiar velocities (relative to the imposed homogeneous flow,
-// physics.md section 1), forces, radii and inverse masses. Radii are drawn number-weighted
-// uniform in [r_min, r_max] from a seeded generator (physics.md section 1).
+// Particle data of the DEM engine as separate arrays (structure of arrays, docs/architecture.md
+// "Design choices"): positions, peculiar velocities (relative to the imposed homogeneous flow,
+// docs/physics.md section 1), forces, radii and inverse masses. Radii are drawn number-weighted
+// uniform in [r_min, r_max] from a seeded generator (docs/physics.md section 1).
 #pragma once
 
 #include <Eigen/Dense>

@@ -1,4 +1,4 @@
-// Probe campaigns (physics.md section 5; issue 4 items 1-3): from one relaxed state, M strain
+// Probe campaigns (docs/physics.md section 5): from one relaxed state, M strain
 // probes per amplitude, by one of three separate methods (never substituted for each other):
 //  - dynamic: a copy of the DEM state takes the probe strain (core probe_strain, log strain,
 //    diagonal) at a controlled rate, then relaxes at fixed cell until E_kin / E_el falls below
@@ -69,7 +69,7 @@ Envelope linear_response_envelope(const DemSystem& state, double amplitude,
 std::string envelope_name(const std::string& method, double amplitude);
 
 // The whole campaign of one state: every method x amplitude, written under
-// /states/<label>/envelopes/<envelope_name> (interfaces.md). The linear-response envelopes
+// /states/<label>/envelopes/<envelope_name> (docs/results.md). The linear-response envelopes
 // also store the 6x6 Mandel stiffness [Pa] and fabric stiffness as datasets `stiffness` and
 // `fabric_stiffness`. Returns the envelopes in the order written.
 std::vector<Envelope> run_probe_campaign(const DemSystem& state, const std::string& label,

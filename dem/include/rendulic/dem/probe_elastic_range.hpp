@@ -1,5 +1,5 @@
-// The elastic range of a state at rest (physics.md section 5: "the amplitude actually used [for
-// elasto-plastic probes] must lie beyond the state's measured elastic range"; docs/probes.md
+// The elastic range of a state at rest (docs/physics.md section 5: the amplitude of
+// elasto-plastic probes must lie beyond the measured elastic range of the state; docs/probes.md
 // "Elastic range"). A ladder of probe amplitudes in the four directions 35.26 (isotropic
 // compression), 125.26 (constant-volume axial compression: reverses the extension path),
 // 215.26 (isotropic extension) and 305.26 (constant-volume axial extension: continues the path,

@@ -1,8 +1,8 @@
-// Response envelopes of strain probes (physics.md sections 5 and 6; interfaces.md
+// Response envelopes of strain probes (docs/physics.md sections 5 and 6; docs/results.md
 // /states/<label>/envelopes/<name>): the data of one envelope whatever made it (dynamic
 // probes, quasi-static minimisation probes or the linear response), the elastic envelope of a
 // linear-response stiffness, and the 2x2 Rendulic map of an envelope with its exact ellipse
-// (semi-axes = singular values, physics.md section 6) used to compare methods.
+// (semi-axes = singular values, docs/physics.md section 6) used to compare methods.
 #pragma once
 
 #include <Eigen/Dense>

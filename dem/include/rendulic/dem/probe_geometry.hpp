@@ -1,10 +1,10 @@
-// Contact geometry of a periodic sphere packing, for the probe tools (physics.md sections 1-3):
-// a cell given by its 3x3 matrix h (columns = cell vectors; orthorhombic = diag(L)), the
+// Contact geometry of a periodic sphere packing, for the probe tools (docs/physics.md sections
+// 1-3): a cell given by its 3x3 matrix h (columns = cell vectors; orthorhombic = diag(L)), the
 // minimum-image branch vector l = x_i - x_j of every pair within a cut-off (cell lists over
 // fractional coordinates), and the static stress (paper eq. 1) and fabric (eq. 2) of the
-// frictionless linear contact law. The probe tools (linear response, energy minimisation,
-// probe checks) use this self-contained geometry so that they can check the DEM engine
-// independently rather than share its code paths.
+// frictionless linear contact law. The probe tools (linear response, energy minimisation, probe
+// checks) use this self-contained geometry so that they can check the DEM engine independently
+// rather than share its code paths.
 #pragma once
 
 #include <Eigen/Dense>

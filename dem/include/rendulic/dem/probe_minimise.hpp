@@ -1,8 +1,8 @@
 // Energy minimisation of a periodic packing of frictionless linear-spring spheres (the contact
-// law of physics.md section 1 without damping: U = sum k delta^2 / 2) at a fixed cell, by
+// law of docs/physics.md section 1 without damping: U = sum k delta^2 / 2) at a fixed cell, by
 // FIRE 2.0 (Guenole et al., Comput. Mater. Sci. 175, 2020: semi-implicit Euler, velocity
 // mixing, restart with half-step back-off on uphill power). Used by the quasi-static probe
-// method (affine step, then minimise: physics.md section 5, issue 4 item 2), to generate
+// method (affine step, then minimise: docs/physics.md section 5), to generate
 // jammed test packings without the DEM engine, and as the independent finite-difference check
 // of the linear response. Particle masses are all 1 in the minimiser: FIRE only needs a
 // descent dynamics, and equal masses keep its time step scale-free (units of 1/sqrt(k)).
@@ -42,7 +42,7 @@ struct MinimiseSummary {
 MinimiseSummary minimise_energy(PackingData& packing, const MinimiseOptions& options);
 
 // Homogeneous deformation of positions and cell by the small strain eps (compression
-// positive, physics.md section 2): x -> (I - eps) x, h -> (I - eps) h.
+// positive, docs/physics.md section 2): x -> (I - eps) x, h -> (I - eps) h.
 void apply_affine_strain(PackingData& packing, const Eigen::Matrix3d& eps);
 
 // A random packing for tests and benchmarks without the DEM engine: N spheres with radii

@@ -1,4 +1,4 @@
-// Probe campaigns across MPI ranks (issue 4 item 1; physics.md section 5: probes are
+// Probe campaigns across MPI ranks (docs/physics.md section 5: probes are
 // independent and run in parallel). Under `mpirun -np K rendulic run`, rank 0 runs the whole
 // pipeline and alone prints and writes files; ranks 1..K-1 serve probe campaigns. For each
 // dynamic or minimisation envelope rank 0 sends the task to every worker: the state through

@@ -1,10 +1,10 @@
-// Protocols of the reference experiment (physics.md section 4, seed paper section 3) composed
+// Protocols of the reference experiment (docs/physics.md section 4, seed paper section 3) composed
 // from a few primitives of DemSystem: a random gas, strain-controlled isotropic compression
 // to a volume fraction (constant rate, or a rate that holds the inertial number), relaxation
 // at fixed cell to a kinetic/elastic energy threshold with a time cap, and the constant-volume
 // axisymmetric path with snapshots at given -eps_dev.
 //
-// Probe API (for probe campaigns, physics.md section 5). A DemSystem is a value: copy a
+// Probe API (for probe campaigns, docs/physics.md section 5). A DemSystem is a value: copy a
 // relaxed state, then
 //   impose_strain_increment(sys, d_eps, rate)  -- the strain increment (compression positive)
 //   relax(sys, RelaxOptions{...})              -- fixed cell, to the energy threshold or cap
@@ -77,7 +77,7 @@ struct CompressOptions {
   bool IsValid(std::string* why) const;
 };
 // The inertial number I = rate 2<r> sqrt(rho / P) of a strain rate (1/s, the largest |D_aa|)
-// at pressure P (Pa), physics.md section 4: 0 at rest, +inf for a positive rate at P <= 0.
+// at pressure P (Pa), docs/physics.md section 4: 0 at rest, +inf for a positive rate at P <= 0.
 // The protocols record it from the rate they impose, not from the last step's D: events
 // (samples, snapshots, the end) are hit by shortening a step, and that step's D is not the
 // rate of the loading.
@@ -133,7 +133,7 @@ struct WindowMean {
 WindowMean window_mean(const std::vector<double>& x, const std::vector<double>& y, double x_lo,
                        double x_hi, int batches = 5);
 
-// Imposes the diagonal strain increment d_eps (compression positive, physics.md section 5)
+// Imposes the diagonal strain increment d_eps (compression positive, docs/physics.md section 5)
 // in whole steps at constant D, the largest component advancing at `rate` (1/s) at most.
 // Returns the number of steps.
 std::int64_t impose_strain_increment(DemSystem& sys, const Eigen::Vector3d& d_eps, double rate);

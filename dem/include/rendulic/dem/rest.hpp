@@ -1,4 +1,4 @@
-// States at rest (physics.md section 5: a probe starts from a state in mechanical equilibrium,
+// States at rest (docs/physics.md section 5: a probe starts from a state in mechanical equilibrium,
 // not only one with little kinetic energy; docs/dem.md "States at rest"). Two things live here:
 //  - the one equilibrium criterion of the project, force_balance(): the largest net contact
 //    force on a non-rattler over the mean force of the contacts between non-rattlers. The

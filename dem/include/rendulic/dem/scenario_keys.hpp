@@ -1,4 +1,4 @@
-// Scenario keys of the DEM stages (physics.md sections 1-4; interfaces.md `rendulic run`):
+// Scenario keys of the DEM stages (docs/physics.md sections 1-4; docs/scenario-keys.md):
 // material.*, dem.*, preparation.*, relax.*, isotropic.*, path.*, states.*, pressure.*. Each key is
 // declared once with type, unit, default (the seed study's values), range and help; the
 // options of the protocols are built from a validated scenario, and cross-key rules (e.g.

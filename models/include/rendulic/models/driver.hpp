@@ -1,5 +1,6 @@
-// Material-point driver (models.md "Material-point driver"; MGIS/MTest style, architecture.md):
-// integrates a Law over one strain increment with sub-stepping, either
+// Material-point driver (docs/models.md "Material-point driver"; a step is plain data:
+// docs/architecture.md "Design choices"): integrates a Law over one strain increment with
+// sub-stepping, either
 // - kModifiedEuler: Heun's method with the embedded forward-Euler error estimate and automatic
 //   substep control (Sloan 1987; Sloan, Abbo and Sheng 2001): a substep is accepted when the
 //   local relative error estimate R = |y_heun - y_euler| / |y| is below `tolerance`;

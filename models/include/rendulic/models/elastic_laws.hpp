@@ -1,6 +1,6 @@
-// The two elastic families of models.md: (1) isotropic hypoelasticity with optionally
+// The two elastic families of docs/models.md: (1) isotropic hypoelasticity with optionally
 // pressure-dependent moduli, (2) the anisotropic elasticity of Kumar, Luding and Magnanimo
-// (Acta Mech. 225, 2014) in exactly the tensor form pinned by models.md:
+// (Acta Mech. 225, 2014) in exactly the tensor form pinned by docs/models.md:
 //   d_sigma = B tr(d_eps) I + 2G d_eps^D + beta_A B [ (F^D : d_eps) I + F^D tr(d_eps) ],
 // which on axisymmetric states gives dP = B d_eps_v + A d_eps_dev,
 // d_sigma_dev = A d_eps_v + 2G d_eps_dev with A = beta_A F_dev B.

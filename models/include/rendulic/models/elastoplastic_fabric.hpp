@@ -1,4 +1,4 @@
-// Family 4 of models.md: an elasto-plastic rate law with fabric evolution, in the spirit of
+// Family 4 of docs/models.md: an elasto-plastic rate law with fabric evolution, in the spirit of
 // Imole et al. (2013) and Kumar et al. (2014). Our own minimal design, documented in
 // docs/models.md:
 // - elastic part: the anisotropic_elastic operator (same first nine parameters);
@@ -10,8 +10,9 @@
 // - hardening makes the deviatoric stress ratio approach its steady value M exponentially
 //   with plastic deviatoric strain: n : dr = beta_s (M - r : n) lambda (alpha follows,
 //   d_alpha = beta_s (M - r : n) lambda n, so |r - alpha| stays m);
-// - fabric: d_F = c_F tr(d_eps) F/tr(F) + beta_F (F_dev_max n - F^D) lambda, i.e. the spec's
-//   dF_dev = beta_F (F_dev_max - F_dev) |d_eps_dev| driven by the plastic deviatoric strain
+// - fabric: d_F = c_F tr(d_eps) F/tr(F) + beta_F (F_dev_max n - F^D) lambda, i.e. the fabric
+//   deviator approaches its steady value exponentially,
+//   dF_dev = beta_F (F_dev_max - F_dev) |d_eps_dev|, driven by the plastic deviatoric strain
 //   (no deviatoric fabric change while elastic, seed Fig. 4).
 // At the steady state (r : n = M) the plastic modulus vanishes: loading probes give no change
 // of the stress ratio, so the envelope collapses toward a line (seed Fig. 5e).
@@ -73,7 +74,7 @@ struct ElastoplasticFabric {
     const T pr = trace(s.stress) / T(3);
     if (!(pr > T(0))) return out;
     const Mat3<T> r = dev(s.stress) / pr;
-    const Mat3<T> xi = r - tensor_of<T>(s.internal);
+    const Mat3<T> xi = r - from_mandel<T>(s.internal);
     const T xi_norm = safe_norm(xi);
     if (!(xi_norm > T(0))) return out;
     const T share = plastic_share((xi_norm - p[kM]) / p[kM], p[kWyield]);
@@ -103,7 +104,7 @@ struct ElastoplasticFabric {
   // A sharp switch at f = 0 makes the response of a finite probe a non-differentiable function
   // of the parameters where the probe just reaches the surface; the default w = 0.02 keeps it
   // smooth at the price of a little plastic flow within the last 2 % of the elastic range
-  // (docs/models.md, family 4). w = 0 is the sharp switch (a state within kYieldSurfaceBand of
+  // (docs/models.md section 4). w = 0 is the sharp switch (a state within kYieldSurfaceBand of
   // the surface counts as on it).
   template <typename T>
   static T plastic_share(const T& f, const T& w) {
@@ -126,7 +127,7 @@ struct ElastoplasticFabric {
     if (pl.loading) {
       r.plastic = true;
       r.d_stress -= pl.lambda * pl.d_n;
-      r.d_internal = mandel_of<T>((pl.hardening * pl.lambda) * pl.n);
+      r.d_internal = to_mandel<T>((pl.hardening * pl.lambda) * pl.n);
       r.d_fabric += (p[kBetaF] * pl.lambda) * (p[kFmax] * pl.n - f_dev);
     }
     return r;
@@ -167,7 +168,7 @@ struct ElastoplasticFabric {
   static T yield_function(const T* p, const StateT<T>& s) {
     const T pr = trace(s.stress) / T(3);
     if (!(pr > T(0))) return T(-std::numeric_limits<double>::infinity());
-    return (safe_norm(Mat3<T>(dev(s.stress) / pr - tensor_of<T>(s.internal))) - p[kM]) / p[kM];
+    return (safe_norm(Mat3<T>(dev(s.stress) / pr - from_mandel<T>(s.internal))) - p[kM]) / p[kM];
   }
 
   // Drift correction after an explicit substep: a state outside the surface has its alpha moved
@@ -181,12 +182,12 @@ struct ElastoplasticFabric {
   static void correct(const T* p, StateT<T>* s, bool on_surface) {
     const T pr = trace(s->stress) / T(3);
     if (!(pr > T(0))) return;
-    const Mat3<T> xi = dev(s->stress) / pr - tensor_of<T>(s->internal);
+    const Mat3<T> xi = dev(s->stress) / pr - from_mandel<T>(s->internal);
     const T xi_norm = safe_norm(xi);
     const T f = xi_norm - p[kM];
     const bool sharp = !(p[kWyield] > T(kYieldSurfaceBand));
     if ((f > T(0) || (on_surface && sharp)) && xi_norm > T(0))
-      s->internal += mandel_of<T>(Mat3<T>(xi * (f / xi_norm)));
+      s->internal += to_mandel<T>(Mat3<T>(xi * (f / xi_norm)));
   }
 };
 

@@ -1,5 +1,5 @@
-// Model response envelopes (models.md "Material-point driver"; physics.md section 5): from a
-// given state, the DEM's probe set (core probe_directions_deg, probe_strain) is applied to a
+// Model response envelopes (docs/models.md "Material-point driver"; docs/physics.md section 5):
+// from a given state, the DEM's probe set (core probe_directions_deg, probe_strain) is applied to a
 // law and the stress and fabric increments are returned as Rendulic pairs, exactly as the DEM
 // campaign reports them. Each probe starts from the same state (probes are independent).
 #pragma once
@@ -18,7 +18,7 @@ enum class EnvelopeMethod {
 };
 
 struct EnvelopeOptions {
-  double amplitude = 5e-5;  // |d_eps| (Frobenius), physics.md section 5 elastic default
+  double amplitude = 5e-5;  // |d_eps| (Frobenius), docs/physics.md section 5 elastic default
   int directions = 36;
   EnvelopeMethod method = EnvelopeMethod::kIntegrated;
   StepOptions step;
@@ -44,8 +44,8 @@ ModelEnvelope model_envelope(const Law& law, const MaterialState& state,
 // The 2x2 map from Rendulic strain pairs to Rendulic stress pairs given by the law's tangent at
 // `state` for probes near the direction theta_deg (axisymmetric probes; the tangent of a
 // rate-independent law depends on the direction only). For the elastic laws this is the
-// Rendulic stiffness whose (iso, dev) form is [[3B, sqrt3 A], [sqrt3 A, 2G]] (models.md
-// "Calibration"); rotate with core's rendulic_to_iso_dev() R as R D R^T.
+// Rendulic stiffness whose (iso, dev) form is [[3B, sqrt3 A], [sqrt3 A, 2G]] (docs/models.md
+// "Coordinates" and section 2); rotate with core's rendulic_to_iso_dev() R as R D R^T.
 Eigen::Matrix2d rendulic_tangent(const Law& law, const MaterialState& state, double theta_deg);
 
 }  // namespace rendulic::models

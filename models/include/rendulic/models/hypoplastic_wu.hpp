@@ -1,14 +1,14 @@
-// Family 3 of models.md: the four-constant hypoplastic law of Wu and Bauer (1994) as used in
+// Family 3 of docs/models.md: the four-constant hypoplastic law of Wu and Bauer (1994) as used in
 // Wu, Bauer and Kolymbas (1996, Mech. Mater. 23:45-69) with the density factor set to one,
 // and the envelope theory of Gudehus (1979) and Wu (2000). In the authors' tension-positive
 // notation (T stress, D stretching):
 //   T' = c1 tr(T) D + c2 tr(T D)/tr(T) T + (c3 T^2 + c4 T*^2)/tr(T) |D|.
-// With sigma = -T and d_eps = -D dt (compression positive, physics.md section 2) this reads
+// With sigma = -T and d_eps = -D dt (compression positive, docs/physics.md section 2) this reads
 //   d_sigma = L(sigma) : d_eps + N(sigma) |d_eps|,
 //   L : x = -c1 tr(sigma) x - c2 (sigma : x)/tr(sigma) sigma,
 //   N     = (c3 sigma^2 + c4 (sigma^D)^2) / tr(sigma),
 // so the constants keep the signs and values published for sand (c1, c2, c3 < 0, c4 > 0).
-// The envelope of one increment is the ellipse of L shifted by N |d_eps| (models.md).
+// The envelope of one increment is the ellipse of L shifted by N |d_eps| (docs/models.md).
 // The law carries no fabric: d_F = 0 (its fabric envelope is the origin).
 #pragma once
 

@@ -1,8 +1,8 @@
-// The constitutive-law interface of models/ (models.md "Families", "Each law: state,
-// parameters with bounds, stress increment and fabric increment for a strain increment, and
-// its tangent"). A material point is plain data (MGIS style): MaterialState holds stress,
-// fabric, up to six scalar internal variables and the volume fraction. A Law owns a flat
-// parameter vector whose names, units, defaults and bounds it publishes, so that a calibration
+// The constitutive-law interface of models/ (docs/models.md "The law interface": a law has a state,
+// parameters with bounds, the stress and fabric increments for a strain increment, and its
+// tangent). A material point is plain data (docs/architecture.md "Design choices"): MaterialState
+// holds stress, fabric, up to six scalar internal variables and the volume fraction. A Law owns a
+// flat parameter vector whose names, units, defaults and bounds it publishes, so that a calibration
 // layer can treat any law as "a vector of bounded numbers". Compression positive throughout.
 //
 // Every law is also written as a template on the scalar type (see law_model.hpp and the
@@ -32,7 +32,7 @@ inline constexpr double kYieldSurfaceBand = 1e-9;
 template <typename T>
 struct StateT {
   Mat3<T> stress = Mat3<T>::Zero();  // Pa, compression positive
-  Mat3<T> fabric = Mat3<T>::Zero();  // dimensionless (physics.md eq. 2)
+  Mat3<T> fabric = Mat3<T>::Zero();  // dimensionless (docs/physics.md section 3, seed eq. 2)
   Vec6<T> internal = Vec6<T>::Zero();
   T volume_fraction = T(0);
 };

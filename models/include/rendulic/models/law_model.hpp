@@ -7,9 +7,9 @@
 //   static bool admissible(const double* p, const MaterialState& s, std::string* why)
 //   template <class T> static void correct(const T* p, StateT<T>* s, bool on_surface)
 //   template <class T> static T yield_function(const T* p, const StateT<T>& s)  (-inf: none)
-// so that calibration code can call M::rate<ceres::Jet<...>> directly (models.md
-// "Calibration": autodiff through the law where the law is smooth), and integrate the law with
-// Jets through the driver (driver_core.hpp) via StaticLawOps.
+// so that calibration code can call M::rate<ceres::Jet<...>> directly (docs/calibration.md
+// "Predictions and derivatives": autodiff through the law where the law is smooth), and integrate
+// the law with Jets through the driver (driver_core.hpp) via StaticLawOps.
 #pragma once
 
 #include <string>

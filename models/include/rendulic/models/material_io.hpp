@@ -1,5 +1,5 @@
-// Reading law parameters and material-point states from small TOML files (interfaces.md
-// `rendulic envelope`). Kept apart from the laws (no I/O inside physics classes).
+// Reading law parameters and material-point states from small TOML files (docs/models.md "Model
+// envelopes and `rendulic envelope`"). Kept apart from the laws (no I/O inside physics classes).
 //   parameters file: keys are the law's parameter names, numeric values; missing keys keep
 //     their defaults; an unknown key or a value out of bounds is an InputError naming the key
 //     and the file.

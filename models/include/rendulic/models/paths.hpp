@@ -1,5 +1,5 @@
-// Main loading paths driven through a law (issue 6 item 4, compared with the DEM curves of the
-// seed's Fig. 1 and the isotropic branch of physics.md section 4): isotropic compression, and
+// Main loading paths driven through a law (compared with the DEM curves of the
+// seed's Fig. 1 and the isotropic branch of docs/physics.md section 4): isotropic compression, and
 // undrained (constant-volume) axisymmetric deformation along x,
 // d_eps = a diag(1, -1/2, -1/2) (compression positive; a < 0 is the seed's axial extension).
 #pragma once
@@ -22,7 +22,7 @@ struct PathSeries {
   bool success = false;
   std::string reason;
   std::vector<Eigen::Matrix3d> strain, stress, fabric;  // accumulated strain, compression +
-  std::vector<double> eps_v, eps_dev, volume_fraction;  // eps_dev signed (physics.md 3)
+  std::vector<double> eps_v, eps_dev, volume_fraction;  // eps_dev signed, docs/physics.md section 3
   std::vector<Vector6d> internal;
   double max_error_estimate = 0.0;
   int total_substeps = 0;

@@ -1,8 +1,8 @@
-// Scalar-generic tensor helpers for the constitutive laws (models.md "Coordinates"). The laws
+// Scalar-generic tensor helpers for the constitutive laws (docs/models.md "Coordinates"). The laws
 // are templates on the scalar type so that the calibration layer can push Ceres Jets through
 // them; core/conventions.hpp is the reference for doubles and these helpers follow it exactly
-// (trace, deviator, double contraction, Mandel order xx, yy, zz, sqrt2 yz, sqrt2 xz, sqrt2 xy).
-// Only the operations a law needs are here; signs and Rendulic pairs stay in conventions.hpp.
+// (trace, deviator, double contraction). Only the operations a law needs are here; signs,
+// Rendulic pairs and the Mandel form (to_mandel<T>, from_mandel<T>) stay in conventions.hpp.
 #pragma once
 
 #include <Eigen/Dense>
@@ -48,23 +48,6 @@ T safe_norm(const Mat3<T>& a) {
 template <typename T>
 Mat3<T> identity3() {
   return Mat3<T>::Identity();
-}
-
-template <typename T>
-Vec6<T> mandel_of(const Mat3<T>& q) {
-  const T r2 = T(std::sqrt(2.0));
-  Vec6<T> v;
-  v << q(0, 0), q(1, 1), q(2, 2), r2 * q(1, 2), r2 * q(0, 2), r2 * q(0, 1);
-  return v;
-}
-
-template <typename T>
-Mat3<T> tensor_of(const Vec6<T>& v) {
-  const T r2 = T(std::sqrt(2.0));
-  const T yz = v(3) / r2, xz = v(4) / r2, xy = v(5) / r2;
-  Mat3<T> q;
-  q << v(0), xy, xz, xy, v(1), yz, xz, yz, v(2);
-  return q;
 }
 
 }  // namespace rendulic::models

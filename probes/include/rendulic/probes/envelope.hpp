@@ -1,7 +1,7 @@
-// Envelope data (physics.md section 5): the response points of one probe campaign in the
+// Envelope data (docs/physics.md section 5): the response points of one probe campaign in the
 // Rendulic plane, with the probe directions and strain points when they are known. The type
 // says nothing about how the envelope was made (DEM, a constitutive model, a file from
-// elsewhere): the fits of probes/ work on any of them (architecture.md).
+// elsewhere): the fits of probes/ work on any of them (docs/architecture.md).
 #pragma once
 
 #include <Eigen/Dense>

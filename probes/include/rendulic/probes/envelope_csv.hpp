@@ -1,7 +1,7 @@
-// Envelope from a CSV file (interfaces.md, `rendulic fit --in FILE.csv`): the header names the
-// columns; x and y (the Rendulic response coordinates) are required, theta_deg is optional,
-// other columns are ignored. Blank lines and lines starting with '#' are skipped. Anything
-// else that is not a finite number where one is needed is an InputError naming file, line
+// Envelope from a CSV file (docs/fitting.md "The fit command", `rendulic fit --in FILE.csv`): the
+// header names the columns; x and y (the Rendulic response coordinates) are required, theta_deg is
+// optional, other columns are ignored. Blank lines and lines starting with '#' are skipped.
+// Anything else that is not a finite number where one is needed is an InputError naming file, line
 // and column.
 #pragma once
 

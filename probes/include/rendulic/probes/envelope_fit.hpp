@@ -1,4 +1,4 @@
-// Geometric fits of one envelope (physics.md section 6, issue 5): an ellipse (centre,
+// Geometric fits of one envelope (docs/physics.md section 6): an ellipse (centre,
 // semi-axes a >= b >= 0, inclination of the major axis in [0, 180) deg from the horizontal
 // sqrt(2)-lateral axis), its degenerate case the line (b = 0), and the circle (a = b within
 // the noise: inclination undefined, never an arbitrary angle). The ellipse fit minimises

@@ -1,4 +1,4 @@
-// Envelope features for the models layer (physics.md sections 5 and 6, issue 5 item 5):
+// Envelope features for the models layer (docs/physics.md sections 5 and 6):
 // directional stiffnesses along the axes (semi-axis / amplitude), inclination, centre shift
 // (absolute and relative to the major axis), the symmetric 2x2 Rendulic stiffness from the
 // affine fit R = c + D e (e the strain point), and the elastic/plastic comparison of two
@@ -34,7 +34,7 @@ struct EnvelopeFeatures {
 EnvelopeFeatures envelope_features(const EnvelopeFit& fit, double amplitude);
 
 // Symmetric Rendulic stiffness: least squares of R_i = c + D e_i over c (2) and symmetric D
-// (3), e_i the strain points. Exact for a linear law plus a shift (physics.md section 6: the
+// (3), e_i the strain points. Exact for a linear law plus a shift (docs/physics.md section 6: the
 // envelope is then an ellipse with semi-axes amplitude * singular values of D). A hyperelastic
 // law gives a symmetric D in these orthonormal coordinates; `asymmetry` measures how far the
 // unconstrained 2x2 fit is from symmetric, ||M - M^T|| / (2 ||M||), and `rms` what the linear

@@ -1,4 +1,4 @@
-// Envelope fits in results files (interfaces.md "Results file", groups
+// Envelope fits in results files (docs/results.md, groups
 // /states/<label>/envelopes/<name>/fit_stress and fit_fabric): attributes shape, center[2],
 // semi_axes[2], inclination_deg (absent for a circle: undefined), rms, and center_stderr,
 // semi_axes_stderr, inclination_deg_stderr where defined; plus n_points, loss, loss_scale,

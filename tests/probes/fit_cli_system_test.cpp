@@ -1,4 +1,4 @@
-// End-to-end tests of `rendulic fit` (interfaces.md, issue 5 item 6): JSON keys and values on
+// End-to-end tests of `rendulic fit` (docs/fitting.md "The fit command"): JSON keys and values on
 // a known ellipse and line, the circle's undefined inclination, the readable summary, and
 // bad input (missing file, empty file, missing column, NaN, too few points, degenerate data)
 // -> exit 2 with a one-line reason. Runs the real binary.

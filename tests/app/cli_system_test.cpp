@@ -1,4 +1,4 @@
-// End-to-end tests of the `rendulic` executable's foundation behaviour (issue 2): exit codes,
+// End-to-end tests of the `rendulic` executable's foundation behaviour: exit codes,
 // one-line errors naming the culprit, nothing written on bad input, the effective scenario
 // stored in the results file, `inspect` on good and bad files. Runs the real binary.
 #include <gtest/gtest.h>

@@ -1,6 +1,6 @@
-// Tests of `rendulic envelope` (interfaces.md; issue 6 item 3) run as a user would, through
-// the built executable: the JSON contract (keys, Pa, Rendulic pairs equal to the library's
-// envelope) and exit code 2 with a one-line reason naming the culprit on bad input.
+// Tests of `rendulic envelope` (docs/models.md "Model envelopes and `rendulic envelope`") run as a
+// user would, through the built executable: the JSON contract (keys, Pa, Rendulic pairs equal to
+// the library's envelope) and exit code 2 with a one-line reason naming the culprit on bad input.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
