@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "rendulic/core/errors.hpp"
+#include "rendulic/core/result_paths.hpp"
 
 namespace rendulic::dem {
 
@@ -27,10 +28,6 @@ std::vector<std::string> split(const std::string& s) {
 
 }  // namespace
 
-std::string envelope_path(const std::string& state_label, const std::string& name) {
-  return "/states/" + state_label + "/envelopes/" + name;
-}
-
 void write_envelope(ResultsWriter& out, const std::string& group, const Envelope& envelope) {
   const std::size_t m = envelope.size();
   if (envelope.strain.size() != m || envelope.stress_star.size() != m ||
@@ -43,19 +40,19 @@ void write_envelope(ResultsWriter& out, const std::string& group, const Envelope
   out.attr(group, "method", envelope.method);
   out.attr(group, "directions", static_cast<std::int64_t>(m));
   out.attr(group, "k_star", envelope.k_star);
-  out.write(group + "/theta_deg", envelope.theta_deg);
-  out.write(group + "/strain", envelope.strain);
-  out.write(group + "/stress_star", envelope.stress_star);
-  out.write(group + "/fabric", envelope.fabric);
-  out.write(group + "/d_stress", envelope.d_stress);
-  out.write(group + "/d_fabric", envelope.d_fabric);
+  out.write(group + datasets::kThetaDeg, envelope.theta_deg);
+  out.write(group + datasets::kStrain, envelope.strain);
+  out.write(group + datasets::kStressStar, envelope.stress_star);
+  out.write(group + datasets::kFabric, envelope.fabric);
+  out.write(group + datasets::kDStress, envelope.d_stress);
+  out.write(group + datasets::kDFabric, envelope.d_fabric);
   if (!envelope.d_fabric_volume.empty()) {
     if (envelope.d_fabric_volume.size() != m || envelope.d_fabric_rotation.size() != m ||
         envelope.d_fabric_contacts.size() != m)
       throw std::logic_error("write_envelope: inconsistent fabric split sizes");
-    out.write(group + "/d_fabric_volume", envelope.d_fabric_volume);
-    out.write(group + "/d_fabric_rotation", envelope.d_fabric_rotation);
-    out.write(group + "/d_fabric_contacts", envelope.d_fabric_contacts);
+    out.write(group + datasets::kDFabricVolume, envelope.d_fabric_volume);
+    out.write(group + datasets::kDFabricRotation, envelope.d_fabric_rotation);
+    out.write(group + datasets::kDFabricContacts, envelope.d_fabric_contacts);
   }
   std::vector<std::string> names;
   for (const auto& [name, values] : envelope.diagnostics) {
@@ -80,16 +77,16 @@ Envelope read_envelope(const ResultsReader& in, const std::string& group) {
   env.amplitude = in.attr_double(group, "amplitude");
   env.method = in.attr_string(group, "method");
   if (in.has_attr(group, "k_star")) env.k_star = in.attr_double(group, "k_star");
-  env.theta_deg = in.read_vector(group + "/theta_deg");
-  env.strain = in.read_pairs(group + "/strain");
-  env.stress_star = in.read_pairs(group + "/stress_star");
-  env.fabric = in.read_pairs(group + "/fabric");
-  env.d_stress = in.read_tensors(group + "/d_stress");
-  env.d_fabric = in.read_tensors(group + "/d_fabric");
-  if (in.exists(group + "/d_fabric_volume")) {
-    env.d_fabric_volume = in.read_tensors(group + "/d_fabric_volume");
-    env.d_fabric_rotation = in.read_tensors(group + "/d_fabric_rotation");
-    env.d_fabric_contacts = in.read_tensors(group + "/d_fabric_contacts");
+  env.theta_deg = in.read_vector(group + datasets::kThetaDeg);
+  env.strain = in.read_pairs(group + datasets::kStrain);
+  env.stress_star = in.read_pairs(group + datasets::kStressStar);
+  env.fabric = in.read_pairs(group + datasets::kFabric);
+  env.d_stress = in.read_tensors(group + datasets::kDStress);
+  env.d_fabric = in.read_tensors(group + datasets::kDFabric);
+  if (in.exists(group + datasets::kDFabricVolume)) {
+    env.d_fabric_volume = in.read_tensors(group + datasets::kDFabricVolume);
+    env.d_fabric_rotation = in.read_tensors(group + datasets::kDFabricRotation);
+    env.d_fabric_contacts = in.read_tensors(group + datasets::kDFabricContacts);
   }
   const std::size_t m = env.theta_deg.size();
   if (env.strain.size() != m || env.stress_star.size() != m || env.fabric.size() != m ||

@@ -13,6 +13,7 @@
 
 #include "rendulic/core/conventions.hpp"
 #include "rendulic/core/errors.hpp"
+#include "rendulic/core/result_paths.hpp"
 #include "rendulic/dem/envelope_io.hpp"
 #include "rendulic/dem/probe_elastic_range.hpp"
 #include "rendulic/dem/probe_mpi.hpp"
@@ -477,16 +478,10 @@ Envelope linear_response_envelope(const DemSystem& state, double amplitude,
   return env;
 }
 
-std::string envelope_name(const std::string& method, double amplitude) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%s_%g", method.c_str(), amplitude);
-  return buf;
-}
-
 std::vector<Envelope> run_probe_campaign(const DemSystem& state, const std::string& label,
                                          const std::vector<std::string>& methods,
                                          const ProbeOptions& options, ResultsWriter& out) {
-  return run_probe_campaign_in(state, "/states/" + label, methods, options, out);
+  return run_probe_campaign_in(state, paths::state(label), methods, options, out);
 }
 
 std::vector<Envelope> run_probe_campaign_in(const DemSystem& state, const std::string& state_group,
@@ -512,11 +507,11 @@ std::vector<Envelope> run_probe_campaign_in(const DemSystem& state, const std::s
       } else {  // one factorisation serves every amplitude
         env = linear_response_envelope(lr, theta, amplitude, state.material().k_star());
       }
-      const std::string group = state_group + "/envelopes/" + envelope_name(method, amplitude);
+      const std::string group = paths::envelope(state_group, paths::envelope_name(method, amplitude));
       write_envelope(out, group, env);
       if (method == "linear_response") {
-        out.write(group + "/stiffness", Eigen::MatrixXd(lr.stiffness));
-        out.write(group + "/fabric_stiffness", Eigen::MatrixXd(lr.fabric_stiffness));
+        out.write(group + datasets::kStiffness, Eigen::MatrixXd(lr.stiffness));
+        out.write(group + datasets::kFabricStiffness, Eigen::MatrixXd(lr.fabric_stiffness));
       }
       envelopes.push_back(std::move(env));
     }
@@ -543,6 +538,8 @@ void register_probe_keys(ScenarioSchema& schema) {
   s.type = KeyType::kDoubleList;
   s.default_value = d.amplitudes;
   s.unit = "-";
+  static_assert(kElasticAmplitudeMax == 1e-4 && kPlasticAmplitudeMin == 1e-3,
+                "the help of probes.amplitudes states the thresholds of core/conventions.hpp");
   s.help = "Probe strain amplitudes |d_eps| (Frobenius): < 1e-4 elastic, > 1e-3 elasto-plastic.";
   s.min = 0.0;
   s.min_open = true;

@@ -8,13 +8,11 @@
 
 #include <string>
 
+#include "rendulic/core/result_paths.hpp"
 #include "rendulic/core/results.hpp"
 #include "rendulic/dem/probe_envelope.hpp"
 
 namespace rendulic::dem {
-
-// "/states/<label>/envelopes/<name>"
-std::string envelope_path(const std::string& state_label, const std::string& name);
 
 void write_envelope(ResultsWriter& out, const std::string& group, const Envelope& envelope);
 // InputError (naming the file and group) if the group is missing or malformed.

@@ -20,8 +20,8 @@ void write_envelope_fit(ResultsWriter& out, const std::string& group, const Enve
 // stored: the result has rms but empty residuals.
 EnvelopeFit read_envelope_fit(const ResultsReader& in, const std::string& group);
 
-// The envelope stored at `group` (theta_deg, strain, amplitude) with `pairs` ("stress_star"
-// or "fabric") as the response.
+// The envelope stored at `group` (theta_deg, strain, amplitude) with the dataset `pairs`
+// (datasets::kStressStar or datasets::kFabric of core/result_paths.hpp) as the response.
 Envelope read_envelope(const ResultsReader& in, const std::string& group, const std::string& pairs);
 
 // Fits the stress_star and fabric pairs of every /states/*/envelopes/* of a results file
@@ -37,6 +37,10 @@ struct FitAllSummary {
 // own options; pairs that were never measured are skipped.
 FitAllSummary fit_envelopes(const ResultsReader& in, ResultsWriter& out,
                             const FitOptions& stress_options, const FitOptions& fabric_options);
+// The same for the envelopes of one state group (e.g. a pressure branch's state).
+FitAllSummary fit_state_envelopes(const ResultsReader& in, ResultsWriter& out,
+                                  const std::string& state_group, const FitOptions& stress_options,
+                                  const FitOptions& fabric_options);
 FitAllSummary fit_all_envelopes(const std::filesystem::path& results_file,
                                 const FitOptions& options = {});
 
