@@ -50,9 +50,9 @@ Envelope linear_response_envelope(const LinearResponse& response,
                                   double k_star);
 
 // The Rendulic map of an envelope: response = map * strain + center, fitted by least squares
-// over the probes (exact for a linear law, where center = 0), and its ellipse: semi-axes
-// a >= b (singular values times the amplitude) and the inclination of the major axis in
-// [0, 180) deg from the sqrt(2)-lateral axis.
+// over the probes (core/affine_map.hpp; exact for a linear law, where center = 0), and its
+// ellipse: semi-axes a >= b (singular values times the amplitude) and the inclination of the
+// major axis in [0, 180) deg from the sqrt(2)-lateral axis.
 struct RendulicMap {
   Eigen::Matrix2d map = Eigen::Matrix2d::Zero();
   Eigen::Vector2d center = Eigen::Vector2d::Zero();
