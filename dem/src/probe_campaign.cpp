@@ -412,7 +412,7 @@ Envelope minimisation_envelope(const DemSystem& state, double amplitude,
   {
     std::vector<Contact> cs;
     for (const PairGeometry& c : find_pairs(ref, 0.0)) {
-      if (c.overlap > min_overlap) cs.push_back({c.i, c.j, c.l, c.overlap, mo.k * c.overlap});
+      if (c.overlap > min_overlap) cs.push_back({c.i, c.j, c.l, c.overlap, 0.0});  // non_rattlers: pairs only
     }
     backbone = non_rattlers(ref.size(), cs);
   }
@@ -421,9 +421,7 @@ Envelope minimisation_envelope(const DemSystem& state, double amplitude,
   const bool assemble = compute_probes(scope, options, "minimisation", probes, [&](int p) {
     MinimisationProbe r;
     PackingData probe = ref;
-    const Eigen::Matrix3d f = exp_sym(-probe_strain(theta_deg[p], amplitude));
-    probe.positions = probe.positions * f.transpose();
-    probe.cell = f * probe.cell;
+    probe.deform(exp_sym(-probe_strain(theta_deg[p], amplitude)));
     r.summary = minimise_energy(probe, mo);
     const StressFabric after = measure_stress_fabric(probe, mo.k, nullptr, min_overlap);
     const std::vector<std::uint64_t> keys_after = contact_keys(find_pairs(probe, 0.0), min_overlap);
