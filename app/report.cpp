@@ -13,6 +13,7 @@
 
 #include "commands.hpp"
 #include "rendulic/core/conventions.hpp"
+#include "rendulic/core/envelope_record.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/result_paths.hpp"
 #include "rendulic/core/version.hpp"
@@ -35,16 +36,13 @@ struct EnvInfo {
   std::string name, method;
   double amplitude = kNaN;
   FitInfo stress, fabric;
-  std::vector<double> theta;
-  std::vector<Eigen::Vector2d> strain_pairs, stress_pairs, fabric_pairs;
-  // The fabric split (docs/probes.md "Fabric split"); empty when not stored.
-  std::vector<Eigen::Matrix3d> f_volume, f_rotation, f_contacts;
+  EnvelopeRecord data;       // as stored (core/envelope_record.hpp): pairs, fabric split, ...
   double mean_flips = kNaN;  // contacts opened + closed per probe (all contacts), if stored
   // The fabric split and the stress pairs of every direction (what C2 compares probe by probe).
   bool has_split() const {
-    const std::size_t n = theta.size();
-    return n > 0 && f_contacts.size() == n && f_volume.size() == n && f_rotation.size() == n &&
-           stress_pairs.size() == n;
+    const std::size_t n = data.theta_deg.size();
+    return n > 0 && data.d_fabric_contacts.size() == n && data.d_fabric_volume.size() == n &&
+           data.d_fabric_rotation.size() == n && data.stress_star.size() == n;
   }
 };
 
@@ -92,25 +90,16 @@ std::vector<StateInfo> read_states(const ResultsReader& r) {
       const std::string e = paths::envelope(g, name);
       EnvInfo env;
       env.name = name;
-      if (r.has_attr(e, "method")) env.method = r.attr_string(e, "method");
-      if (r.has_attr(e, "amplitude")) env.amplitude = r.attr_double(e, "amplitude");
-      if (r.exists(e + datasets::kThetaDeg)) env.theta = r.read_vector(e + datasets::kThetaDeg);
-      if (r.exists(e + datasets::kStrain)) env.strain_pairs = r.read_pairs(e + datasets::kStrain);
-      if (r.exists(e + datasets::kStressStar))
-        env.stress_pairs = r.read_pairs(e + datasets::kStressStar);
-      if (r.exists(e + datasets::kFabric)) env.fabric_pairs = r.read_pairs(e + datasets::kFabric);
-      if (r.exists(e + datasets::kDFabricContacts)) {
-        env.f_volume = r.read_tensors(e + datasets::kDFabricVolume);
-        env.f_rotation = r.read_tensors(e + datasets::kDFabricRotation);
-        env.f_contacts = r.read_tensors(e + datasets::kDFabricContacts);
-      }
-      if (r.exists(e + datasets::kContactsOpened) && r.exists(e + datasets::kContactsClosed)) {
-        const auto opened = r.read_vector(e + datasets::kContactsOpened);
-        const auto closed = r.read_vector(e + datasets::kContactsClosed);
+      env.data = read_envelope(r, e);
+      env.method = env.data.method;
+      env.amplitude = env.data.amplitude;
+      const auto opened = env.data.diagnostics.find("contacts_opened");
+      const auto closed = env.data.diagnostics.find("contacts_closed");
+      if (opened != env.data.diagnostics.end() && closed != env.data.diagnostics.end()) {
         double sum = 0;
-        for (std::size_t p = 0; p < opened.size() && p < closed.size(); ++p)
-          sum += opened[p] + closed[p];
-        if (!opened.empty()) env.mean_flips = sum / static_cast<double>(opened.size());
+        for (std::size_t p = 0; p < opened->second.size() && p < closed->second.size(); ++p)
+          sum += opened->second[p] + closed->second[p];
+        if (!opened->second.empty()) env.mean_flips = sum / static_cast<double>(opened->second.size());
       }
       env.stress = read_fit(r, e + paths::kFitStress);
       env.fabric = read_fit(r, e + paths::kFitFabric);
@@ -213,8 +202,8 @@ double angle_between_axes_deg(double a_deg, double b_deg) {
 
 // The index of the probe in direction `deg` (modulo 360), or -1.
 int probe_at(const EnvInfo& e, double deg) {
-  for (std::size_t i = 0; i < e.theta.size(); ++i)
-    if (std::abs(std::fmod(e.theta[i] - deg + 540.0, 360.0) - 180.0) < 0.01)
+  for (std::size_t i = 0; i < e.data.theta_deg.size(); ++i)
+    if (std::abs(std::fmod(e.data.theta_deg[i] - deg + 540.0, 360.0) - 180.0) < 0.01)
       return static_cast<int>(i);
   return -1;
 }
@@ -223,9 +212,9 @@ int probe_at(const EnvInfo& e, double deg) {
 // (stress_star units), NaN if absent.
 double directional_stiffness(const EnvInfo& e, double deg) {
   const int i = probe_at(e, deg);
-  if (i < 0 || static_cast<std::size_t>(i) >= e.stress_pairs.size()) return kNaN;
+  if (i < 0 || static_cast<std::size_t>(i) >= e.data.stress_star.size()) return kNaN;
   const Eigen::Vector2d u(std::cos(deg_to_rad(deg)), std::sin(deg_to_rad(deg)));
-  return e.stress_pairs[static_cast<std::size_t>(i)].dot(u) / e.amplitude;
+  return e.data.stress_star[static_cast<std::size_t>(i)].dot(u) / e.amplitude;
 }
 
 // The fabric change of one contact flip (docs/claims.md): the largest contribution one contact
@@ -393,21 +382,21 @@ std::vector<Claim> evaluate_claims(const ResultsReader& r) {
       const EnvInfo* lr = find_env(states[i], "linear_response", e->amplitude);
       const double flip = one_contact_flip(r, states[i].volume_fraction);
       if (!e->has_split() || !lr || !lr->has_split() || !std::isfinite(flip) ||
-          lr->theta.size() != e->theta.size()) {
+          lr->data.theta_deg.size() != e->data.theta_deg.size()) {
         measured = false;
         break;
       }
-      flips.push_back(frobenius_max(e->f_contacts) / flip);
+      flips.push_back(frobenius_max(e->data.d_fabric_contacts) / flip);
       // Kinematic parts of the probes against the linear response, relative to its largest
       // fabric change; the noise is the same comparison of the stress responses.
       double d_kin = 0, f_max = 0, d_s = 0, s_max = 0;
-      for (std::size_t p = 0; p < e->theta.size(); ++p) {
-        const Eigen::Matrix3d kin = e->f_volume[p] + e->f_rotation[p];
-        const Eigen::Matrix3d kin_lr = lr->f_volume[p] + lr->f_rotation[p];
+      for (std::size_t p = 0; p < e->data.theta_deg.size(); ++p) {
+        const Eigen::Matrix3d kin = e->data.d_fabric_volume[p] + e->data.d_fabric_rotation[p];
+        const Eigen::Matrix3d kin_lr = lr->data.d_fabric_volume[p] + lr->data.d_fabric_rotation[p];
         d_kin = std::max(d_kin, (kin - kin_lr).norm());
         f_max = std::max(f_max, kin_lr.norm());
-        d_s = std::max(d_s, (e->stress_pairs[p] - lr->stress_pairs[p]).norm());
-        s_max = std::max(s_max, lr->stress_pairs[p].norm());
+        d_s = std::max(d_s, (e->data.stress_star[p] - lr->data.stress_star[p]).norm());
+        s_max = std::max(s_max, lr->data.stress_star[p].norm());
       }
       kin_err.push_back(d_kin / f_max);
       noise.push_back(d_s / s_max);
@@ -426,16 +415,16 @@ std::vector<Claim> evaluate_claims(const ResultsReader& r) {
             ""};
     bool measured = false, ok = false;
     // One stress pair per direction, or the envelope is damaged and C3 cannot be measured.
-    if (!el.empty() && el[0] && !el[0]->theta.empty() &&
-        el[0]->stress_pairs.size() == el[0]->theta.size() && std::isfinite(el[0]->stress.incl)) {
+    if (!el.empty() && el[0] && !el[0]->data.theta_deg.empty() &&
+        el[0]->data.stress_star.size() == el[0]->data.theta_deg.size() && std::isfinite(el[0]->stress.incl)) {
       const auto& e = *el[0];
       std::size_t best = 0;
-      for (std::size_t i = 0; i < e.theta.size(); ++i)
-        if (angle_between_axes_deg(e.theta[i], kIsoCompressionDeg) <
-            angle_between_axes_deg(e.theta[best], kIsoCompressionDeg))
+      for (std::size_t i = 0; i < e.data.theta_deg.size(); ++i)
+        if (angle_between_axes_deg(e.data.theta_deg[i], kIsoCompressionDeg) <
+            angle_between_axes_deg(e.data.theta_deg[best], kIsoCompressionDeg))
           best = i;
-      if (angle_between_axes_deg(e.theta[best], kIsoCompressionDeg) < 0.01) {
-        const Eigen::Vector2d v = e.stress_pairs[best] - e.stress.center;
+      if (angle_between_axes_deg(e.data.theta_deg[best], kIsoCompressionDeg) < 0.01) {
+        const Eigen::Vector2d v = e.data.stress_star[best] - e.stress.center;
         const double dir = rad_to_deg(std::atan2(v.y(), v.x()));
         const double off = angle_between_axes_deg(dir, e.stress.incl);
         measured = true;
@@ -521,7 +510,7 @@ std::vector<Claim> evaluate_claims(const ResultsReader& r) {
       }
       // A contact-set part at round-off (no contact changed) is zero.
       auto structural = [](const EnvInfo& env) {
-        const double m = frobenius_mean(env.f_contacts);
+        const double m = frobenius_mean(env.data.d_fabric_contacts);
         return m > 1e-12 ? m / env.amplitude : 0.0;
       };
       const double p = structural(*pl[i]), e = structural(*el[i]);
@@ -532,7 +521,7 @@ std::vector<Claim> evaluate_claims(const ResultsReader& r) {
     }
     if (measured) {
       const EnvInfo& last = *pl.back();
-      const dem::RendulicMap m = dem::fit_rendulic_map(last.strain_pairs, last.fabric_pairs);
+      const dem::RendulicMap m = dem::fit_rendulic_map(last.data.strain, last.data.fabric);
       thin = m.semi_minor / m.semi_major;
       if (!std::isfinite(inc.back())) inc.back() = m.inclination_deg;
       ok = ok && thin < 0.15 && angle_between_axes_deg(inc.back(), kIsoCompressionDeg) < 10.0;

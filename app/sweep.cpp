@@ -94,11 +94,7 @@ struct Features {
 // uses, here without covariance or shape selection). Where the orthogonal-distance fit fails
 // the least-squares Rendulic map gives the features, and the note says so.
 Features stress_features(const dem::Envelope& env) {
-  Envelope e;
-  e.response = env.stress_star;
-  e.theta_deg = env.theta_deg;
-  e.strain = env.strain;
-  e.amplitude = env.amplitude;
+  const Envelope e = envelope_of(env, Response::kStress);
   Features f;
   try {
     FitOptions fo;

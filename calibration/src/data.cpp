@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "rendulic/core/conventions.hpp"
+#include "rendulic/core/envelope_record.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/result_paths.hpp"
 #include "rendulic/core/results.hpp"
@@ -86,38 +87,39 @@ std::string join(const std::vector<std::string>& v) {
   return s.empty() ? "(none)" : s;
 }
 
-EnvelopeData read_envelope(const ResultsReader& r, const std::string& group,
-                           const std::string& name, double k_star) {
+// The calibration's view of a stored envelope (core/envelope_record.hpp): stress pairs in Pa
+// (stress_star times /material k_star, or from the d_stress tensors of a file without pairs),
+// fabric pairs, strain pairs (or from the directions) and the directions (or from the strain).
+EnvelopeData envelope_data_of(const ResultsReader& r, const std::string& group,
+                              const std::string& name, double k_star) {
   const std::string file = r.path().string();
+  const double amplitude = r.attr_double(group, "amplitude");  // required here
+  const EnvelopeRecord record = read_envelope(r, group);
   EnvelopeData e;
   e.name = name;
-  e.amplitude = r.attr_double(group, "amplitude");
-  e.method = r.has_attr(group, "method") ? r.attr_string(group, "method") : "unknown";
-  if (r.exists(group + datasets::kStressStar)) {
-    for (const auto& p : r.read_pairs(group + datasets::kStressStar)) e.stress.push_back(p * k_star);
-  } else if (r.exists(group + datasets::kDStress)) {
-    for (const auto& t : r.read_tensors(group + datasets::kDStress)) e.stress.push_back(rendulic_pair(t));
+  e.amplitude = amplitude;
+  e.method = record.method.empty() ? "unknown" : record.method;
+  if (!record.stress_star.empty()) {
+    for (const auto& p : record.stress_star) e.stress.push_back(p * k_star);
+  } else if (!record.d_stress.empty()) {
+    for (const auto& t : record.d_stress) e.stress.push_back(rendulic_pair(t));
   } else {
     throw InputError(file + ": envelope " + group + " has neither stress_star nor d_stress");
   }
-  if (r.exists(group + datasets::kFabric)) {
-    e.fabric = r.read_pairs(group + datasets::kFabric);
-  } else if (r.exists(group + datasets::kDFabric)) {
-    for (const auto& t : r.read_tensors(group + datasets::kDFabric)) e.fabric.push_back(rendulic_pair(t));
+  if (!record.fabric.empty()) {
+    e.fabric = record.fabric;
+  } else {
+    for (const auto& t : record.d_fabric) e.fabric.push_back(rendulic_pair(t));
   }
-  const std::size_t m = e.stress.size();
-  if (r.exists(group + datasets::kStrain)) {
-    e.strain = r.read_pairs(group + datasets::kStrain);
-  } else if (r.exists(group + datasets::kThetaDeg)) {
-    for (double t : r.read_vector(group + datasets::kThetaDeg))
-      e.strain.push_back(rendulic_pair(probe_strain(t, e.amplitude)));
+  if (!record.strain.empty()) {
+    e.strain = record.strain;
+  } else if (!record.theta_deg.empty()) {
+    for (double t : record.theta_deg) e.strain.push_back(rendulic_pair(probe_strain(t, e.amplitude)));
   } else {
     throw InputError(file + ": envelope " + group + " has neither strain nor theta_deg");
   }
-  if (e.strain.size() != m)
-    throw InputError(file + ": envelope " + group + ": strain and stress differ in length");
-  if (r.exists(group + datasets::kThetaDeg)) {
-    e.theta_deg = r.read_vector(group + datasets::kThetaDeg);
+  if (!record.theta_deg.empty()) {
+    e.theta_deg = record.theta_deg;
   } else {
     for (const auto& s : e.strain) e.theta_deg.push_back(probe_direction_deg(s));
   }
@@ -174,7 +176,7 @@ CalibrationData load_calibration_data(const std::filesystem::path& file,
       // An envelope that could not be measured (e.g. no linear response of an unstable
       // network) carries only an `error` attribute: there is nothing to fit.
       if (r.has_attr(paths::envelope(g, e), "error")) continue;
-      s.envelopes.push_back(read_envelope(r, paths::envelope(g, e), e, data.k_star));
+      s.envelopes.push_back(envelope_data_of(r, paths::envelope(g, e), e, data.k_star));
     }
     data.states.push_back(std::move(s));
   }

@@ -14,7 +14,7 @@
 #include "rendulic/core/conventions.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/result_paths.hpp"
-#include "rendulic/dem/envelope_io.hpp"
+#include "rendulic/core/envelope_record.hpp"
 #include "rendulic/dem/probe_elastic_range.hpp"
 #include "rendulic/dem/probe_mpi.hpp"
 #include "rendulic/dem/scenario_keys.hpp"
@@ -170,7 +170,8 @@ Envelope assemble_envelope(const std::string& method, double amplitude, double k
   auto& diag = env.diagnostics;
   for (std::size_t p = 0; p < records.size(); ++p) {
     const ProbeOutcome& o = records[p].outcome;
-    env.add(theta_deg[p], probe_strain(theta_deg[p], amplitude), o.d_stress, o.d_fabric, o.split);
+    env.add(theta_deg[p], probe_strain(theta_deg[p], amplitude), o.d_stress, o.d_fabric,
+            o.split.volume, o.split.rotation, o.split.contacts);
     diag["contacts_opened"].push_back(o.changes.first);
     diag["contacts_closed"].push_back(o.changes.second);
     diag["backbone_contacts_opened"].push_back(o.backbone_changes.first);

@@ -10,24 +10,6 @@
 
 namespace rendulic::dem {
 
-void Envelope::add(double theta, const Eigen::Matrix3d& d_eps, const Eigen::Matrix3d& d_sigma,
-                   const Eigen::Matrix3d& d_f) {
-  theta_deg.push_back(theta);
-  strain.push_back(rendulic_pair(d_eps));
-  stress_star.push_back(rendulic_pair(d_sigma) / k_star);
-  fabric.push_back(rendulic_pair(d_f));
-  d_stress.push_back(d_sigma);
-  d_fabric.push_back(d_f);
-}
-
-void Envelope::add(double theta, const Eigen::Matrix3d& d_eps, const Eigen::Matrix3d& d_sigma,
-                   const Eigen::Matrix3d& d_f, const FabricSplit& split) {
-  add(theta, d_eps, d_sigma, d_f);
-  d_fabric_volume.push_back(split.volume);
-  d_fabric_rotation.push_back(split.rotation);
-  d_fabric_contacts.push_back(split.contacts);
-}
-
 Envelope linear_response_envelope(const LinearResponse& response,
                                   const std::vector<double>& theta_deg, double amplitude,
                                   double k_star) {
@@ -47,7 +29,7 @@ Envelope linear_response_envelope(const LinearResponse& response,
                             from_mandel(response.fabric_rotation_stiffness * to_mandel(d_eps)),
                             Eigen::Matrix3d::Zero()};
     env.add(theta, d_eps, response.stress_increment(d_eps), response.fabric_increment(d_eps),
-            split);
+            split.volume, split.rotation, split.contacts);
   }
   env.attributes["n_rattlers"] = response.n_rattlers;
   env.attributes["n_backbone_contacts"] = response.n_backbone_contacts;

@@ -74,19 +74,6 @@ EnvelopeFit read_envelope_fit(const ResultsReader& in, const std::string& g) {
   return f;
 }
 
-Envelope read_envelope(const ResultsReader& in, const std::string& g, const std::string& pairs) {
-  Envelope env;
-  if (!in.exists(g + pairs))
-    throw InputError(in.path().string() + ": no dataset " + g + pairs);
-  env.response = in.read_pairs(g + pairs);
-  if (in.exists(g + datasets::kThetaDeg)) env.theta_deg = in.read_vector(g + datasets::kThetaDeg);
-  if (in.exists(g + datasets::kStrain)) env.strain = in.read_pairs(g + datasets::kStrain);
-  if (in.has_attr(g, "amplitude")) env.amplitude = in.attr_double(g, "amplitude");
-  std::string why;
-  if (!env.IsValid(&why)) throw InputError(in.path().string() + ": " + g + ": " + why);
-  return env;
-}
-
 FitAllSummary fit_state_envelopes(const ResultsReader& in, ResultsWriter& out,
                                   const std::string& state_group, const FitOptions& stress_options,
                                   const FitOptions& fabric_options) {
@@ -95,14 +82,27 @@ FitAllSummary fit_state_envelopes(const ResultsReader& in, ResultsWriter& out,
   if (!in.exists(eg)) return summary;
   for (const auto& name : in.children(eg)) {
     const std::string g = paths::envelope(state_group, name);
-    for (const auto& [pairs, fit_group, options] :
-         {std::tuple<const char*, const char*, const FitOptions&>{
-              datasets::kStressStar, paths::kFitStress, stress_options},
-          {datasets::kFabric, paths::kFitFabric, fabric_options}}) {
-      if (!in.exists(g + pairs)) continue;  // nothing measured (its `error` says why)
+    EnvelopeRecord record;
+    try {
+      record = read_envelope(in, g);
+    } catch (const InputError& e) {  // malformed envelope: say so in the file, go on
+      for (const char* fit_group : {paths::kFitStress, paths::kFitFabric}) {
+        out.attr(g + fit_group, "shape", "none");
+        out.attr(g + fit_group, "error", std::string(e.what()));
+        ++summary.failed;
+      }
+      continue;
+    }
+    for (const auto& [response, fit_group, options] :
+         {std::tuple<Response, const char*, const FitOptions&>{Response::kStress, paths::kFitStress,
+                                                               stress_options},
+          {Response::kFabric, paths::kFitFabric, fabric_options}}) {
+      const Envelope env = envelope_of(record, response);
+      if (env.size() == 0) continue;  // nothing measured (its `error` says why)
       try {
-        write_envelope_fit(out, g + fit_group,
-                           fit_envelope(read_envelope(in, g, pairs), options));
+        std::string why;
+        if (!env.IsValid(&why)) throw InputError(in.path().string() + ": " + g + ": " + why);
+        write_envelope_fit(out, g + fit_group, fit_envelope(env, options));
         ++summary.fitted;
       } catch (const InputError& e) {  // degenerate envelope: say so in the file
         out.attr(g + fit_group, "shape", "none");

@@ -5,7 +5,9 @@
 #include <filesystem>
 
 #include "rendulic/core/errors.hpp"
-#include "rendulic/dem/envelope_io.hpp"
+#include "rendulic/core/envelope_record.hpp"
+#include "rendulic/core/result_paths.hpp"
+#include "rendulic/dem/probe_envelope.hpp"
 
 namespace rendulic::dem {
 namespace {

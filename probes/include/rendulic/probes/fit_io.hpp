@@ -20,10 +20,6 @@ void write_envelope_fit(ResultsWriter& out, const std::string& group, const Enve
 // stored: the result has rms but empty residuals.
 EnvelopeFit read_envelope_fit(const ResultsReader& in, const std::string& group);
 
-// The envelope stored at `group` (theta_deg, strain, amplitude) with the dataset `pairs`
-// (datasets::kStressStar or datasets::kFabric of core/result_paths.hpp) as the response.
-Envelope read_envelope(const ResultsReader& in, const std::string& group, const std::string& pairs);
-
 // Fits the stress_star and fabric pairs of every /states/*/envelopes/* of a results file
 // and writes fit_stress and fit_fabric (atomically, via ResultsWriter::update). An envelope
 // that cannot be fitted (e.g. no fabric change at all) gets shape "none" and an attribute
