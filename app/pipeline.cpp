@@ -97,7 +97,8 @@ void register_run_keys(ScenarioSchema& schema) {
 void check_stages_available(const Scenario& scenario) {
   // A run that computes nothing would replace an existing results.h5 with an empty file.
   bool computes = false;
-  for (const auto& s : stages()) computes = computes || (stage_requested(scenario, s.name) && s.run);
+  for (const auto& s : stages())
+    computes = computes || (stage_requested(scenario, s.name) && s.run);
   if (!computes)
     throw InputError("run.stages (" + scenario.origin("run.stages") +
                      "): no stage that computes anything; the report of an existing file is "

@@ -99,7 +99,8 @@ std::vector<StateInfo> read_states(const ResultsReader& r) {
         double sum = 0;
         for (std::size_t p = 0; p < opened->second.size() && p < closed->second.size(); ++p)
           sum += opened->second[p] + closed->second[p];
-        if (!opened->second.empty()) env.mean_flips = sum / static_cast<double>(opened->second.size());
+        if (!opened->second.empty())
+          env.mean_flips = sum / static_cast<double>(opened->second.size());
       }
       env.stress = read_fit(r, e + paths::kFitStress);
       env.fabric = read_fit(r, e + paths::kFitFabric);
@@ -225,7 +226,8 @@ double one_contact_flip(const ResultsReader& r, double nu) {
       !r.has_attr(paths::kMaterial, "r_mean") || !std::isfinite(nu))
     return kNaN;
   const double n = static_cast<double>(r.attr_int(paths::kMaterial, "n_particles"));
-  const double w = r.attr_double(paths::kMaterial, "w"), rm = r.attr_double(paths::kMaterial, "r_mean");
+  const double w = r.attr_double(paths::kMaterial, "w"),
+               rm = r.attr_double(paths::kMaterial, "r_mean");
   const double r_min = 2.0 * rm / (1.0 + w), r_max = w * r_min;
   const double r3 = w > 1.0 ? (std::pow(r_max, 4) - std::pow(r_min, 4)) / (4.0 * (r_max - r_min))
                             : std::pow(rm, 3);
@@ -416,7 +418,8 @@ std::vector<Claim> evaluate_claims(const ResultsReader& r) {
     bool measured = false, ok = false;
     // One stress pair per direction, or the envelope is damaged and C3 cannot be measured.
     if (!el.empty() && el[0] && !el[0]->data.theta_deg.empty() &&
-        el[0]->data.stress_star.size() == el[0]->data.theta_deg.size() && std::isfinite(el[0]->stress.incl)) {
+        el[0]->data.stress_star.size() == el[0]->data.theta_deg.size() &&
+        std::isfinite(el[0]->stress.incl)) {
       const auto& e = *el[0];
       std::size_t best = 0;
       for (std::size_t i = 0; i < e.data.theta_deg.size(); ++i)

@@ -316,7 +316,8 @@ void write_state(ResultsWriter& out, const std::string& g, const dem::DemSystem&
   out.write(cp + datasets::kReferenceCellLengths,
             std::vector<double>(st.ref_lengths.data(), st.ref_lengths.data() + 3));
   out.write(cp + datasets::kReferenceHalfSkins, st.ref_half_skin);
-  out.write(cp + datasets::kStrainE, std::vector<double>(st.strain_E.data(), st.strain_E.data() + 3));
+  out.write(cp + datasets::kStrainE,
+            std::vector<double>(st.strain_E.data(), st.strain_E.data() + 3));
   out.write(cp + datasets::kLastD, std::vector<double>(st.last_D.data(), st.last_D.data() + 3));
   out.attr(cp, "time", st.time);
   out.attr(cp, "steps", st.steps);

@@ -62,8 +62,8 @@ void stage_linear_response(const Scenario& sc, ResultsWriter& out, const RunCont
       // A network with no elastic response (unstable even at its energy minimum) is a
       // finding about that state, not a failure of the run: record it, say it, go on.
       for (double a : o.amplitudes) {
-        const std::string g = paths::envelope(paths::state(label),
-                                              paths::envelope_name("linear_response", a));
+        const std::string g =
+            paths::envelope(paths::state(label), paths::envelope_name("linear_response", a));
         out.attr(g, "method", "linear_response");
         out.attr(g, "amplitude", a);
         out.attr(g, "error", std::string(e.what()));

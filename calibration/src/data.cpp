@@ -114,7 +114,8 @@ EnvelopeData envelope_data_of(const ResultsReader& r, const std::string& group,
   if (!record.strain.empty()) {
     e.strain = record.strain;
   } else if (!record.theta_deg.empty()) {
-    for (double t : record.theta_deg) e.strain.push_back(rendulic_pair(probe_strain(t, e.amplitude)));
+    for (double t : record.theta_deg)
+      e.strain.push_back(rendulic_pair(probe_strain(t, e.amplitude)));
   } else {
     throw InputError(file + ": envelope " + group + " has neither strain nor theta_deg");
   }
@@ -167,7 +168,7 @@ CalibrationData load_calibration_data(const std::filesystem::path& file,
     s.label = l;
     s.stress = r.read_tensor(g + datasets::kStress);
     s.fabric = r.exists(g + datasets::kFabric) ? r.read_tensor(g + datasets::kFabric)
-                                            : Eigen::Matrix3d::Zero();
+                                               : Eigen::Matrix3d::Zero();
     s.volume_fraction = r.has_attr(g, "volume_fraction") ? r.attr_double(g, "volume_fraction") : 0;
     s.eps_dev = r.has_attr(g, "eps_dev") ? r.attr_double(g, "eps_dev") : 0.0;
     if (!s.stress.allFinite() || !s.fabric.allFinite())

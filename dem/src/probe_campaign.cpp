@@ -12,9 +12,9 @@
 #include <sstream>
 
 #include "rendulic/core/conventions.hpp"
+#include "rendulic/core/envelope_record.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/result_paths.hpp"
-#include "rendulic/core/envelope_record.hpp"
 #include "rendulic/dem/probe_elastic_range.hpp"
 #include "rendulic/dem/probe_mpi.hpp"
 #include "rendulic/dem/scenario_keys.hpp"
@@ -413,7 +413,8 @@ Envelope minimisation_envelope(const DemSystem& state, double amplitude,
   {
     std::vector<Contact> cs;
     for (const PairGeometry& c : find_pairs(ref, 0.0)) {
-      if (c.overlap > min_overlap) cs.push_back({c.i, c.j, c.l, c.overlap, 0.0});  // non_rattlers: pairs only
+      if (c.overlap > min_overlap)
+        cs.push_back({c.i, c.j, c.l, c.overlap, 0.0});  // non_rattlers: pairs only
     }
     backbone = non_rattlers(ref.size(), cs);
   }
@@ -506,7 +507,8 @@ std::vector<Envelope> run_probe_campaign_in(const DemSystem& state, const std::s
       } else {  // one factorisation serves every amplitude
         env = linear_response_envelope(lr, theta, amplitude, state.material().k_star());
       }
-      const std::string group = paths::envelope(state_group, paths::envelope_name(method, amplitude));
+      const std::string group =
+          paths::envelope(state_group, paths::envelope_name(method, amplitude));
       write_envelope(out, group, env);
       if (method == "linear_response") {
         out.write(group + datasets::kStiffness, Eigen::MatrixXd(lr.stiffness));

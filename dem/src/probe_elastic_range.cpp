@@ -9,9 +9,9 @@
 #include <stdexcept>
 
 #include "rendulic/core/conventions.hpp"
+#include "rendulic/core/envelope_record.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/result_paths.hpp"
-#include "rendulic/core/envelope_record.hpp"
 #include "rendulic/dem/probe_campaign.hpp"
 
 namespace rendulic::dem {

@@ -68,7 +68,8 @@ TEST(Stiffness, AnisotropicLawGivesAAndTheTilt) {
   // Independent estimator: the affine map fit of core gives M = D_rendulic * amplitude.
   const AffineMapFit af = fit_affine_map(direction_vectors(e.theta_deg), e.stress);
   ASSERT_TRUE(af.ok);
-  EXPECT_LT((af.map / e.amplitude - s.rendulic_matrix()).norm(), kExact * s.rendulic_matrix().norm());
+  EXPECT_LT((af.map / e.amplitude - s.rendulic_matrix()).norm(),
+            kExact * s.rendulic_matrix().norm());
   // And the symmetric fit of probes/ features.hpp (c + D e, D symmetric).
   Envelope pe;
   pe.response = e.stress;

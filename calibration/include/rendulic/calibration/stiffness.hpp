@@ -58,5 +58,4 @@ struct PlasticFeatures {
 
 PlasticFeatures plastic_features(const EnvelopeData& envelope);
 
-
 }  // namespace rendulic::calibration

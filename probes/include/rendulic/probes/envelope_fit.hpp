@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "rendulic/core/affine_map.hpp"
 #include "rendulic/probes/envelope.hpp"
 
 namespace rendulic {
