@@ -22,6 +22,7 @@
 #include "rendulic/calibration/report.hpp"
 #include "rendulic/core/cleanup.hpp"
 #include "rendulic/core/errors.hpp"
+#include "rendulic/core/result_paths.hpp"
 #include "rendulic/core/results.hpp"
 #include "rendulic/models/law.hpp"
 
@@ -150,8 +151,8 @@ int run_calibrate(const CalibrateArgs& a) {
     std::vector<ModelScore> scores{summary.score};
     {
       const ResultsReader r(a.results);
-      if (r.exists("/calibration"))
-        for (const auto& m : r.children("/calibration")) {
+      if (r.exists(paths::kCalibration))
+        for (const auto& m : r.children(paths::kCalibration)) {
           ModelScore ms;
           if (m != a.model && read_model_score(r, m, &ms)) scores.push_back(ms);
         }

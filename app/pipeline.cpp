@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "rendulic/core/errors.hpp"
+#include "rendulic/core/result_paths.hpp"
 #include "rendulic/dem/probe_campaign.hpp"
 #include "rendulic/dem/probe_elastic_range.hpp"
 #include "rendulic/dem/scenario_keys.hpp"
@@ -121,7 +122,7 @@ void run_pipeline(const Scenario& scenario, ResultsWriter& out, const RunContext
     s.run(scenario, out, ctx);
     const double secs =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    out.attr("/timings", s.name, secs);  // wall seconds, reported in report.md
+    out.attr(paths::kTimings, s.name, secs);  // wall seconds, reported in report.md
     // What a later failure keeps (results.h5.partial): hours of DEM are not thrown away.
     completed += (completed.empty() ? "" : ", ") + std::string(s.name);
     out.save_partial("completed stages (" + completed + ")");

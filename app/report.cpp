@@ -13,7 +13,9 @@
 
 #include "commands.hpp"
 #include "rendulic/core/conventions.hpp"
+#include "rendulic/core/envelope_record.hpp"
 #include "rendulic/core/errors.hpp"
+#include "rendulic/core/result_paths.hpp"
 #include "rendulic/core/version.hpp"
 #include "rendulic/dem/probe_envelope.hpp"
 #include "rendulic/dem/protocols.hpp"
@@ -22,8 +24,6 @@ namespace rendulic::app {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-// docs/physics.md section 5: elastic probes below 1e-4, elasto-plastic above 1e-3.
-constexpr double kElasticMax = 1e-4, kPlasticMin = 1e-3;
 
 struct FitInfo {
   bool present = false;
@@ -36,16 +36,13 @@ struct EnvInfo {
   std::string name, method;
   double amplitude = kNaN;
   FitInfo stress, fabric;
-  std::vector<double> theta;
-  std::vector<Eigen::Vector2d> strain_pairs, stress_pairs, fabric_pairs;
-  // The fabric split (docs/probes.md "Fabric split"); empty when not stored.
-  std::vector<Eigen::Matrix3d> f_volume, f_rotation, f_contacts;
+  EnvelopeRecord data;       // as stored (core/envelope_record.hpp): pairs, fabric split, ...
   double mean_flips = kNaN;  // contacts opened + closed per probe (all contacts), if stored
   // The fabric split and the stress pairs of every direction (what C2 compares probe by probe).
   bool has_split() const {
-    const std::size_t n = theta.size();
-    return n > 0 && f_contacts.size() == n && f_volume.size() == n && f_rotation.size() == n &&
-           stress_pairs.size() == n;
+    const std::size_t n = data.theta_deg.size();
+    return n > 0 && data.d_fabric_contacts.size() == n && data.d_fabric_volume.size() == n &&
+           data.d_fabric_rotation.size() == n && data.stress_star.size() == n;
   }
 };
 
@@ -77,43 +74,36 @@ FitInfo read_fit(const ResultsReader& r, const std::string& g) {
 
 std::vector<StateInfo> read_states(const ResultsReader& r) {
   std::vector<StateInfo> out;
-  for (const auto& label : r.children("/states")) {
-    const std::string g = "/states/" + label;
+  for (const auto& label : r.children(paths::kStates)) {
+    const std::string g = paths::state(label);
     StateInfo s;
     s.label = label;
     if (r.has_attr(g, "eps_dev")) s.eps_dev = r.attr_double(g, "eps_dev");
     if (r.has_attr(g, "volume_fraction")) s.volume_fraction = r.attr_double(g, "volume_fraction");
-    const std::string er = g + "/elastic_range";
+    const std::string er = paths::elastic_range(g);
     if (r.exists(er) && r.has_attr(er, "yield_strain")) {
       s.has_range = true;
       s.yield_strain = r.attr_double(er, "yield_strain");
       s.yielded = r.has_attr(er, "yielded") && r.attr_int(er, "yielded") != 0;
     }
-    for (const auto& name : r.children(g + "/envelopes")) {
-      const std::string e = g + "/envelopes/" + name;
+    for (const auto& name : r.children(paths::envelopes(g))) {
+      const std::string e = paths::envelope(g, name);
       EnvInfo env;
       env.name = name;
-      if (r.has_attr(e, "method")) env.method = r.attr_string(e, "method");
-      if (r.has_attr(e, "amplitude")) env.amplitude = r.attr_double(e, "amplitude");
-      if (r.exists(e + "/theta_deg")) env.theta = r.read_vector(e + "/theta_deg");
-      if (r.exists(e + "/strain")) env.strain_pairs = r.read_pairs(e + "/strain");
-      if (r.exists(e + "/stress_star")) env.stress_pairs = r.read_pairs(e + "/stress_star");
-      if (r.exists(e + "/fabric")) env.fabric_pairs = r.read_pairs(e + "/fabric");
-      if (r.exists(e + "/d_fabric_contacts")) {
-        env.f_volume = r.read_tensors(e + "/d_fabric_volume");
-        env.f_rotation = r.read_tensors(e + "/d_fabric_rotation");
-        env.f_contacts = r.read_tensors(e + "/d_fabric_contacts");
-      }
-      if (r.exists(e + "/contacts_opened") && r.exists(e + "/contacts_closed")) {
-        const auto opened = r.read_vector(e + "/contacts_opened");
-        const auto closed = r.read_vector(e + "/contacts_closed");
+      env.data = read_envelope(r, e);
+      env.method = env.data.method;
+      env.amplitude = env.data.amplitude;
+      const auto opened = env.data.diagnostics.find("contacts_opened");
+      const auto closed = env.data.diagnostics.find("contacts_closed");
+      if (opened != env.data.diagnostics.end() && closed != env.data.diagnostics.end()) {
         double sum = 0;
-        for (std::size_t p = 0; p < opened.size() && p < closed.size(); ++p)
-          sum += opened[p] + closed[p];
-        if (!opened.empty()) env.mean_flips = sum / static_cast<double>(opened.size());
+        for (std::size_t p = 0; p < opened->second.size() && p < closed->second.size(); ++p)
+          sum += opened->second[p] + closed->second[p];
+        if (!opened->second.empty())
+          env.mean_flips = sum / static_cast<double>(opened->second.size());
       }
-      env.stress = read_fit(r, e + "/fit_stress");
-      env.fabric = read_fit(r, e + "/fit_fabric");
+      env.stress = read_fit(r, e + paths::kFitStress);
+      env.fabric = read_fit(r, e + paths::kFitFabric);
       s.envs.push_back(std::move(env));
     }
     out.push_back(std::move(s));
@@ -131,7 +121,7 @@ bool same_amplitude(double a, double b) { return std::abs(a - b) <= 1e-9 * std::
 const EnvInfo* pick_elastic(const StateInfo& s) {
   for (const char* method : {"dynamic", "minimisation", "linear_response"})
     for (const auto& e : s.envs)
-      if (e.amplitude < kElasticMax && e.method == method && e.stress.present) return &e;
+      if (is_elastic_amplitude(e.amplitude) && e.method == method && e.stress.present) return &e;
   return nullptr;
 }
 const EnvInfo* find_env(const StateInfo& s, const std::string& method, double amplitude) {
@@ -154,7 +144,7 @@ double plastic_amplitude(const std::vector<StateInfo>& states, std::string* note
   std::vector<double> common;
   if (!states.empty())
     for (const auto& e : states[0].envs)
-      if (e.amplitude > kPlasticMin && pick_plastic(states[0], e.amplitude))
+      if (is_plastic_amplitude(e.amplitude) && pick_plastic(states[0], e.amplitude))
         common.push_back(e.amplitude);
   std::erase_if(common, [&](double a) {
     return !std::all_of(states.begin(), states.end(),
@@ -213,8 +203,8 @@ double angle_between_axes_deg(double a_deg, double b_deg) {
 
 // The index of the probe in direction `deg` (modulo 360), or -1.
 int probe_at(const EnvInfo& e, double deg) {
-  for (std::size_t i = 0; i < e.theta.size(); ++i)
-    if (std::abs(std::fmod(e.theta[i] - deg + 540.0, 360.0) - 180.0) < 0.01)
+  for (std::size_t i = 0; i < e.data.theta_deg.size(); ++i)
+    if (std::abs(std::fmod(e.data.theta_deg[i] - deg + 540.0, 360.0) - 180.0) < 0.01)
       return static_cast<int>(i);
   return -1;
 }
@@ -223,20 +213,21 @@ int probe_at(const EnvInfo& e, double deg) {
 // (stress_star units), NaN if absent.
 double directional_stiffness(const EnvInfo& e, double deg) {
   const int i = probe_at(e, deg);
-  if (i < 0 || static_cast<std::size_t>(i) >= e.stress_pairs.size()) return kNaN;
+  if (i < 0 || static_cast<std::size_t>(i) >= e.data.stress_star.size()) return kNaN;
   const Eigen::Vector2d u(std::cos(deg_to_rad(deg)), std::sin(deg_to_rad(deg)));
-  return e.stress_pairs[static_cast<std::size_t>(i)].dot(u) / e.amplitude;
+  return e.data.stress_star[static_cast<std::size_t>(i)].dot(u) / e.amplitude;
 }
 
 // The fabric change of one contact flip (docs/claims.md): the largest contribution one contact
 // makes to eq. 2, (V_i + V_j) / V between two of the largest particles, = 2 nu r_max^3 / (N
 // <r^3>) for radii uniform in [r_min, r_max].
 double one_contact_flip(const ResultsReader& r, double nu) {
-  if (!r.has_attr("/material", "n_particles") || !r.has_attr("/material", "w") ||
-      !r.has_attr("/material", "r_mean") || !std::isfinite(nu))
+  if (!r.has_attr(paths::kMaterial, "n_particles") || !r.has_attr(paths::kMaterial, "w") ||
+      !r.has_attr(paths::kMaterial, "r_mean") || !std::isfinite(nu))
     return kNaN;
-  const double n = static_cast<double>(r.attr_int("/material", "n_particles"));
-  const double w = r.attr_double("/material", "w"), rm = r.attr_double("/material", "r_mean");
+  const double n = static_cast<double>(r.attr_int(paths::kMaterial, "n_particles"));
+  const double w = r.attr_double(paths::kMaterial, "w"),
+               rm = r.attr_double(paths::kMaterial, "r_mean");
   const double r_min = 2.0 * rm / (1.0 + w), r_max = w * r_min;
   const double r3 = w > 1.0 ? (std::pow(r_max, 4) - std::pow(r_min, 4)) / (4.0 * (r_max - r_min))
                             : std::pow(rm, 3);
@@ -266,11 +257,11 @@ constexpr double kKinematicNoiseFactor = 3.0;
 // the held-out score, the information criterion, how each fit stopped, and the sentence of
 // /calibration `selection`; parameters at a bound or undetermined are named.
 std::string model_selection_markdown(const ResultsReader& r) {
-  if (!r.has_attr("/calibration", "selection")) return "";
+  if (!r.has_attr(paths::kCalibration, "selection")) return "";
   std::ostringstream md;
-  const std::string sel = r.attr_string("/calibration", "selected_model");
+  const std::string sel = r.attr_string(paths::kCalibration, "selected_model");
   md << "\n## Model selection (docs/calibration.md)\n\n"
-     << r.attr_string("/calibration", "selection") << "\n\n";
+     << r.attr_string(paths::kCalibration, "selection") << "\n\n";
   static const char* kinds[] = {"stress_elastic", "stress_plastic", "fabric_elastic",
                                 "fabric_plastic", "path_stress",    "path_fabric"};
   md << "| law | free | stress el. | stress pl. | fabric el. | fabric pl. | path stress | path "
@@ -278,17 +269,17 @@ std::string model_selection_markdown(const ResultsReader& r) {
         "stopped by | global start | s |\n"
         "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   double best = kNaN, best_stress = kNaN;
-  const std::string sel_s = r.has_attr("/calibration", "selected_model_stress")
-                                ? r.attr_string("/calibration", "selected_model_stress")
+  const std::string sel_s = r.has_attr(paths::kCalibration, "selected_model_stress")
+                                ? r.attr_string(paths::kCalibration, "selected_model_stress")
                                 : "";
-  if (!sel.empty() && r.has_attr("/calibration/" + sel, "information_criterion"))
-    best = r.attr_double("/calibration/" + sel, "information_criterion");
-  if (!sel_s.empty() && r.has_attr("/calibration/" + sel_s, "information_criterion_stress"))
-    best_stress = r.attr_double("/calibration/" + sel_s, "information_criterion_stress");
+  if (!sel.empty() && r.has_attr(paths::calibration(sel), "information_criterion"))
+    best = r.attr_double(paths::calibration(sel), "information_criterion");
+  if (!sel_s.empty() && r.has_attr(paths::calibration(sel_s), "information_criterion_stress"))
+    best_stress = r.attr_double(paths::calibration(sel_s), "information_criterion_stress");
   std::vector<std::string> flags;
   std::string noise_row;
-  for (const std::string& m : r.children("/calibration")) {
-    const std::string g = "/calibration/" + m;
+  for (const std::string& m : r.children(paths::kCalibration)) {
+    const std::string g = paths::calibration(m);
     if (r.has_attr(g, "error") || !r.has_attr(g, "information_criterion")) continue;
     auto num = [&](const std::string& a, int prec = 3) {
       return r.has_attr(g, a) ? fmt(r.attr_double(g, a), prec) : std::string("-");
@@ -342,7 +333,7 @@ std::string model_selection_markdown(const ResultsReader& r) {
         "states' blocks. BIC: -2 ln L + k ln N with the block variances profiled "
         "(docs/calibration.md \"Model selection\"); laws without fabric are compared on the "
         "stress blocks only. Rule: "
-     << r.attr_string("/calibration", "selection_rule") << ".\n";
+     << r.attr_string(paths::kCalibration, "selection_rule") << ".\n";
   if (!flags.empty()) {
     md << "\nParameters to read with care:\n\n";
     for (const auto& f : flags) md << "- " << f << "\n";
@@ -393,21 +384,21 @@ std::vector<Claim> evaluate_claims(const ResultsReader& r) {
       const EnvInfo* lr = find_env(states[i], "linear_response", e->amplitude);
       const double flip = one_contact_flip(r, states[i].volume_fraction);
       if (!e->has_split() || !lr || !lr->has_split() || !std::isfinite(flip) ||
-          lr->theta.size() != e->theta.size()) {
+          lr->data.theta_deg.size() != e->data.theta_deg.size()) {
         measured = false;
         break;
       }
-      flips.push_back(frobenius_max(e->f_contacts) / flip);
+      flips.push_back(frobenius_max(e->data.d_fabric_contacts) / flip);
       // Kinematic parts of the probes against the linear response, relative to its largest
       // fabric change; the noise is the same comparison of the stress responses.
       double d_kin = 0, f_max = 0, d_s = 0, s_max = 0;
-      for (std::size_t p = 0; p < e->theta.size(); ++p) {
-        const Eigen::Matrix3d kin = e->f_volume[p] + e->f_rotation[p];
-        const Eigen::Matrix3d kin_lr = lr->f_volume[p] + lr->f_rotation[p];
+      for (std::size_t p = 0; p < e->data.theta_deg.size(); ++p) {
+        const Eigen::Matrix3d kin = e->data.d_fabric_volume[p] + e->data.d_fabric_rotation[p];
+        const Eigen::Matrix3d kin_lr = lr->data.d_fabric_volume[p] + lr->data.d_fabric_rotation[p];
         d_kin = std::max(d_kin, (kin - kin_lr).norm());
         f_max = std::max(f_max, kin_lr.norm());
-        d_s = std::max(d_s, (e->stress_pairs[p] - lr->stress_pairs[p]).norm());
-        s_max = std::max(s_max, lr->stress_pairs[p].norm());
+        d_s = std::max(d_s, (e->data.stress_star[p] - lr->data.stress_star[p]).norm());
+        s_max = std::max(s_max, lr->data.stress_star[p].norm());
       }
       kin_err.push_back(d_kin / f_max);
       noise.push_back(d_s / s_max);
@@ -426,16 +417,17 @@ std::vector<Claim> evaluate_claims(const ResultsReader& r) {
             ""};
     bool measured = false, ok = false;
     // One stress pair per direction, or the envelope is damaged and C3 cannot be measured.
-    if (!el.empty() && el[0] && !el[0]->theta.empty() &&
-        el[0]->stress_pairs.size() == el[0]->theta.size() && std::isfinite(el[0]->stress.incl)) {
+    if (!el.empty() && el[0] && !el[0]->data.theta_deg.empty() &&
+        el[0]->data.stress_star.size() == el[0]->data.theta_deg.size() &&
+        std::isfinite(el[0]->stress.incl)) {
       const auto& e = *el[0];
       std::size_t best = 0;
-      for (std::size_t i = 0; i < e.theta.size(); ++i)
-        if (angle_between_axes_deg(e.theta[i], kIsoCompressionDeg) <
-            angle_between_axes_deg(e.theta[best], kIsoCompressionDeg))
+      for (std::size_t i = 0; i < e.data.theta_deg.size(); ++i)
+        if (angle_between_axes_deg(e.data.theta_deg[i], kIsoCompressionDeg) <
+            angle_between_axes_deg(e.data.theta_deg[best], kIsoCompressionDeg))
           best = i;
-      if (angle_between_axes_deg(e.theta[best], kIsoCompressionDeg) < 0.01) {
-        const Eigen::Vector2d v = e.stress_pairs[best] - e.stress.center;
+      if (angle_between_axes_deg(e.data.theta_deg[best], kIsoCompressionDeg) < 0.01) {
+        const Eigen::Vector2d v = e.data.stress_star[best] - e.stress.center;
         const double dir = rad_to_deg(std::atan2(v.y(), v.x()));
         const double off = angle_between_axes_deg(dir, e.stress.incl);
         measured = true;
@@ -521,7 +513,7 @@ std::vector<Claim> evaluate_claims(const ResultsReader& r) {
       }
       // A contact-set part at round-off (no contact changed) is zero.
       auto structural = [](const EnvInfo& env) {
-        const double m = frobenius_mean(env.f_contacts);
+        const double m = frobenius_mean(env.data.d_fabric_contacts);
         return m > 1e-12 ? m / env.amplitude : 0.0;
       };
       const double p = structural(*pl[i]), e = structural(*el[i]);
@@ -532,7 +524,7 @@ std::vector<Claim> evaluate_claims(const ResultsReader& r) {
     }
     if (measured) {
       const EnvInfo& last = *pl.back();
-      const dem::RendulicMap m = dem::fit_rendulic_map(last.strain_pairs, last.fabric_pairs);
+      const dem::RendulicMap m = dem::fit_rendulic_map(last.data.strain, last.data.fabric);
       thin = m.semi_minor / m.semi_major;
       if (!std::isfinite(inc.back())) inc.back() = m.inclination_deg;
       ok = ok && thin < 0.15 && angle_between_axes_deg(inc.back(), kIsoCompressionDeg) < 10.0;
@@ -562,10 +554,12 @@ std::vector<Claim> evaluate_claims(const ResultsReader& r) {
             "standard errors)",
             "", ""};
     bool measured = false, ok = false;
-    if (r.exists("/path/stress_star") && r.exists("/path/fabric") && r.exists("/path/eps_dev")) {
-      const auto s = r.read_tensors("/path/stress_star");
-      const auto f = r.read_tensors("/path/fabric");
-      const auto e = r.read_vector("/path/eps_dev");
+    const std::string p = paths::kPath;
+    if (r.exists(p + datasets::kStressStar) && r.exists(p + datasets::kFabric) &&
+        r.exists(p + datasets::kEpsDev)) {
+      const auto s = r.read_tensors(p + datasets::kStressStar);
+      const auto f = r.read_tensors(p + datasets::kFabric);
+      const auto e = r.read_vector(p + datasets::kEpsDev);
       if (s.size() >= 10 && f.size() == s.size() && e.size() == s.size()) {
         std::vector<double> x, sxx, slat, fxx, flat;
         for (std::size_t i = 0; i < s.size(); ++i) {
@@ -632,14 +626,14 @@ std::string report_markdown(const ResultsReader& r, const std::vector<Claim>& cl
   if (r.has_attr("/", "scenario_file"))
     md << "- scenario: `" << r.attr_string("/", "scenario_file") << "`, seed "
        << r.attr_int("/", "seed") << "\n";
-  if (r.has_attr("/material", "n_particles"))
-    md << "- particles: " << r.attr_int("/material", "n_particles") << "\n";
-  if (r.exists("/timings")) {
+  if (r.has_attr(paths::kMaterial, "n_particles"))
+    md << "- particles: " << r.attr_int(paths::kMaterial, "n_particles") << "\n";
+  if (r.exists(paths::kTimings)) {
     md << "\n## Wall time per stage\n\n| stage | seconds |\n|---|---|\n";
     for (const char* st : {"prepare", "isotropic", "path", "states", "elastic_range", "probes",
                            "linear_response", "pressure", "fits", "calibration"})
-      if (r.has_attr("/timings", st))
-        md << "| " << st << " | " << fmt(r.attr_double("/timings", st), 4) << " |\n";
+      if (r.has_attr(paths::kTimings, st))
+        md << "| " << st << " | " << fmt(r.attr_double(paths::kTimings, st), 4) << " |\n";
   }
   md << "\n## The seed's claims (docs/claims.md)\n\n"
      << "| claim | statement | measured | verdict |\n|---|---|---|---|\n";
@@ -650,13 +644,14 @@ std::string report_markdown(const ResultsReader& r, const std::vector<Claim>& cl
         "minimisation, else linear response (elastic only).\n";
   // The elastic range of every state, at nu_max and at the pressure branches.
   std::vector<std::string> roots = {""};
-  if (r.exists("/pressure"))
-    for (const auto& b : r.children("/pressure")) roots.push_back("/pressure/" + b);
+  if (r.exists(paths::kPressure))
+    for (const auto& b : r.children(paths::kPressure))
+      roots.push_back(std::string(paths::kPressure) + "/" + b);
   std::ostringstream range;
   for (const auto& root : roots) {
-    if (!r.exists(root + "/states")) continue;
-    for (const auto& label : r.children(root + "/states")) {
-      const std::string g = root + "/states/" + label, e = g + "/elastic_range";
+    if (!r.exists(paths::states(root))) continue;
+    for (const auto& label : r.children(paths::states(root))) {
+      const std::string g = paths::state(label, root), e = paths::elastic_range(g);
       if (!r.exists(e) || !r.has_attr(e, "yield_strain")) continue;
       const bool yielded = r.has_attr(e, "yielded") && r.attr_int(e, "yielded") != 0;
       auto attr_or_nan = [&](const std::string& object, const char* name) {
@@ -675,12 +670,12 @@ std::string report_markdown(const ResultsReader& r, const std::vector<Claim>& cl
           "between the rung below (elastic to) and it.\n\n| nu | P* | state | -eps_dev | yield "
           "strain | elastic to |\n|---|---|---|---|---|---|\n"
        << range.str();
-  if (r.exists("/calibration")) {
+  if (r.exists(paths::kCalibration)) {
     md << "\n## Calibration (docs/calibration.md)\n\n"
        << "| model | converged | objective | fitted misfit | held-out misfit | parameters "
           "(+- standard error) |\n|---|---|---|---|---|---|\n";
-    for (const std::string& m : r.children("/calibration")) {
-      const std::string g = "/calibration/" + m;
+    for (const std::string& m : r.children(paths::kCalibration)) {
+      const std::string g = paths::calibration(m);
       md << "| " << m << " | ";
       if (r.has_attr(g, "error")) {
         md << "no | - | - | - | failed: " << r.attr_string(g, "error") << " |\n";
@@ -691,8 +686,8 @@ std::string report_markdown(const ResultsReader& r, const std::vector<Claim>& cl
          << " | "
          << (r.has_attr(g, "held_out_misfit") ? fmt(r.attr_double(g, "held_out_misfit")) : "-")
          << " | ";
-      const std::vector<double> p = r.read_vector(g + "/params");
-      const std::vector<double> se = r.read_vector(g + "/stderr");
+      const std::vector<double> p = r.read_vector(g + datasets::kParams);
+      const std::vector<double> se = r.read_vector(g + datasets::kStderr);
       std::stringstream names(r.attr_string(g, "param_names"));
       std::string name;
       for (std::size_t i = 0; i < p.size() && std::getline(names, name, ','); ++i)

@@ -10,6 +10,7 @@
 #include "rendulic/calibration/calibrate.hpp"
 #include "rendulic/calibration/report.hpp"
 #include "rendulic/core/errors.hpp"
+#include "rendulic/core/result_paths.hpp"
 #include "rendulic/models/law.hpp"
 
 namespace rendulic::app {
@@ -115,7 +116,7 @@ void run_calibration_stage(const Scenario& scenario, ResultsWriter& out, const R
     } catch (const std::exception& e) {
       // One family that cannot be fitted to these data (e.g. its driver fails on every
       // start) is a finding, not a reason to lose the others: recorded, said, skipped.
-      const std::string g = "/calibration/" + m;
+      const std::string g = paths::calibration(m);
       out.attr(g, "converged", std::int64_t{0});
       out.attr(g, "error", std::string(e.what()));
       std::cerr << "rendulic: warning: calibration of " << m << " failed: " << e.what() << "\n";

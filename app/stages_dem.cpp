@@ -23,6 +23,7 @@
 #include "pipeline.hpp"
 #include "rendulic/core/conventions.hpp"
 #include "rendulic/core/errors.hpp"
+#include "rendulic/core/result_paths.hpp"
 #include "rendulic/dem/protocols.hpp"
 #include "rendulic/dem/rest.hpp"
 #include "rendulic/dem/scenario_keys.hpp"
@@ -118,16 +119,16 @@ void stage_prepare(const Scenario& sc, ResultsWriter& out, const RunContext& ctx
   const dem::Material& m = o.system.material;
   Progress progress(ctx, "prepare");
 
-  out.attr("/material", "k", m.k);
-  out.attr("/material", "gamma", m.gamma);
-  out.attr("/material", "gamma_b", m.gamma_b);
-  out.attr("/material", "density", m.density);
-  out.attr("/material", "r_mean", m.r_mean);
-  out.attr("/material", "w", m.w);
-  out.attr("/material", "k_star", m.k_star());
-  out.attr("/material", "dt", dem::time_step(m, o.system.dt_factor));
-  out.attr("/material", "dt_factor", o.system.dt_factor);
-  out.attr("/material", "n_particles", static_cast<std::int64_t>(o.gas.n_particles));
+  out.attr(paths::kMaterial, "k", m.k);
+  out.attr(paths::kMaterial, "gamma", m.gamma);
+  out.attr(paths::kMaterial, "gamma_b", m.gamma_b);
+  out.attr(paths::kMaterial, "density", m.density);
+  out.attr(paths::kMaterial, "r_mean", m.r_mean);
+  out.attr(paths::kMaterial, "w", m.w);
+  out.attr(paths::kMaterial, "k_star", m.k_star());
+  out.attr(paths::kMaterial, "dt", dem::time_step(m, o.system.dt_factor));
+  out.attr(paths::kMaterial, "dt_factor", o.system.dt_factor);
+  out.attr(paths::kMaterial, "n_particles", static_cast<std::int64_t>(o.gas.n_particles));
 
   progress.start_task("gas");
   dem::SystemOptions prep = o.system;
@@ -148,14 +149,14 @@ void stage_prepare(const Scenario& sc, ResultsWriter& out, const RunContext& ctx
   const dem::RelaxSummary r = dem::relax(sys, o.relax, progress.fn());
   warn_cap(ctx, "at nu0", r);
   const dem::Measures me = sys.measure();
-  out.attr("/preparation", "nu0", me.volume_fraction);
-  out.attr("/preparation", "pressure_star", me.pressure_star);
-  out.attr("/preparation", "coordination", me.coordination);
-  out.attr("/preparation", "compression_time", c.time);
-  write_relax(out, "/preparation", "", r);
-  out.attr("/preparation", "steps", sys.steps());
-  out.attr("/preparation", "gamma_b", o.prepare_gamma_b);
-  out.attr("/preparation", "wall_time_s", progress.elapsed());
+  out.attr(paths::kPreparation, "nu0", me.volume_fraction);
+  out.attr(paths::kPreparation, "pressure_star", me.pressure_star);
+  out.attr(paths::kPreparation, "coordination", me.coordination);
+  out.attr(paths::kPreparation, "compression_time", c.time);
+  write_relax(out, paths::kPreparation, "", r);
+  out.attr(paths::kPreparation, "steps", sys.steps());
+  out.attr(paths::kPreparation, "gamma_b", o.prepare_gamma_b);
+  out.attr(paths::kPreparation, "wall_time_s", progress.elapsed());
   // Later stages run with the material's own background damping.
   session.system = dem::DemSystem::restore(sys.save(), o.system);
 }
@@ -165,19 +166,20 @@ void stage_isotropic(const Scenario&, ResultsWriter& out, const RunContext& ctx)
   const dem::DemRunOptions& o = *dem_run_session().options;
   Progress progress(ctx, "isotropic");
   const std::int64_t steps0 = sys.steps();
+  const std::string g = paths::kIsotropic;
   auto row = [&](const dem::Measures& m) {
-    out.append("/isotropic/time", m.time);
-    out.append("/isotropic/volume_fraction", m.volume_fraction);
-    out.append("/isotropic/pressure", m.pressure);
-    out.append("/isotropic/pressure_star", m.pressure_star);
-    out.append("/isotropic/coordination", m.coordination);
-    out.append("/isotropic/coordination_nonrattler", m.coordination_nonrattler);
-    out.append("/isotropic/rattler_fraction", m.rattler_fraction);
-    out.append("/isotropic/stress", m.stress);
-    out.append("/isotropic/fabric", m.fabric);
-    out.append("/isotropic/kinetic_energy", m.kinetic_energy);
-    out.append("/isotropic/elastic_energy", m.elastic_energy);
-    out.append("/isotropic/inertial_number", m.inertial_number);
+    out.append(g + datasets::kTime, m.time);
+    out.append(g + datasets::kVolumeFraction, m.volume_fraction);
+    out.append(g + datasets::kPressure, m.pressure);
+    out.append(g + datasets::kPressureStar, m.pressure_star);
+    out.append(g + datasets::kCoordination, m.coordination);
+    out.append(g + datasets::kCoordinationNonrattler, m.coordination_nonrattler);
+    out.append(g + datasets::kRattlerFraction, m.rattler_fraction);
+    out.append(g + datasets::kStress, m.stress);
+    out.append(g + datasets::kFabric, m.fabric);
+    out.append(g + datasets::kKineticEnergy, m.kinetic_energy);
+    out.append(g + datasets::kElasticEnergy, m.elastic_energy);
+    out.append(g + datasets::kInertialNumber, m.inertial_number);
   };
   progress.start_task("loading to nu_max");
   dem::CompressSummary c = dem::compress_isotropic(sys, o.loading, row, progress.fn());
@@ -190,30 +192,30 @@ void stage_isotropic(const Scenario&, ResultsWriter& out, const RunContext& ctx)
   warn_cap(ctx, "at nu_max", r);
   const dem::Measures me = sys.measure();
   dem_run_session().path_start_pressure = me.pressure;
-  out.attr("/isotropic", "max_inertial_number", c.max_inertial_number);
-  out.attr("/isotropic", "relaxed_pressure_star", me.pressure_star);
-  out.attr("/isotropic", "relaxed_coordination", me.coordination);
-  out.attr("/isotropic", "relaxed_coordination_nonrattler", me.coordination_nonrattler);
-  write_relax(out, "/isotropic", "", r);
-  out.attr("/isotropic", "steps", sys.steps() - steps0);
-  out.attr("/isotropic", "wall_time_s", progress.elapsed());
+  out.attr(paths::kIsotropic, "max_inertial_number", c.max_inertial_number);
+  out.attr(paths::kIsotropic, "relaxed_pressure_star", me.pressure_star);
+  out.attr(paths::kIsotropic, "relaxed_coordination", me.coordination);
+  out.attr(paths::kIsotropic, "relaxed_coordination_nonrattler", me.coordination_nonrattler);
+  write_relax(out, paths::kIsotropic, "", r);
+  out.attr(paths::kIsotropic, "steps", sys.steps() - steps0);
+  out.attr(paths::kIsotropic, "wall_time_s", progress.elapsed());
 }
 
 dem::SampleFn path_recorder(ResultsWriter& out, const std::string& g) {
   return [&out, g](const dem::Measures& m) {
-    out.append(g + "/time", m.time);
-    out.append(g + "/strain", m.strain);
-    out.append(g + "/eps_v", m.eps_v);
-    out.append(g + "/eps_dev", m.eps_dev);
-    out.append(g + "/stress", m.stress);
-    out.append(g + "/stress_star", m.stress_star);
-    out.append(g + "/fabric", m.fabric);
-    out.append(g + "/volume_fraction", m.volume_fraction);
-    out.append(g + "/coordination", m.coordination);
-    out.append(g + "/coordination_nonrattler", m.coordination_nonrattler);
-    out.append(g + "/kinetic_energy", m.kinetic_energy);
-    out.append(g + "/elastic_energy", m.elastic_energy);
-    out.append(g + "/inertial_number", m.inertial_number);
+    out.append(g + datasets::kTime, m.time);
+    out.append(g + datasets::kStrain, m.strain);
+    out.append(g + datasets::kEpsV, m.eps_v);
+    out.append(g + datasets::kEpsDev, m.eps_dev);
+    out.append(g + datasets::kStress, m.stress);
+    out.append(g + datasets::kStressStar, m.stress_star);
+    out.append(g + datasets::kFabric, m.fabric);
+    out.append(g + datasets::kVolumeFraction, m.volume_fraction);
+    out.append(g + datasets::kCoordination, m.coordination);
+    out.append(g + datasets::kCoordinationNonrattler, m.coordination_nonrattler);
+    out.append(g + datasets::kKineticEnergy, m.kinetic_energy);
+    out.append(g + datasets::kElasticEnergy, m.elastic_energy);
+    out.append(g + datasets::kInertialNumber, m.inertial_number);
   };
 }
 
@@ -225,11 +227,11 @@ void stage_path(const Scenario&, ResultsWriter& out, const RunContext& ctx) {
   progress.start_task("undrained extension");
   const std::int64_t steps0 = sys.steps();
   dem::PathSummary p =
-      dem::undrained_extension(sys, o.path, path_recorder(out, "/path"), progress.fn());
-  out.attr("/path", "rate", o.path.rate);
-  out.attr("/path", "max_inertial_number", p.max_inertial_number);
-  out.attr("/path", "steps", sys.steps() - steps0);
-  out.attr("/path", "wall_time_s", progress.elapsed());
+      dem::undrained_extension(sys, o.path, path_recorder(out, paths::kPath), progress.fn());
+  out.attr(paths::kPath, "rate", o.path.rate);
+  out.attr(paths::kPath, "max_inertial_number", p.max_inertial_number);
+  out.attr(paths::kPath, "steps", sys.steps() - steps0);
+  out.attr(paths::kPath, "wall_time_s", progress.elapsed());
   session.snapshots = std::move(p.snapshots);
 }
 
@@ -297,25 +299,26 @@ void write_state(ResultsWriter& out, const std::string& g, const dem::DemSystem&
   out.attr(g, "minimise_max_displacement", r.max_displacement);
   out.attr(g, "minimise_stress_change_over_p",
            r.stress_change.norm() / std::max(m.pressure, 1e-300));
-  out.write(g + "/stress", m.stress);
-  out.write(g + "/fabric", m.fabric);
+  out.write(g + datasets::kStress, m.stress);
+  out.write(g + datasets::kFabric, m.fabric);
   if (!with_configuration) return;
   const dem::Particles& p = sys.particles();
-  out.write(g + "/positions", as_matrix(p.x, p.y, p.z));
-  out.write(g + "/radii", p.radius);
-  out.write(g + "/cell_lengths",
+  out.write(g + datasets::kPositions, as_matrix(p.x, p.y, p.z));
+  out.write(g + datasets::kRadii, p.radius);
+  out.write(g + datasets::kCellLengths,
             std::vector<double>(sys.cell().lengths.data(), sys.cell().lengths.data() + 3));
   // Checkpoint: everything DemSystem::restore() needs for a bit-identical continuation.
   const dem::State st = sys.save();
-  const std::string cp = g + "/checkpoint";
-  out.write(cp + "/velocities", as_matrix(p.vx, p.vy, p.vz));
-  out.write(cp + "/forces", as_matrix(p.fx, p.fy, p.fz));
-  out.write(cp + "/reference_positions", as_matrix(st.ref_x, st.ref_y, st.ref_z));
-  out.write(cp + "/reference_cell_lengths",
+  const std::string cp = g + paths::kCheckpoint;
+  out.write(cp + datasets::kVelocities, as_matrix(p.vx, p.vy, p.vz));
+  out.write(cp + datasets::kForces, as_matrix(p.fx, p.fy, p.fz));
+  out.write(cp + datasets::kReferencePositions, as_matrix(st.ref_x, st.ref_y, st.ref_z));
+  out.write(cp + datasets::kReferenceCellLengths,
             std::vector<double>(st.ref_lengths.data(), st.ref_lengths.data() + 3));
-  out.write(cp + "/reference_half_skins", st.ref_half_skin);
-  out.write(cp + "/strain_E", std::vector<double>(st.strain_E.data(), st.strain_E.data() + 3));
-  out.write(cp + "/last_D", std::vector<double>(st.last_D.data(), st.last_D.data() + 3));
+  out.write(cp + datasets::kReferenceHalfSkins, st.ref_half_skin);
+  out.write(cp + datasets::kStrainE,
+            std::vector<double>(st.strain_E.data(), st.strain_E.data() + 3));
+  out.write(cp + datasets::kLastD, std::vector<double>(st.last_D.data(), st.last_D.data() + 3));
   out.attr(cp, "time", st.time);
   out.attr(cp, "steps", st.steps);
 }
@@ -330,11 +333,11 @@ void stage_states(const Scenario&, ResultsWriter& out, const RunContext& ctx) {
   session.relaxed.clear();
   for (std::size_t k = 0; k < rested.size(); ++k) {
     const std::string& label = o.state_labels[k];
-    write_state(out, "/states/" + label, rested[k].first, rested[k].second,
+    write_state(out, paths::state(label), rested[k].first, rested[k].second,
                 o.state_rest.minimise.force_tolerance, true);
     session.relaxed.emplace_back(label, std::move(rested[k].first));
   }
-  out.attr("/states", "wall_time_s", std::chrono::duration<double>(Clock::now() - t0).count());
+  out.attr(paths::kStates, "wall_time_s", std::chrono::duration<double>(Clock::now() - t0).count());
 }
 
 }  // namespace rendulic::app

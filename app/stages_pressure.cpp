@@ -7,24 +7,15 @@
 // elastic_range, probes, linear_response and fits. The branches' states are stored without
 // their configuration (positions, checkpoint): the main states carry those.
 #include <cmath>
-#include <cstdio>
 #include <iostream>
 
 #include "rendulic/core/errors.hpp"
+#include "rendulic/core/result_paths.hpp"
 #include "rendulic/dem/probe_campaign.hpp"
 #include "rendulic/dem/probe_elastic_range.hpp"
 #include "stages.hpp"
 
 namespace rendulic::app {
-namespace {
-
-std::string branch_group(double nu) {
-  char buf[48];
-  std::snprintf(buf, sizeof buf, "/pressure/nu%g", nu);
-  return buf;
-}
-
-}  // namespace
 
 void stage_pressure(const Scenario& sc, ResultsWriter& out, const RunContext& ctx) {
   auto& session = dem_run_session();
@@ -41,7 +32,7 @@ void stage_pressure(const Scenario& sc, ResultsWriter& out, const RunContext& ct
   const bool with_lr = stage_requested(sc, "linear_response");
   const bool with_fits = stage_requested(sc, "fits");
   for (auto& [nu, snapshot] : session.branches) {
-    const std::string G = branch_group(nu);
+    const std::string G = paths::pressure_branch(nu);
     if (!ctx.quiet) std::cerr << "rendulic: pressure branch nu = " << nu << "\n";
     dem::DemSystem sys = snapshot;
     const dem::RelaxSummary r = dem::relax(sys, o.relax);
@@ -54,19 +45,20 @@ void stage_pressure(const Scenario& sc, ResultsWriter& out, const RunContext& ct
     out.attr(G, "pressure_star", start.pressure_star);
     out.attr(G, "coordination", start.coordination);
     out.attr(G, "relax_converged", std::int64_t{r.converged});
-    out.attr(G + "/path", "rate", path.rate);
-    dem::PathSummary p = dem::undrained_extension(sys, path, path_recorder(out, G + "/path"));
-    out.attr(G + "/path", "max_inertial_number", p.max_inertial_number);
+    const std::string path_group = G + paths::kPath;
+    out.attr(path_group, "rate", path.rate);
+    dem::PathSummary p = dem::undrained_extension(sys, path, path_recorder(out, path_group));
+    out.attr(path_group, "max_inertial_number", p.max_inertial_number);
     auto rested = rest_states(p.snapshots, o.state_rest, o.state_labels, ctx);
     for (std::size_t k = 0; k < rested.size(); ++k) {
       const std::string& label = o.state_labels[k];
-      const std::string sg = G + "/states/" + label;
+      const std::string sg = paths::state(label, G);
       const dem::DemSystem& state = rested[k].first;
       write_state(out, sg, state, rested[k].second, o.state_rest.minimise.force_tolerance, false);
       if (with_range) {
         const dem::ElasticRangeOptions eo = dem::elastic_range_options_from(sc);
         const dem::ElasticRange er = dem::elastic_range(state, eo, po);
-        dem::write_elastic_range(out, sg + "/elastic_range", er, eo);
+        dem::write_elastic_range(out, paths::elastic_range(sg), er, eo);
         if (!ctx.quiet)
           std::cerr << "rendulic: nu " << nu << " state " << label << ": yield strain "
                     << er.yield_strain << "\n";

@@ -5,9 +5,9 @@
 // that cannot be fitted (no fabric change at all, a degenerate set) gets shape "none" and the
 // reason, never an invented fit.
 #include <iostream>
-#include <tuple>
 
 #include "rendulic/core/errors.hpp"
+#include "rendulic/core/result_paths.hpp"
 #include "rendulic/dem/probe_campaign.hpp"
 #include "rendulic/dem/probe_elastic_range.hpp"
 #include "rendulic/probes/envelope_fit.hpp"
@@ -63,7 +63,7 @@ void stage_linear_response(const Scenario& sc, ResultsWriter& out, const RunCont
       // finding about that state, not a failure of the run: record it, say it, go on.
       for (double a : o.amplitudes) {
         const std::string g =
-            "/states/" + label + "/envelopes/" + dem::envelope_name("linear_response", a);
+            paths::envelope(paths::state(label), paths::envelope_name("linear_response", a));
         out.attr(g, "method", "linear_response");
         out.attr(g, "amplitude", a);
         out.attr(g, "error", std::string(e.what()));
@@ -81,7 +81,7 @@ void stage_elastic_range(const Scenario& sc, ResultsWriter& out, const RunContex
   for (const auto& [label, state] : relaxed_states("elastic_range")) {
     if (!ctx.quiet) std::cerr << "rendulic: elastic_range of state " << label << "\n";
     const dem::ElasticRange r = dem::elastic_range(state, eo, o);
-    dem::write_elastic_range(out, "/states/" + label + "/elastic_range", r, eo);
+    dem::write_elastic_range(out, paths::elastic_range(paths::state(label)), r, eo);
     if (!ctx.quiet)
       std::cerr << "rendulic: state " << label << ": yield strain " << r.yield_strain
                 << (r.yielded ? "" : " (no departure within the ladder: a lower bound)") << "\n";
@@ -116,26 +116,8 @@ void register_fit_keys(ScenarioSchema& s) {
 }
 
 void fit_state_envelopes(const Scenario& sc, ResultsWriter& out, const std::string& state_group) {
-  const ResultsReader in(out.temporary_path());
-  const std::string eg = state_group + "/envelopes";
-  if (!in.exists(eg)) return;
-  const FitOptions stress = fit_options(sc, "stress"), fabric = fit_options(sc, "fabric");
-  for (const auto& name : in.children(eg)) {
-    const std::string g = eg + "/" + name;
-    for (const auto& [pairs, fit_name, options] :
-         {std::tuple<std::string, std::string, const FitOptions&>{"stress_star", "fit_stress",
-                                                                  stress},
-          {"fabric", "fit_fabric", fabric}}) {
-      if (!in.exists(g + "/" + pairs)) continue;
-      try {
-        write_envelope_fit(out, g + "/" + fit_name,
-                           fit_envelope(read_envelope(in, g, pairs), options));
-      } catch (const InputError& e) {  // degenerate envelope: say so, as stage_fits does
-        out.attr(g + "/" + fit_name, "shape", "none");
-        out.attr(g + "/" + fit_name, "error", std::string(e.what()));
-      }
-    }
-  }
+  rendulic::fit_state_envelopes(ResultsReader(out.temporary_path()), out, state_group,
+                                fit_options(sc, "stress"), fit_options(sc, "fabric"));
 }
 
 void stage_fits(const Scenario& sc, ResultsWriter& out, const RunContext& ctx) {

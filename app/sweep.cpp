@@ -16,6 +16,7 @@
 
 #include "rendulic/core/conventions.hpp"
 #include "rendulic/core/errors.hpp"
+#include "rendulic/core/result_paths.hpp"
 #include "rendulic/dem/contact.hpp"
 #include "rendulic/dem/probe_campaign.hpp"
 #include "rendulic/dem/scenario_keys.hpp"
@@ -93,11 +94,7 @@ struct Features {
 // uses, here without covariance or shape selection). Where the orthogonal-distance fit fails
 // the least-squares Rendulic map gives the features, and the note says so.
 Features stress_features(const dem::Envelope& env) {
-  Envelope e;
-  e.response = env.stress_star;
-  e.theta_deg = env.theta_deg;
-  e.strain = env.strain;
-  e.amplitude = env.amplitude;
+  const Envelope e = envelope_of(env, Response::kStress);
   Features f;
   try {
     FitOptions fo;
@@ -223,8 +220,9 @@ class Sweeper {
     const auto& amps = probe_.amplitudes;
     elastic_amp_ = *std::min_element(amps.begin(), amps.end());
     plastic_amp_ = *std::max_element(amps.begin(), amps.end());
-    if (!(elastic_amp_ < 1e-4))
-      throw InputError("sweep: probes.amplitudes needs an elastic amplitude (< 1e-4)");
+    if (!is_elastic_amplitude(elastic_amp_))
+      throw InputError("sweep: probes.amplitudes needs an elastic amplitude (< " +
+                       fmt(kElasticAmplitudeMax) + ")");
     seed_ = static_cast<std::uint64_t>(sc.get_int("run.seed"));
   }
 
@@ -234,7 +232,7 @@ class Sweeper {
     s.options = o_;
     s.scenario_toml = sc_.to_toml();
     s.elastic_amplitude = elastic_amp_;
-    s.plastic_amplitude = plastic_amp_ > 1e-3 ? plastic_amp_ : 0.0;
+    s.plastic_amplitude = is_plastic_amplitude(plastic_amp_) ? plastic_amp_ : 0.0;
     s.stability_limit_factor =
         dem::stability_limit(run_.system.material) / dem::time_step(run_.system.material, 1.0);
     const Setting base{"dynamic",
@@ -846,11 +844,11 @@ void write_sweep_h5(const SweepSummary& s, ResultsWriter& out) {
              {"err_inclination_deg", p.err_inclination_deg},
              {"err_center", p.err_center}});
     out.attr(pg, "center", std::vector<double>{p.center_x, p.center_y});
-    out.write(pg + "/theta_deg", p.theta_deg);
+    out.write(pg + datasets::kThetaDeg, p.theta_deg);
     std::vector<Eigen::Vector2d> pairs;
     for (std::size_t k = 0; k < p.stress_star_x.size(); ++k)
       pairs.emplace_back(p.stress_star_x[k], p.stress_star_y[k]);
-    out.write(pg + "/stress_star", pairs);
+    out.write(pg + datasets::kStressStar, pairs);
   }
 }
 

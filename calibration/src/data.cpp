@@ -5,7 +5,9 @@
 #include <cmath>
 
 #include "rendulic/core/conventions.hpp"
+#include "rendulic/core/envelope_record.hpp"
 #include "rendulic/core/errors.hpp"
+#include "rendulic/core/result_paths.hpp"
 #include "rendulic/core/results.hpp"
 
 namespace rendulic::calibration {
@@ -85,38 +87,40 @@ std::string join(const std::vector<std::string>& v) {
   return s.empty() ? "(none)" : s;
 }
 
-EnvelopeData read_envelope(const ResultsReader& r, const std::string& group,
-                           const std::string& name, double k_star) {
+// The calibration's view of a stored envelope (core/envelope_record.hpp): stress pairs in Pa
+// (stress_star times /material k_star, or from the d_stress tensors of a file without pairs),
+// fabric pairs, strain pairs (or from the directions) and the directions (or from the strain).
+EnvelopeData envelope_data_of(const ResultsReader& r, const std::string& group,
+                              const std::string& name, double k_star) {
   const std::string file = r.path().string();
+  const double amplitude = r.attr_double(group, "amplitude");  // required here
+  const EnvelopeRecord record = read_envelope(r, group);
   EnvelopeData e;
   e.name = name;
-  e.amplitude = r.attr_double(group, "amplitude");
-  e.method = r.has_attr(group, "method") ? r.attr_string(group, "method") : "unknown";
-  if (r.exists(group + "/stress_star")) {
-    for (const auto& p : r.read_pairs(group + "/stress_star")) e.stress.push_back(p * k_star);
-  } else if (r.exists(group + "/d_stress")) {
-    for (const auto& t : r.read_tensors(group + "/d_stress")) e.stress.push_back(rendulic_pair(t));
+  e.amplitude = amplitude;
+  e.method = record.method.empty() ? "unknown" : record.method;
+  if (!record.stress_star.empty()) {
+    for (const auto& p : record.stress_star) e.stress.push_back(p * k_star);
+  } else if (!record.d_stress.empty()) {
+    for (const auto& t : record.d_stress) e.stress.push_back(rendulic_pair(t));
   } else {
     throw InputError(file + ": envelope " + group + " has neither stress_star nor d_stress");
   }
-  if (r.exists(group + "/fabric")) {
-    e.fabric = r.read_pairs(group + "/fabric");
-  } else if (r.exists(group + "/d_fabric")) {
-    for (const auto& t : r.read_tensors(group + "/d_fabric")) e.fabric.push_back(rendulic_pair(t));
+  if (!record.fabric.empty()) {
+    e.fabric = record.fabric;
+  } else {
+    for (const auto& t : record.d_fabric) e.fabric.push_back(rendulic_pair(t));
   }
-  const std::size_t m = e.stress.size();
-  if (r.exists(group + "/strain")) {
-    e.strain = r.read_pairs(group + "/strain");
-  } else if (r.exists(group + "/theta_deg")) {
-    for (double t : r.read_vector(group + "/theta_deg"))
+  if (!record.strain.empty()) {
+    e.strain = record.strain;
+  } else if (!record.theta_deg.empty()) {
+    for (double t : record.theta_deg)
       e.strain.push_back(rendulic_pair(probe_strain(t, e.amplitude)));
   } else {
     throw InputError(file + ": envelope " + group + " has neither strain nor theta_deg");
   }
-  if (e.strain.size() != m)
-    throw InputError(file + ": envelope " + group + ": strain and stress differ in length");
-  if (r.exists(group + "/theta_deg")) {
-    e.theta_deg = r.read_vector(group + "/theta_deg");
+  if (!record.theta_deg.empty()) {
+    e.theta_deg = record.theta_deg;
   } else {
     for (const auto& s : e.strain) e.theta_deg.push_back(probe_direction_deg(s));
   }
@@ -138,14 +142,14 @@ CalibrationData load_calibration_data(const std::filesystem::path& file,
   const std::string name = file.string();
   CalibrationData data;
   data.source = name;
-  if (!r.exists("/material")) throw InputError(name + ": no /material group");
-  data.k_star = r.attr_double("/material", "k_star");
+  if (!r.exists(paths::kMaterial)) throw InputError(name + ": no /material group");
+  data.k_star = r.attr_double(paths::kMaterial, "k_star");
   if (!(data.k_star > 0.0) || !std::isfinite(data.k_star))
     throw InputError(name + ": /material k_star must be a positive number");
-  if (!r.exists("/states")) throw InputError(name + ": no /states group (no relaxed states)");
-  const std::vector<std::string> all = r.children("/states");
+  if (!r.exists(paths::kStates)) throw InputError(name + ": no /states group (no relaxed states)");
+  const std::vector<std::string> all = r.children(paths::kStates);
   auto has_envelopes = [&](const std::string& l) {
-    const std::string g = "/states/" + l + "/envelopes";
+    const std::string g = paths::envelopes(paths::state(l));
     return r.exists(g) && !r.children(g).empty();
   };
   std::vector<std::string> wanted = options.states;
@@ -159,28 +163,30 @@ CalibrationData load_calibration_data(const std::filesystem::path& file,
     if (std::find(all.begin(), all.end(), l) == all.end())
       throw InputError(name + ": no state '" + l + "' (states: " + join(all) + ")");
     if (!has_envelopes(l)) throw InputError(name + ": state '" + l + "' has no envelopes");
-    const std::string g = "/states/" + l;
+    const std::string g = paths::state(l);
     StateData s;
     s.label = l;
-    s.stress = r.read_tensor(g + "/stress");
-    s.fabric = r.exists(g + "/fabric") ? r.read_tensor(g + "/fabric") : Eigen::Matrix3d::Zero();
+    s.stress = r.read_tensor(g + datasets::kStress);
+    s.fabric = r.exists(g + datasets::kFabric) ? r.read_tensor(g + datasets::kFabric)
+                                               : Eigen::Matrix3d::Zero();
     s.volume_fraction = r.has_attr(g, "volume_fraction") ? r.attr_double(g, "volume_fraction") : 0;
     s.eps_dev = r.has_attr(g, "eps_dev") ? r.attr_double(g, "eps_dev") : 0.0;
     if (!s.stress.allFinite() || !s.fabric.allFinite())
       throw InputError(name + ": state '" + l + "' has non-finite stress or fabric");
-    for (const auto& e : r.children(g + "/envelopes")) {
+    for (const auto& e : r.children(paths::envelopes(g))) {
       // An envelope that could not be measured (e.g. no linear response of an unstable
       // network) carries only an `error` attribute: there is nothing to fit.
-      if (r.has_attr(g + "/envelopes/" + e, "error")) continue;
-      s.envelopes.push_back(read_envelope(r, g + "/envelopes/" + e, e, data.k_star));
+      if (r.has_attr(paths::envelope(g, e), "error")) continue;
+      s.envelopes.push_back(envelope_data_of(r, paths::envelope(g, e), e, data.k_star));
     }
     data.states.push_back(std::move(s));
   }
-  if (options.load_path && r.exists("/path/eps_dev") && r.exists("/path/stress") &&
-      r.exists("/path/fabric")) {
-    const auto e = r.read_vector("/path/eps_dev");
-    const auto st = r.read_tensors("/path/stress");
-    const auto fb = r.read_tensors("/path/fabric");
+  const std::string path = paths::kPath;
+  if (options.load_path && r.exists(path + datasets::kEpsDev) &&
+      r.exists(path + datasets::kStress) && r.exists(path + datasets::kFabric)) {
+    const auto e = r.read_vector(path + datasets::kEpsDev);
+    const auto st = r.read_tensors(path + datasets::kStress);
+    const auto fb = r.read_tensors(path + datasets::kFabric);
     if (e.size() != st.size() || e.size() != fb.size())
       throw InputError(name + ": /path eps_dev, stress and fabric differ in length");
     if (e.size() >= 2) {
@@ -198,8 +204,8 @@ CalibrationData load_calibration_data(const std::filesystem::path& file,
         data.path.stress.push_back(st[j]);
         data.path.fabric.push_back(fb[j]);
       }
-      if (r.exists("/path/volume_fraction")) {
-        const auto nu = r.read_vector("/path/volume_fraction");
+      if (r.exists(path + datasets::kVolumeFraction)) {
+        const auto nu = r.read_vector(path + datasets::kVolumeFraction);
         if (nu.empty()) throw InputError(name + ": /path/volume_fraction is empty");
         data.path.volume_fraction = nu.front();
       }

@@ -8,6 +8,7 @@
 #include <set>
 
 #include "law_dispatch.hpp"
+#include "rendulic/core/affine_map.hpp"
 #include "rendulic/core/conventions.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/models/driver_core.hpp"
@@ -104,17 +105,6 @@ namespace {
 template <typename T>
 Eigen::Matrix<T, 2, 1> pair_of(const models::Mat3<T>& q) {
   return {T(kSqrt2) * T(0.5) * (q(1, 1) + q(2, 2)), q(0, 0)};
-}
-
-// Affine projection (probes/ fit_affine, written for any scalar): for directions theta_i the
-// least-squares c + M u(theta) of points R_i is (U^T U)^-1 U^T R, U_i = (1, cos, sin).
-Eigen::Matrix<double, 3, Eigen::Dynamic> affine_projection(const std::vector<double>& theta) {
-  Eigen::MatrixXd U(theta.size(), 3);
-  for (std::size_t i = 0; i < theta.size(); ++i) {
-    const double t = deg_to_rad(theta[i]);
-    U.row(i) << 1.0, std::cos(t), std::sin(t);
-  }
-  return (U.transpose() * U).ldlt().solve(U.transpose());
 }
 
 }  // namespace

@@ -5,6 +5,8 @@
 #include <cstdio>
 #include <sstream>
 
+#include "rendulic/core/result_paths.hpp"
+
 namespace rendulic::calibration {
 namespace {
 
@@ -175,7 +177,7 @@ std::string to_json(const CalibrationSummary& s) {
 }
 
 void write_calibration(ResultsWriter& out, const CalibrationSummary& s) {
-  const std::string g = "/calibration/" + s.model;
+  const std::string g = paths::calibration(s.model);
   const FitResult& f = s.fit;
   out.attr(g, "objective", f.cost);
   out.attr(g, "converged", std::int64_t{f.converged ? 1 : 0});
@@ -233,9 +235,9 @@ void write_calibration(ResultsWriter& out, const CalibrationSummary& s) {
     out.attr(g, "blocks_covered", kinds);
   }
   if (!s.predicted_path.eps_dev.empty()) {
-    out.write(g + "/path/eps_dev", s.predicted_path.eps_dev);
-    out.write(g + "/path/stress", s.predicted_path.stress);  // Pa
-    out.write(g + "/path/fabric", s.predicted_path.fabric);
+    out.write(g + paths::kPath + datasets::kEpsDev, s.predicted_path.eps_dev);
+    out.write(g + paths::kPath + datasets::kStress, s.predicted_path.stress);  // Pa
+    out.write(g + paths::kPath + datasets::kFabric, s.predicted_path.fabric);
   }
   std::string names, free, warnings, fitted, held;
   for (const auto& n : s.param_names) names += (names.empty() ? "" : ",") + n;
@@ -248,17 +250,17 @@ void write_calibration(ResultsWriter& out, const CalibrationSummary& s) {
   out.attr(g, "warnings", warnings);
   out.attr(g, "fitted_states", fitted);
   out.attr(g, "held_out_states", held);
-  out.write(g + "/params", f.params);
+  out.write(g + datasets::kParams, f.params);
   // stderr over every parameter: 0 for fixed ones (not estimated), +inf for undetermined.
   // Matched by name: the free parameters are not listed in the law's order.
   std::vector<double> se(s.param_names.size(), 0.0);
   for (std::size_t k = 0; k < f.names.size() && k < f.stderr_.size(); ++k)
     for (std::size_t i = 0; i < s.param_names.size(); ++i)
       if (s.param_names[i] == f.names[k]) se[i] = f.stderr_[k];
-  out.write(g + "/stderr", se);
-  out.write(g + "/correlation", Eigen::MatrixXd(f.correlation));
+  out.write(g + datasets::kStderr, se);
+  out.write(g + datasets::kCorrelation, Eigen::MatrixXd(f.correlation));
   for (const auto& st : s.states) {
-    const std::string sg = g + "/states/" + st.label;
+    const std::string sg = paths::state(st.label, g);
     out.attr(sg, "held_out", std::int64_t{st.held_out ? 1 : 0});
     out.attr(sg, "misfit", st.misfit);
     if (st.has_elastic) {
@@ -276,11 +278,11 @@ void write_calibration(ResultsWriter& out, const CalibrationSummary& s) {
       out.attr(sg, "plastic_inclination_deg", st.plastic.inclination_deg);
     }
     for (const auto& pe : st.predicted) {
-      const std::string eg = sg + "/envelopes/" + pe.name;
-      out.write(eg + "/theta_deg", pe.theta_deg);
-      out.write(eg + "/strain", pe.strain);
-      out.write(eg + "/stress", pe.stress);  // Pa
-      out.write(eg + "/fabric", pe.fabric);
+      const std::string eg = paths::envelope(sg, pe.name);
+      out.write(eg + datasets::kThetaDeg, pe.theta_deg);
+      out.write(eg + datasets::kStrain, pe.strain);
+      out.write(eg + datasets::kStress, pe.stress);  // Pa
+      out.write(eg + datasets::kFabric, pe.fabric);
       out.attr(eg, "amplitude", pe.amplitude);
     }
   }
@@ -300,7 +302,7 @@ std::vector<std::string> split(const std::string& s) {
 }  // namespace
 
 bool read_model_score(const ResultsReader& in, const std::string& model, ModelScore* score) {
-  const std::string g = "/calibration/" + model;
+  const std::string g = paths::calibration(model);
   if (!in.exists(g) || !in.has_attr(g, "yardstick_blocks") || in.has_attr(g, "error")) return false;
   ModelScore m;
   m.model = model;
@@ -348,11 +350,11 @@ bool read_model_score(const ResultsReader& in, const std::string& model, ModelSc
 }
 
 void write_selection(ResultsWriter& out, const Selection& sel) {
-  out.attr("/calibration", "selected_model", sel.selected);
-  out.attr("/calibration", "selected_model_stress", sel.selected_stress);
-  out.attr("/calibration", "selection", sel.sentence);
-  out.attr("/calibration", "selection_rule", sel.rule);
-  for (const auto& r : sel.rows) out.attr("/calibration/" + r.model, "selection_note", r.note);
+  out.attr(paths::kCalibration, "selected_model", sel.selected);
+  out.attr(paths::kCalibration, "selected_model_stress", sel.selected_stress);
+  out.attr(paths::kCalibration, "selection", sel.sentence);
+  out.attr(paths::kCalibration, "selection_rule", sel.rule);
+  for (const auto& r : sel.rows) out.attr(paths::calibration(r.model), "selection_note", r.note);
 }
 
 }  // namespace rendulic::calibration

@@ -13,7 +13,7 @@ namespace rendulic::calibration {
 
 std::string yardstick_kind(const ResidualBlock& b) {
   if (b.kind == "path_stress" || b.kind == "path_fabric") return b.kind;
-  const bool elastic = b.amplitude < kElasticAmplitudeMax;
+  const bool elastic = is_elastic_amplitude(b.amplitude);
   if (b.kind == "stress") return elastic ? "stress_elastic" : "stress_plastic";
   if (b.kind == "fabric") return elastic ? "fabric_elastic" : "fabric_plastic";
   return b.kind;

@@ -4,6 +4,7 @@
 
 #include <cmath>
 
+#include "rendulic/core/affine_map.hpp"
 #include "rendulic/core/conventions.hpp"
 #include "rendulic/probes/envelope_fit.hpp"
 
@@ -22,14 +23,16 @@ Eigen::Matrix2d RendulicStiffness::rendulic_matrix() const {
 
 bool StiffnessOptions::IsValid(std::string*) const { return true; }
 
-void ellipse_of_affine(const Eigen::Matrix2d& M, double* a, double* b, double* inclination_deg) {
-  const Eigen::JacobiSVD<Eigen::Matrix2d> svd(M, Eigen::ComputeFullU);
-  *a = svd.singularValues()(0);
-  *b = svd.singularValues()(1);
-  double deg = rad_to_deg(std::atan2(svd.matrixU()(1, 0), svd.matrixU()(0, 0)));
-  deg = std::fmod(deg + 360.0, 180.0);
-  *inclination_deg = deg >= 180.0 ? deg - 180.0 : deg;
+namespace {
+
+void set_ellipse(const Eigen::Matrix2d& M, double* a, double* b, double* inclination_deg) {
+  const MapEllipse e = ellipse_of_map(M);
+  *a = e.semi_major;
+  *b = e.semi_minor;
+  *inclination_deg = e.inclination_deg;
 }
+
+}  // namespace
 
 RendulicStiffness fit_rendulic_stiffness(const EnvelopeData& env, const StiffnessOptions& options) {
   RendulicStiffness out;
@@ -81,7 +84,7 @@ RendulicStiffness fit_rendulic_stiffness(const EnvelopeData& env, const Stiffnes
     out.G_stderr = std::sqrt(cov(1, 1));
     out.A_stderr = std::sqrt(cov(2, 2));
   }
-  ellipse_of_affine(out.rendulic_matrix() * env.amplitude, &out.a, &out.b, &out.inclination_deg);
+  set_ellipse(out.rendulic_matrix() * env.amplitude, &out.a, &out.b, &out.inclination_deg);
   out.ok = true;
   // An elastic envelope should be centred: a centre beyond 5% of the minor axis says the
   // probes were not in the linear range (or the state was not relaxed).
@@ -99,21 +102,21 @@ PlasticFeatures plastic_features(const EnvelopeData& env) {
     out.note = why;
     return out;
   }
-  const AffineFit fs = fit_affine(env.stress, env.theta_deg);
+  const AffineMapFit fs = fit_affine_map(direction_vectors(env.theta_deg), env.stress);
   if (!fs.ok) {
     out.note = "affine fit of the stress envelope failed";
     return out;
   }
   out.shift = fs.center;
-  ellipse_of_affine(fs.M, &out.a, &out.b, &out.inclination_deg);
+  set_ellipse(fs.map, &out.a, &out.b, &out.inclination_deg);
   out.thinning = out.a > 0.0 ? out.b / out.a : 0.0;
   out.shift_ratio = out.a > 0.0 ? out.shift.norm() / out.a : 0.0;
   out.rms = fs.rms;
   if (env.has_fabric()) {
-    const AffineFit ff = fit_affine(env.fabric, env.theta_deg);
+    const AffineMapFit ff = fit_affine_map(direction_vectors(env.theta_deg), env.fabric);
     if (ff.ok) {
       out.fabric_shift = ff.center;
-      ellipse_of_affine(ff.M, &out.fabric_a, &out.fabric_b, &out.fabric_inclination_deg);
+      set_ellipse(ff.map, &out.fabric_a, &out.fabric_b, &out.fabric_inclination_deg);
     }
   }
   out.ok = true;

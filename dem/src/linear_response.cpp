@@ -17,6 +17,7 @@
 #endif
 
 #include "rendulic/core/errors.hpp"
+#include "rendulic/dem/contact.hpp"
 
 namespace rendulic::dem {
 
@@ -49,9 +50,9 @@ struct BackboneContact {
 };
 
 // BackboneContact Hessian block: d^2 phi(|l|) / dl dl = k n n - (f/r)(I - n n).
-Eigen::Matrix3d contact_block(const BackboneContact& c, double k) {
+Eigen::Matrix3d contact_block(const BackboneContact& c, const NormalContact& law) {
   const Eigen::Matrix3d nn = c.n * c.n.transpose();
-  return k * nn - (c.f / c.r) * (Eigen::Matrix3d::Identity() - nn);
+  return law.stiffness() * nn - (c.f / c.r) * (Eigen::Matrix3d::Identity() - nn);
 }
 
 // Strain basis tensor whose Mandel vector is the unit vector a.
@@ -123,13 +124,14 @@ LinearResponse linear_response(const PackingData& packing, const LinearResponseO
   const auto t_start = Clock::now();
   LinearResponse out;
   const int n = packing.size();
-  const double k = options.k;
+  const NormalContact law{options.k, 0.0};  // at rest: the spring alone
   out.n_particles = n;
   out.volume = packing.volume();
 
   std::vector<BackboneContact> all;
   for (const PairGeometry& p : find_pairs(packing, 0.0)) {
-    if (p.overlap > 0.0) all.push_back({p.i, p.j, p.l / p.distance, p.distance, k * p.overlap});
+    if (p.overlap > 0.0)
+      all.push_back({p.i, p.j, p.l / p.distance, p.distance, law.elastic_force(p.overlap)});
   }
   out.n_contacts = static_cast<int>(all.size());
 
@@ -147,7 +149,7 @@ LinearResponse linear_response(const PackingData& packing, const LinearResponseO
       if (!keep[c.i] || !keep[c.j]) continue;
       ++count[c.i];
       ++count[c.j];
-      const Eigen::Matrix3d kc = contact_block(c, k);
+      const Eigen::Matrix3d kc = contact_block(c, law);
       local[c.i] += kc;
       local[c.j] += kc;
     }
@@ -158,7 +160,7 @@ LinearResponse linear_response(const PackingData& packing, const LinearResponseO
         changed = true;
         ++out.n_rattlers;
       } else if (Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(local[p], Eigen::EigenvaluesOnly)
-                     .eigenvalues()(0) < options.floppy_tolerance * k) {
+                     .eigenvalues()(0) < options.floppy_tolerance * law.stiffness()) {
         keep[p] = 0;
         changed = true;
         ++out.n_rattlers;
@@ -226,7 +228,7 @@ LinearResponse linear_response(const PackingData& packing, const LinearResponseO
       for (int s = 0; s < 3; ++s) triplets.emplace_back(row + r, col + s, b(r, s));
   };
   for (const BackboneContact& c : contacts) {
-    const Eigen::Matrix3d kc = contact_block(c, k);
+    const Eigen::Matrix3d kc = contact_block(c, law);
     const int di = dof[c.i], dj = dof[c.j];
     add_block(di, di, kc);
     add_block(dj, dj, kc);
@@ -321,7 +323,7 @@ LinearResponse linear_response(const PackingData& packing, const LinearResponseO
       if (dof[c.j] >= 0) dl -= u.block<3, 1>(dof[c.j], a);
       auto rate = [&](const Eigen::Vector3d& x) -> Eigen::Matrix3d {
         const Eigen::Matrix3d nx = c.n * x.transpose();
-        return ((k * c.r + c.f) * c.n.dot(x)) * (c.n * c.n.transpose()) -
+        return ((law.stiffness() * c.r + c.f) * c.n.dot(x)) * (c.n * c.n.transpose()) -
                c.f * (nx + nx.transpose());
       };
       ds_full += rate(dl);

@@ -12,8 +12,9 @@
 #include <sstream>
 
 #include "rendulic/core/conventions.hpp"
+#include "rendulic/core/envelope_record.hpp"
 #include "rendulic/core/errors.hpp"
-#include "rendulic/dem/envelope_io.hpp"
+#include "rendulic/core/result_paths.hpp"
 #include "rendulic/dem/probe_elastic_range.hpp"
 #include "rendulic/dem/probe_mpi.hpp"
 #include "rendulic/dem/scenario_keys.hpp"
@@ -169,7 +170,8 @@ Envelope assemble_envelope(const std::string& method, double amplitude, double k
   auto& diag = env.diagnostics;
   for (std::size_t p = 0; p < records.size(); ++p) {
     const ProbeOutcome& o = records[p].outcome;
-    env.add(theta_deg[p], probe_strain(theta_deg[p], amplitude), o.d_stress, o.d_fabric, o.split);
+    env.add(theta_deg[p], probe_strain(theta_deg[p], amplitude), o.d_stress, o.d_fabric,
+            o.split.volume, o.split.rotation, o.split.contacts);
     diag["contacts_opened"].push_back(o.changes.first);
     diag["contacts_closed"].push_back(o.changes.second);
     diag["backbone_contacts_opened"].push_back(o.backbone_changes.first);
@@ -411,7 +413,8 @@ Envelope minimisation_envelope(const DemSystem& state, double amplitude,
   {
     std::vector<Contact> cs;
     for (const PairGeometry& c : find_pairs(ref, 0.0)) {
-      if (c.overlap > min_overlap) cs.push_back({c.i, c.j, c.l, c.overlap, mo.k * c.overlap});
+      if (c.overlap > min_overlap)
+        cs.push_back({c.i, c.j, c.l, c.overlap, 0.0});  // non_rattlers: pairs only
     }
     backbone = non_rattlers(ref.size(), cs);
   }
@@ -420,9 +423,7 @@ Envelope minimisation_envelope(const DemSystem& state, double amplitude,
   const bool assemble = compute_probes(scope, options, "minimisation", probes, [&](int p) {
     MinimisationProbe r;
     PackingData probe = ref;
-    const Eigen::Matrix3d f = exp_sym(-probe_strain(theta_deg[p], amplitude));
-    probe.positions = probe.positions * f.transpose();
-    probe.cell = f * probe.cell;
+    probe.deform(exp_sym(-probe_strain(theta_deg[p], amplitude)));
     r.summary = minimise_energy(probe, mo);
     const StressFabric after = measure_stress_fabric(probe, mo.k, nullptr, min_overlap);
     const std::vector<std::uint64_t> keys_after = contact_keys(find_pairs(probe, 0.0), min_overlap);
@@ -477,16 +478,10 @@ Envelope linear_response_envelope(const DemSystem& state, double amplitude,
   return env;
 }
 
-std::string envelope_name(const std::string& method, double amplitude) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%s_%g", method.c_str(), amplitude);
-  return buf;
-}
-
 std::vector<Envelope> run_probe_campaign(const DemSystem& state, const std::string& label,
                                          const std::vector<std::string>& methods,
                                          const ProbeOptions& options, ResultsWriter& out) {
-  return run_probe_campaign_in(state, "/states/" + label, methods, options, out);
+  return run_probe_campaign_in(state, paths::state(label), methods, options, out);
 }
 
 std::vector<Envelope> run_probe_campaign_in(const DemSystem& state, const std::string& state_group,
@@ -512,11 +507,12 @@ std::vector<Envelope> run_probe_campaign_in(const DemSystem& state, const std::s
       } else {  // one factorisation serves every amplitude
         env = linear_response_envelope(lr, theta, amplitude, state.material().k_star());
       }
-      const std::string group = state_group + "/envelopes/" + envelope_name(method, amplitude);
+      const std::string group =
+          paths::envelope(state_group, paths::envelope_name(method, amplitude));
       write_envelope(out, group, env);
       if (method == "linear_response") {
-        out.write(group + "/stiffness", Eigen::MatrixXd(lr.stiffness));
-        out.write(group + "/fabric_stiffness", Eigen::MatrixXd(lr.fabric_stiffness));
+        out.write(group + datasets::kStiffness, Eigen::MatrixXd(lr.stiffness));
+        out.write(group + datasets::kFabricStiffness, Eigen::MatrixXd(lr.fabric_stiffness));
       }
       envelopes.push_back(std::move(env));
     }
@@ -543,6 +539,8 @@ void register_probe_keys(ScenarioSchema& schema) {
   s.type = KeyType::kDoubleList;
   s.default_value = d.amplitudes;
   s.unit = "-";
+  static_assert(kElasticAmplitudeMax == 1e-4 && kPlasticAmplitudeMin == 1e-3,
+                "the help of probes.amplitudes states the thresholds of core/conventions.hpp");
   s.help = "Probe strain amplitudes |d_eps| (Frobenius): < 1e-4 elastic, > 1e-3 elasto-plastic.";
   s.min = 0.0;
   s.min_open = true;

@@ -9,8 +9,9 @@
 #include <stdexcept>
 
 #include "rendulic/core/conventions.hpp"
+#include "rendulic/core/envelope_record.hpp"
 #include "rendulic/core/errors.hpp"
-#include "rendulic/dem/envelope_io.hpp"
+#include "rendulic/core/result_paths.hpp"
 #include "rendulic/dem/probe_campaign.hpp"
 
 namespace rendulic::dem {
@@ -131,14 +132,14 @@ ElasticRange elastic_range(const DemSystem& state, const ElasticRangeOptions& op
 void write_elastic_range(ResultsWriter& out, const std::string& g, const ElasticRange& r,
                          const ElasticRangeOptions& options) {
   out.create_group(g);
-  out.write(g + "/amplitude", r.amplitude);
-  out.write(g + "/minor_over_elastic", r.minor_over_elastic);
-  out.write(g + "/major_over_elastic", r.major_over_elastic);
-  out.write(g + "/center_over_a", r.center_over_a);
-  out.write(g + "/k_continue", r.k_continue);
-  out.write(g + "/k_reverse", r.k_reverse);
-  out.write(g + "/departure", r.departure);
-  out.write(g + "/theta_deg", elastic_range_directions());
+  out.write(g + datasets::kAmplitude, r.amplitude);
+  out.write(g + datasets::kMinorOverElastic, r.minor_over_elastic);
+  out.write(g + datasets::kMajorOverElastic, r.major_over_elastic);
+  out.write(g + datasets::kCenterOverA, r.center_over_a);
+  out.write(g + datasets::kKContinue, r.k_continue);
+  out.write(g + datasets::kKReverse, r.k_reverse);
+  out.write(g + datasets::kDeparture, r.departure);
+  out.write(g + datasets::kThetaDeg, elastic_range_directions());
   // Every probe of the ladder, amplitude by amplitude (rows a * 4 + direction).
   std::vector<Eigen::Matrix3d> ds, df, fv, fr, fc;
   std::map<std::string, std::vector<double>> diagnostics;
@@ -153,16 +154,16 @@ void write_elastic_range(ResultsWriter& out, const std::string& g, const Elastic
       v.insert(v.end(), values.begin(), values.end());
     }
   }
-  out.write(g + "/d_stress", ds);
-  out.write(g + "/d_fabric", df);
+  out.write(g + datasets::kDStress, ds);
+  out.write(g + datasets::kDFabric, df);
   if (fv.size() == ds.size()) {
-    out.write(g + "/d_fabric_volume", fv);
-    out.write(g + "/d_fabric_rotation", fr);
-    out.write(g + "/d_fabric_contacts", fc);
+    out.write(g + datasets::kDFabricVolume, fv);
+    out.write(g + datasets::kDFabricRotation, fr);
+    out.write(g + datasets::kDFabricContacts, fc);
   }
   for (const auto& [name, values] : diagnostics)
     if (values.size() == ds.size()) out.write(g + "/" + name, values);
-  out.write(g + "/seconds", r.seconds);
+  out.write(g + datasets::kSeconds, r.seconds);
   out.attr(g, "yield_strain", r.yield_strain);
   out.attr(g, "yielded", std::int64_t{r.yielded});
   out.attr(g, "elastic_to", r.elastic_to);

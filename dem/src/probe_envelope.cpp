@@ -5,27 +5,10 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "rendulic/core/affine_map.hpp"
 #include "rendulic/core/conventions.hpp"
 
 namespace rendulic::dem {
-
-void Envelope::add(double theta, const Eigen::Matrix3d& d_eps, const Eigen::Matrix3d& d_sigma,
-                   const Eigen::Matrix3d& d_f) {
-  theta_deg.push_back(theta);
-  strain.push_back(rendulic_pair(d_eps));
-  stress_star.push_back(rendulic_pair(d_sigma) / k_star);
-  fabric.push_back(rendulic_pair(d_f));
-  d_stress.push_back(d_sigma);
-  d_fabric.push_back(d_f);
-}
-
-void Envelope::add(double theta, const Eigen::Matrix3d& d_eps, const Eigen::Matrix3d& d_sigma,
-                   const Eigen::Matrix3d& d_f, const FabricSplit& split) {
-  add(theta, d_eps, d_sigma, d_f);
-  d_fabric_volume.push_back(split.volume);
-  d_fabric_rotation.push_back(split.rotation);
-  d_fabric_contacts.push_back(split.contacts);
-}
 
 Envelope linear_response_envelope(const LinearResponse& response,
                                   const std::vector<double>& theta_deg, double amplitude,
@@ -46,7 +29,7 @@ Envelope linear_response_envelope(const LinearResponse& response,
                             from_mandel(response.fabric_rotation_stiffness * to_mandel(d_eps)),
                             Eigen::Matrix3d::Zero()};
     env.add(theta, d_eps, response.stress_increment(d_eps), response.fabric_increment(d_eps),
-            split);
+            split.volume, split.rotation, split.contacts);
   }
   env.attributes["n_rattlers"] = response.n_rattlers;
   env.attributes["n_backbone_contacts"] = response.n_backbone_contacts;
@@ -58,13 +41,10 @@ Envelope linear_response_envelope(const LinearResponse& response,
 RendulicMap ellipse_of(const Eigen::Matrix2d& map, double amplitude) {
   RendulicMap out;
   out.map = map;
-  const Eigen::JacobiSVD<Eigen::Matrix2d> svd(map, Eigen::ComputeFullU);
-  out.semi_major = amplitude * svd.singularValues()(0);
-  out.semi_minor = amplitude * svd.singularValues()(1);
-  const Eigen::Vector2d u = svd.matrixU().col(0);
-  double deg = rad_to_deg(std::atan2(u.y(), u.x()));
-  deg = std::fmod(deg + 360.0, 180.0);  // a direction, not an orientation
-  out.inclination_deg = deg >= 180.0 ? deg - 180.0 : deg;
+  const MapEllipse e = ellipse_of_map(map);
+  out.semi_major = amplitude * e.semi_major;
+  out.semi_minor = amplitude * e.semi_minor;
+  out.inclination_deg = e.inclination_deg;
   return out;
 }
 
@@ -74,21 +54,13 @@ RendulicMap fit_rendulic_map(const std::vector<Eigen::Vector2d>& strain,
   if (m != response.size() || m < 3) {
     throw std::invalid_argument("fit_rendulic_map: needs >= 3 probes with matching responses");
   }
-  // Rows (s_x, s_y, 1): the same design for both response components.
-  Eigen::MatrixXd a(m, 3);
-  Eigen::MatrixXd b(m, 2);
+  const AffineMapFit fit = fit_affine_map(strain, response);
+  if (fit.rank < 3) throw std::invalid_argument("fit_rendulic_map: strain pairs are collinear");
   double amplitude = 0.0;
-  for (std::size_t r = 0; r < m; ++r) {
-    a.row(r) << strain[r].x(), strain[r].y(), 1.0;
-    b.row(r) = response[r].transpose();
-    amplitude += strain[r].norm() / static_cast<double>(m);
-  }
-  const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(a);
-  if (qr.rank() < 3) throw std::invalid_argument("fit_rendulic_map: strain pairs are collinear");
-  const Eigen::MatrixXd x = qr.solve(b);  // 3 x 2
-  RendulicMap out = ellipse_of(x.topRows<2>().transpose(), amplitude);
-  out.center = x.row(2).transpose();
-  out.rms = std::sqrt((a * x - b).squaredNorm() / static_cast<double>(m));
+  for (std::size_t r = 0; r < m; ++r) amplitude += strain[r].norm() / static_cast<double>(m);
+  RendulicMap out = ellipse_of(fit.map, amplitude);
+  out.center = fit.center;
+  out.rms = fit.rms;
   return out;
 }
 

@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "rendulic/core/errors.hpp"
+#include "rendulic/dem/contact.hpp"
 
 namespace rendulic::dem {
 
@@ -131,17 +132,18 @@ StressFabric measure_stress_fabric(const PackingData& packing, double k,
                                    const std::vector<char>* include, double min_overlap) {
   StressFabric out;
   const double volume = packing.volume();
+  const NormalContact law{k, 0.0};  // at rest: the spring alone
   for (const PairGeometry& c : find_pairs(packing, 0.0)) {
     if (c.overlap <= min_overlap) continue;
     if (include && (!(*include)[c.i] || !(*include)[c.j])) continue;
     const Eigen::Vector3d n = c.l / c.distance;
-    const double f = k * c.overlap;
+    const double f = law.elastic_force(c.overlap);
     // l (x) f with f = f n along l: compression positive.
     out.stress += (f * c.distance) * (n * n.transpose());
     const double ri = packing.radii(c.i), rj = packing.radii(c.j);
     const double vp = 4.0 / 3.0 * std::numbers::pi * (ri * ri * ri + rj * rj * rj);
     out.fabric += vp * (n * n.transpose());
-    out.elastic_energy += 0.5 * k * c.overlap * c.overlap;
+    out.elastic_energy += law.energy(c.overlap);
     ++out.contacts;
   }
   out.stress /= volume;

@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "rendulic/core/errors.hpp"
+#include "rendulic/dem/contact.hpp"
 
 namespace rendulic::dem {
 
@@ -43,8 +44,8 @@ namespace {
 
 // Net contact forces on every particle from a candidate pair list; returns the elastic energy.
 double contact_forces(const PackingData& packing, const Eigen::Matrix3d& h_inv,
-                      const std::vector<PairGeometry>& pairs, double k, Eigen::MatrixX3d& force,
-                      double* sum_contact_force, int* n_contacts) {
+                      const std::vector<PairGeometry>& pairs, const NormalContact& law,
+                      Eigen::MatrixX3d& force, double* sum_contact_force, int* n_contacts) {
   force.setZero();
   double energy = 0.0, sum_f = 0.0;
   int contacts = 0;
@@ -54,11 +55,11 @@ double contact_forces(const PackingData& packing, const Eigen::Matrix3d& h_inv,
     const double r = l.norm();
     const double delta = packing.radii(c.i) + packing.radii(c.j) - r;
     if (delta <= 0.0) continue;
-    const double f = k * delta;
+    const double f = law.elastic_force(delta);
     const Eigen::RowVector3d fv = (f / r) * l.transpose();
     force.row(c.i) += fv;
     force.row(c.j) -= fv;
-    energy += 0.5 * k * delta * delta;
+    energy += law.energy(delta);
     sum_f += f;
     ++contacts;
   }
@@ -83,6 +84,7 @@ MinimiseSummary minimise_energy(PackingData& packing, const MinimiseOptions& opt
   const double skin = options.skin * r_mean;
   const Eigen::Matrix3d h_inv = packing.cell.inverse();
   const double k = options.k;
+  const NormalContact law{k, 0.0};  // at rest: the spring alone
 
   // FIRE 2.0 parameters (Guenole et al. 2020, table 1), time in units of 1/sqrt(k/m), m = 1.
   // The largest vibration frequency is below sqrt(2 z_max k) ~ sqrt(30 k); semi-implicit Euler
@@ -100,12 +102,13 @@ MinimiseSummary minimise_energy(PackingData& packing, const MinimiseOptions& opt
   double sum_f = 0.0;
   int contacts = 0;
   auto evaluate = [&]() {
-    summary.elastic_energy = contact_forces(packing, h_inv, pairs, k, force, &sum_f, &contacts);
+    summary.elastic_energy = contact_forces(packing, h_inv, pairs, law, force, &sum_f, &contacts);
     summary.max_force = force.rowwise().norm().maxCoeff();
     summary.mean_contact_force = contacts > 0 ? sum_f / contacts : 0.0;
   };
   auto converged = [&]() {
-    const double reference_force = contacts > 0 ? summary.mean_contact_force : k * r_mean;
+    const double reference_force =
+        contacts > 0 ? summary.mean_contact_force : law.elastic_force(r_mean);
     return summary.max_force <= options.force_tolerance * reference_force;
   };
   evaluate();
@@ -164,9 +167,7 @@ MinimiseSummary minimise_energy(PackingData& packing, const MinimiseOptions& opt
 }
 
 void apply_affine_strain(PackingData& packing, const Eigen::Matrix3d& eps) {
-  const Eigen::Matrix3d f = Eigen::Matrix3d::Identity() - eps;
-  packing.positions = packing.positions * f.transpose();
-  packing.cell = f * packing.cell;
+  packing.deform(Eigen::Matrix3d::Identity() - eps);
 }
 
 PackingData generate_packing(const GeneratedPackingOptions& options, MinimiseSummary* summary) {

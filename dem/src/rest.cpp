@@ -13,9 +13,11 @@ namespace rendulic::dem {
 
 ForceBalance force_balance(const PackingData& packing, double k) {
   const int n = packing.size();
+  const NormalContact law{k, 0.0};  // at rest: the spring alone
   std::vector<Contact> contacts;
   for (const PairGeometry& p : find_pairs(packing, 0.0))
-    if (p.overlap > 0.0) contacts.push_back({p.i, p.j, p.l, p.overlap, k * p.overlap});
+    if (p.overlap > 0.0)
+      contacts.push_back({p.i, p.j, p.l, p.overlap, law.elastic_force(p.overlap)});
   const std::vector<bool> keep = non_rattlers(static_cast<std::size_t>(n), contacts);
   Eigen::MatrixX3d net = Eigen::MatrixX3d::Zero(n, 3);
   ForceBalance b;

@@ -348,7 +348,7 @@ EllipseGuess best_guess(const std::vector<Eigen::Vector2d>& q, const std::vector
                         bool use_theta, bool* used_theta) {
   *used_theta = false;
   if (use_theta && theta.size() == q.size()) {
-    EllipseGuess g = ellipse_guess_from_affine(fit_affine(q, theta), theta);
+    EllipseGuess g = ellipse_guess_from_affine(fit_detail::affine_fit(q, theta), theta);
     if (g.ok) {
       *used_theta = true;
       return g;

@@ -32,6 +32,15 @@ bool Envelope::IsValid(std::string* why) const {
   return true;
 }
 
+Envelope envelope_of(const EnvelopeRecord& record, Response response) {
+  Envelope env;
+  env.response = response == Response::kStress ? record.stress_star : record.fabric;
+  env.theta_deg = record.theta_deg;
+  env.strain = record.strain;
+  if (std::isfinite(record.amplitude)) env.amplitude = record.amplitude;
+  return env;
+}
+
 std::vector<Eigen::Vector2d> Envelope::strain_points() const {
   if (!strain.empty()) return strain;
   std::vector<Eigen::Vector2d> out;

@@ -4,6 +4,7 @@
 
 #include <cmath>
 
+#include "rendulic/core/affine_map.hpp"
 #include "rendulic/core/conventions.hpp"
 #include "rendulic/core/errors.hpp"
 
@@ -77,8 +78,6 @@ RendulicStiffness fit_rendulic_stiffness(const Envelope& env) {
   // Unknowns (c1, c2, D11, D12, D22); each probe gives two rows.
   Eigen::MatrixXd X = Eigen::MatrixXd::Zero(2 * n, 5);
   Eigen::VectorXd y(2 * n);
-  Eigen::MatrixXd Xu = Eigen::MatrixXd::Zero(n, 3);
-  Eigen::MatrixXd Yu(n, 2);
   for (Eigen::Index i = 0; i < n; ++i) {
     const auto& ei = e[static_cast<std::size_t>(i)];
     const auto& ri = env.response[static_cast<std::size_t>(i)];
@@ -86,12 +85,10 @@ RendulicStiffness fit_rendulic_stiffness(const Envelope& env) {
     X.row(2 * i + 1) << 0.0, 1.0, 0.0, ei.x(), ei.y();
     y(2 * i) = ri.x();
     y(2 * i + 1) = ri.y();
-    Xu.row(i) << 1.0, ei.x(), ei.y();
-    Yu.row(i) = ri.transpose();
   }
   Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(X);
-  Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qru(Xu);
-  if (qr.rank() < 5 || qru.rank() < 3)
+  const AffineMapFit affine = fit_affine_map(e, env.response);
+  if (qr.rank() < 5 || affine.rank < 3)
     throw InputError("stiffness: the strain points span fewer than 3 independent directions");
   const Eigen::VectorXd beta = qr.solve(y);
   RendulicStiffness out;
@@ -103,8 +100,7 @@ RendulicStiffness fit_rendulic_stiffness(const Envelope& env) {
   const Eigen::MatrixXd cov = (ssr / dof) * (X.transpose() * X).inverse();
   out.center_stderr = cov.diagonal().head<2>().cwiseMax(0.0).cwiseSqrt();
   out.D_stderr = cov.diagonal().tail<3>().cwiseMax(0.0).cwiseSqrt();
-  const Eigen::MatrixXd bu = qru.solve(Yu);  // rows: c^T, then M^T
-  out.M = bu.bottomRows(2).transpose();
+  out.M = affine.map;
   const double mn = out.M.norm();
   out.asymmetry = mn > 0.0 ? (out.M - out.M.transpose()).norm() / (2.0 * mn) : 0.0;
   return out;

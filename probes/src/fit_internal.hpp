@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "rendulic/core/affine_map.hpp"
 #include "rendulic/core/conventions.hpp"
 
 namespace rendulic::fit_detail {
@@ -16,6 +17,15 @@ namespace rendulic::fit_detail {
 inline std::int64_t& point_operations() {
   thread_local std::int64_t count = 0;
   return count;
+}
+
+// The affine fit R = c + M u(theta) of core (affine_map.hpp), counted as one point operation
+// per point when it is made.
+inline AffineMapFit affine_fit(const std::vector<Eigen::Vector2d>& points,
+                               const std::vector<double>& theta_deg) {
+  if (points.size() >= 3 && theta_deg.size() == points.size())
+    point_operations() += static_cast<std::int64_t>(points.size());
+  return fit_affine_map(direction_vectors(theta_deg), points);
 }
 
 inline Eigen::Matrix2d rotation(double phi) {

@@ -8,6 +8,7 @@
 
 #include "rendulic/core/conventions.hpp"
 #include "rendulic/core/errors.hpp"
+#include "rendulic/core/result_paths.hpp"
 
 namespace rendulic {
 
@@ -73,44 +74,55 @@ EnvelopeFit read_envelope_fit(const ResultsReader& in, const std::string& g) {
   return f;
 }
 
-Envelope read_envelope(const ResultsReader& in, const std::string& g, const std::string& pairs) {
-  Envelope env;
-  if (!in.exists(g + "/" + pairs))
-    throw InputError(in.path().string() + ": " + g + " has no dataset '" + pairs + "'");
-  env.response = in.read_pairs(g + "/" + pairs);
-  if (in.exists(g + "/theta_deg")) env.theta_deg = in.read_vector(g + "/theta_deg");
-  if (in.exists(g + "/strain")) env.strain = in.read_pairs(g + "/strain");
-  if (in.has_attr(g, "amplitude")) env.amplitude = in.attr_double(g, "amplitude");
-  std::string why;
-  if (!env.IsValid(&why)) throw InputError(in.path().string() + ": " + g + ": " + why);
-  return env;
+FitAllSummary fit_state_envelopes(const ResultsReader& in, ResultsWriter& out,
+                                  const std::string& state_group, const FitOptions& stress_options,
+                                  const FitOptions& fabric_options) {
+  FitAllSummary summary;
+  const std::string eg = paths::envelopes(state_group);
+  if (!in.exists(eg)) return summary;
+  for (const auto& name : in.children(eg)) {
+    const std::string g = paths::envelope(state_group, name);
+    EnvelopeRecord record;
+    try {
+      record = read_envelope(in, g);
+    } catch (const InputError& e) {  // malformed envelope: say so in the file, go on
+      for (const char* fit_group : {paths::kFitStress, paths::kFitFabric}) {
+        out.attr(g + fit_group, "shape", "none");
+        out.attr(g + fit_group, "error", std::string(e.what()));
+        ++summary.failed;
+      }
+      continue;
+    }
+    for (const auto& [response, fit_group, options] :
+         {std::tuple<Response, const char*, const FitOptions&>{Response::kStress, paths::kFitStress,
+                                                               stress_options},
+          {Response::kFabric, paths::kFitFabric, fabric_options}}) {
+      const Envelope env = envelope_of(record, response);
+      if (env.size() == 0) continue;  // nothing measured (its `error` says why)
+      try {
+        std::string why;
+        if (!env.IsValid(&why)) throw InputError(in.path().string() + ": " + g + ": " + why);
+        write_envelope_fit(out, g + fit_group, fit_envelope(env, options));
+        ++summary.fitted;
+      } catch (const InputError& e) {  // degenerate envelope: say so in the file
+        out.attr(g + fit_group, "shape", "none");
+        out.attr(g + fit_group, "error", std::string(e.what()));
+        ++summary.failed;
+      }
+    }
+  }
+  return summary;
 }
 
 FitAllSummary fit_envelopes(const ResultsReader& in, ResultsWriter& out,
                             const FitOptions& stress_options, const FitOptions& fabric_options) {
   FitAllSummary summary;
-  if (!in.exists("/states")) return summary;
-  for (const auto& label : in.children("/states")) {
-    const std::string eg = "/states/" + label + "/envelopes";
-    if (!in.exists(eg)) continue;
-    for (const auto& name : in.children(eg)) {
-      const std::string g = eg + "/" + name;
-      for (const auto& [pairs, fit_name, options] :
-           {std::tuple<std::string, std::string, const FitOptions&>{"stress_star", "fit_stress",
-                                                                    stress_options},
-            {"fabric", "fit_fabric", fabric_options}}) {
-        if (!in.exists(g + "/" + pairs)) continue;  // nothing measured (its `error` says why)
-        try {
-          write_envelope_fit(out, g + "/" + fit_name,
-                             fit_envelope(read_envelope(in, g, pairs), options));
-          ++summary.fitted;
-        } catch (const InputError& e) {  // degenerate envelope: say so in the file
-          out.attr(g + "/" + fit_name, "shape", "none");
-          out.attr(g + "/" + fit_name, "error", std::string(e.what()));
-          ++summary.failed;
-        }
-      }
-    }
+  if (!in.exists(paths::kStates)) return summary;
+  for (const auto& label : in.children(paths::kStates)) {
+    const FitAllSummary s =
+        fit_state_envelopes(in, out, paths::state(label), stress_options, fabric_options);
+    summary.fitted += s.fitted;
+    summary.failed += s.failed;
   }
   return summary;
 }

@@ -181,17 +181,17 @@ EllipseGuess robust_guess(const std::vector<Eigen::Vector2d>& q, const std::vect
   EllipseGuess best_g;
   std::vector<double> d(n);
   if (affine) {
-    AffineFit best_a;
+    AffineMapFit best_a;
     for (int trial = 0; trial < kTrials; ++trial) {
       draw(3);
       std::vector<Eigen::Vector2d> sp = {q[idx[0]], q[idx[1]], q[idx[2]]};
       std::vector<double> st = {theta[idx[0]], theta[idx[1]], theta[idx[2]]};
-      const AffineFit af = fit_affine(sp, st);
+      const AffineMapFit af = affine_fit(sp, st);
       if (!af.ok) continue;
       point_operations() += static_cast<std::int64_t>(n);
       for (std::size_t i = 0; i < n; ++i) {
         const double r = deg_to_rad(theta[i]);
-        d[i] = (af.center + af.M * Eigen::Vector2d(std::cos(r), std::sin(r)) - q[i]).norm();
+        d[i] = (af.center + af.map * Eigen::Vector2d(std::cos(r), std::sin(r)) - q[i]).norm();
       }
       const double med = median_of(d);
       if (med < best) best = med, best_a = af;
@@ -228,35 +228,13 @@ EllipseGuess robust_guess(const std::vector<Eigen::Vector2d>& q, const std::vect
 
 }  // namespace fit_detail
 
-AffineFit fit_affine(const std::vector<Eigen::Vector2d>& points,
-                     const std::vector<double>& theta_deg) {
-  AffineFit out;
-  const auto n = static_cast<Eigen::Index>(points.size());
-  if (n < 3 || theta_deg.size() != points.size()) return out;
-  fit_detail::point_operations() += n;
-  Eigen::MatrixXd X(n, 3), Y(n, 2);
-  for (Eigen::Index i = 0; i < n; ++i) {
-    const double t = deg_to_rad(theta_deg[static_cast<std::size_t>(i)]);
-    X.row(i) << 1.0, std::cos(t), std::sin(t);
-    Y.row(i) = points[static_cast<std::size_t>(i)].transpose();
-  }
-  Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(X);
-  if (qr.rank() < 3) return out;  // fewer than three independent directions
-  const Eigen::MatrixXd B = qr.solve(Y);
-  out.center = B.row(0).transpose();
-  out.M = B.bottomRows(2).transpose();
-  out.rms = std::sqrt((X * B - Y).squaredNorm() / static_cast<double>(n));
-  out.ok = out.center.allFinite() && out.M.allFinite();
-  return out;
-}
-
-EllipseGuess ellipse_guess_from_affine(const AffineFit& affine,
+EllipseGuess ellipse_guess_from_affine(const AffineMapFit& affine,
                                        const std::vector<double>& theta_deg) {
   EllipseGuess g;
   if (!affine.ok) return g;
   // M u = U S V^T u. Writing U = R(phi) diag(1, det U) turns this into the ellipse
   // R(phi) diag(s0, det(U) s1) (cos t, sin t) with (cos t, sin t) = V^T u(theta).
-  Eigen::JacobiSVD<Eigen::Matrix2d> svd(affine.M, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::JacobiSVD<Eigen::Matrix2d> svd(affine.map, Eigen::ComputeFullU | Eigen::ComputeFullV);
   const Eigen::Matrix2d U = svd.matrixU(), V = svd.matrixV();
   const Eigen::Vector2d s = svd.singularValues();
   g.center = affine.center;

@@ -1,7 +1,7 @@
 // Level-one calibration (stiffness.hpp) against closed forms: the isotropic law's ellipse of
 // docs/models.md "Coordinates" (D = diag(3K, 2G), semi-axes 3K|de| and 2G|de|, major axis at
 // 35.26 deg), the anisotropic law's A = beta_A F_dev B and tilt (1/2) atan2(2 sqrt3 A, 3B - 2G),
-// an independent estimator (probes/ fit_affine), the hypoplastic centre shift N |d_eps|, and
+// an independent estimator (core's affine map fit), the hypoplastic centre shift N |d_eps|, and
 // the reported standard errors against the scatter of repeated noisy fits.
 #include "rendulic/calibration/stiffness.hpp"
 
@@ -9,6 +9,7 @@
 
 #include <cmath>
 
+#include "rendulic/core/affine_map.hpp"
 #include "rendulic/models/hypoplastic_wu.hpp"
 #include "rendulic/probes/envelope_fit.hpp"
 #include "rendulic/probes/features.hpp"
@@ -64,10 +65,11 @@ TEST(Stiffness, AnisotropicLawGivesAAndTheTilt) {
   EXPECT_NEAR(s.inclination_deg, kIsoCompressionDeg + tilt, 1e-7);
   EXPECT_LT(s.inclination_deg, kIsoCompressionDeg);  // extension lowers the inclination
 
-  // Independent estimator: the affine fit of probes/ gives M = D_rendulic * amplitude.
-  const AffineFit af = fit_affine(e.stress, e.theta_deg);
+  // Independent estimator: the affine map fit of core gives M = D_rendulic * amplitude.
+  const AffineMapFit af = fit_affine_map(direction_vectors(e.theta_deg), e.stress);
   ASSERT_TRUE(af.ok);
-  EXPECT_LT((af.M / e.amplitude - s.rendulic_matrix()).norm(), kExact * s.rendulic_matrix().norm());
+  EXPECT_LT((af.map / e.amplitude - s.rendulic_matrix()).norm(),
+            kExact * s.rendulic_matrix().norm());
   // And the symmetric fit of probes/ features.hpp (c + D e, D symmetric).
   Envelope pe;
   pe.response = e.stress;

@@ -4,8 +4,10 @@
 
 #include <filesystem>
 
+#include "rendulic/core/envelope_record.hpp"
 #include "rendulic/core/errors.hpp"
-#include "rendulic/dem/envelope_io.hpp"
+#include "rendulic/core/result_paths.hpp"
+#include "rendulic/dem/probe_envelope.hpp"
 
 namespace rendulic::dem {
 namespace {
@@ -34,7 +36,7 @@ TEST(EnvelopeIo, RoundTripWithTheContractNames) {
   std::filesystem::create_directories(dir);
   const std::filesystem::path file = dir / "results.h5";
   const Envelope env = sample_envelope();
-  const std::string group = envelope_path("s0", "elastic_dynamic");
+  const std::string group = paths::envelope(paths::state("s0"), "elastic_dynamic");
   EXPECT_EQ(group, "/states/s0/envelopes/elastic_dynamic");
   {
     ResultsWriter out(file);
@@ -61,7 +63,7 @@ TEST(EnvelopeIo, RoundTripWithTheContractNames) {
   }
   EXPECT_EQ(back.diagnostics, env.diagnostics);
   EXPECT_EQ(back.attributes, env.attributes);
-  EXPECT_THROW(read_envelope(in, envelope_path("s0", "missing")), InputError);
+  EXPECT_THROW(read_envelope(in, paths::envelope(paths::state("s0"), "missing")), InputError);
 }
 
 }  // namespace

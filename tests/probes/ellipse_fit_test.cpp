@@ -162,9 +162,9 @@ TEST(InitialGuess, AffineFitIsExactForLinearLaw) {
     const double r = deg_to_rad(th.back());
     pts.push_back(Eigen::Vector2d(0.5, 0.25) + M * Eigen::Vector2d(std::cos(r), std::sin(r)));
   }
-  const AffineFit af = fit_affine(pts, th);
+  const AffineMapFit af = fit_affine_map(direction_vectors(th), pts);
   ASSERT_TRUE(af.ok);
-  EXPECT_LT((af.M - M).norm(), 1e-12);
+  EXPECT_LT((af.map - M).norm(), 1e-12);
   EXPECT_LT((af.center - Eigen::Vector2d(0.5, 0.25)).norm(), 1e-12);
   // The guess built from it reproduces every point with its latent angle.
   const EllipseGuess g = ellipse_guess_from_affine(af, th);

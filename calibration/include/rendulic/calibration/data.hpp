@@ -12,11 +12,9 @@
 #include <string>
 #include <vector>
 
-namespace rendulic::calibration {
+#include "rendulic/core/conventions.hpp"
 
-// docs/physics.md section 5: elastic probes have |d_eps| < 1e-4, elasto-plastic ones > 1e-3.
-inline constexpr double kElasticAmplitudeMax = 1e-4;
-inline constexpr double kPlasticAmplitudeMin = 1e-3;
+namespace rendulic::calibration {
 
 struct EnvelopeData {
   std::string name;
@@ -29,7 +27,7 @@ struct EnvelopeData {
   std::vector<Eigen::Vector2d> fabric;  // Rendulic pairs of d_F
 
   int size() const { return static_cast<int>(stress.size()); }
-  bool elastic() const { return amplitude < kElasticAmplitudeMax; }
+  bool elastic() const { return is_elastic_amplitude(amplitude); }
   bool has_fabric() const { return fabric.size() == stress.size() && !fabric.empty(); }
   // Sizes agree, everything finite, at least 3 directions.
   bool IsValid(std::string* why) const;

@@ -3,7 +3,7 @@
 //   - envelope points: per state and envelope, the predicted minus measured Rendulic pair of
 //     d_sigma (and, as a separate block, of d_F) for every probe direction;
 //   - envelope features: the six numbers (centre c, matrix M) of the affine envelope
-//     R(theta) = c + M u(theta) (probes/ fit_affine), which carry the ellipse's axes,
+//     R(theta) = c + M u(theta) (core/affine_map.hpp), which carry the ellipse's axes,
 //     inclination and shift; a projection of the points that ignores non-elliptic scatter
 //     (for stress, and for fabric as "fabric_features" with weight_features * weight_fabric);
 //   - the main path: predicted minus measured (iso, dev) pairs of stress and of fabric at the

@@ -5,7 +5,7 @@
 // centre c that an elastic envelope should not have: its size is a check of linearity). The
 // elasto-plastic envelope adds the features the elastic one lacks: the centre shift
 // (incremental non-linearity) and the thinning b/a (docs/physics.md section 5), from the affine
-// envelope fit of probes/ (R(theta) = c + M u(theta)). Model-free: no constitutive law here.
+// map fit R(theta) = c + M u(theta) of core/affine_map.hpp. Model-free: no constitutive law here.
 #pragma once
 
 #include <Eigen/Dense>
@@ -57,8 +57,5 @@ struct PlasticFeatures {
 };
 
 PlasticFeatures plastic_features(const EnvelopeData& envelope);
-
-// Semi-axes and inclination ([0, 180) deg) of the ellipse c + M u(theta).
-void ellipse_of_affine(const Eigen::Matrix2d& M, double* a, double* b, double* inclination_deg);
 
 }  // namespace rendulic::calibration

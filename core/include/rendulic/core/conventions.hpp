@@ -94,6 +94,17 @@ inline Eigen::Matrix3d probe_strain(double theta_deg, double amplitude) {
   const double lat = amplitude * std::cos(t) / kSqrt2;
   return Eigen::Vector3d(amplitude * std::sin(t), lat, lat).asDiagonal();
 }
+// Elastic and elasto-plastic probes (docs/physics.md section 5): an envelope whose probes have
+// |d_eps| below kElasticAmplitudeMax is elastic; one above kPlasticAmplitudeMin is
+// elasto-plastic (between the two a probe is neither, and no claim or objective uses it).
+inline constexpr double kElasticAmplitudeMax = 1e-4;
+inline constexpr double kPlasticAmplitudeMin = 1e-3;
+inline constexpr bool is_elastic_amplitude(double amplitude) {
+  return amplitude < kElasticAmplitudeMax;
+}
+inline constexpr bool is_plastic_amplitude(double amplitude) {
+  return amplitude > kPlasticAmplitudeMin;
+}
 // Direction of a strain Rendulic pair, in [0, 360) degrees.
 inline double probe_direction_deg(const Eigen::Vector2d& strain_pair) {
   double deg = rad_to_deg(std::atan2(strain_pair.y(), strain_pair.x()));

@@ -11,15 +11,13 @@
 
 namespace rendulic::dem {
 
+// The engine's cell: orthorhombic, so that its hot loop takes the periodic images from a table
+// of 27 shifts (neighbor_list.hpp). The probe tools, which also deform a cell by any strain,
+// hold it as a 3x3 matrix (PackingData, probe_geometry.hpp; lengths.asDiagonal() here) with the
+// one minimum image for such cells (minimum_image() there).
 struct PeriodicCell {
   Eigen::Vector3d lengths = Eigen::Vector3d::Ones();  // m
   double volume() const { return lengths.prod(); }
-  // Minimum image of a separation (only valid when |d_a| < 1.5 L_a, always the case for
-  // positions inside or near the cell).
-  Eigen::Vector3d minimum_image(Eigen::Vector3d d) const {
-    for (int a = 0; a < 3; ++a) d[a] -= lengths[a] * std::round(d[a] / lengths[a]);
-    return d;
-  }
 };
 
 // How one axis of the cell moves.

@@ -1,8 +1,8 @@
 // Contact law, time scales and the time step of the DEM engine (docs/physics.md section 1, seed
-// paper section 2.1). NormalContact is a pure kernel: the normal force from the overlap and
-// its rate, nothing else; the contact loop (dem_system.cpp) owns minimum image, the affine
-// relative velocity and the sums. The closed forms here (contact duration, restitution) are
-// what the two-particle tests compare the integrator against.
+// paper section 2.1). NormalContact is the one statement of the contact law: a pure kernel of
+// the overlap and its rate; the callers own minimum image, the relative velocity and the sums.
+// The closed forms here (contact duration, restitution) are what the two-particle tests compare
+// the integrator against.
 #pragma once
 
 #include <cmath>
@@ -11,13 +11,38 @@
 
 namespace rendulic::dem {
 
-// Linear spring-dashpot normal contact: f = k delta + gamma d(delta)/dt, positive = repulsive.
-// The force is not clipped at zero: the closed forms of t_c and e below assume exactly this
-// law (the dashpot may pull slightly just before separation).
+// Linear spring-dashpot normal contact: f = k delta + gamma d(delta)/dt, positive = repulsive,
+// along the branch vector l = x_i - x_j, with delta = r_i + r_j - |l| > 0 the overlap. The force
+// is not clipped at zero: the closed forms of t_c and e below assume exactly this law (the
+// dashpot may pull slightly just before separation).
+//
+// Evaluated per pair, in the manner of HOOMD-blue's pair evaluators: a small value made once
+// outside a loop whose inline methods every user of the law calls per pair (the engine's force
+// loop and measures, dem_system.cpp; the energy minimiser, probe_minimise.cpp; the static
+// stress of the probe tools, probe_geometry.cpp; the Hessian of the linear response,
+// linear_response.cpp; the force balance at rest, rest.cpp). It inlines into the engine's
+// vectorised force loop, where it costs nothing (docs/performance.md). The static tools work
+// at rest: they use the spring alone (elastic_force, energy, stiffness).
+//
+// Friction, when it comes, is added here: its parameters as members and one method giving the
+// tangential force from the contact's tangential displacement and relative velocity, which the
+// callers add to the normal force they take from this type now.
 struct NormalContact {
   double k = 1e8;     // kg/s^2
   double gamma = 1.;  // kg/s
   double force(double delta, double delta_dot) const { return k * delta + gamma * delta_dot; }
+  // The force loop's form: the force on i as a multiple s of l (F = s l), from delta, 1 / |l|
+  // and l . v_rel, v_rel = v_i - v_j the true relative velocity (peculiar plus affine part), so
+  // that d(delta)/dt = -l . v_rel / |l|. One scale factor instead of the normal's three
+  // components.
+  double force_over_distance(double delta, double inv_distance, double l_dot_v) const {
+    return (k * delta - gamma * l_dot_v * inv_distance) * inv_distance;
+  }
+  // At rest (no relative velocity): the spring's force, its energy k delta^2 / 2, and its
+  // stiffness df / d(delta), the normal part of the contact's block of the Hessian.
+  double elastic_force(double delta) const { return k * delta; }
+  double energy(double delta) const { return 0.5 * k * delta * delta; }
+  double stiffness() const { return k; }
 };
 
 // Material of the seed study (docs/physics.md section 1), SI units.

@@ -65,11 +65,8 @@ Envelope linear_response_envelope(const DemSystem& state, double amplitude,
                                   const std::vector<double>& theta_deg, const ProbeOptions& options,
                                   LinearResponse* response = nullptr);
 
-// Name of an envelope in the results file: "<method>_<amplitude %g>", e.g. "dynamic_5e-05".
-std::string envelope_name(const std::string& method, double amplitude);
-
 // The whole campaign of one state: every method x amplitude, written under
-// /states/<label>/envelopes/<envelope_name> (docs/results.md). The linear-response envelopes
+// /states/<label>/envelopes/<paths::envelope_name> (docs/results.md). The linear-response envelopes
 // also store the 6x6 Mandel stiffness [Pa] and fabric stiffness as datasets `stiffness` and
 // `fabric_stiffness`. Returns the envelopes in the order written.
 std::vector<Envelope> run_probe_campaign(const DemSystem& state, const std::string& label,

@@ -10,37 +10,14 @@
 #include <string>
 #include <vector>
 
+#include "rendulic/core/envelope_record.hpp"
 #include "rendulic/dem/linear_response.hpp"
 
 namespace rendulic::dem {
 
-struct Envelope {
-  std::string method;      // "dynamic" | "minimisation" | "linear_response"
-  double amplitude = 0.0;  // |d_eps| (Frobenius)
-  double k_star = 0.0;     // Pa, the stress scale of stress_star
-  std::vector<double> theta_deg;
-  std::vector<Eigen::Vector2d> strain;       // Rendulic pairs of d_eps
-  std::vector<Eigen::Vector2d> stress_star;  // Rendulic pairs of d_sigma / k*
-  std::vector<Eigen::Vector2d> fabric;       // Rendulic pairs of d_F
-  std::vector<Eigen::Matrix3d> d_stress;     // Pa, compression positive
-  std::vector<Eigen::Matrix3d> d_fabric;
-  // d_fabric split with the contact set of the starting state held fixed (FabricSplit,
-  // probe_geometry.hpp): volume change, rotation of the normals, contacts made and lost.
-  // Empty for envelopes made without it; otherwise one entry per probe each.
-  std::vector<Eigen::Matrix3d> d_fabric_volume, d_fabric_rotation, d_fabric_contacts;
-  // Per-probe diagnostics ([m] each), e.g. contacts_opened, contacts_closed, relax_time,
-  // relax_steps, kinetic_to_elastic, converged; written as datasets next to the envelope.
-  std::map<std::string, std::vector<double>> diagnostics;
-  // Per-envelope scalars (attributes), e.g. rate, inertial_number, n_rattlers.
-  std::map<std::string, double> attributes;
-
-  std::size_t size() const { return theta_deg.size(); }
-  // Appends one probe; the pairs follow from the tensors (core/conventions.hpp).
-  void add(double theta, const Eigen::Matrix3d& d_eps, const Eigen::Matrix3d& d_sigma,
-           const Eigen::Matrix3d& d_f);
-  void add(double theta, const Eigen::Matrix3d& d_eps, const Eigen::Matrix3d& d_sigma,
-           const Eigen::Matrix3d& d_f, const FabricSplit& split);
-};
+// An envelope of the DEM is core's envelope record (core/envelope_record.hpp): the one type
+// that the results file stores and every reader takes its view from.
+using Envelope = EnvelopeRecord;
 
 // The elastic envelope of the linear response for the given directions and amplitude: the
 // probe strain of core probe_strain(theta, amplitude), d_sigma = C d_eps, d_F = G d_eps.
@@ -50,9 +27,9 @@ Envelope linear_response_envelope(const LinearResponse& response,
                                   double k_star);
 
 // The Rendulic map of an envelope: response = map * strain + center, fitted by least squares
-// over the probes (exact for a linear law, where center = 0), and its ellipse: semi-axes
-// a >= b (singular values times the amplitude) and the inclination of the major axis in
-// [0, 180) deg from the sqrt(2)-lateral axis.
+// over the probes (core/affine_map.hpp; exact for a linear law, where center = 0), and its
+// ellipse: semi-axes a >= b (singular values times the amplitude) and the inclination of the
+// major axis in [0, 180) deg from the sqrt(2)-lateral axis.
 struct RendulicMap {
   Eigen::Matrix2d map = Eigen::Matrix2d::Zero();
   Eigen::Vector2d center = Eigen::Vector2d::Zero();

@@ -20,6 +20,12 @@ struct PackingData {
   Eigen::Matrix3d cell = Eigen::Matrix3d::Identity();  // columns: cell vectors, m
   int size() const { return static_cast<int>(radii.size()); }
   double volume() const { return cell.determinant(); }
+  // The homogeneous deformation x -> F x of positions and cell (F the deformation gradient):
+  // the one affine map of the probe tools (an affine probe step, apply_affine_strain()).
+  void deform(const Eigen::Matrix3d& F) {
+    positions = positions * F.transpose();
+    cell = F * cell;
+  }
   // An orthorhombic cell of lengths L.
   static PackingData orthorhombic(Eigen::MatrixX3d positions, Eigen::VectorXd radii,
                                   const Eigen::Vector3d& cell_lengths);

@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "rendulic/core/envelope_record.hpp"
+
 namespace rendulic {
 
 struct Envelope {
@@ -29,5 +31,11 @@ struct Envelope {
   // (core's probe_strain convention). Empty if neither is known.
   std::vector<Eigen::Vector2d> strain_points() const;
 };
+
+// The view of a stored envelope (core/envelope_record.hpp) that the fits take: its stress
+// pairs (sigma*) or its fabric pairs as the response, with its directions, strain points and
+// amplitude (0 when the record has none).
+enum class Response { kStress, kFabric };
+Envelope envelope_of(const EnvelopeRecord& record, Response response);
 
 }  // namespace rendulic

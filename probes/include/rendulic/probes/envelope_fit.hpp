@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "rendulic/core/affine_map.hpp"
 #include "rendulic/probes/envelope.hpp"
 
 namespace rendulic {
@@ -114,17 +115,9 @@ struct EllipseGuess {
   std::vector<double> t;  // latent angle per point
   bool ok = false;
 };
-// Affine fit R(theta) = c + M u(theta) (needs theta): six linear unknowns, exact for a linear
-// law plus a shift; the axes are the singular values of M.
-struct AffineFit {
-  Eigen::Vector2d center = Eigen::Vector2d::Zero();
-  Eigen::Matrix2d M = Eigen::Matrix2d::Zero();
-  double rms = 0.0;  // rms of the 2D residual vectors
-  bool ok = false;
-};
-AffineFit fit_affine(const std::vector<Eigen::Vector2d>& points,
-                     const std::vector<double>& theta_deg);
-EllipseGuess ellipse_guess_from_affine(const AffineFit& affine,
+// The ellipse of the affine fit R(theta) = c + M u(theta) (core/affine_map.hpp, needs theta):
+// exact for a linear law plus a shift; the axes are the singular values of M.
+EllipseGuess ellipse_guess_from_affine(const AffineMapFit& affine,
                                        const std::vector<double>& theta_deg);
 // Direct least-squares ellipse (Halir and Flusser 1998). ok = false when the points admit no
 // ellipse (collinear, too few, hyperbolic best conic).

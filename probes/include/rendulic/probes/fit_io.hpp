@@ -20,10 +20,6 @@ void write_envelope_fit(ResultsWriter& out, const std::string& group, const Enve
 // stored: the result has rms but empty residuals.
 EnvelopeFit read_envelope_fit(const ResultsReader& in, const std::string& group);
 
-// The envelope stored at `group` (theta_deg, strain, amplitude) with `pairs` ("stress_star"
-// or "fabric") as the response.
-Envelope read_envelope(const ResultsReader& in, const std::string& group, const std::string& pairs);
-
 // Fits the stress_star and fabric pairs of every /states/*/envelopes/* of a results file
 // and writes fit_stress and fit_fabric (atomically, via ResultsWriter::update). An envelope
 // that cannot be fitted (e.g. no fabric change at all) gets shape "none" and an attribute
@@ -37,6 +33,10 @@ struct FitAllSummary {
 // own options; pairs that were never measured are skipped.
 FitAllSummary fit_envelopes(const ResultsReader& in, ResultsWriter& out,
                             const FitOptions& stress_options, const FitOptions& fabric_options);
+// The same for the envelopes of one state group (e.g. a pressure branch's state).
+FitAllSummary fit_state_envelopes(const ResultsReader& in, ResultsWriter& out,
+                                  const std::string& state_group, const FitOptions& stress_options,
+                                  const FitOptions& fabric_options);
 FitAllSummary fit_all_envelopes(const std::filesystem::path& results_file,
                                 const FitOptions& options = {});
 

@@ -1,0 +1,66 @@
+// The response envelope as the results file stores it (docs/results.md,
+// /states/<label>/envelopes/<name>; docs/probes.md): the one record of an envelope whatever
+// made it (dynamic probes, minimisation probes, the linear response, another DEM code's data
+// converted to the schema), with its one writer and one reader. The DEM writes it, the fits,
+// the calibration and the report read it; each takes the view it needs from this record
+// (docs/architecture.md "Where each concept lives").
+//
+// Stored: attributes amplitude, method, directions, k_star and the envelope's own scalar
+// attributes; datasets theta_deg[m], strain[m,2], stress_star[m,2], fabric[m,2],
+// d_stress[m,3,3] (Pa), d_fabric[m,3,3], the fabric split d_fabric_volume, d_fabric_rotation,
+// d_fabric_contacts [m,3,3] when made, and one [m] dataset per probe diagnostic. The names of
+// the diagnostics and extra attributes are listed in the string attributes `diagnostics` and
+// `attributes` (comma-separated) so that a reader finds them without guessing.
+#pragma once
+
+#include <Eigen/Dense>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "rendulic/core/results.hpp"
+
+namespace rendulic {
+
+struct EnvelopeRecord {
+  std::string method;      // "dynamic" | "minimisation" | "linear_response" | ...
+  double amplitude = 0.0;  // |d_eps| (Frobenius)
+  double k_star = 0.0;     // Pa, the stress scale of stress_star
+  std::vector<double> theta_deg;
+  std::vector<Eigen::Vector2d> strain;       // Rendulic pairs of d_eps
+  std::vector<Eigen::Vector2d> stress_star;  // Rendulic pairs of d_sigma / k*
+  std::vector<Eigen::Vector2d> fabric;       // Rendulic pairs of d_F
+  std::vector<Eigen::Matrix3d> d_stress;     // Pa, compression positive
+  std::vector<Eigen::Matrix3d> d_fabric;
+  // d_fabric split with the contact set of the starting state held fixed (docs/probes.md
+  // "Fabric split"): volume change, rotation of the normals, contacts made and lost. Empty
+  // for envelopes made without it; otherwise one entry per probe each.
+  std::vector<Eigen::Matrix3d> d_fabric_volume, d_fabric_rotation, d_fabric_contacts;
+  // Per-probe diagnostics ([m] each), e.g. contacts_opened, contacts_closed, relax_time,
+  // relax_steps, kinetic_to_elastic, converged; written as datasets next to the envelope.
+  std::map<std::string, std::vector<double>> diagnostics;
+  // Per-envelope scalars (attributes), e.g. rate, inertial_number, n_rattlers.
+  std::map<std::string, double> attributes;
+
+  std::size_t size() const { return theta_deg.size(); }
+  // Appends one probe; the pairs follow from the tensors (core/conventions.hpp).
+  void add(double theta, const Eigen::Matrix3d& d_eps, const Eigen::Matrix3d& d_sigma,
+           const Eigen::Matrix3d& d_f);
+  // The same with the probe's fabric split (volume + rotation + contacts = d_f).
+  void add(double theta, const Eigen::Matrix3d& d_eps, const Eigen::Matrix3d& d_sigma,
+           const Eigen::Matrix3d& d_f, const Eigen::Matrix3d& d_f_volume,
+           const Eigen::Matrix3d& d_f_rotation, const Eigen::Matrix3d& d_f_contacts);
+};
+
+// std::logic_error if the record's sizes disagree (a bug of its maker, not bad input).
+void write_envelope(ResultsWriter& out, const std::string& group, const EnvelopeRecord& envelope);
+
+// What is stored at `group`, every part optional but the group itself: an envelope that could
+// not be measured holds only attributes (its `error` says why), and files from elsewhere may
+// lack what our writer adds. A missing amplitude reads as NaN, a missing method as "". Empty
+// datasets read as absent. InputError (naming the file and group) if the group is missing,
+// a dataset is malformed, or the non-empty per-probe datasets (and `directions`) disagree in
+// length.
+EnvelopeRecord read_envelope(const ResultsReader& in, const std::string& group);
+
+}  // namespace rendulic

@@ -1,0 +1,123 @@
+// The names of the results file (docs/results.md): the one place where its groups, datasets
+// and shared attributes are spelled. Every writer and reader in C++ builds its paths from
+// here, so a name of the contract changes here or nowhere (the plotting script, app/plot.py,
+// reads the same names from Python; docs/results.md is the contract both follow).
+//
+// Groups are absolute paths; dataset and child-group names carry their leading '/', so that
+// `group + datasets::kStress` is a path. A pressure branch repeats the layout of the main run
+// under its own root (pressure_branch()), hence the builders take a root.
+#pragma once
+
+#include <cstdio>
+#include <string>
+
+namespace rendulic::paths {
+
+inline constexpr char kMaterial[] = "/material";
+inline constexpr char kPreparation[] = "/preparation";
+inline constexpr char kIsotropic[] = "/isotropic";
+inline constexpr char kPath[] = "/path";
+inline constexpr char kStates[] = "/states";
+inline constexpr char kCalibration[] = "/calibration";
+inline constexpr char kPressure[] = "/pressure";
+inline constexpr char kTimings[] = "/timings";
+
+// Below a state, a calibrated law or a pressure branch.
+inline constexpr char kEnvelopes[] = "/envelopes";
+inline constexpr char kElasticRange[] = "/elastic_range";
+inline constexpr char kCheckpoint[] = "/checkpoint";
+inline constexpr char kFitStress[] = "/fit_stress";
+inline constexpr char kFitFabric[] = "/fit_fabric";
+
+// "<root>/states" and "<root>/states/<label>" (root "" for the main run).
+inline std::string states(const std::string& root = "") { return root + kStates; }
+inline std::string state(const std::string& label, const std::string& root = "") {
+  return states(root) + "/" + label;
+}
+// "<state>/envelopes" and "<state>/envelopes/<name>" for a state group from state().
+inline std::string envelopes(const std::string& state_group) { return state_group + kEnvelopes; }
+inline std::string envelope(const std::string& state_group, const std::string& name) {
+  return envelopes(state_group) + "/" + name;
+}
+inline std::string elastic_range(const std::string& state_group) {
+  return state_group + kElasticRange;
+}
+// The name of an envelope: "<method>_<amplitude %g>", e.g. "dynamic_5e-05".
+inline std::string envelope_name(const std::string& method, double amplitude) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%s_%g", method.c_str(), amplitude);
+  return buf;
+}
+// "/calibration/<model>".
+inline std::string calibration(const std::string& model) {
+  return std::string(kCalibration) + "/" + model;
+}
+// "/pressure/nu<nu>", nu printed with %g (nu0.7, nu0.75).
+inline std::string pressure_branch(double nu) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%s/nu%g", kPressure, nu);
+  return buf;
+}
+
+}  // namespace rendulic::paths
+
+// Datasets, with their leading '/'. One name, one meaning: the same quantity has the same
+// name in a series (/isotropic, /path), a state, an envelope and a calibrated law.
+namespace rendulic::datasets {
+
+inline constexpr char kTime[] = "/time";
+inline constexpr char kStrain[] = "/strain";  // strain tensors (series) or Rendulic pairs
+inline constexpr char kEpsV[] = "/eps_v";
+inline constexpr char kEpsDev[] = "/eps_dev";
+inline constexpr char kStress[] = "/stress";  // Pa
+inline constexpr char kStressStar[] = "/stress_star";
+inline constexpr char kFabric[] = "/fabric";
+inline constexpr char kVolumeFraction[] = "/volume_fraction";
+// A state.
+inline constexpr char kPositions[] = "/positions";
+inline constexpr char kRadii[] = "/radii";
+inline constexpr char kCellLengths[] = "/cell_lengths";
+// A state's checkpoint (DemSystem::restore()).
+inline constexpr char kVelocities[] = "/velocities";
+inline constexpr char kForces[] = "/forces";
+inline constexpr char kReferencePositions[] = "/reference_positions";
+inline constexpr char kReferenceCellLengths[] = "/reference_cell_lengths";
+inline constexpr char kReferenceHalfSkins[] = "/reference_half_skins";
+inline constexpr char kStrainE[] = "/strain_E";
+inline constexpr char kLastD[] = "/last_D";
+// The remaining series of /isotropic and /path, one row per sample.
+inline constexpr char kPressure[] = "/pressure";  // Pa
+inline constexpr char kPressureStar[] = "/pressure_star";
+inline constexpr char kCoordination[] = "/coordination";
+inline constexpr char kCoordinationNonrattler[] = "/coordination_nonrattler";
+inline constexpr char kRattlerFraction[] = "/rattler_fraction";
+inline constexpr char kKineticEnergy[] = "/kinetic_energy";
+inline constexpr char kElasticEnergy[] = "/elastic_energy";
+inline constexpr char kInertialNumber[] = "/inertial_number";
+// An envelope (per probe) and the elastic-range ladder.
+inline constexpr char kThetaDeg[] = "/theta_deg";
+inline constexpr char kDStress[] = "/d_stress";
+inline constexpr char kDFabric[] = "/d_fabric";
+inline constexpr char kDFabricVolume[] = "/d_fabric_volume";
+inline constexpr char kDFabricRotation[] = "/d_fabric_rotation";
+inline constexpr char kDFabricContacts[] = "/d_fabric_contacts";
+inline constexpr char kContactsOpened[] = "/contacts_opened";
+inline constexpr char kContactsClosed[] = "/contacts_closed";
+// A linear-response envelope: the 6x6 Mandel stiffness [Pa] and fabric stiffness.
+inline constexpr char kStiffness[] = "/stiffness";
+inline constexpr char kFabricStiffness[] = "/fabric_stiffness";
+// The elastic-range ladder, one row per amplitude.
+inline constexpr char kAmplitude[] = "/amplitude";
+inline constexpr char kMinorOverElastic[] = "/minor_over_elastic";
+inline constexpr char kMajorOverElastic[] = "/major_over_elastic";
+inline constexpr char kCenterOverA[] = "/center_over_a";
+inline constexpr char kKContinue[] = "/k_continue";
+inline constexpr char kKReverse[] = "/k_reverse";
+inline constexpr char kDeparture[] = "/departure";
+inline constexpr char kSeconds[] = "/seconds";
+// A calibrated law.
+inline constexpr char kParams[] = "/params";
+inline constexpr char kStderr[] = "/stderr";
+inline constexpr char kCorrelation[] = "/correlation";
+
+}  // namespace rendulic::datasets
