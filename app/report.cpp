@@ -30,6 +30,9 @@ struct FitInfo {
   std::string shape;
   Eigen::Vector2d center = Eigen::Vector2d::Zero();
   double a = kNaN, b = kNaN, incl = kNaN;
+  // The fit's own verdict: a fit that did not converge can sit anywhere (an ellipse of huge
+  // axes whose arc passes the points), and a claim read from it would be an artefact.
+  bool converged = true;
 };
 
 struct EnvInfo {
@@ -69,6 +72,7 @@ FitInfo read_fit(const ResultsReader& r, const std::string& g) {
     if (s.size() == 2) f.a = s[0], f.b = s[1];
   }
   if (r.has_attr(g, "inclination_deg")) f.incl = r.attr_double(g, "inclination_deg");
+  if (r.has_attr(g, "converged")) f.converged = r.attr_int(g, "converged") != 0;
   return f;
 }
 
@@ -477,7 +481,11 @@ std::vector<Claim> evaluate_claims(const ResultsReader& r) {
             "0.1, stiffness continuing the path < 0.2 of reversing it)",
             "", ""};
     std::vector<double> shift, thin, k_ratio;
-    const bool measured = all(pl) && all(el) && beyond_elastic;
+    std::string unconverged;
+    for (std::size_t i = 0; i < pl.size() && all(pl); ++i)
+      if (!pl[i]->stress.converged)
+        unconverged += (unconverged.empty() ? "" : ", ") + states[i].label;
+    const bool measured = all(pl) && all(el) && beyond_elastic && unconverged.empty();
     bool ok = measured;
     if (all(pl) && all(el)) {
       for (std::size_t i = 0; i < pl.size(); ++i) {
@@ -490,6 +498,9 @@ std::vector<Claim> evaluate_claims(const ResultsReader& r) {
       ok = ok && thin.back() < 0.1 && k_ratio.back() < 0.2;
       c.measured = amplitude_note + "; |centre|/a: " + series(shift) + "; b/a: " + series(thin) +
                    "; k_continue/k_reverse: " + series(k_ratio);
+      if (!unconverged.empty())
+        c.measured += "; the plastic stress fit did not converge at state " + unconverged +
+                      ", so its axes and centre are not a measurement";
     } else {
       c.measured = amplitude_note;
     }

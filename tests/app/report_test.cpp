@@ -11,6 +11,7 @@
 #include <fstream>
 
 #include "rendulic/core/conventions.hpp"
+#include "rendulic/core/result_paths.hpp"
 #include "synthetic_results.hpp"
 
 namespace rendulic::app {
@@ -52,6 +53,25 @@ TEST(Report, AbsentDataIsNotMeasured) {
     EXPECT_EQ(claims[i].id, ids[i]);
     EXPECT_EQ(claims[i].verdict, "not measured") << claims[i].id << ": " << claims[i].measured;
   }
+}
+
+// A plastic stress fit that did not converge (on the paper data: an ellipse of axes 719 and
+// 0.087 whose arc passed points of size 0.03) must not decide C6: its b/a made the steady state
+// look collapsed onto a line.
+TEST(Report, AnUnconvergedPlasticFitLeavesC6NotMeasured) {
+  const fs::path f = seed_like("unconverged", false);
+  const auto before = by_id(evaluate_claims(ResultsReader(f)));
+  ASSERT_EQ(before.at("C6").verdict, "holds") << before.at("C6").measured;
+  {
+    ResultsWriter w = ResultsWriter::update(f);
+    w.attr(paths::state("s5") + "/envelopes/dynamic_0.002/fit_stress", "converged",
+           std::int64_t{0});
+    w.commit();
+  }
+  const auto after = by_id(evaluate_claims(ResultsReader(f)));
+  EXPECT_EQ(after.at("C6").verdict, "not measured") << after.at("C6").measured;
+  EXPECT_NE(after.at("C6").measured.find("did not converge at state s5"), std::string::npos)
+      << after.at("C6").measured;
 }
 
 // A linear response at 2e-3 is the elastic response scaled (the paper run without dynamic
