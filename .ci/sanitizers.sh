@@ -8,7 +8,7 @@
 # -march=native is off so that the binary runs wherever the job does.
 # Run after .ci/setup.sh (same Debian packages). Environment: BUILD_DIR (default build-asan),
 # JOBS (default: all cores), SANITIZERS_BUILD_ONLY (set: build, run nothing; .ci/setup.sh
-# does that under CI, and the default suite's ci.SanitizedUnitAndSystemTests runs the tests).
+# does that under CI, and the default suite's ci.SanitizedUnitTests runs the unit tests).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -31,7 +31,7 @@ fi
 
 # The sanitizer options and the test selection live with the suite's own entry.
 status=0
-JOBS=$jobs bash tests/style/sanitized_suite.sh "$build_dir" "$PWD" || status=$?
+JOBS=$jobs bash tests/style/sanitized_suite.sh "$build_dir" "$PWD" all || status=$?
 done=$(date +%s)
 echo "sanitizers: build $((built - start)) s, tests $((done - built)) s (wall, $jobs jobs)" >&2
 exit $status
