@@ -163,7 +163,7 @@ def panel_grid(n_panels, legend_cell=True, ncols=3):
     nrows = math.ceil(cells / ncols)
     side = PAGE_WIDTH / max(ncols, 2)
     # Each row: a square panel, its title above and the axis label below.
-    fig, axes = plt.subplots(nrows, ncols, figsize=(side * ncols, (side + 0.25) * nrows + 0.4),
+    fig, axes = plt.subplots(nrows, ncols, figsize=(side * ncols, (side + 0.12) * nrows + 0.4),
                              squeeze=False)
     flat = list(axes.ravel())
     for ax in flat[n_panels:]:
@@ -358,7 +358,7 @@ def fig_envelopes(f, out, ctx, number, kind, quantity):
     handles, seen, families = {}, set(), set()
     for k, (ax, (eps, label, envs)) in enumerate(zip(axes, found)):
         by_method = {attr(g, "method", "?"): g for _, g in envs if key in g}
-        xs, ys = [], []
+        xs, ys, shapes = [], [], []
         primary = next((m for m in ("dynamic", "minimisation", "linear_response")
                         if m in by_method), None)
         for method in sorted(by_method, key=lambda m: DRAW_ORDER.index(m)
@@ -380,6 +380,7 @@ def fig_envelopes(f, out, ctx, number, kind, quantity):
                 x, y = fit_curve(fit)
                 shape = attr(fit, "shape")
                 ax.plot(x / scale, y / scale, st["fit_ls"], color=st["color"], lw=0.9, zorder=2)
+                shapes.append((shape, st["color"]))
                 if (method, shape) not in seen:
                     seen.add((method, shape))
                     handles[(method, shape)] = Line2D([], [], ls=st["fit_ls"], color=st["color"],
@@ -390,6 +391,9 @@ def fig_envelopes(f, out, ctx, number, kind, quantity):
         rendulic_axes(ax, xs, ys, label)
         rendulic_labels(ax, sym, e, k % ncols == 0)
         ax.set_title(state_title(label, eps))
+        for j, (shape, colour) in enumerate(shapes):  # the chosen shapes, in the fits' colours
+            ax.text(0.97, 0.03 + 0.075 * j, shape, transform=ax.transAxes, ha="right",
+                    va="bottom", fontsize=6, color=colour)
     points = [h for k, h in handles.items() if isinstance(k, str)]
     fits = [h for k, h in handles.items() if not isinstance(k, str)]
     legend_in(leg, points + fits + special_handles(families),
