@@ -746,7 +746,7 @@ def place_labels(ax, items, fontsize=6):
     directions = [(1, 1), (1, -1), (-1, 1), (-1, -1), (0, 1), (0, -1), (1, 0), (-1, 0)]
     for (x, y, text, colour) in items:
         placed = False
-        for radius in (4, 11, 18, 26):
+        for radius in (4, 11, 18, 26, 36, 48):
             for dx, dy in directions:
                 ha = "left" if dx > 0 else "right" if dx < 0 else "center"
                 va = "bottom" if dy > 0 else "top" if dy < 0 else "center"

@@ -235,6 +235,18 @@ if "dt_factor = 0.3: refused" not in text:
 for ext in ("png", "pdf", "svg"):
     if not any(w.endswith("pareto." + ext) for w in written):
         print("FAIL no pareto." + ext)
+# List attributes in both stored forms: one joined string, or an HDF5 string array.
+with h5py.File(path, "a") as f:
+    g = f["sweep"]
+    g.attrs["free_joined"] = "B,G,beta_A"
+    g.attrs.create("free_array", ["B", "G", "beta_A"], dtype=h5py.string_dtype())
+    g.attrs.create("breaks_array", breaks, dtype=h5py.string_dtype())
+    for name, sep, want in (("free_joined", ",", ["B", "G", "beta_A"]),
+                            ("free_array", ",", ["B", "G", "beta_A"]),
+                            ("breaks", "\n", breaks), ("breaks_array", "\n", breaks)):
+        got = plot.attr_list(g, name, sep)
+        if got != want:
+            print("FAIL attr_list", name, got)
 )PY";
 
 TEST(Plot, ParetoChartLabelsDoNotOverlapAndFindingsAreWhole) {
