@@ -704,7 +704,14 @@ def fig_models_path(f, out, ctx):
         a.set_ylim(lo - 0.5 * (hi - lo), hi + 0.5 * (hi - lo))
     for a in ax:
         a.set_xlabel(r"$-\varepsilon_{dev}$")
-        a.legend(fontsize=6)
+    # One legend below both panels: inside, it would hide the curves.
+    handles, labels = [], []
+    for a in ax:
+        for h, lab in zip(*a.get_legend_handles_labels()):
+            if lab not in labels:
+                handles.append(h)
+                labels.append(lab)
+    fig.legend(handles, labels, loc="upper center", bbox_to_anchor=(0.5, 0.0), ncol=3)
     ax[0].set_ylabel(with_power(r"stress $\sigma^*_{ii}$", es))
     ax[1].set_ylabel(r"fabric $F_{ii}$")
     ax[0].set_title("(a) stress: xx solid, yy dashed")
