@@ -704,14 +704,13 @@ def fig_models_path(f, out, ctx):
         a.set_ylim(lo - 0.5 * (hi - lo), hi + 0.5 * (hi - lo))
     for a in ax:
         a.set_xlabel(r"$-\varepsilon_{dev}$")
-    # One legend below both panels: inside, it would hide the curves.
-    handles, labels = [], []
-    for a in ax:
-        for h, lab in zip(*a.get_legend_handles_labels()):
-            if lab not in labels:
-                handles.append(h)
-                labels.append(lab)
-    fig.legend(handles, labels, loc="upper center", bbox_to_anchor=(0.5, 0.0), ncol=3)
+    # One legend below both panels (inside, it would hide the curves): a colour per source,
+    # the line style (xx solid, yy dashed) is in the titles.
+    handles = [Line2D([], [], color="k", lw=1.4, label="DEM")]
+    handles += [Line2D([], [], color=MODEL_COLOURS[j % len(MODEL_COLOURS)], lw=1, label=m[2])
+                for j, m in enumerate(models)]
+    fig.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, 0.0),
+               ncol=min(len(handles), 3))
     ax[0].set_ylabel(with_power(r"stress $\sigma^*_{ii}$", es))
     ax[1].set_ylabel(r"fabric $F_{ii}$")
     ax[0].set_title("(a) stress: xx solid, yy dashed")
