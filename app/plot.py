@@ -44,7 +44,7 @@ METHODS = {
                     fit_ls="-"),
     "minimisation": dict(marker="s", ms=4.5, mfc="none", mew=0.9, color="tab:orange",
                          zorder=3, fit_ls=":"),
-    "linear_response": dict(marker=".", ms=3.5, mfc="tab:green", mew=0.0, color="tab:green",
+    "linear_response": dict(marker=".", ms=4.5, mfc="tab:green", mew=0.0, color="tab:green",
                             zorder=5, fit_ls="--"),
 }
 DRAW_ORDER = ("minimisation", "dynamic", "linear_response")
@@ -163,7 +163,7 @@ def panel_grid(n_panels, legend_cell=True, ncols=3):
     nrows = math.ceil(cells / ncols)
     side = PAGE_WIDTH / max(ncols, 2)
     # Each row: a square panel, its title above and the axis label below.
-    fig, axes = plt.subplots(nrows, ncols, figsize=(side * ncols, (side + 0.12) * nrows + 0.4),
+    fig, axes = plt.subplots(nrows, ncols, figsize=(side * ncols, (side - 0.2) * nrows + 0.5),
                              squeeze=False)
     flat = list(axes.ravel())
     for ax in flat[n_panels:]:
