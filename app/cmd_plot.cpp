@@ -1,9 +1,12 @@
-// `rendulic plot FILE.h5 [--out DIR]` (docs/usage.md): the figures of a results
-// file as PNG and SVG, drawn by the embedded app/plot.py with Debian's python3-matplotlib and
-// python3-h5py. The file is checked to be ours and the output folder to be writable first,
-// and the script reports data it cannot draw in one line (exit 2), so a bad file or folder is
-// the usual one-line exit 2, never a Python traceback. The script is passed on the command
-// line (no temporary script file) and its process is killed if ours is stopped by a signal.
+// `rendulic plot FILE.h5 [--out DIR] [--script FILE]` (docs/usage.md, docs/figures.md): the
+// figures of a results file as PNG, PDF and SVG, drawn by app/plot.py with Debian's
+// python3-matplotlib and python3-h5py. The script is an editable file (--script, the
+// RENDULIC_PLOT_SCRIPT variable, or the copy installed beside the binary), so figures can be
+// restyled without a rebuild; without one, the copy compiled into the binary is passed on the
+// command line (no temporary file), so `plot` works from any folder. The file is checked to be
+// ours and the output folder to be writable first, and the script reports data it cannot draw
+// in one line (exit 2), so a bad file or folder is the usual one-line exit 2, never a Python
+// traceback. Its process is killed if ours is stopped by a signal.
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -15,6 +18,8 @@
 #include <iostream>
 #include <memory>
 #include <sstream>
+#include <string>
+#include <vector>
 
 #include "commands.hpp"
 #include "plot_script.hpp"
@@ -84,7 +89,29 @@ std::string last_line(const std::string& text) {
 
 }  // namespace
 
-int plot_results(const std::filesystem::path& file, const std::filesystem::path& out_dir) {
+std::filesystem::path plot_script_file(const std::filesystem::path& script) {
+  namespace fs = std::filesystem;
+  auto must_exist = [](const fs::path& p, const std::string& how) {
+    std::error_code ec;
+    if (!fs::is_regular_file(p, ec))
+      throw InputError(p.string() + ": no figure script there (" + how + ")");
+    return p;
+  };
+  if (!script.empty()) return must_exist(script, "--script");
+  if (const char* env = std::getenv("RENDULIC_PLOT_SCRIPT"); env && *env)
+    return must_exist(env, "RENDULIC_PLOT_SCRIPT");
+  std::error_code ec;
+  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+  if (ec) return {};
+  const fs::path bin = exe.parent_path();
+  for (const fs::path& p : {bin / "plot.py", bin.parent_path() / RENDULIC_PLOT_SCRIPT_REL})
+    if (fs::is_regular_file(p, ec)) return p;
+  return {};
+}
+
+int plot_results(const std::filesystem::path& file, const std::filesystem::path& out_dir,
+                 const std::filesystem::path& script) {
+  const std::filesystem::path script_file = plot_script_file(script);
   { ResultsReader check(file); }
   std::error_code ec;
   std::filesystem::create_directories(out_dir, ec);
@@ -104,8 +131,15 @@ int plot_results(const std::filesystem::path& file, const std::filesystem::path&
     throw InputError(
         "plot: needs python3 with matplotlib and h5py (bash .ci/setup.sh installs "
         "python3-matplotlib and python3-h5py)");
-  const Spawned r =
-      spawn({python, "-c", kPlotScript, file.string(), out_dir.string()}, false, true);
+  std::vector<std::string> args = {python};
+  if (script_file.empty()) {
+    args.insert(args.end(), {"-c", kPlotScript});
+  } else {
+    args.push_back(script_file.string());
+    std::cerr << "rendulic: figures drawn by " << script_file.string() << "\n";
+  }
+  args.insert(args.end(), {file.string(), out_dir.string()});
+  const Spawned r = spawn(args, false, true);
   if (r.code == 0) {
     std::cerr << r.err;  // the figures it skipped, and why
     return 0;
@@ -119,13 +153,17 @@ int plot_results(const std::filesystem::path& file, const std::filesystem::path&
 Subcommand add_plot(CLI::App& parent) {
   auto file = std::make_shared<std::string>();
   auto out = std::make_shared<std::string>();
-  auto* sub = parent.add_subcommand("plot", "Figures of a results file (PNG and SVG)");
+  auto script = std::make_shared<std::string>();
+  auto* sub = parent.add_subcommand("plot", "Figures of a results file (PNG, PDF and SVG)");
   sub->add_option("file", *file, "results file (HDF5, schema rendulic/1)")->required();
   sub->add_option("--out", *out, "output folder (default: FILE's folder/figures)");
-  return {sub, [file, out]() -> int {
+  sub->add_option("--script", *script,
+                  "figure script to run instead of the installed or compiled-in plot.py "
+                  "(also: RENDULIC_PLOT_SCRIPT)");
+  return {sub, [file, out, script]() -> int {
             std::filesystem::path dir = *out;
             if (dir.empty()) dir = std::filesystem::path(*file).parent_path() / "figures";
-            return plot_results(*file, dir);
+            return plot_results(*file, dir, *script);
           }};
 }
 }  // namespace rendulic::app

@@ -29,7 +29,13 @@ Subcommand add_sweep(CLI::App& parent);
 Subcommand add_report(CLI::App& parent);
 
 // Draws the figures of a results file into out_dir (cmd_plot.cpp); used by the report stage.
-int plot_results(const std::filesystem::path& file, const std::filesystem::path& out_dir);
+// The figure script is `script` if given, else the first of RENDULIC_PLOT_SCRIPT, plot.py
+// beside the binary, <prefix>/share/rendulic/plot.py, and the copy compiled in.
+int plot_results(const std::filesystem::path& file, const std::filesystem::path& out_dir,
+                 const std::filesystem::path& script = {});
+
+// The figure script plot_results would run given `script` (empty: the compiled-in copy).
+std::filesystem::path plot_script_file(const std::filesystem::path& script = {});
 
 // Every scenario key of every module (app/schema.cpp).
 const ScenarioSchema& scenario_schema();

@@ -84,8 +84,9 @@ void register_run_keys(ScenarioSchema& schema) {
               .type = KeyType::kBool,
               .default_value = true,
               .unit = "-",
-              .help = "Draw the figures (PNG and SVG) next to report.md; needs python3-matplotlib "
-                      "and python3-h5py."});
+              .help =
+                  "Draw the figures (PNG, PDF and SVG) next to report.md; needs python3-matplotlib "
+                  "and python3-h5py."});
   schema.add({.path = "run.description",
               .type = KeyType::kString,
               .default_value = std::string{},

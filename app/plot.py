@@ -1,39 +1,102 @@
-# Figures of a rendulic results file (seed paper Figs. 1-7 and the isotropic branch).
-# Embedded into the `rendulic` binary at build time and run by `rendulic plot FILE.h5 --out DIR`
-# with Debian's python3-matplotlib and python3-h5py. Reads only the names of docs/results.md
-# (schema rendulic/1), so it works on any conforming file; a figure whose data is absent is
-# skipped with a note, never faked. Writes each figure as PNG and SVG.
+# Figures of a rendulic results file (seed paper Figs. 1-7, the isotropic branch, elastic
+# ranges, calibrated laws; a sweep file's Pareto and path-rate charts). docs/figures.md lists
+# them and says how to restyle them. Reads only the names of docs/results.md (schema
+# rendulic/1), so it works on any conforming file; a figure whose data is absent is skipped
+# with a note, never faked. Writes each figure as PNG (300 dpi), PDF and SVG, sized for a
+# journal page (7 in wide, the Rendulic planes equal-aspect in a grid).
+#
+# `rendulic plot` runs this file: the copy named by --script or RENDULIC_PLOT_SCRIPT, else the
+# one installed beside the binary (share/rendulic/plot.py), else the copy compiled into the
+# binary. Edit an installed copy to restyle; `python3 plot.py FILE.h5 OUTDIR` runs it alone
+# with Debian's python3-matplotlib and python3-h5py.
 import math
 import os
 import sys
+import textwrap
 
 import h5py
 import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+import matplotlib.transforms as mtransforms  # noqa: E402
 import numpy as np  # noqa: E402
+from matplotlib.lines import Line2D  # noqa: E402
+from matplotlib.ticker import FuncFormatter, MaxNLocator, NullLocator  # noqa: E402
+
+# --- style: the one place to restyle every figure -------------------------------------------
+FORMATS = ("png", "pdf", "svg")
+PNG_DPI = 300
+PAGE_WIDTH = 7.0  # inches: a two-column journal figure (one column is about 3.4 in)
+STYLE = {
+    "font.size": 8, "axes.titlesize": 8, "axes.labelsize": 8, "xtick.labelsize": 7,
+    "ytick.labelsize": 7, "legend.fontsize": 7, "figure.titlesize": 9, "lines.linewidth": 1.0,
+    "lines.markersize": 4, "axes.linewidth": 0.6, "legend.frameon": False,
+    # No offset text ("1e-5" above an axis): the Rendulic planes and Fig. 1 put the power of
+    # ten into the axis label instead.
+    "axes.formatter.useoffset": False,
+    "svg.fonttype": "none", "pdf.fonttype": 42,
+}
+# Probe methods: linear_response (the exact elastic reference) is a small dot drawn on top,
+# the probes open markers around it, so coincident points stay visible.
+METHODS = {
+    "dynamic": dict(marker="o", ms=5, mfc="none", mew=0.9, color="tab:blue", zorder=4,
+                    fit_ls="-"),
+    "minimisation": dict(marker="s", ms=4.5, mfc="none", mew=0.9, color="tab:orange",
+                         zorder=3, fit_ls=":"),
+    "linear_response": dict(marker=".", ms=4.5, mfc="tab:green", mew=0.0, color="tab:green",
+                            zorder=5, fit_ls="--"),
+}
+DRAW_ORDER = ("minimisation", "dynamic", "linear_response")
+MODEL_COLOURS = ["tab:red", "tab:green", "tab:purple", "tab:brown", "tab:olive", "tab:cyan"]
 
 ISO = math.degrees(math.atan(1 / math.sqrt(2)))  # 35.26 deg
+# Special strain directions (docs/physics.md): families with their marker.
 SPECIAL = {"I.C.": ISO, "I.E.": ISO + 180, "U.C.": 90.0, "U.E.": 270.0,
            "D.C.": ISO + 90, "D.E.": ISO + 270}
+SPECIAL_FAMILIES = [
+    ("I", "o", "isotropic I.C./I.E. (35.26°, 215.26°)"),
+    ("U", "s", "uniaxial U.C./U.E. (90°, 270°)"),
+    ("D", "D", "constant volume D.C./D.E. (125.26°, 305.26°)"),
+]
 ELASTIC_MAX, PLASTIC_MIN = 1e-4, 1e-3  # docs/physics.md section 5
+RENDULIC_GID = "rendulic-plane"  # gid of every Rendulic-plane axes (tests find them by it)
 
 
-def save(fig, out, name, written, description=None):
-    for ext in ("png", "svg"):
+def save(fig, out, name, ctx, description=None):
+    meta = {"Description": description} if description else {}
+    for ext in FORMATS:
         path = os.path.join(out, f"{name}.{ext}")
-        meta = {"Description": description} if description else None
-        fig.savefig(path, dpi=130, bbox_inches="tight", metadata=meta)
-        written.append(path)
-    plt.close(fig)
+        # PNG takes no "Description" key in every matplotlib; the SVG and PDF carry it.
+        md = meta if ext == "svg" else ({"Subject": description} if ext == "pdf" and
+                                        description else None)
+        fig.savefig(path, dpi=PNG_DPI, bbox_inches="tight", metadata=md)
+        ctx["written"].append(path)
+    if ctx.get("keep") is not None:
+        ctx["keep"][name] = fig
+    else:
+        plt.close(fig)
 
 
 def attr(obj, name, default=None):
+    """An attribute; byte strings decoded, string arrays as lists of str."""
     v = obj.attrs.get(name, default)
     if isinstance(v, bytes):
-        v = v.decode()
+        return v.decode()
+    if isinstance(v, np.ndarray) and v.dtype.kind in ("O", "S", "U"):
+        return [x.decode() if isinstance(x, bytes) else str(x) for x in v.ravel()]
     return v
+
+
+def attr_list(obj, name, sep=","):
+    """A list attribute stored either as one `sep`-joined string or as an HDF5 string array
+    (files of either form exist: docs/results.md)."""
+    v = attr(obj, name)
+    if v is None:
+        return []
+    if isinstance(v, list):
+        return [x for x in v if x]
+    return [x.strip() for x in str(v).split(sep) if x.strip()]
 
 
 def states(f):
@@ -55,6 +118,10 @@ def envelopes(state_group, kind):
     return out
 
 
+def fit_ok(fit):
+    return fit is not None and attr(fit, "shape", "none") in ("ellipse", "line", "circle")
+
+
 def fit_curve(fit):
     c = np.asarray(attr(fit, "center", [0, 0]), dtype=float)
     a, b = np.asarray(attr(fit, "semi_axes", [0, 0]), dtype=float)
@@ -68,146 +135,338 @@ def fit_curve(fit):
     return x, y
 
 
-def fig_isotropic(f, out, written, notes):
+# --- layout helpers -------------------------------------------------------------------------
+def power_of_ten(*arrays):
+    """The power of ten that brings the data to 0.1-1000, 0 when it is there already."""
+    m = 0.0
+    for a in arrays:
+        a = np.asarray(a, dtype=float)
+        if a.size:
+            v = np.nanmax(np.abs(a))
+            if np.isfinite(v):
+                m = max(m, float(v))
+    if m <= 0:
+        return 0
+    e = int(math.floor(math.log10(m)))
+    return 0 if -1 <= e <= 2 else e
+
+
+def with_power(label, e):
+    return label if e == 0 else label + rf" [$10^{{{e}}}$]"
+
+
+def panel_grid(n_panels, legend_cell=True, ncols=3):
+    """Square panels in rows of `ncols` across the page; with legend_cell, the cell after the
+    last panel (or a row of its own) holds the legend. Returns fig, panel axes, legend axes."""
+    cells = n_panels + (1 if legend_cell else 0)
+    ncols = max(1, min(ncols, cells))
+    nrows = math.ceil(cells / ncols)
+    side = PAGE_WIDTH / max(ncols, 2)
+    # Each row: a square panel, its title above and the axis label below.
+    fig, axes = plt.subplots(nrows, ncols, figsize=(side * ncols, (side - 0.2) * nrows + 0.5),
+                             squeeze=False)
+    flat = list(axes.ravel())
+    for ax in flat[n_panels:]:
+        ax.axis("off")
+    leg = flat[n_panels] if legend_cell else None
+    return fig, flat[:n_panels], leg
+
+
+def rendulic_axes(ax, xs, ys, tag):
+    """Equal aspect and square limits around the data points (not the fits: a fit far off
+    leaves the frame rather than shrink the data), axes through the origin."""
+    x = np.concatenate([np.ravel(v) for v in xs]) if xs else np.zeros(1)
+    y = np.concatenate([np.ravel(v) for v in ys]) if ys else np.zeros(1)
+    x, y = x[np.isfinite(x)], y[np.isfinite(y)]
+    if not x.size or not y.size:
+        x, y = np.zeros(1), np.zeros(1)
+    cx, cy = 0.5 * (x.min() + x.max()), 0.5 * (y.min() + y.max())
+    h = 0.5 * max(x.max() - x.min(), y.max() - y.min()) * 1.12
+    if h <= 0:
+        h = max(abs(cx), abs(cy), 1.0) * 0.1
+    ax.set_xlim(cx - h, cx + h)
+    ax.set_ylim(cy - h, cy + h)
+    ax.set_aspect("equal", adjustable="box")
+    ax.axhline(0, color="0.85", lw=0.6, zorder=0)
+    ax.axvline(0, color="0.85", lw=0.6, zorder=0)
+    ax.xaxis.set_major_locator(MaxNLocator(4))
+    ax.yaxis.set_major_locator(MaxNLocator(4))
+    ax.set_gid(f"{RENDULIC_GID}-{tag}")
+
+
+def rendulic_labels(ax, sym, e, first_in_row):
+    ax.set_xlabel(with_power(r"$\sqrt{2}\,\delta " + sym + r"_{yy}$", e))
+    if first_in_row:
+        ax.set_ylabel(with_power(r"$\delta " + sym + r"_{xx}$", e))
+
+
+def legend_in(cell, handles, title=None):
+    """The figure's legend in its own cell (one legend for all panels)."""
+    if cell is None:
+        return
+    cell.legend(handles=handles, loc="center", title=title, fontsize=7, title_fontsize=7)
+
+
+def special_handles(present):
+    return [Line2D([], [], ls="none", marker=m, mfc="none", mec="k", ms=7, label=lab)
+            for fam, m, lab in SPECIAL_FAMILIES if fam in present]
+
+
+def mark_special(ax, theta, xy, annotate):
+    """Black open markers (one shape per family) at the probes along special directions;
+    returns the families found."""
+    found = set()
+    if theta is None:
+        return found
+    for name, deg in SPECIAL.items():
+        d = np.abs(((theta - deg + 180) % 360) - 180)
+        i = int(np.argmin(d))
+        if d[i] > 1e-6:
+            continue
+        fam = name[0]
+        m = next(mm for f, mm, _ in SPECIAL_FAMILIES if f == fam)
+        ax.plot(xy[i, 0], xy[i, 1], ls="none", marker=m, mfc="none", mec="k", ms=7, mew=0.8,
+                zorder=6)
+        if annotate:  # the name outside the envelope, away from its centroid
+            d = xy[i] - np.mean(xy, axis=0)
+            n = float(np.hypot(d[0], d[1])) or 1.0
+            ax.annotate(name, (xy[i, 0], xy[i, 1]), xytext=(9 * d[0] / n, 9 * d[1] / n),
+                        textcoords="offset points", fontsize=6, zorder=7,
+                        ha="left" if d[0] >= 0 else "right", va="bottom" if d[1] >= 0 else "top")
+        found.add(fam)
+    return found
+
+
+def state_title(label, eps):
+    return rf"{label}: $-\varepsilon_{{dev}}$ = {-eps:.3f}"
+
+
+# --- figures --------------------------------------------------------------------------------
+def fig_isotropic(f, out, ctx):
     if "isotropic" not in f:
-        notes.append("isotropic branch: no /isotropic")
+        ctx["notes"].append("isotropic branch: no /isotropic")
         return
     g = f["isotropic"]
     nu = g["volume_fraction"][:]
-    fig, ax = plt.subplots(1, 2, figsize=(9, 3.6))
-    ax[0].plot(nu, g["pressure_star"][:], ".-")
-    ax[0].set_xlabel(r"$\nu$")
-    ax[0].set_ylabel(r"$P^*$")
-    ax[1].plot(nu, g["coordination_nonrattler"][:], ".-", label=r"$C^*$")
+    fig, ax = plt.subplots(1, 2, figsize=(PAGE_WIDTH, 2.8))
+    p = g["pressure_star"][:]
+    e = power_of_ten(p)
+    ax[0].plot(nu, p / 10.0 ** e, ".-")
+    ax[0].set_xlabel(r"volume fraction $\nu$")
+    ax[0].set_ylabel(with_power(r"$P^*$", e))
+    ax[1].plot(nu, g["coordination_nonrattler"][:], ".-", label=r"$C^*$ (without rattlers)")
     ax[1].plot(nu, g["coordination"][:], ".-", label="$C$")
-    ax[1].set_xlabel(r"$\nu$")
+    ax[1].set_xlabel(r"volume fraction $\nu$")
+    ax[1].set_ylabel("coordination number")
     ax[1].legend()
+    ax[0].set_title("(a) pressure")
+    ax[1].set_title("(b) coordination")
     fig.suptitle("Isotropic branch")
-    save(fig, out, "isotropic_branch", written)
+    fig.tight_layout()
+    save(fig, out, "isotropic_branch", ctx)
 
 
-def fig1_path(f, out, written, notes):
+def mark_states(ax, f):
+    """Dotted vertical lines at the states, labelled with their names along the top."""
+    for eps, label, _ in states(f):
+        ax.axvline(-eps, color="0.6", lw=0.7, ls=":", zorder=0)
+        ax.text(-eps, 1.0, label, transform=ax.get_xaxis_transform(), ha="center",
+                va="bottom", fontsize=7, color="0.3")
+
+
+def fig1_path(f, out, ctx):
     if "path" not in f:
-        notes.append("Fig. 1: no /path")
+        ctx["notes"].append("Fig. 1: no /path")
         return
     g = f["path"]
     x = -g["eps_dev"][:]
     s, F = g["stress_star"][:], g["fabric"][:]
-    fig, ax = plt.subplots(1, 2, figsize=(10, 3.8))
-    for i, lab in enumerate(("xx", "yy", "zz")):
-        ax[0].plot(x, s[:, i, i], label=rf"$\sigma^*_{{{lab}}}$")
-        ax[1].plot(x, F[:, i, i], label=f"$F_{{{lab}}}$")
-    for eps, label, _ in states(f):
-        for a in ax:
-            a.axvline(-eps, color="0.8", lw=0.8, zorder=0)
-    ax[0].set_xlabel(r"$-\varepsilon_{dev}$")
-    ax[1].set_xlabel(r"$-\varepsilon_{dev}$")
-    ax[0].legend()
-    ax[1].legend()
-    ax[0].set_title("(a) stress")
-    ax[1].set_title("(b) fabric")
-    save(fig, out, "fig1_path", written)
+    fig, ax = plt.subplots(1, 2, figsize=(PAGE_WIDTH, 3.0))
+    es = power_of_ten(*(s[:, i, i] for i in range(3)))
+    for i, (lab, ls) in enumerate((("xx", "-"), ("yy", "--"), ("zz", ":"))):
+        ax[0].plot(x, s[:, i, i] / 10.0 ** es, ls, label=rf"$\sigma^*_{{{lab}}}$")
+        ax[1].plot(x, F[:, i, i], ls, label=f"$F_{{{lab}}}$")
+    for a in ax:
+        mark_states(a, f)
+        a.set_xlabel(r"$-\varepsilon_{dev}$")
+        a.legend()
+    ax[0].set_ylabel(with_power(r"stress $\sigma^*_{ii}$", es))
+    ax[1].set_ylabel(r"fabric $F_{ii}$")
+    ax[0].set_title("(a) stress", pad=12)
+    ax[1].set_title("(b) fabric", pad=12)
+    fig.suptitle("Fig. 1: the undrained path (dotted: the states, labelled above)")
+    fig.tight_layout()
+    save(fig, out, "fig1_path", ctx)
 
 
-def fig2_strain_circle(out, written):
-    fig, ax = plt.subplots(figsize=(4.2, 4.2))
+def fig2_strain_circle(f, out, ctx):
+    """The run's own strain probes: every direction and amplitude stored in its envelopes,
+    normalised to the unit circle, with the special directions."""
+    dirs, amps, methods = None, set(), set()
+    for eps, label, g in states(f):
+        if "envelopes" not in g:
+            continue
+        for name, e in g["envelopes"].items():
+            if "strain" not in e:
+                continue
+            s = np.asarray(e["strain"][:], dtype=float)
+            n = np.linalg.norm(s, axis=1)
+            if not np.all(n > 0):
+                continue
+            if dirs is None:
+                dirs = s / n[:, None]
+            amps.add(float(attr(e, "amplitude", 0.0)))
+            methods.add(str(attr(e, "method", "?")))
+    if dirs is None:
+        ctx["notes"].append("Fig. 2: no probe envelopes with strains")
+        return
+    fig, ax = plt.subplots(figsize=(3.4, 3.4))
     t = np.linspace(0, 2 * math.pi, 300)
-    ax.plot(np.cos(t), np.sin(t), "k-", lw=1)
+    ax.plot(np.cos(t), np.sin(t), "-", color="0.6", lw=0.8, zorder=1)
+    ax.plot(dirs[:, 0], dirs[:, 1], "o", ms=3.5, color="tab:blue", zorder=3)
+    colours = {"I": "tab:red", "U": "tab:green", "D": "tab:purple"}
     for name, deg in SPECIAL.items():
         r = math.radians(deg)
-        ax.plot([0, math.cos(r)], [0, math.sin(r)], lw=0.8,
-                color="tab:red" if name.startswith("I") else
-                "tab:blue" if name.startswith("D") else "tab:green")
-        ax.annotate(f"{name} {deg:.2f}°", (1.08 * math.cos(r), 1.08 * math.sin(r)),
-                    ha="center", fontsize=7)
-    ax.set_aspect("equal")
+        ax.plot([0, math.cos(r)], [0, math.sin(r)], lw=0.8, color=colours[name[0]], zorder=2)
+        ax.annotate(f"{name}\n{deg:.2f}°", (1.22 * math.cos(r), 1.22 * math.sin(r)),
+                    ha="center", va="center", fontsize=6)
+    ax.set_xlim(-1.45, 1.45)
+    ax.set_ylim(-1.45, 1.45)
+    ax.set_aspect("equal", adjustable="box")
+    ax.set_gid(f"{RENDULIC_GID}-fig2")
     ax.set_xlabel(r"$\sqrt{2}\,\delta\varepsilon_{yy}/|\delta\varepsilon|$")
     ax.set_ylabel(r"$\delta\varepsilon_{xx}/|\delta\varepsilon|$")
-    ax.set_xlim(-1.5, 1.5)
-    ax.set_ylim(-1.5, 1.5)
-    ax.set_title("Fig. 2: strain probes in the Rendulic plane")
-    save(fig, out, "fig2_strain_circle", written)
+    amp = ", ".join(f"{a:g}" for a in sorted(amps))
+    ax.set_title(f"Fig. 2: the run's {len(dirs)} strain probes (dots)\n|δε| = {amp}; "
+                 + ", ".join(sorted(methods)), fontsize=8)
+    save(fig, out, "fig2_strain_circle", ctx)
 
 
-def fig_envelopes(f, out, written, notes, number, kind, quantity):
-    sts = states(f)
-    found = [(eps, label, envelopes(g, kind)) for eps, label, g in sts]
+def fig_envelopes(f, out, ctx, number, kind, quantity):
+    found = [(eps, label, envelopes(g, kind)) for eps, label, g in states(f)]
     found = [x for x in found if x[2]]
     if not found:
-        notes.append(f"Fig. {number}: no {kind} envelopes")
+        ctx["notes"].append(f"Fig. {number}: no {kind} envelopes")
         return
-    n = len(found)
-    fig, axes = plt.subplots(1, n, figsize=(3.3 * n, 3.4), squeeze=False)
     key = "stress_star" if quantity == "stress" else "fabric"
     fit_key = "fit_stress" if quantity == "stress" else "fit_fabric"
-    for ax, (eps, label, envs) in zip(axes[0], found):
-        for name, g in envs:
-            if key not in g:
-                continue
-            r = g[key][:]
-            th = g["theta_deg"][:] if "theta_deg" in g else None
-            method = attr(g, "method", "?")
-            ax.plot(r[:, 0], r[:, 1], ".", ms=4, label=f"{method}")
-            if th is not None:
-                for deg in SPECIAL.values():
-                    i = int(np.argmin(np.abs(((th - deg + 180) % 360) - 180)))
-                    if abs(((th[i] - deg + 180) % 360) - 180) < 1e-6:
-                        ax.plot(r[i, 0], r[i, 1], "o", mfc="none", color="k", ms=6)
-            if fit_key in g:
-                x, y = fit_curve(g[fit_key])
-                ax.plot(x, y, "-", lw=0.8)
-        ax.axhline(0, color="0.85", lw=0.6)
-        ax.axvline(0, color="0.85", lw=0.6)
-        ax.set_title(rf"$-\varepsilon_{{dev}}$ = {-eps:.3f}", fontsize=9)
-        ax.set_xlabel(r"$\sqrt{2}\,\delta " + ("\\sigma^*" if quantity == "stress" else "F") +
-                      r"_{yy}$")
-        ax.tick_params(labelsize=7)
-    axes[0][0].set_ylabel(r"$\delta " + ("\\sigma^*" if quantity == "stress" else "F") +
-                          r"_{xx}$")
-    axes[0][0].legend(fontsize=7)
+    sym = "\\sigma^*" if quantity == "stress" else "F"
+    e = power_of_ten(*(g[key][:] for _, _, envs in found for _, g in envs if key in g))
+    scale = 10.0 ** e
+    fig, axes, leg = panel_grid(len(found))
+    ncols = fig.axes[0].get_subplotspec().get_gridspec().ncols
+    handles, seen, families = {}, set(), set()
+    for k, (ax, (eps, label, envs)) in enumerate(zip(axes, found)):
+        by_method = {attr(g, "method", "?"): g for _, g in envs if key in g}
+        xs, ys, shapes = [], [], []
+        primary = next((m for m in ("dynamic", "minimisation", "linear_response")
+                        if m in by_method), None)
+        for method in sorted(by_method, key=lambda m: DRAW_ORDER.index(m)
+                             if m in DRAW_ORDER else -1):
+            g = by_method[method]
+            st = METHODS.get(method, dict(marker="x", ms=4, mfc="k", mew=0.8, color="k",
+                                          zorder=3, fit_ls="-."))
+            r = g[key][:] / scale
+            xs.append(r[:, 0])
+            ys.append(r[:, 1])
+            ax.plot(r[:, 0], r[:, 1], ls="none", marker=st["marker"], ms=st["ms"],
+                    mfc=st["mfc"], mec=st["color"], mew=st["mew"], zorder=st["zorder"])
+            if method not in handles:
+                handles[method] = Line2D([], [], ls="none", marker=st["marker"], ms=st["ms"],
+                                         mfc=st["mfc"], mec=st["color"], mew=st["mew"],
+                                         label=f"{method} ({float(attr(g, 'amplitude', 0)):g})")
+            fit = g.get(fit_key)
+            if fit_ok(fit):
+                x, y = fit_curve(fit)
+                shape = attr(fit, "shape")
+                ax.plot(x / scale, y / scale, st["fit_ls"], color=st["color"], lw=0.9, zorder=2)
+                shapes.append((shape, st["color"]))
+                if (method, shape) not in seen:
+                    seen.add((method, shape))
+                    handles[(method, shape)] = Line2D([], [], ls=st["fit_ls"], color=st["color"],
+                                                      lw=0.9, label=f"{method} fit: {shape}")
+            if method == primary:
+                th = g["theta_deg"][:] if "theta_deg" in g else None
+                families |= mark_special(ax, th, r, annotate=(k == 0))
+        rendulic_axes(ax, xs, ys, label)
+        rendulic_labels(ax, sym, e, k % ncols == 0)
+        ax.set_title(state_title(label, eps))
+        for j, (shape, colour) in enumerate(shapes):  # the chosen shapes, in the fits' colours
+            ax.text(0.97, 0.03 + 0.075 * j, shape, transform=ax.transAxes, ha="right",
+                    va="bottom", fontsize=6, color=colour)
+    points = [h for k, h in handles.items() if isinstance(k, str)]
+    fits = [h for k, h in handles.items() if not isinstance(k, str)]
+    legend_in(leg, points + fits + special_handles(families),
+              title="fit shape: F-test (docs/fitting.md)")
     fig.suptitle(f"Fig. {number}: {kind} {quantity} response envelopes")
-    save(fig, out, f"fig{number}_{kind}_{quantity}", written)
+    fig.tight_layout()
+    save(fig, out, f"fig{number}_{kind}_{quantity}", ctx)
 
 
-def fig7_trends(f, out, written, notes):
-    rows = {"elastic": [], "plastic": []}
+def feature_rows(f, kind):
+    """Per state the probe envelope's fitted features with their standard errors: -eps_dev,
+    stress inclination, fabric inclination, major and minor semi-axes (value, error)."""
+    rows = []
     for eps, label, g in states(f):
-        for kind in rows:
-            for name, e in envelopes(g, kind):
-                if attr(e, "method") == "linear_response":
-                    continue  # Fig. 7 compares probes; linear response is in Figs. 3-4
-                fs, ff = e.get("fit_stress"), e.get("fit_fabric")
-                if fs is None:
-                    continue
-                sa = np.asarray(attr(fs, "semi_axes", [np.nan, np.nan]), dtype=float)
-                inc_f = attr(ff, "inclination_deg", np.nan) if ff is not None else np.nan
-                rows[kind].append((-eps, attr(fs, "inclination_deg", np.nan), inc_f,
-                                   sa[0], sa[1]))
-    if not rows["elastic"] and not rows["plastic"]:
-        notes.append("Fig. 7: no fitted envelopes")
-        return
-    fig, ax = plt.subplots(1, 4, figsize=(14, 3.3))
-    titles = [r"(a) $\theta_\sigma$ [deg]", r"(b) $\theta_F$ [deg]",
-              "(c) major axis / first state", "(d) minor axis / first state"]
-    for kind, style in (("elastic", "o"), ("plastic", "s")):
-        r = sorted(rows[kind])
-        if not r:
+        env = dem_envelope(g, kind, probes_only=True)
+        if env is None:
             continue
-        a = np.array(r, dtype=float)
-        mfc = "none" if kind == "elastic" else None
-        ax[0].plot(a[:, 0], a[:, 1], style + "-", mfc=mfc, label=kind)
-        ax[1].plot(a[:, 0], a[:, 2], style + "-", mfc=mfc, label=kind)
-        ax[2].plot(a[:, 0], a[:, 3] / a[0, 3], style + "-", mfc=mfc, label=kind)
-        ax[3].plot(a[:, 0], a[:, 4] / a[0, 4] if a[0, 4] else a[:, 4], style + "-", mfc=mfc,
-                   label=kind)
-    ax[0].axhline(ISO, color="tab:red", lw=0.8)
-    ax[1].axhline(ISO, color="tab:red", lw=0.8)
+        fs, ff = env[1].get("fit_stress"), env[1].get("fit_fabric")
+        if not fit_ok(fs):
+            continue
+        sa = np.asarray(attr(fs, "semi_axes", [np.nan, np.nan]), dtype=float)
+        se = np.asarray(attr(fs, "semi_axes_stderr", [np.nan, np.nan]), dtype=float)
+        inc_s = float(attr(fs, "inclination_deg", np.nan))
+        inc_s_se = float(attr(fs, "inclination_deg_stderr", np.nan))
+        inc_f = float(attr(ff, "inclination_deg", np.nan)) if fit_ok(ff) else np.nan
+        inc_f_se = float(attr(ff, "inclination_deg_stderr", np.nan)) if fit_ok(ff) else np.nan
+        rows.append((-eps, inc_s, inc_s_se, inc_f, inc_f_se, sa[0], se[0], sa[1], se[1]))
+    return np.array(sorted(rows), dtype=float) if rows else None
+
+
+def ratio_with_error(v, se, i0=0):
+    """v / v[0] and its first-order standard error (independent fits)."""
+    v0, s0 = v[i0], se[i0]
+    if not np.isfinite(v0) or v0 == 0:
+        return v, se
+    r = v / v0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        rel = np.sqrt(np.nan_to_num((se / v) ** 2) + np.nan_to_num((s0 / v0) ** 2))
+    return r, np.abs(r) * rel
+
+
+def fig7_trends(f, out, ctx):
+    data = {kind: feature_rows(f, kind) for kind in ("elastic", "plastic")}
+    if all(v is None for v in data.values()):
+        ctx["notes"].append("Fig. 7: no fitted probe envelopes")
+        return
+    fig, axes = plt.subplots(2, 2, figsize=(PAGE_WIDTH, 5.2))
+    ax = axes.ravel()
+    titles = [r"(a) stress inclination $\theta_\sigma$ [deg]",
+              r"(b) fabric inclination $\theta_F$ [deg]",
+              "(c) major semi-axis / first state", "(d) minor semi-axis / first state"]
+    for kind, style, colour in (("elastic", "o", "tab:blue"), ("plastic", "s", "tab:orange")):
+        a = data[kind]
+        if a is None:
+            continue
+        kw = dict(fmt=style + "-", color=colour, capsize=2.5, ms=4, lw=0.9, elinewidth=0.8,
+                  mfc="none" if kind == "elastic" else colour, label=kind)
+        x = a[:, 0]
+        ax[0].errorbar(x, a[:, 1], yerr=np.nan_to_num(a[:, 2]), **kw)
+        ax[1].errorbar(x, a[:, 3], yerr=np.nan_to_num(a[:, 4]), **kw)
+        r, se = ratio_with_error(a[:, 5], a[:, 6])
+        ax[2].errorbar(x, r, yerr=np.nan_to_num(se), **kw)
+        r, se = ratio_with_error(a[:, 7], a[:, 8])
+        ax[3].errorbar(x, r, yerr=np.nan_to_num(se), **kw)
+    for a in ax[:2]:
+        a.axhline(ISO, color="tab:red", lw=0.7, ls="--", label="isotropic 35.26°")
     for a, t in zip(ax, titles):
-        a.set_title(t, fontsize=9)
+        a.set_title(t)
         a.set_xlabel(r"$-\varepsilon_{dev}$")
-    ax[0].legend(fontsize=7)
-    fig.suptitle("Fig. 7: envelope features along the path")
-    save(fig, out, "fig7_features", written)
+    ax[0].legend()
+    fig.suptitle("Fig. 7: envelope features along the path (bars: standard errors of the fits)")
+    fig.tight_layout()
+    save(fig, out, "fig7_features", ctx)
 
 
 def plastic_amplitude(f):
@@ -220,15 +479,16 @@ def plastic_amplitude(f):
     return max(amps) if amps else None
 
 
-def fig_elastic_range(f, out, written, notes):
+def fig_elastic_range(f, out, ctx):
     """Where each state's response leaves the elastic one (elastic_range stage): b/a, |c|/a
     and k_continue/k_reverse of the four-direction ladder against the amplitude."""
     rows = [(eps, label, g["elastic_range"]) for eps, label, g in states(f)
             if "elastic_range" in g]
     if not rows:
-        notes.append("elastic range: no /states/*/elastic_range")
+        ctx["notes"].append("elastic range: no /states/*/elastic_range")
         return
-    fig, ax = plt.subplots(1, 4, figsize=(15, 3.5))
+    fig, axes = plt.subplots(2, 2, figsize=(PAGE_WIDTH, 5.4))
+    ax = axes.ravel()
     colours = plt.cm.viridis(np.linspace(0, 0.9, len(rows)))
     for (eps, label, g), c in zip(rows, colours):
         a = g["amplitude"][:]
@@ -237,10 +497,10 @@ def fig_elastic_range(f, out, written, notes):
         kc, kr = g["k_continue"][:], g["k_reverse"][:]
         y = float(attr(g, "yield_strain"))
         lab = rf"{label} ($-\varepsilon_{{dev}}$ {-eps:.3f})"
-        ax[0].plot(a, minor / major, "o-", color=c, ms=4, label=lab)
-        ax[1].plot(a, g["minor_over_elastic"][:], "o-", color=c, ms=4)
-        ax[2].plot(a, g["center_over_a"][:], "o-", color=c, ms=4)
-        ax[3].plot(a, kc / kr, "o-", color=c, ms=4)
+        ax[0].plot(a, minor / major, "o-", color=c, ms=3.5, label=lab)
+        ax[1].plot(a, g["minor_over_elastic"][:], "o-", color=c, ms=3.5)
+        ax[2].plot(a, g["center_over_a"][:], "o-", color=c, ms=3.5)
+        ax[3].plot(a, kc / kr, "o-", color=c, ms=3.5)
         for x in ax:
             x.axvline(y, color=c, lw=0.8, ls=":")
     tol = float(attr(rows[0][2], "tolerance"))
@@ -253,16 +513,17 @@ def fig_elastic_range(f, out, written, notes):
         x.set_xlabel(r"$|\delta\varepsilon|$")
         if pa:
             x.axvline(pa, color="k", lw=1, ls="--")
-    ax[0].set_title("b/a of the ladder's map", fontsize=9)
-    ax[1].set_title("minor axis / elastic (band: tolerance)", fontsize=9)
-    ax[2].set_title("|centre| / a", fontsize=9)
-    ax[3].set_title(r"$k_{continue}/k_{reverse}$ (red: 0.2)", fontsize=9)
+    ax[0].set_title("(a) b/a of the ladder's map")
+    ax[1].set_title("(b) minor axis / elastic (band: tolerance)")
+    ax[2].set_title("(c) |centre| / a")
+    ax[3].set_title(r"(d) $k_{continue}/k_{reverse}$ (red: 0.2)")
     ax[0].legend(fontsize=6)
     fig.suptitle("Elastic range per state (dotted: yield strain; dashed: plastic amplitude)")
-    save(fig, out, "elastic_range", written)
+    fig.tight_layout()
+    save(fig, out, "elastic_range", ctx)
 
 
-def fig_yield_pressure(f, out, written, notes):
+def fig_yield_pressure(f, out, ctx):
     """Yield strain against P* over the volume fractions of the run (pressure stage)."""
     pts = []  # (P*, yield, yielded, nu, label, elastic_to)
     groups = [g for _, _, g in states(f)]
@@ -281,9 +542,9 @@ def fig_yield_pressure(f, out, written, notes):
                     g.name.split("/")[-1], float(attr(er, "elastic_to", 0.0))))
     nus = sorted({round(p[3], 2) for p in pts})
     if len(nus) < 2:
-        notes.append("yield against P*: elastic ranges at fewer than two volume fractions")
+        ctx["notes"].append("yield against P*: elastic ranges at fewer than two volume fractions")
         return
-    fig, ax = plt.subplots(figsize=(5.5, 4))
+    fig, ax = plt.subplots(figsize=(4.6, 3.6))
     colours = plt.cm.plasma(np.linspace(0, 0.8, len(nus)))
     for nu, c in zip(nus, colours):
         sel = [p for p in pts if round(p[3], 2) == nu]
@@ -291,19 +552,20 @@ def fig_yield_pressure(f, out, written, notes):
             ax.plot(p[0], p[1], "o" if p[2] else "^", color=c, mfc=c if p[2] else "none")
             if p[5] > 0:  # the bracket: still elastic at elastic_to, departed at the yield
                 ax.plot([p[0], p[0]], [p[5], p[1]], "-", color=c, lw=0.6, alpha=0.6)
-            ax.annotate(p[4], (p[0], p[1]), fontsize=6, xytext=(3, 2), textcoords="offset points")
         med_p = float(np.median([p[0] for p in sel]))
         med_y = float(np.median([p[1] for p in sel]))
         ax.plot(med_p, med_y, "s", color=c, ms=9, mfc="none", mew=1.5)
-        ax.plot([], [], "o", color=c, label=rf"$\nu$ = {nu:.2f} (square: median)")
+        ax.plot([], [], "o", color=c, label=rf"$\nu$ = {nu:.2f}")
+    place_labels(ax, [(p[0], p[1], p[4], "0.2") for p in pts])
+    ax.plot([], [], "s", color="0.3", mfc="none", ms=8, label="median")
+    ax.plot([], [], "^", color="0.3", mfc="none", label="no departure in the ladder")
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.set_xlabel(r"$P^*$")
     ax.set_ylabel("yield strain")
-    ax.legend(fontsize=7)
-    ax.set_title("Yield strain against pressure (lines: from the last elastic rung; open "
-                 "triangle: no departure within the ladder)", fontsize=8)
-    save(fig, out, "yield_pressure", written)
+    ax.legend(fontsize=6)
+    ax.set_title("Yield strain against pressure\n(lines: from the last elastic rung)")
+    save(fig, out, "yield_pressure", ctx)
 
 
 # Calibrated laws over the DEM (docs/calibration.md "Model envelopes beside the DEM"): per
@@ -311,9 +573,6 @@ def fig_yield_pressure(f, out, written, notes):
 # method the claims use: dynamic, else minimisation, else the linear response at elastic
 # amplitude), the DEM fit, and every calibrated law's envelope for the same probes; and the
 # path with every law's prediction. The SVG description lists the laws drawn.
-MODEL_COLOURS = ["tab:red", "tab:green", "tab:purple", "tab:brown", "tab:olive", "tab:cyan"]
-
-
 def calibrated_models(f):
     """(name, group, label) of every calibrated law; the selected one is marked."""
     if "calibration" not in f:
@@ -327,12 +586,12 @@ def calibrated_models(f):
     return out
 
 
-def dem_envelope(state_group, kind):
-    """The DEM envelope a panel shows: dynamic, else minimisation, else (elastic only) the
-    linear response; returns (name, group) or None."""
+def dem_envelope(state_group, kind, probes_only=False):
+    """The DEM envelope a panel shows: dynamic, else minimisation, else (elastic only, unless
+    probes_only) the linear response; returns (name, group) or None."""
     envs = envelopes(state_group, kind)
     for method in ("dynamic", "minimisation", "linear_response"):
-        if method == "linear_response" and kind != "elastic":
+        if method == "linear_response" and (kind != "elastic" or probes_only):
             continue
         for name, g in envs:
             if attr(g, "method") == method:
@@ -346,10 +605,10 @@ def closed(theta, pts):
     return np.vstack([p, p[:1]])
 
 
-def fig_model_envelopes(f, out, written, notes, kind, quantity):
+def fig_model_envelopes(f, out, ctx, kind, quantity):
     models = calibrated_models(f)
     if not models:
-        notes.append(f"models {kind} {quantity}: no calibrated law")
+        ctx["notes"].append(f"models {kind} {quantity}: no calibrated law")
         return
     k_star = float(attr(f["material"], "k_star", 1.0)) if "material" in f else 1.0
     panels = []
@@ -358,72 +617,80 @@ def fig_model_envelopes(f, out, written, notes, kind, quantity):
         if env is not None:
             panels.append((eps, label, env))
     if not panels:
-        notes.append(f"models {kind} {quantity}: no {kind} DEM envelopes")
+        ctx["notes"].append(f"models {kind} {quantity}: no {kind} DEM envelopes")
         return
     key = "stress_star" if quantity == "stress" else "fabric"
     fit_key = "fit_stress" if quantity == "stress" else "fit_fabric"
-    n = len(panels)
-    fig, axes = plt.subplots(1, n, figsize=(3.4 * n, 3.6), squeeze=False)
-    drawn, no_fabric = set(), set()
-    for ax, (eps, label, (name, g)) in zip(axes[0], panels):
-        r = g[key][:]
-        ax.plot(r[:, 0], r[:, 1], "k.", ms=4, label=f"DEM ({attr(g, 'method', '?')})")
-        if fit_key in g:
-            x, y = fit_curve(g[fit_key])
-            ax.plot(x, y, "k-", lw=0.8, label="DEM fit")
+    sym = "\\sigma^*" if quantity == "stress" else "F"
+    e = power_of_ten(*(g[key][:] for _, _, (_, g) in panels))
+    scale = 10.0 ** e
+    fig, axes, leg = panel_grid(len(panels))
+    ncols = fig.axes[0].get_subplotspec().get_gridspec().ncols
+    drawn, no_fabric, handles = set(), set(), {}
+    for k, (ax, (eps, label, (name, g))) in enumerate(zip(axes, panels)):
+        r = g[key][:] / scale
+        ax.plot(r[:, 0], r[:, 1], "k.", ms=4, zorder=4)
+        handles.setdefault("dem", Line2D([], [], ls="none", marker=".", color="k", ms=4,
+                                         label=f"DEM ({attr(g, 'method', '?')})"))
+        fit = g.get(fit_key)
+        if fit_ok(fit):
+            x, y = fit_curve(fit)
+            ax.plot(x / scale, y / scale, "k-", lw=0.8, zorder=3)
+            shape = attr(fit, "shape")
+            handles.setdefault("fit " + shape, Line2D([], [], color="k", lw=0.8,
+                                                      label=f"DEM fit: {shape}"))
         for i, (mname, mg, mlabel) in enumerate(models):
             path = f"states/{label}/envelopes/{name}"
             if path not in mg:
                 continue
-            e = mg[path]
-            pred = e["stress"][:] / k_star if quantity == "stress" else e["fabric"][:]
+            em = mg[path]
+            pred = em["stress"][:] / k_star if quantity == "stress" else em["fabric"][:]
             if quantity == "fabric" and not np.any(pred):
                 no_fabric.add(mname)  # a law without fabric (hypoplastic_wu): nothing to draw
                 continue
-            c = closed(e["theta_deg"][:], pred)
-            ax.plot(c[:, 0], c[:, 1], "-", color=MODEL_COLOURS[i % len(MODEL_COLOURS)], lw=1.2,
-                    label=mlabel)
+            c = closed(em["theta_deg"][:], pred) / scale
+            colour = MODEL_COLOURS[i % len(MODEL_COLOURS)]
+            ax.plot(c[:, 0], c[:, 1], "-", color=colour, lw=1.1, zorder=2)
+            handles.setdefault("m " + mname, Line2D([], [], color=colour, lw=1.1, label=mlabel))
             drawn.add(mname)
-        ax.axhline(0, color="0.85", lw=0.6)
-        ax.axvline(0, color="0.85", lw=0.6)
-        ax.set_title(rf"{label}: $-\varepsilon_{{dev}}$ = {-eps:.3f}, "
-                     f"|δε| = {float(attr(g, 'amplitude', 0)):g}", fontsize=8)
-        sym = "\\sigma^*" if quantity == "stress" else "F"
-        ax.set_xlabel(r"$\sqrt{2}\,\delta " + sym + r"_{yy}$")
-        ax.tick_params(labelsize=7)
-    sym = "\\sigma^*" if quantity == "stress" else "F"
-    axes[0][0].set_ylabel(r"$\delta " + sym + r"_{xx}$")
-    axes[0][0].legend(fontsize=6)
-    title = f"Calibrated laws over the DEM: {kind} {quantity} envelopes"
+        rendulic_axes(ax, [r[:, 0]], [r[:, 1]], label)
+        rendulic_labels(ax, sym, e, k % ncols == 0)
+        ax.set_title(state_title(label, eps))
+    legend_in(leg, list(handles.values()))
+    amps = sorted({float(attr(g, "amplitude", 0)) for _, _, (_, g) in panels})
+    title = (f"Calibrated laws over the DEM: {kind} {quantity} envelopes, |δε| = "
+             + ", ".join(f"{a:g}" for a in amps))
     if no_fabric:
-        title += " (no fabric predicted by " + ", ".join(sorted(no_fabric)) + ")"
-    fig.suptitle(title, y=1.06)  # above the panels' titles and axis offsets
+        title += "\n(no fabric predicted by " + ", ".join(sorted(no_fabric)) + ")"
+    fig.suptitle(title)
+    fig.tight_layout()
     desc = "models: " + ", ".join(sorted(drawn))
     if no_fabric:
         desc += "; no fabric: " + ", ".join(sorted(no_fabric))
-    save(fig, out, f"models_{kind}_{quantity}", written, description=desc)
+    save(fig, out, f"models_{kind}_{quantity}", ctx, description=desc)
 
 
-def fig_models_path(f, out, written, notes):
+def fig_models_path(f, out, ctx):
     models = [m for m in calibrated_models(f) if "path" in m[1]]
     if "path" not in f or not models:
-        notes.append("models path: no path or no law with a predicted path")
+        ctx["notes"].append("models path: no path or no law with a predicted path")
         return
     g = f["path"]
     k_star = float(attr(f["material"], "k_star", 1.0)) if "material" in f else 1.0
     e0 = float(g["eps_dev"][0])
     x = -g["eps_dev"][:]
     s, F = g["stress_star"][:], g["fabric"][:]
-    fig, ax = plt.subplots(1, 2, figsize=(10, 3.8))
+    es = power_of_ten(s[:, 0, 0], s[:, 1, 1])
+    fig, ax = plt.subplots(1, 2, figsize=(PAGE_WIDTH, 3.2))
     for i, lab in ((0, "xx"), (1, "yy")):
-        ax[0].plot(x, s[:, i, i], "k-" if i == 0 else "k--", lw=1.4,
+        ax[0].plot(x, s[:, i, i] / 10.0 ** es, "k-" if i == 0 else "k--", lw=1.4,
                    label=rf"DEM $\sigma^*_{{{lab}}}$")
         ax[1].plot(x, F[:, i, i], "k-" if i == 0 else "k--", lw=1.4, label=f"DEM $F_{{{lab}}}$")
     drawn = []
     for j, (mname, mg, mlabel) in enumerate(models):
         p = mg["path"]
         xm = -(e0 + p["eps_dev"][:])
-        sm, fm = p["stress"][:] / k_star, p["fabric"][:]
+        sm, fm = p["stress"][:] / k_star / 10.0 ** es, p["fabric"][:]
         c = MODEL_COLOURS[j % len(MODEL_COLOURS)]
         for i in (0, 1):
             ls = "-" if i == 0 else "--"
@@ -431,29 +698,99 @@ def fig_models_path(f, out, written, notes):
             ax[1].plot(xm, fm[:, i, i], ls, color=c, lw=1, label=mlabel if i == 0 else None)
         drawn.append(mname)
     # The DEM sets the scale: a law far off leaves the frame rather than flatten the data.
-    for a, d in ((ax[0], s), (ax[1], F)):
+    for a, d in ((ax[0], s / 10.0 ** es), (ax[1], F)):
         lo = min(d[:, 0, 0].min(), d[:, 1, 1].min())
         hi = max(d[:, 0, 0].max(), d[:, 1, 1].max())
         a.set_ylim(lo - 0.5 * (hi - lo), hi + 0.5 * (hi - lo))
     for a in ax:
         a.set_xlabel(r"$-\varepsilon_{dev}$")
-        a.legend(fontsize=6)
+    # One legend below both panels (inside, it would hide the curves): a colour per source,
+    # the line style (xx solid, yy dashed) is in the titles.
+    handles = [Line2D([], [], color="k", lw=1.4, label="DEM")]
+    handles += [Line2D([], [], color=MODEL_COLOURS[j % len(MODEL_COLOURS)], lw=1, label=m[2])
+                for j, m in enumerate(models)]
+    fig.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, 0.0),
+               ncol=min(len(handles), 3))
+    ax[0].set_ylabel(with_power(r"stress $\sigma^*_{ii}$", es))
+    ax[1].set_ylabel(r"fabric $F_{ii}$")
     ax[0].set_title("(a) stress: xx solid, yy dashed")
     ax[1].set_title("(b) fabric: xx solid, yy dashed")
     fig.suptitle("Calibrated laws along the main path (Fig. 1 analogue)")
-    save(fig, out, "models_path", written, description="models: " + ", ".join(sorted(drawn)))
+    fig.tight_layout()
+    save(fig, out, "models_path", ctx, description="models: " + ", ".join(sorted(drawn)))
 
 
+# --- sweep files ----------------------------------------------------------------------------
 FACTOR_STYLE = {"dt_factor": ("o", "tab:blue"), "dt_factor_tight": ("o", "tab:cyan"),
                 "n_particles": ("s", "tab:green"), "inertial_number": ("^", "tab:orange"),
                 "relax": ("D", "tab:purple"), "method": ("*", "tab:red")}
 METHOD_MARKER = {"dynamic": "*", "minimisation": "P", "linear_response": "X"}
 ERROR_FLOOR = 1e-6  # the reference itself has error 0: drawn on the floor
+LABEL_GID = "point-label"  # gid of the value labels placed by place_labels
+
+
+def overlap(a, b):
+    w = min(a.x1, b.x1) - max(a.x0, b.x0)
+    h = min(a.y1, b.y1) - max(a.y0, b.y0)
+    return w * h if w > 0 and h > 0 else 0.0
+
+
+def place_labels(ax, items, fontsize=6):
+    """Labels (x, y, text, colour) beside their points without overlapping each other, the
+    points or the axes frame: each takes the first free place on rings of growing radius
+    around its point (beyond the first ring with a leader line). A label with no free place
+    is left out and returned, so the caller can list it instead of drawing it over another."""
+    fig = ax.figure
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    pts = [ax.transData.transform((x, y)) for x, y, _, _ in items]
+    r_px = 4.0 * fig.dpi / 72.0
+    taken = [mtransforms.Bbox([[px - r_px, py - r_px], [px + r_px, py + r_px]])
+             for px, py in pts]
+    frame = ax.get_window_extent(renderer)
+    left_out = []
+    directions = [(1, 1), (1, -1), (-1, 1), (-1, -1), (0, 1), (0, -1), (1, 0), (-1, 0)]
+    for (x, y, text, colour) in items:
+        placed = False
+        for radius in (4, 11, 18, 26, 36, 48):
+            for dx, dy in directions:
+                ha = "left" if dx > 0 else "right" if dx < 0 else "center"
+                va = "bottom" if dy > 0 else "top" if dy < 0 else "center"
+                arrow = dict(arrowstyle="-", color=colour, lw=0.4) if radius > 4 else None
+                t = ax.annotate(text, (x, y), xytext=(dx * radius, dy * radius),
+                                textcoords="offset points", ha=ha, va=va, fontsize=fontsize,
+                                color=colour, arrowprops=arrow, annotation_clip=False)
+                bb = t.get_window_extent(renderer)
+                inside = (bb.x0 >= frame.x0 and bb.x1 <= frame.x1 and bb.y0 >= frame.y0 and
+                          bb.y1 <= frame.y1)
+                if inside and all(overlap(bb, o) == 0.0 for o in taken):
+                    t.set_gid(LABEL_GID)
+                    taken.append(bb)
+                    placed = True
+                    break
+                t.remove()
+            if placed:
+                break
+        if not placed:
+            left_out.append(text)
+    return left_out
+
+
+def readable_log_axes(ax):
+    """A log axis spanning less than a decade gets a few plain ticks (the default labels every
+    minor tick in scientific notation, and they run into each other)."""
+    for axis, (lo, hi) in ((ax.xaxis, ax.get_xlim()), (ax.yaxis, ax.get_ylim())):
+        if axis.get_scale() == "log" and lo > 0 and hi / lo < 10:
+            axis.set_major_locator(MaxNLocator(5))
+            axis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+            axis.set_minor_locator(NullLocator())
 
 
 def draw_sweep_points(ax, rows):
     """One marker and colour per factor (per method for the method points), value labels;
-    filled markers meet the accuracy target."""
+    filled markers meet the accuracy target. Returns the labels, to be placed once the axes
+    are final."""
+    labels = []
     for factor, (marker, colour) in FACTOR_STYLE.items():
         pts = [r for r in rows if r["factor"] == factor]
         if not pts:
@@ -461,22 +798,22 @@ def draw_sweep_points(ax, rows):
         for r in pts:
             err = max(float(r["error"]), ERROR_FLOOR)
             m = METHOD_MARKER[r["method"]] if factor == "method" else marker
-            ax.plot(float(r["cpu_s"]), err, m, color=colour, ms=8 if factor == "method" else 6,
-                    mfc=colour if r["meets_target"] else "none")
+            ax.plot(float(r["cpu_s"]), err, m, color=colour, ms=7 if factor == "method" else 5,
+                    mfc=colour if int(r["meets_target"]) else "none")
             label = r["method"] if factor == "method" else f"{float(r['value']):g}"
-            ax.annotate(label, (float(r["cpu_s"]), err), fontsize=6, xytext=(3, 3),
-                        textcoords="offset points", color=colour)
+            labels.append((float(r["cpu_s"]), err, label, colour))
         ax.plot([], [], marker, color=colour, label=factor)
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.set_xlabel("CPU time of the envelope [s]")
+    return labels
 
 
-def fig_pareto(f, out, written, notes):
+def fig_pareto(f, out, ctx):
     """Speed versus accuracy (rendulic sweep): envelope error against CPU time, log-log."""
     g = f["sweep"]
     if "points" not in g:
-        notes.append("Pareto chart: no probe-method points (path_rate only)")
+        ctx["notes"].append("Pareto chart: no probe-method points (path_rate only)")
         return
     rows = []
     for name in sorted(g["points"]):
@@ -484,13 +821,13 @@ def fig_pareto(f, out, written, notes):
         rows.append({k: attr(p, k) for k in p.attrs})
     ok = [r for r in rows if r["status"] == "ok" and r["envelope"] == "elastic"]
     if not ok:
-        notes.append("Pareto chart: no elastic point with status ok")
+        ctx["notes"].append("Pareto chart: no elastic point with status ok")
         return
     plastic = [r for r in rows if r["status"] == "ok" and r["envelope"] == "plastic"]
-    fig, axes = plt.subplots(1, 2 if plastic else 1, figsize=(15 if plastic else 8.5, 6),
-                             squeeze=False)
+    fig, axes = plt.subplots(2 if plastic else 1, 1,
+                             figsize=(PAGE_WIDTH, 9.0 if plastic else 4.8), squeeze=False)
     ax = axes[0][0]
-    draw_sweep_points(ax, ok)
+    labels = draw_sweep_points(ax, ok)
     front = sorted((float(r["cpu_s"]), max(float(r["error"]), ERROR_FLOOR))
                    for r in ok if r["pareto"])
     if front:
@@ -498,31 +835,43 @@ def fig_pareto(f, out, written, notes):
                 lw=1, ls="--", label="Pareto front")
     target = float(attr(g, "target"))
     ax.axhline(target, color="tab:red", lw=0.8, ls=":", label=f"target {target:g}")
-    # Settings that could not run, listed at the top edge with the reason.
-    bad = [r for r in rows if r["status"] != "ok"]
-    for i, r in enumerate(bad):
-        ax.annotate(f"{r['factor']} = {float(r['value']):g}: {r['status']}",
-                    xy=(0.01, 0.98 - 0.035 * i), xycoords="axes fraction", fontsize=7,
-                    color="tab:red", va="top")
     ax.set_ylabel(r"max$_\theta$ $|\delta\sigma^* - \delta\sigma^*_{ref}|$ / $a_{ref}$")
-    ax.legend(fontsize=7, loc="upper right")
-    ax.set_title("Elastic envelope against the linear response (filled: meets the target; "
-                 f"the reference itself at {ERROR_FLOOR:g}, off the front)", fontsize=8)
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    ax.set_title("(a) elastic envelope against the linear response (filled: meets the target; "
+                 f"the reference itself at {ERROR_FLOOR:g})")
+    # Headroom for the labels of the highest and lowest points.
+    lo, hi = ax.get_ylim()
+    ax.set_ylim(lo / 3, hi * 3)
+    panels = [(ax, labels)]
     if plastic:
-        bx = axes[0][1]
-        draw_sweep_points(bx, plastic)
+        bx = axes[1][0]
+        panels.append((bx, draw_sweep_points(bx, plastic)))
         bx.set_ylabel("error against the minimisation envelope")
-        bx.legend(fontsize=7, loc="upper right")
-        bx.set_title("Elasto-plastic envelope, |d eps| = "
-                     f"{float(attr(g, 'plastic_amplitude')):g}", fontsize=8)
-    breaks = [b for b in str(attr(g, "breaks", "")).split("\n") if b]
-    if breaks:
-        fig.text(0.01, -0.01, "\n".join(b if len(b) < 170 else b[:167] + "..." for b in breaks),
-                 fontsize=6, va="top", ha="left")
-    save(fig, out, "pareto", written)
+        bx.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0))
+        bx.set_title("(b) elasto-plastic envelope, |δε| = "
+                     f"{float(attr(g, 'plastic_amplitude')):g}")
+        lo, hi = bx.get_ylim()
+        bx.set_ylim(lo / 3, hi * 3)
+    for a, _ in panels:
+        readable_log_axes(a)
+    fig.tight_layout()
+    unlabelled = []
+    for a, lab in panels:
+        unlabelled += place_labels(a, lab)
+    # Settings that could not run and the sweep's findings: full text, wrapped, below.
+    notes = [f"{r['factor']} = {float(r['value']):g}: {r['status']}"
+             for r in rows if r["status"] != "ok"]
+    notes += attr_list(g, "breaks", sep="\n")
+    if unlabelled:
+        notes.append("unlabelled (no free place): " + ", ".join(unlabelled))
+    if notes:
+        text = "\n".join(textwrap.fill(n, 130, subsequent_indent="    ") for n in notes)
+        fig.text(0.0, 0.0, text, fontsize=6, va="top", ha="left",
+                 transform=fig.transFigure)
+    save(fig, out, "pareto", ctx)
 
 
-def fig_path_rate(f, out, written, notes):
+def fig_path_rate(f, out, ctx):
     """The path's rate (rendulic sweep, factor path_rate): the steady-state stress ratio
     against the inertial number, each seed and their mean with its standard error."""
     g = f["sweep"]
@@ -531,9 +880,10 @@ def fig_path_rate(f, out, written, notes):
     rows = [g["path_rate"][k] for k in sorted(g["path_rate"])]
     ok = [r for r in rows if attr(r, "status") == "ok"]
     if not ok:
-        notes.append("path rate: no point with status ok")
+        ctx["notes"].append("path rate: no point with status ok")
         return
-    fig, ax = plt.subplots(figsize=(6.5, 4.2))
+    fig, ax = plt.subplots(figsize=(4.6, 3.4))
+    labels = []
     for r in ok:
         i = float(attr(r, "inertial_number"))
         seeds = np.atleast_1d(np.asarray(attr(r, "ratio_per_seed", []), dtype=float))
@@ -541,56 +891,66 @@ def fig_path_rate(f, out, written, notes):
         filled = int(attr(r, "converged", 0)) == 1
         ax.errorbar(i, float(attr(r, "ratio")), yerr=float(attr(r, "ratio_stderr")), fmt="o",
                     color="tab:blue", mfc="tab:blue" if filled else "white", capsize=3)
-        ax.annotate(f"{float(attr(r, 'rate')):g}/s", (i, float(attr(r, "ratio"))), fontsize=6,
-                    xytext=(4, 4), textcoords="offset points")
+        labels.append((i, float(attr(r, "ratio")), f"{float(attr(r, 'rate')):g}/s", "0.2"))
     ax.set_xscale("log")
     ax.set_xlabel("inertial number of the path (steady state)")
     ax.set_ylabel(r"steady-state $|\sigma_{dev}|/P$")
     target = float(attr(g, "path_rate_target", 0.02))
-    ax.set_title("Path rate: mean +- standard error over seeds (grey: each seed); filled: "
-                 f"within {100 * target:g} % of the run 4x slower", fontsize=8)
-    save(fig, out, "path_rate", written)
+    ax.set_title("Path rate: mean ± standard error over seeds (grey: each seed);\nfilled: "
+                 f"within {100 * target:g} % of the run 4x slower")
+    readable_log_axes(ax)
+    fig.tight_layout()
+    place_labels(ax, labels)
+    save(fig, out, "path_rate", ctx)
+
+
+# --- driver ---------------------------------------------------------------------------------
+def figure_list(f, out, ctx):
+    if "sweep" in f:  # a sweep file (rendulic sweep): the Pareto and path-rate charts
+        return [("Pareto chart", lambda: fig_pareto(f, out, ctx)),
+                ("path rate", lambda: fig_path_rate(f, out, ctx))]
+    return [
+        ("isotropic branch", lambda: fig_isotropic(f, out, ctx)),
+        ("Fig. 1", lambda: fig1_path(f, out, ctx)),
+        ("Fig. 2", lambda: fig2_strain_circle(f, out, ctx)),
+        ("Fig. 3", lambda: fig_envelopes(f, out, ctx, 3, "elastic", "stress")),
+        ("Fig. 4", lambda: fig_envelopes(f, out, ctx, 4, "elastic", "fabric")),
+        ("Fig. 5", lambda: fig_envelopes(f, out, ctx, 5, "plastic", "stress")),
+        ("Fig. 6", lambda: fig_envelopes(f, out, ctx, 6, "plastic", "fabric")),
+        ("Fig. 7", lambda: fig7_trends(f, out, ctx)),
+        ("elastic range", lambda: fig_elastic_range(f, out, ctx)),
+        ("yield against P*", lambda: fig_yield_pressure(f, out, ctx)),
+        ("models elastic stress", lambda: fig_model_envelopes(f, out, ctx, "elastic", "stress")),
+        ("models plastic stress", lambda: fig_model_envelopes(f, out, ctx, "plastic", "stress")),
+        ("models elastic fabric", lambda: fig_model_envelopes(f, out, ctx, "elastic", "fabric")),
+        ("models plastic fabric", lambda: fig_model_envelopes(f, out, ctx, "plastic", "fabric")),
+        ("models path", lambda: fig_models_path(f, out, ctx)),
+    ]
+
+
+def draw_all(path, out, keep=False):
+    """Draws every figure of results file `path` into folder `out`. Returns (files written,
+    notes on skipped figures, {name: Figure} when keep, else {}): keep leaves the figures open
+    for a caller that inspects them."""
+    os.makedirs(out, exist_ok=True)
+    ctx = {"written": [], "notes": [], "keep": {} if keep else None}
+    with plt.rc_context(STYLE), h5py.File(path, "r") as f:
+        for name, draw in figure_list(f, out, ctx):
+            try:
+                draw()
+            except (KeyError, ValueError, IndexError, TypeError) as e:  # partial files: skip
+                # and say why
+                if not keep:
+                    plt.close("all")
+                ctx["notes"].append(f"{name}: {e}")
+    return ctx["written"], ctx["notes"], ctx["keep"] or {}
 
 
 def main():
     if len(sys.argv) != 3:
         print("usage: plot.py FILE.h5 OUTDIR", file=sys.stderr)
         return 2
-    path, out = sys.argv[1], sys.argv[2]
-    os.makedirs(out, exist_ok=True)
-    written, notes = [], []
-    figures = [
-        ("isotropic branch", lambda f: fig_isotropic(f, out, written, notes)),
-        ("Fig. 1", lambda f: fig1_path(f, out, written, notes)),
-        ("Fig. 2", lambda f: fig2_strain_circle(out, written)),
-        ("Fig. 3", lambda f: fig_envelopes(f, out, written, notes, 3, "elastic", "stress")),
-        ("Fig. 4", lambda f: fig_envelopes(f, out, written, notes, 4, "elastic", "fabric")),
-        ("Fig. 5", lambda f: fig_envelopes(f, out, written, notes, 5, "plastic", "stress")),
-        ("Fig. 6", lambda f: fig_envelopes(f, out, written, notes, 6, "plastic", "fabric")),
-        ("Fig. 7", lambda f: fig7_trends(f, out, written, notes)),
-        ("elastic range", lambda f: fig_elastic_range(f, out, written, notes)),
-        ("yield against P*", lambda f: fig_yield_pressure(f, out, written, notes)),
-        ("models elastic stress",
-         lambda f: fig_model_envelopes(f, out, written, notes, "elastic", "stress")),
-        ("models plastic stress",
-         lambda f: fig_model_envelopes(f, out, written, notes, "plastic", "stress")),
-        ("models elastic fabric",
-         lambda f: fig_model_envelopes(f, out, written, notes, "elastic", "fabric")),
-        ("models plastic fabric",
-         lambda f: fig_model_envelopes(f, out, written, notes, "plastic", "fabric")),
-        ("models path", lambda f: fig_models_path(f, out, written, notes)),
-    ]
-    with h5py.File(path, "r") as f:
-        if "sweep" in f:  # a sweep file (rendulic sweep): the Pareto and path-rate charts
-            figures = [("Pareto chart", lambda f: fig_pareto(f, out, written, notes)),
-                       ("path rate", lambda f: fig_path_rate(f, out, written, notes))]
-        for name, draw in figures:
-            try:
-                draw(f)
-            except (KeyError, ValueError, IndexError, TypeError) as e:  # partial files: skip
-                # and say why
-                plt.close("all")
-                notes.append(f"{name}: {e}")
+    written, notes, _ = draw_all(sys.argv[1], sys.argv[2])
     for w in written:
         print(w)
     for n in notes:

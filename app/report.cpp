@@ -530,7 +530,7 @@ std::vector<Claim> evaluate_claims(const ResultsReader& r) {
       const double p = structural(*pl[i]), e = structural(*el[i]);
       gain.push_back(e > 0 ? p / e : (p > 0 ? std::numeric_limits<double>::infinity() : kNaN));
       ok = ok && (e > 0 ? p > 5.0 * e : p > 0);
-      // The line fit's inclination (the seed fits fabric envelopes with lines), else the map's.
+      // The fit's inclination (line or ellipse, as the shape test chose), else the map's.
       inc.push_back(pl[i]->fabric.incl);
     }
     if (measured) {

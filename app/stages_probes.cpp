@@ -98,9 +98,10 @@ void register_fit_keys(ScenarioSchema& s) {
          .choices = {"auto", "ellipse", "line"}});
   s.add({.path = "fits.fabric_shape",
          .type = KeyType::kString,
-         .default_value = std::string("line"),
+         .default_value = std::string("auto"),
          .unit = "-",
-         .help = "Shape fitted to fabric envelopes (the seed fits lines).",
+         .help = "Shape fitted to fabric envelopes; auto chooses ellipse or line by the same "
+                 "test as the stress (the seed draws lines; line forces that).",
          .choices = {"auto", "ellipse", "line"}});
   s.add({.path = "fits.loss",
          .type = KeyType::kString,

@@ -12,6 +12,11 @@
 //   The bootstrap draws the distribution of T = cost(line) / cost(ellipse) under the fitted
 //   line itself (same projections, Gaussian noise of the line's residual level) with the
 //   very fitting procedure used on the data, so the test has its stated size.
+// - Either way, an ellipse whose semi-major axis exceeds kMaxAxisOverSize times the points'
+//   rms radius is not what the points support: probes all around the circle of directions
+//   span their own envelope (a/rms = sqrt(2) for a thin one), so such a fit has run away
+//   along a nearly straight cloud the test found not quite straight (noise with structure).
+//   The line stands then, and the note says so.
 #include <cmath>
 #include <optional>
 #include <random>
@@ -79,6 +84,9 @@ bool FitOptions::IsValid(std::string* why) const {
 }
 
 namespace {
+
+// The largest semi-major axis of a selected ellipse, in rms radii of its points (see top).
+constexpr double kMaxAxisOverSize = 4.0;
 
 // Cost of a fit at the ellipse's loss scale: both shapes are judged by the same rho. In units
 // of `unit` (the data's size): only ratios of costs are used, and squares of data near 1e300
@@ -150,6 +158,14 @@ EnvelopeFit select_shape(const Envelope& env, const FitOptions& options) {
   auto choose = [&](double p, const std::string& how) -> EnvelopeFit {
     if (p < options.selection_alpha) {
       if (!ell) ell = fit_ellipse(env, options);
+      if (ell->a > kMaxAxisOverSize * L) {
+        note << "auto: line (the line is rejected by " << how << ": p = " << p << " < "
+             << options.selection_alpha << ", but the ellipse fit runs away: semi-major axis "
+             << ell->a / L << " x the points' rms radius, beyond " << kMaxAxisOverSize << ")";
+        line.line_p_value = p;
+        line.selection_note = note.str();
+        return line;
+      }
       note << "auto: " << to_string(ell->shape) << " (line rejected by " << how << ": p = " << p
            << " < " << options.selection_alpha << ")";
       if (ell->shape == FitShape::kCircle) note << "; axes equal within the errors";

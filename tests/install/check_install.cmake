@@ -9,12 +9,18 @@ function(run)
   endif()
 endfunction()
 run(${CMAKE_COMMAND} --install ${BUILD} --prefix ${WORK}/prefix)
-foreach(f bin/rendulic include/rendulic/core/version.hpp include/rendulic/dem/dem_system.hpp
-          lib/cmake/rendulic/rendulicConfig.cmake)
+foreach(f bin/rendulic share/rendulic/plot.py include/rendulic/core/version.hpp
+          include/rendulic/dem/dem_system.hpp lib/cmake/rendulic/rendulicConfig.cmake)
   if(NOT EXISTS ${WORK}/prefix/${f})
     message(FATAL_ERROR "not installed: ${f}")
   endif()
 endforeach()
+# The editable figure script (docs/figures.md) is the one compiled into the binary.
+file(READ ${WORK}/prefix/share/rendulic/plot.py installed_plot)
+file(READ ${SRC}/app/plot.py source_plot)
+if(NOT installed_plot STREQUAL source_plot)
+  message(FATAL_ERROR "share/rendulic/plot.py differs from app/plot.py")
+endif()
 run(${CMAKE_COMMAND} -S ${SRC}/tests/install/consumer -B ${WORK}/consumer
     -DCMAKE_PREFIX_PATH=${WORK}/prefix -DCMAKE_BUILD_TYPE=Release)
 run(${CMAKE_COMMAND} --build ${WORK}/consumer -j 2)

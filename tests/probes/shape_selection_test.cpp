@@ -1,6 +1,9 @@
 // Tests of the line fit, the shape criterion (parametric-bootstrap test of line against
-// ellipse), the circle flag and the robust losses.
+// ellipse, the guard against runaway ellipses), the circle flag and the robust losses.
 #include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
 
 #include "rendulic/core/errors.hpp"
 #include "rendulic/probes/envelope_fit.hpp"
@@ -112,6 +115,66 @@ TEST(ShapeSelection, CircleHasNoInclination) {
   // A clearly elongated noisy ellipse is not flagged.
   TrueEllipse el{{0.0, 0.0}, 1.0, 0.8, 50.0};
   EXPECT_EQ(fit_envelope(ellipse_envelope(el, 36, 0.01, 5), quick).shape, FitShape::kEllipse);
+}
+
+// A nearly straight cloud whose residuals the F-test finds structured (p ~ 5e-4): the fabric
+// of a dynamic probe campaign at |d eps| = 0.02 (quick.toml, state d). The orthogonal-distance
+// ellipse (here a circle) runs away to a radius ~30 times the cloud's; the selection keeps
+// the line, which is exactly the line fit's, and says why. The ellipses of the tests above
+// (a / rms radius = sqrt(2)) are untouched by this guard.
+TEST(ShapeSelection, RunawayEllipseOfANearlyStraightCloudIsALine) {
+  const double pts[][3] = {{35.264389682754654, 0.32878491893728884, 0.24097234068051554},
+                           {50.264389682754654, 0.31703256893885806, 0.23511725720677346},
+                           {65.264389682754654, 0.29743640412130418, 0.22511250414783213},
+                           {80.264389682754654, 0.24522097390171835, 0.17840615340066934},
+                           {95.264389682754654, 0.1723074109514415, 0.12094163973717631},
+                           {110.26438968275465, 0.098254822887818505, 0.063704413064214371},
+                           {125.26438968275465, 0.014842224958288323, -0.00043630146798534497},
+                           {140.26438968275465, -0.064030144838973568, -0.029088124462119058},
+                           {155.26438968275465, -0.1324732189546044, -0.099611882947523434},
+                           {170.26438968275465, -0.21047175776914373, -0.15135023991895702},
+                           {185.26438968275465, -0.25452737163255262, -0.18031503155220818},
+                           {200.26438968275465, -0.299623119334955, -0.22237652087080706},
+                           {215.26438968275465, -0.30319401805492513, -0.22645836293033872},
+                           {230.26438968275465, -0.30346319352814566, -0.24985261014021098},
+                           {245.26438968275465, -0.2855207255829984, -0.21484971232812944},
+                           {260.26438968275465, -0.20591994708337813, -0.16938675061928299},
+                           {275.26438968275465, -0.14713563712308037, -0.1384882159009142},
+                           {290.26438968275465, -0.070909209753807434, -0.080508798802468196},
+                           {305.26438968275465, 0.035051920031211624, -0.024234348644282644},
+                           {320.26438968275465, 0.072632246761729205, 0.026585667936943391},
+                           {335.26438968275465, 0.14182139413694841, 0.089874064985250524},
+                           {350.26438968275465, 0.2206042940354252, 0.15089257022769065},
+                           {5.2643896827546541, 0.26435497998635982, 0.17672742477861769},
+                           {20.264389682754654, 0.31345937637351384, 0.22427704113319802}};
+  Envelope env;
+  for (const auto& p : pts) {
+    env.theta_deg.push_back(p[0]);
+    env.response.emplace_back(p[1], p[2]);
+  }
+  env.amplitude = 0.02;
+  FitOptions forced;
+  forced.shape = FitShape::kEllipse;
+  const EnvelopeFit ell = fit_envelope(env, forced);
+  double rms = 0.0;
+  Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+  for (const auto& p : env.response) mean += p / static_cast<double>(env.size());
+  for (const auto& p : env.response)
+    rms += (p - mean).squaredNorm() / static_cast<double>(env.size());
+  rms = std::sqrt(rms);
+  ASSERT_GT(ell.a, 4.0 * rms) << "the forced ellipse no longer runs away: " << ell.a / rms;
+  const EnvelopeFit f = fit_envelope(env);
+  EXPECT_EQ(f.shape, FitShape::kLine) << f.selection_note;
+  ASSERT_TRUE(f.line_p_value.has_value());
+  EXPECT_LT(*f.line_p_value, 0.01);
+  EXPECT_NE(f.selection_note.find("runs away"), std::string::npos) << f.selection_note;
+  FitOptions line;
+  line.shape = FitShape::kLine;
+  const EnvelopeFit l = fit_envelope(env, line);
+  EXPECT_LT((f.center - l.center).norm(), kExact);
+  EXPECT_NEAR(f.a, l.a, kExact);
+  ASSERT_TRUE(f.inclination_deg && l.inclination_deg);
+  EXPECT_NEAR(*f.inclination_deg, *l.inclination_deg, kExact);
 }
 
 Envelope with_outliers(const TrueEllipse& e, bool theta) {
