@@ -120,7 +120,7 @@ Subcommand add_plot(CLI::App& parent) {
   auto file = std::make_shared<std::string>();
   auto out = std::make_shared<std::string>();
   auto* sub = parent.add_subcommand("plot", "Figures of a results file (PNG and SVG)");
-  sub->add_option("file", *file, "results file (HDF5, schema rendulic/1)")->required();
+  sub->add_option("file", *file, "results file (HDF5, schema rendulic/2 or 1)")->required();
   sub->add_option("--out", *out, "output folder (default: FILE's folder/figures)");
   return {sub, [file, out]() -> int {
             std::filesystem::path dir = *out;

@@ -30,50 +30,13 @@
 #include "cli_runner.hpp"
 #include "rendulic/core/results.hpp"
 #include "rendulic/core/scenario.hpp"
+#include "tiny_run.hpp"
 
 namespace {
 namespace fs = std::filesystem;
 using rendulic::testing::CliResult;
 
 const fs::path kRoot = fs::path(RENDULIC_TEST_TMP) / "app_faults_system";
-
-// The tiny scenario: every stage a results file can hold, at the lowest cost that still makes
-// envelopes, fits and a calibration.
-const char* const kTiny = R"(
-[run]
-stages = ["prepare", "isotropic", "path", "states", "probes", "fits", "calibration"]
-[dem]
-n_particles = 250
-[preparation]
-rate = 20000.0
-gamma_b = 5.0
-[relax]
-kinetic_to_elastic = 1e-4
-time_cap = 2e-4
-[isotropic]
-nu_max = 0.75
-samples = 50
-inertial_number = 5e-3
-rate_max = 5000.0
-rate_min = 500.0
-[path]
-rate = 5000.0
-eps_dev_max = 0.05
-samples = 10
-[states]
-eps_dev = [0.01, 0.05]
-labels = ["a", "b"]
-kinetic_to_elastic = 1e-4
-time_cap = 1e-4
-[probes]
-directions = 8
-inertial_number = 0.01
-relax_kinetic_to_elastic = 1e-5
-relax_time_cap = 1e-4
-[calibration]
-model = "isotropic_elastic"
-max_iterations = 20
-)";
 
 int lines(const std::string& s) { return static_cast<int>(std::count(s.begin(), s.end(), '\n')); }
 
@@ -86,12 +49,7 @@ fs::path fresh_dir(const std::string& name) {
   return rendulic::testing::fresh_dir("app_faults_system/" + name);
 }
 
-fs::path tiny_scenario() {
-  fs::create_directories(kRoot);
-  const fs::path s = kRoot / "tiny.toml";
-  std::ofstream(s) << kTiny;
-  return s;
-}
+fs::path tiny_scenario() { return rendulic::testing::tiny_scenario(kRoot); }
 
 // Temporary files in a folder: anything a writer leaves while it works.
 std::vector<std::string> temporaries(const fs::path& dir) {
@@ -104,23 +62,7 @@ std::vector<std::string> temporaries(const fs::path& dir) {
   return out;
 }
 
-// The real results file of the tiny run, made once per build (again when the binary is newer).
-fs::path base_results() {
-  const fs::path dir = kRoot / "base", f = dir / "results.h5";
-  fs::create_directories(kRoot);
-  const int lock = ::open((kRoot / ".base.lock").c_str(), O_CREAT | O_RDWR | O_CLOEXEC, 0644);
-  flock(lock, LOCK_EX);
-  std::error_code ec;
-  if (!fs::exists(f) || fs::last_write_time(f, ec) < fs::last_write_time(RENDULIC_EXE, ec)) {
-    fs::remove_all(dir);
-    const CliResult r = rendulic::testing::run_rendulic(
-        "run " + tiny_scenario().string() + " --quiet --threads 1 --out " + dir.string());
-    EXPECT_EQ(r.code, 0) << r.out;
-  }
-  flock(lock, LOCK_UN);
-  ::close(lock);
-  return f;
-}
+fs::path base_results() { return rendulic::testing::tiny_results(kRoot); }
 
 // --- the damaged-file walk -------------------------------------------------------------
 
@@ -607,7 +549,7 @@ TEST(FaultsSystem, TheNextRunTidiesStaleTemporariesAndTheStoredScenarioReplays) 
   // A description that used to cut the stored scenario short (\u0000) or make it unreadable
   // (\u0001).
   const fs::path s = d / "s.toml";
-  std::string text = kTiny;
+  std::string text = rendulic::testing::kTiny;
   text.replace(text.find("[run]\n"), 6, "[run]\ndescription = \"x\\u0000y\\u0001z\"\n");
   std::ofstream(s, std::ios::trunc) << text;
   const CliResult r = rendulic::testing::run_rendulic(
