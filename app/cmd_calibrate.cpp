@@ -178,7 +178,8 @@ Subcommand add_calibrate(CLI::App& parent) {
   auto* sub = parent.add_subcommand(
       "calibrate", "Fit a constitutive model to the envelopes and path of a results file");
   auto args = std::make_shared<CalibrateArgs>();
-  sub->add_option("--results", args->results, "Results file (HDF5, schema rendulic/1)")->required();
+  sub->add_option("--results", args->results, "Results file (HDF5, schema rendulic/2 or 1)")
+      ->required();
   sub->add_option("--model", args->model,
                   "Model: isotropic_elastic, anisotropic_elastic, hypoplastic_wu, "
                   "elastoplastic_fabric")

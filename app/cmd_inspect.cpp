@@ -10,7 +10,7 @@ namespace rendulic::app {
 Subcommand add_inspect(CLI::App& parent) {
   auto file = std::make_shared<std::string>();
   auto* sub = parent.add_subcommand("inspect", "Summary of a results file");
-  sub->add_option("file", *file, "results file (HDF5, schema rendulic/1)")->required();
+  sub->add_option("file", *file, "results file (HDF5, schema rendulic/2 or 1)")->required();
   return {sub, [file]() -> int {
             ResultsReader reader(*file);
             std::cout << reader.summary();

@@ -155,7 +155,7 @@ Subcommand add_plot(CLI::App& parent) {
   auto out = std::make_shared<std::string>();
   auto script = std::make_shared<std::string>();
   auto* sub = parent.add_subcommand("plot", "Figures of a results file (PNG, PDF and SVG)");
-  sub->add_option("file", *file, "results file (HDF5, schema rendulic/1)")->required();
+  sub->add_option("file", *file, "results file (HDF5, schema rendulic/2 or 1)")->required();
   sub->add_option("--out", *out, "output folder (default: FILE's folder/figures)");
   sub->add_option("--script", *script,
                   "figure script to run instead of the installed or compiled-in plot.py "

@@ -20,7 +20,7 @@ Subcommand add_report(CLI::App& parent) {
   auto o = std::make_shared<ReportOptions>();
   auto* sub = parent.add_subcommand(
       "report", "Write report.md (claims C1-C8, calibration, timings) and figures beside FILE.h5");
-  sub->add_option("file", o->file, "results file (HDF5, schema rendulic/1)")->required();
+  sub->add_option("file", o->file, "results file (HDF5, schema rendulic/2 or 1)")->required();
   sub->add_flag("--no-figures", o->no_figures, "report.md only");
   return {sub, [o]() -> int {
             const auto path = write_report(o->file, !o->no_figures);

@@ -9,12 +9,12 @@
 // released when rank 0 returns or throws.
 #include <omp.h>
 
-#include <iostream>
 #include <memory>
 
 #include "commands.hpp"
 #include "pipeline.hpp"
 #include "rendulic/core/errors.hpp"
+#include "rendulic/core/log.hpp"
 #include "rendulic/core/results.hpp"
 #include "rendulic/dem/probe_mpi.hpp"
 
@@ -26,6 +26,7 @@ struct RunOptions {
   std::vector<std::string> sets;
   int threads = 0;
   bool quiet = false;
+  double progress_every = 30.0;
 };
 }  // namespace
 
@@ -45,7 +46,13 @@ Subcommand add_run(CLI::App& parent) {
                   "pays: never below N = 1000, and only while it measures faster than one thread "
                   "(a busy core makes it slower); results do not depend on it")
       ->check(CLI::NonNegativeNumber);
-  sub->add_flag("--quiet", o->quiet, "no progress display");
+  sub->add_flag("--quiet", o->quiet,
+                "no progress display and no progress lines; warnings and errors still print");
+  sub->add_option("--progress-every", o->progress_every,
+                  "seconds of work between two progress lines when stderr is not a terminal "
+                  "(a log file, a batch job); a terminal gets a live line instead")
+      ->check(CLI::Range(0.1, 86400.0))
+      ->capture_default_str();
   return {sub, [o]() -> int {
             // Before anything else, so that the workers never parse, print or write.
             dem::MpiSession mpi;
@@ -54,6 +61,7 @@ Subcommand add_run(CLI::App& parent) {
               mpi.serve();
               return 0;
             }
+            if (o->quiet) log::set_level(log::Level::kWarning);
             Scenario scenario = Scenario::from_file(o->scenario, scenario_schema());
             for (const auto& s : o->sets) scenario.apply_override(s);
             check_stages_available(scenario);
@@ -61,24 +69,21 @@ Subcommand add_run(CLI::App& parent) {
 
             const std::filesystem::path out_dir = o->out;
             ResultsWriter out(out_dir / "results.h5");
-            if (!o->quiet)
-              for (const auto& note : out.notes()) std::cerr << "rendulic: " << note << "\n";
+            for (const auto& note : out.notes()) log::info(note);
             out.attr("/", "seed", scenario.get_int("run.seed"));
             out.attr("/", "scenario", scenario.to_toml());
             out.attr("/", "scenario_file", o->scenario);
-            RunContext ctx{out_dir, o->threads, o->quiet};
-            if (!o->quiet) {
+            RunContext ctx{out_dir, o->threads, o->quiet, o->progress_every};
+            {
               // Say first what will run, on what, and where it goes.
               std::string plan;
               for (const auto& st : scenario.get_strings("run.stages"))
                 plan += (plan.empty() ? "" : ", ") + st;
-              std::cerr << "rendulic: " << o->scenario
-                        << ": N = " << scenario.get_int("dem.n_particles") << ", stages " << plan
-                        << "; writing " << (out_dir / "results.h5").string()
-                        << " (on 2 idle cores quick.toml takes ~2 min, paper.toml ~25 min)\n";
+              log::info(o->scenario, ": N = ", scenario.get_int("dem.n_particles"), ", stages ",
+                        plan, "; writing ", (out_dir / "results.h5").string(),
+                        " (on 2 idle cores quick.toml takes ~2 min, paper.toml ~25 min)");
             }
-            if (mpi.size() > 1 && !o->quiet)
-              std::cerr << "rendulic: " << mpi.size() << " MPI ranks share the probe campaigns\n";
+            if (mpi.size() > 1) log::info(mpi.size(), " MPI ranks share the probe campaigns");
             try {
               run_pipeline(scenario, out, ctx);
               out.commit();
@@ -87,7 +92,7 @@ Subcommand add_run(CLI::App& parent) {
                 rethrow_with_note(kept);
               throw;
             }
-            if (!o->quiet) std::cerr << "rendulic: wrote " << out.final_path().string() << "\n";
+            log::info("wrote ", out.final_path().string());
             run_post_commit(scenario, out.final_path(), ctx);
             return 0;
           }};

@@ -4,11 +4,12 @@
 
 #include <chrono>
 #include <functional>
-#include <iostream>
 #include <string>
 #include <vector>
 
+#include "progress.hpp"
 #include "rendulic/core/errors.hpp"
+#include "rendulic/core/log.hpp"
 #include "rendulic/core/result_paths.hpp"
 #include "rendulic/dem/probe_campaign.hpp"
 #include "rendulic/dem/probe_elastic_range.hpp"
@@ -32,8 +33,10 @@ struct Stage {
 
 void report_stage(const Scenario& scenario, const std::filesystem::path& results,
                   const RunContext& ctx) {
+  (void)ctx;
+  log::info("[report] started");
   const auto path = write_report(results, scenario.get_bool("report.figures"));
-  if (!ctx.quiet) std::cerr << "rendulic: wrote " << path.string() << "\n";
+  log::info("[report] wrote ", path.string());
 }
 
 const std::vector<Stage>& stages() {
@@ -119,10 +122,14 @@ void run_pipeline(const Scenario& scenario, ResultsWriter& out, const RunContext
   std::string completed;
   for (const auto& s : stages()) {
     if (!stage_requested(scenario, s.name) || !s.run) continue;
+    // Every stage says when it starts and ends, in a log as on a terminal: a short stage
+    // shows no progress line of its own (progress.hpp).
+    log::info("[", s.name, "] started");
     const auto t0 = std::chrono::steady_clock::now();
     s.run(scenario, out, ctx);
     const double secs =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    log::info("[", s.name, "] done in ", human_seconds(secs));
     out.attr(paths::kTimings, s.name, secs);  // wall seconds, reported in report.md
     // What a later failure keeps (results.h5.partial): hours of DEM are not thrown away.
     completed += (completed.empty() ? "" : ", ") + std::string(s.name);

@@ -13,7 +13,9 @@ namespace rendulic::app {
 struct RunContext {
   std::filesystem::path out_dir;
   int threads = 0;     // 0: OpenMP's default
-  bool quiet = false;  // no progress display
+  bool quiet = false;  // no progress display and no info lines (log level warning)
+  // In a log (stderr not a terminal): seconds of work between two progress lines.
+  double progress_every = 30.0;
 };
 
 // Whether run.stages lists the stage `name`.

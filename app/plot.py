@@ -644,7 +644,12 @@ def fig_model_envelopes(f, out, ctx, kind, quantity):
             if path not in mg:
                 continue
             em = mg[path]
-            pred = em["stress"][:] / k_star if quantity == "stress" else em["fabric"][:]
+            if quantity == "fabric":
+                pred = em["fabric"][:]
+            elif "stress_star" in em:  # rendulic/2: starred like the DEM's
+                pred = em["stress_star"][:]
+            else:  # rendulic/1 stored the law's envelope in Pa
+                pred = em["stress"][:] / k_star
             if quantity == "fabric" and not np.any(pred):
                 no_fabric.add(mname)  # a law without fabric (hypoplastic_wu): nothing to draw
                 continue

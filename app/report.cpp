@@ -292,7 +292,9 @@ std::string model_selection_markdown(const ResultsReader& r) {
     for (const char* k : kinds) md << " | " << num(std::string("misfit_") + k);
     const double ic = r.attr_double(g, "information_criterion");
     const double ics = r.attr_double(g, "information_criterion_stress");
-    const bool fabric = r.attr_string(g, "blocks_covered").find("fabric") != std::string::npos;
+    bool fabric = false;
+    for (const std::string& kind : r.attr_strings(g, "blocks_covered"))
+      fabric = fabric || kind.find("fabric") != std::string::npos;
     md << " | " << (fabric ? num("held_out_score") : "-") << " / " << num("held_out_score_stress")
        << " | " << (fabric ? fmt(ic, 6) : "-") << " / " << fmt(ics, 6) << " | "
        << (fabric && std::isfinite(best) ? fmt(ic - best, 4) : "-") << " / "
@@ -302,8 +304,14 @@ std::string model_selection_markdown(const ResultsReader& r) {
                ? "used"
                : "no")
        << " | " << num("seconds", 2) << " |\n";
-    const std::string at = r.has_attr(g, "at_bound") ? r.attr_string(g, "at_bound") : "";
-    const std::string und = r.has_attr(g, "undetermined") ? r.attr_string(g, "undetermined") : "";
+    const auto listed = [&](const char* name) {
+      std::string s;
+      if (r.has_attr(g, name))
+        for (const std::string& n : r.attr_strings(g, name)) s += (s.empty() ? "" : ",") + n;
+      return s;
+    };
+    const std::string at = listed("at_bound");
+    const std::string und = listed("undetermined");
     if (!at.empty()) flags.push_back(m + ": at a bound of its range: " + at);
     if (!und.empty())
       flags.push_back(m +
@@ -312,12 +320,12 @@ std::string model_selection_markdown(const ResultsReader& r) {
       flags.push_back(m + ": global start " + r.attr_string(g, "global_start"));
     if (noise_row.empty() && fabric) {
       // The data's own noise per kind (rms over the fitted blocks; any law's yardstick has it).
-      std::stringstream ids(r.attr_string(g, "yardstick_blocks"));
+      const std::vector<std::string> ids = r.attr_strings(g, "yardstick_blocks");
       const auto noise = r.attr_doubles(g, "yardstick_noise");
       const auto held = r.attr_doubles(g, "yardstick_held_out");
       std::map<std::string, std::pair<double, int>> acc;
-      std::string id;
-      for (std::size_t i = 0; std::getline(ids, id, ',') && i < noise.size(); ++i) {
+      for (std::size_t i = 0; i < ids.size() && i < noise.size(); ++i) {
+        const std::string& id = ids[i];
         if (i < held.size() && held[i] != 0.0) continue;
         const std::string kind = id.substr(id.rfind('/') + 1);
         acc[kind].first += noise[i] * noise[i];
@@ -699,10 +707,9 @@ std::string report_markdown(const ResultsReader& r, const std::vector<Claim>& cl
          << " | ";
       const std::vector<double> p = r.read_vector(g + datasets::kParams);
       const std::vector<double> se = r.read_vector(g + datasets::kStderr);
-      std::stringstream names(r.attr_string(g, "param_names"));
-      std::string name;
-      for (std::size_t i = 0; i < p.size() && std::getline(names, name, ','); ++i)
-        md << (i ? ", " : "") << name << " = " << fmt(p[i])
+      const std::vector<std::string> names = r.attr_strings(g, "param_names");
+      for (std::size_t i = 0; i < p.size() && i < names.size(); ++i)
+        md << (i ? ", " : "") << names[i] << " = " << fmt(p[i])
            << (i < se.size() && se[i] > 0 ? " +- " + fmt(se[i]) : "");
       md << " |\n";
     }

@@ -6,8 +6,8 @@
 //                mechanical equilibrium (rest.hpp), stored with a checkpoint that restarts
 //                bit-identically (same build)
 // The stages of one run share the live system through one DemRunSession (a process holds one
-// run); later stages (probe campaigns) reach it through dem_run_session(). Progress (stage,
-// %, ETA) goes to stderr only when stderr is a terminal and --quiet is off.
+// run); later stages (probe campaigns) reach it through dem_run_session(). Progress lines
+// (progress.hpp) go to the terminal or the log.
 #include <omp.h>
 #include <unistd.h>
 
@@ -21,8 +21,10 @@
 #include <string>
 
 #include "pipeline.hpp"
+#include "progress.hpp"
 #include "rendulic/core/conventions.hpp"
 #include "rendulic/core/errors.hpp"
+#include "rendulic/core/log.hpp"
 #include "rendulic/core/result_paths.hpp"
 #include "rendulic/dem/protocols.hpp"
 #include "rendulic/dem/rest.hpp"
@@ -38,47 +40,6 @@ DemRunSession& dem_run_session() {
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
-
-// One status line on stderr, rewritten in place at most 5 times a second.
-class Progress {
- public:
-  Progress(const RunContext& ctx, std::string stage)
-      : on_(!ctx.quiet && isatty(STDERR_FILENO)), stage_(std::move(stage)), start_(Clock::now()) {}
-  ~Progress() {
-    if (on_ && printed_) std::fprintf(stderr, "\r\033[K");
-  }
-  void task(std::string name) { task_ = std::move(name); }
-  void operator()(double fraction) {
-    if (!on_) return;
-    const auto now = Clock::now();
-    if (printed_ && now - last_ < std::chrono::milliseconds(200)) return;
-    last_ = now;
-    printed_ = true;
-    const double el = std::chrono::duration<double>(now - task_start_).count();
-    const double f = std::clamp(fraction, 0.0, 1.0);
-    char eta[32] = "?";
-    if (f > 1e-3) std::snprintf(eta, sizeof eta, "%.0fs", el * (1 - f) / f);
-    std::fprintf(stderr, "\r\033[K[%s] %s %5.1f%%  ETA %s", stage_.c_str(), task_.c_str(), 100 * f,
-                 eta);
-    std::fflush(stderr);
-  }
-  void start_task(std::string name) {
-    task(std::move(name));
-    task_start_ = Clock::now();
-  }
-  double elapsed() const { return std::chrono::duration<double>(Clock::now() - start_).count(); }
-  dem::ProgressFn fn() {
-    return [this](double f) { (*this)(f); };
-  }
-
- private:
-  bool on_;
-  bool printed_ = false;
-  std::string stage_, task_;
-  Clock::time_point start_, last_{}, task_start_ = Clock::now();
-};
-
 void write_relax(ResultsWriter& out, const std::string& group, const std::string& prefix,
                  const dem::RelaxSummary& r) {
   out.attr(group, prefix + "relax_time", r.time);
@@ -86,10 +47,10 @@ void write_relax(ResultsWriter& out, const std::string& group, const std::string
   out.attr(group, prefix + "relax_converged", std::int64_t{r.converged});
 }
 
-void warn_cap(const RunContext& ctx, const std::string& what, const dem::RelaxSummary& r) {
-  if (!r.converged && !ctx.quiet)
-    std::cerr << "rendulic: warning: relaxation " << what << " hit its time cap (" << r.time
-              << " s) at kinetic/elastic " << r.ratio << "\n";
+void warn_cap(const std::string& what, const dem::RelaxSummary& r) {
+  if (!r.converged)
+    log::warning("relaxation ", what, " hit its time cap (", r.time, " s) at kinetic/elastic ",
+                 r.ratio);
 }
 
 Eigen::MatrixXd as_matrix(const std::vector<double>& x, const std::vector<double>& y,
@@ -147,7 +108,7 @@ void stage_prepare(const Scenario& sc, ResultsWriter& out, const RunContext& ctx
   const dem::CompressSummary c = dem::compress_isotropic(sys, o.prepare, {}, progress.fn());
   progress.start_task("relax at nu0");
   const dem::RelaxSummary r = dem::relax(sys, o.relax, progress.fn());
-  warn_cap(ctx, "at nu0", r);
+  warn_cap("at nu0", r);
   const dem::Measures me = sys.measure();
   out.attr(paths::kPreparation, "nu0", me.volume_fraction);
   out.attr(paths::kPreparation, "pressure_star", me.pressure_star);
@@ -189,7 +150,7 @@ void stage_isotropic(const Scenario&, ResultsWriter& out, const RunContext& ctx)
     branches.emplace_back(o.loading.snapshot_nu[k], std::move(c.snapshots[k]));
   progress.start_task("relax at nu_max");
   const dem::RelaxSummary r = dem::relax(sys, o.relax, progress.fn());
-  warn_cap(ctx, "at nu_max", r);
+  warn_cap("at nu_max", r);
   const dem::Measures me = sys.measure();
   dem_run_session().path_start_pressure = me.pressure;
   out.attr(paths::kIsotropic, "max_inertial_number", c.max_inertial_number);
@@ -247,7 +208,7 @@ std::vector<std::pair<dem::DemSystem, dem::RestSummary>> rest_states(
   std::vector<dem::RestSummary> summaries(snapshots.size());
   std::vector<std::string> errors(snapshots.size());
   progress.start_task("relax and minimise " + std::to_string(n) + " states");
-  int done = 0;
+  long done = 0;
   const int team = ctx.threads > 0 ? ctx.threads : omp_get_max_threads();
 #pragma omp parallel for schedule(dynamic, 1) num_threads(team)
   for (int k = 0; k < n; ++k) {
@@ -260,16 +221,15 @@ std::vector<std::pair<dem::DemSystem, dem::RestSummary>> rest_states(
     } catch (const std::exception& e) {
       errors[u] = e.what();
     }
-#pragma omp critical(rendulic_states_progress)
-    {
-      ++done;
-      if (omp_get_thread_num() == 0) progress(double(done) / n);
-    }
+    long finished = 0;
+#pragma omp atomic capture
+    finished = ++done;
+    progress.count(finished, n);
   }
   std::vector<std::pair<dem::DemSystem, dem::RestSummary>> out;
   for (std::size_t k = 0; k < snapshots.size(); ++k) {
     if (!errors[k].empty()) throw std::runtime_error("state " + labels[k] + ": " + errors[k]);
-    warn_cap(ctx, "of state " + labels[k], summaries[k].relaxed);
+    warn_cap("of state " + labels[k], summaries[k].relaxed);
     if (!(summaries[k].at_rest.ratio < dem::kEquilibrium))
       throw std::runtime_error(
           "state " + labels[k] + ": not at rest after minimisation (net force " +
@@ -328,7 +288,7 @@ void stage_states(const Scenario&, ResultsWriter& out, const RunContext& ctx) {
   if (session.snapshots.empty())
     throw InputError("run: stage 'states' needs the stage 'path' in run.stages");
   const dem::DemRunOptions& o = *session.options;
-  const auto t0 = Clock::now();
+  const auto t0 = std::chrono::steady_clock::now();
   auto rested = rest_states(session.snapshots, o.state_rest, o.state_labels, ctx);
   session.relaxed.clear();
   for (std::size_t k = 0; k < rested.size(); ++k) {
@@ -337,7 +297,8 @@ void stage_states(const Scenario&, ResultsWriter& out, const RunContext& ctx) {
                 o.state_rest.minimise.force_tolerance, true);
     session.relaxed.emplace_back(label, std::move(rested[k].first));
   }
-  out.attr(paths::kStates, "wall_time_s", std::chrono::duration<double>(Clock::now() - t0).count());
+  out.attr(paths::kStates, "wall_time_s",
+           std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
 }
 
 }  // namespace rendulic::app

@@ -7,9 +7,9 @@
 // elastic_range, probes, linear_response and fits. The branches' states are stored without
 // their configuration (positions, checkpoint): the main states carry those.
 #include <cmath>
-#include <iostream>
 
 #include "rendulic/core/errors.hpp"
+#include "rendulic/core/log.hpp"
 #include "rendulic/core/result_paths.hpp"
 #include "rendulic/dem/probe_campaign.hpp"
 #include "rendulic/dem/probe_elastic_range.hpp"
@@ -33,7 +33,7 @@ void stage_pressure(const Scenario& sc, ResultsWriter& out, const RunContext& ct
   const bool with_fits = stage_requested(sc, "fits");
   for (auto& [nu, snapshot] : session.branches) {
     const std::string G = paths::pressure_branch(nu);
-    if (!ctx.quiet) std::cerr << "rendulic: pressure branch nu = " << nu << "\n";
+    log::info("[pressure] branch nu = ", nu);
     dem::DemSystem sys = snapshot;
     const dem::RelaxSummary r = dem::relax(sys, o.relax);
     const dem::Measures start = sys.measure();
@@ -59,17 +59,14 @@ void stage_pressure(const Scenario& sc, ResultsWriter& out, const RunContext& ct
         const dem::ElasticRangeOptions eo = dem::elastic_range_options_from(sc);
         const dem::ElasticRange er = dem::elastic_range(state, eo, po);
         dem::write_elastic_range(out, paths::elastic_range(sg), er, eo);
-        if (!ctx.quiet)
-          std::cerr << "rendulic: nu " << nu << " state " << label << ": yield strain "
-                    << er.yield_strain << "\n";
+        log::info("[pressure] nu ", nu, " state ", label, ": yield strain ", er.yield_strain);
       }
       if (with_probes) dem::run_probe_campaign_in(state, sg, dem::probe_methods_from(sc), po, out);
       if (with_lr) {
         try {
           dem::run_probe_campaign_in(state, sg, {"linear_response"}, po, out);
         } catch (const std::runtime_error& e) {
-          std::cerr << "rendulic: warning: no linear response for nu " << nu << " state " << label
-                    << ": " << e.what() << "\n";
+          log::warning("no linear response for nu ", nu, " state ", label, ": ", e.what());
         }
       }
       if (with_fits) fit_state_envelopes(sc, out, sg);

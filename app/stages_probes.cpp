@@ -4,9 +4,11 @@
 // reader on the writer's temporary file) and add fit_stress / fit_fabric beside it. An envelope
 // that cannot be fitted (no fabric change at all, a degenerate set) gets shape "none" and the
 // reason, never an invented fit.
-#include <iostream>
+#include <atomic>
 
+#include "progress.hpp"
 #include "rendulic/core/errors.hpp"
+#include "rendulic/core/log.hpp"
 #include "rendulic/core/result_paths.hpp"
 #include "rendulic/dem/probe_campaign.hpp"
 #include "rendulic/dem/probe_elastic_range.hpp"
@@ -25,12 +27,23 @@ const std::vector<std::pair<std::string, dem::DemSystem>>& relaxed_states(const 
   return relaxed;
 }
 
+// Counts the probes of a stage on its progress display: `total` probes over all states.
+void count_probes(dem::ProbeOptions& o, Progress& progress, std::atomic<long>& done, long total) {
+  o.probe_done = [&progress, &done, total] { progress.count(++done, total); };
+}
+
 void campaign(const Scenario& sc, ResultsWriter& out, const RunContext& ctx,
               const std::vector<std::string>& methods, const char* stage) {
   dem::ProbeOptions o = dem::probe_options_from(sc);
   if (ctx.threads > 0) o.threads = ctx.threads;
-  for (const auto& [label, state] : relaxed_states(stage)) {
-    if (!ctx.quiet) std::cerr << "rendulic: " << stage << " of state " << label << "\n";
+  const auto& states = relaxed_states(stage);
+  Progress progress(ctx, stage);
+  std::atomic<long> done{0};
+  count_probes(
+      o, progress, done,
+      static_cast<long>(states.size() * methods.size() * o.amplitudes.size()) * o.directions);
+  for (const auto& [label, state] : states) {
+    progress.start_task("state " + label + ", probe");
     dem::run_probe_campaign(state, label, methods, o, out);
   }
 }
@@ -54,8 +67,12 @@ void stage_probes(const Scenario& sc, ResultsWriter& out, const RunContext& ctx)
 void stage_linear_response(const Scenario& sc, ResultsWriter& out, const RunContext& ctx) {
   dem::ProbeOptions o = dem::probe_options_from(sc);
   if (ctx.threads > 0) o.threads = ctx.threads;
-  for (const auto& [label, state] : relaxed_states("linear_response")) {
-    if (!ctx.quiet) std::cerr << "rendulic: linear_response of state " << label << "\n";
+  const auto& states = relaxed_states("linear_response");
+  Progress progress(ctx, "linear_response");
+  long done = 0;
+  for (const auto& [label, state] : states) {
+    progress.start_task("state " + label);
+    progress.count(done++, static_cast<long>(states.size()));
     try {
       dem::run_probe_campaign(state, label, {"linear_response"}, o, out);
     } catch (const std::runtime_error& e) {
@@ -68,8 +85,7 @@ void stage_linear_response(const Scenario& sc, ResultsWriter& out, const RunCont
         out.attr(g, "amplitude", a);
         out.attr(g, "error", std::string(e.what()));
       }
-      std::cerr << "rendulic: warning: no linear response for state " << label << ": " << e.what()
-                << "\n";
+      log::warning("no linear response for state ", label, ": ", e.what());
     }
   }
 }
@@ -78,13 +94,18 @@ void stage_elastic_range(const Scenario& sc, ResultsWriter& out, const RunContex
   dem::ProbeOptions o = dem::probe_options_from(sc);
   if (ctx.threads > 0) o.threads = ctx.threads;
   const dem::ElasticRangeOptions eo = dem::elastic_range_options_from(sc);
-  for (const auto& [label, state] : relaxed_states("elastic_range")) {
-    if (!ctx.quiet) std::cerr << "rendulic: elastic_range of state " << label << "\n";
+  const auto& states = relaxed_states("elastic_range");
+  Progress progress(ctx, "elastic_range");
+  std::atomic<long> done{0};
+  count_probes(o, progress, done,
+               static_cast<long>(states.size() * eo.amplitudes.size() *
+                                 dem::elastic_range_directions().size()));
+  for (const auto& [label, state] : states) {
+    progress.start_task("state " + label + ", probe");
     const dem::ElasticRange r = dem::elastic_range(state, eo, o);
     dem::write_elastic_range(out, paths::elastic_range(paths::state(label)), r, eo);
-    if (!ctx.quiet)
-      std::cerr << "rendulic: state " << label << ": yield strain " << r.yield_strain
-                << (r.yielded ? "" : " (no departure within the ladder: a lower bound)") << "\n";
+    log::info("state ", label, ": yield strain ", r.yield_strain,
+              r.yielded ? "" : " (no departure within the ladder: a lower bound)");
   }
 }
 
@@ -124,8 +145,8 @@ void fit_state_envelopes(const Scenario& sc, ResultsWriter& out, const std::stri
 void stage_fits(const Scenario& sc, ResultsWriter& out, const RunContext& ctx) {
   const FitAllSummary s = fit_envelopes(ResultsReader(out.temporary_path()), out,
                                         fit_options(sc, "stress"), fit_options(sc, "fabric"));
-  if (!ctx.quiet)
-    std::cerr << "rendulic: fits: " << s.fitted << " fitted, " << s.failed << " not fittable\n";
+  (void)ctx;
+  log::info("fits: ", s.fitted, " fitted, ", s.failed, " not fittable");
 }
 
 }  // namespace rendulic::app

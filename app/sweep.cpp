@@ -759,13 +759,8 @@ void write_sweep_h5(const SweepSummary& s, ResultsWriter& out) {
   out.attr(g, "stability_limit_factor", s.stability_limit_factor);
   out.attr(g, "wall_s", s.wall_s);
   out.attr(g, "cpu_s", s.cpu_s);
-  auto join = [](const std::vector<std::string>& lines) {
-    std::string t;
-    for (const auto& l : lines) t += l + "\n";
-    return t;
-  };
-  out.attr(g, "breaks", join(s.breaks));
-  out.attr(g, "recommendations", join(s.recommendations));
+  out.attr(g, "breaks", s.breaks);
+  out.attr(g, "recommendations", s.recommendations);
   // Named numbers as attributes of one group.
   auto put = [&out](const std::string& group,
                     std::initializer_list<std::pair<const char*, double>> values) {

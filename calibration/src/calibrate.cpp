@@ -139,7 +139,11 @@ CalibrationSummary calibrate(const CalibrationData& data, const CalibrationOptio
   if (data.states.empty()) throw InputError("calibrate: no states in the data");
   CalibrationSummary out;
   out.model = options.model;
-  for (const auto& pi : law->parameter_info()) out.param_names.push_back(pi.name);
+  out.k_star = data.k_star;
+  for (const auto& pi : law->parameter_info()) {
+    out.param_names.push_back(pi.name);
+    out.param_units.push_back(pi.unit);
+  }
   const std::vector<std::string> holdout =
       options.holdout.size() == 1 && options.holdout[0] == "auto" ? default_holdout(data)
                                                                   : options.holdout;

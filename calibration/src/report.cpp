@@ -189,19 +189,14 @@ void write_calibration(ResultsWriter& out, const CalibrationSummary& s) {
   out.attr(g, "global_start", s.global_start);
   out.attr(g, "seconds", f.seconds);
   out.attr(g, "n_free", std::int64_t{s.score.n_free});
-  {
-    std::string at, und;
-    for (const auto& n : s.at_bound) at += (at.empty() ? "" : ",") + n;
-    for (const auto& n : s.undetermined) und += (und.empty() ? "" : ",") + n;
-    out.attr(g, "at_bound", at);
-    out.attr(g, "undetermined", und);
-  }
+  out.attr(g, "at_bound", s.at_bound);
+  out.attr(g, "undetermined", s.undetermined);
   // The yardstick (selection.hpp): one entry per block, and its summaries.
   {
-    std::string ids;
+    std::vector<std::string> ids;
     std::vector<double> misfit, noise, scale, comps, held;
     for (const auto& b : s.score.blocks) {
-      ids += (ids.empty() ? "" : ",") + b.id;
+      ids.push_back(b.id);
       misfit.push_back(b.misfit);
       noise.push_back(b.noise);
       scale.push_back(b.scale);
@@ -226,9 +221,9 @@ void write_calibration(ResultsWriter& out, const CalibrationSummary& s) {
     if (std::isfinite(stress.held_out_score))
       out.attr(g, "held_out_score_stress", stress.held_out_score);
     out.attr(g, "fitted_misfit_stress", stress.fitted_misfit);
-    std::string kinds;
+    std::vector<std::string> kinds;
     for (const auto& [k, v] : all.fitted_by_kind) {
-      kinds += (kinds.empty() ? "" : ",") + k;
+      kinds.push_back(k);
       out.attr(g, "misfit_" + k, v);
     }
     for (const auto& [k, v] : all.held_out_by_kind) out.attr(g, "held_out_misfit_" + k, v);
@@ -239,17 +234,11 @@ void write_calibration(ResultsWriter& out, const CalibrationSummary& s) {
     out.write(g + paths::kPath + datasets::kStress, s.predicted_path.stress);  // Pa
     out.write(g + paths::kPath + datasets::kFabric, s.predicted_path.fabric);
   }
-  std::string names, free, warnings, fitted, held;
-  for (const auto& n : s.param_names) names += (names.empty() ? "" : ",") + n;
-  for (const auto& n : f.names) free += (free.empty() ? "" : ",") + n;
-  for (const auto& w : s.warnings) warnings += (warnings.empty() ? "" : "\n") + w;
-  for (const auto& n : s.fitted_states) fitted += (fitted.empty() ? "" : ",") + n;
-  for (const auto& n : s.held_out_states) held += (held.empty() ? "" : ",") + n;
-  out.attr(g, "param_names", names);
-  out.attr(g, "free", free);
-  out.attr(g, "warnings", warnings);
-  out.attr(g, "fitted_states", fitted);
-  out.attr(g, "held_out_states", held);
+  out.attr(g, "param_names", s.param_names);
+  out.attr(g, "free", f.names);
+  out.attr(g, "warnings", s.warnings);
+  out.attr(g, "fitted_states", s.fitted_states);
+  out.attr(g, "held_out_states", s.held_out_states);
   out.write(g + datasets::kParams, f.params);
   // stderr over every parameter: 0 for fixed ones (not estimated), +inf for undetermined.
   // Matched by name: the free parameters are not listed in the law's order.
@@ -258,6 +247,11 @@ void write_calibration(ResultsWriter& out, const CalibrationSummary& s) {
     for (std::size_t i = 0; i < s.param_names.size(); ++i)
       if (s.param_names[i] == f.names[k]) se[i] = f.stderr_[k];
   out.write(g + datasets::kStderr, se);
+  // One unit per parameter (docs/results.md "Units"): the law's table, in param_names' order.
+  if (s.param_units.size() == s.param_names.size()) {
+    out.attr(g + datasets::kParams, "units", s.param_units);
+    out.attr(g + datasets::kStderr, "units", s.param_units);
+  }
   out.write(g + datasets::kCorrelation, Eigen::MatrixXd(f.correlation));
   for (const auto& st : s.states) {
     const std::string sg = paths::state(st.label, g);
@@ -281,25 +275,19 @@ void write_calibration(ResultsWriter& out, const CalibrationSummary& s) {
       const std::string eg = paths::envelope(sg, pe.name);
       out.write(eg + datasets::kThetaDeg, pe.theta_deg);
       out.write(eg + datasets::kStrain, pe.strain);
-      out.write(eg + datasets::kStress, pe.stress);  // Pa
+      // Starred like the DEM envelope beside it (docs/results.md "Units"), when k* is known.
+      if (s.k_star > 0) {
+        std::vector<Eigen::Vector2d> star;
+        for (const auto& p : pe.stress) star.push_back(p / s.k_star);
+        out.write(eg + datasets::kStressStar, star);
+      } else {
+        out.write(eg + datasets::kStress, pe.stress);  // Pa
+      }
       out.write(eg + datasets::kFabric, pe.fabric);
       out.attr(eg, "amplitude", pe.amplitude);
     }
   }
 }
-
-namespace {
-
-std::vector<std::string> split(const std::string& s) {
-  std::vector<std::string> out;
-  std::string item;
-  std::stringstream ss(s);
-  while (std::getline(ss, item, ','))
-    if (!item.empty()) out.push_back(item);
-  return out;
-}
-
-}  // namespace
 
 bool read_model_score(const ResultsReader& in, const std::string& model, ModelScore* score) {
   const std::string g = paths::calibration(model);
@@ -307,9 +295,9 @@ bool read_model_score(const ResultsReader& in, const std::string& model, ModelSc
   ModelScore m;
   m.model = model;
   m.n_free = static_cast<int>(in.attr_int(g, "n_free"));
-  m.fitted_states = split(in.attr_string(g, "fitted_states"));
-  m.held_out_states = split(in.attr_string(g, "held_out_states"));
-  const std::vector<std::string> ids = split(in.attr_string(g, "yardstick_blocks"));
+  m.fitted_states = in.attr_strings(g, "fitted_states");
+  m.held_out_states = in.attr_strings(g, "held_out_states");
+  const std::vector<std::string> ids = in.attr_strings(g, "yardstick_blocks");
   const auto misfit = in.attr_doubles(g, "yardstick_misfit");
   const auto noise = in.attr_doubles(g, "yardstick_noise");
   const auto scale = in.attr_doubles(g, "yardstick_scale");

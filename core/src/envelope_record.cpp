@@ -11,25 +11,6 @@
 
 namespace rendulic {
 
-namespace {
-
-std::string join(const std::vector<std::string>& names) {
-  std::string s;
-  for (const std::string& n : names) s += (s.empty() ? "" : ",") + n;
-  return s;
-}
-
-std::vector<std::string> split(const std::string& s) {
-  std::vector<std::string> out;
-  std::stringstream ss(s);
-  for (std::string item; std::getline(ss, item, ',');) {
-    if (!item.empty()) out.push_back(item);
-  }
-  return out;
-}
-
-}  // namespace
-
 void EnvelopeRecord::add(double theta, const Eigen::Matrix3d& d_eps, const Eigen::Matrix3d& d_sigma,
                          const Eigen::Matrix3d& d_f) {
   theta_deg.push_back(theta);
@@ -81,13 +62,13 @@ void write_envelope(ResultsWriter& out, const std::string& group, const Envelope
     out.write(group + "/" + name, values);
     names.push_back(name);
   }
-  out.attr(group, "diagnostics", join(names));
+  out.attr(group, "diagnostics", names);
   names.clear();
   for (const auto& [name, value] : envelope.attributes) {
     out.attr(group, name, value);
     names.push_back(name);
   }
-  out.attr(group, "attributes", join(names));
+  out.attr(group, "attributes", names);
 }
 
 EnvelopeRecord read_envelope(const ResultsReader& in, const std::string& group) {
@@ -117,12 +98,12 @@ EnvelopeRecord read_envelope(const ResultsReader& in, const std::string& group) 
   tensors(datasets::kDFabricRotation, env.d_fabric_rotation);
   tensors(datasets::kDFabricContacts, env.d_fabric_contacts);
   if (in.has_attr(group, "diagnostics")) {
-    for (const std::string& name : split(in.attr_string(group, "diagnostics"))) {
+    for (const std::string& name : in.attr_strings(group, "diagnostics")) {
       env.diagnostics[name] = in.read_vector(group + "/" + name);
     }
   }
   if (in.has_attr(group, "attributes")) {
-    for (const std::string& name : split(in.attr_string(group, "attributes"))) {
+    for (const std::string& name : in.attr_strings(group, "attributes")) {
       env.attributes[name] = in.attr_double(group, name);
     }
   }

@@ -1,4 +1,4 @@
-// Atomic HDF5 results files, schema "rendulic/1" (docs/results.md,
+// Atomic HDF5 results files, schema "rendulic/2" (docs/results.md,
 // docs/usage.md "Results are atomic"). See results.hpp. Implementation notes:
 // - HDF5's automatic error printing is replaced by a recorder (hdf5_reason.hpp): every
 //   failure becomes one InputError line naming the file, the object and the reason.
@@ -30,6 +30,7 @@
 #include "hdf5_reason.hpp"
 #include "rendulic/core/cleanup.hpp"
 #include "rendulic/core/errors.hpp"
+#include "rendulic/core/result_paths.hpp"
 #include "rendulic/core/version.hpp"
 
 namespace rendulic {
@@ -349,6 +350,41 @@ struct ResultsWriter::Impl {
     });
   }
 
+  void write_string_array_attr(const std::string& object, const std::string& name,
+                               const std::vector<std::string>& values) {
+    for (const std::string& v : values)
+      if (v.find('\0') != std::string::npos)
+        throw InputError(final_path.string() + ": cannot write " + shown(object) + " @" + name +
+                         ": the text holds a NUL character, which HDF5 strings cannot");
+    guarded(object, name, [&] {
+      Handle type(H5Tcopy(H5T_C_S1));
+      checked(H5Tset_size(type.get(), H5T_VARIABLE));
+      const hsize_t n = values.size();
+      Handle space(H5Screate_simple(1, &n, nullptr));
+      std::vector<const char*> texts;
+      for (const std::string& v : values) texts.push_back(v.c_str());
+      // An empty list is an attribute of no element (H5Awrite refuses a null buffer).
+      static const char* const kNone = "";
+      write_attr(object, name, type.get(), space.get(), texts.empty() ? &kNone : texts.data());
+    });
+  }
+
+  // A new dataset's file type and unit (docs/results.md "Units"): counters are integers
+  // (converted from the double buffer by HDF5), every other dataset float with its unit.
+  static hid_t file_type_of(const std::string& path) {
+    return units::is_counter(path) ? H5T_STD_I64LE : H5T_IEEE_F64LE;
+  }
+  void label_unit(hid_t dataset, const std::string& path) {
+    const char* unit = units::is_counter(path) ? nullptr : units::of_dataset(path);
+    if (!unit) return;
+    Handle type(H5Tcopy(H5T_C_S1));
+    checked(H5Tset_size(type.get(), H5T_VARIABLE));
+    Handle space(H5Screate(H5S_SCALAR));
+    Handle a(H5Acreate2(dataset, "units", type.get(), space.get(), H5P_DEFAULT, H5P_DEFAULT));
+    checked(H5Awrite(a.get(), type.get(), &unit));
+    a.close();
+  }
+
   void write_dataset(const std::string& path, const std::vector<hsize_t>& dims,
                      const double* data) {
     guarded(path, {}, [&] {
@@ -356,8 +392,9 @@ struct ResultsWriter::Impl {
       if (H5Lexists(id(), path.c_str(), H5P_DEFAULT) > 0)
         checked(H5Ldelete(id(), path.c_str(), H5P_DEFAULT));
       Handle space(H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr));
-      Handle ds(H5Dcreate2(id(), path.c_str(), H5T_NATIVE_DOUBLE, space.get(), H5P_DEFAULT,
+      Handle ds(H5Dcreate2(id(), path.c_str(), file_type_of(path), space.get(), H5P_DEFAULT,
                            H5P_DEFAULT, H5P_DEFAULT));
+      label_unit(ds.get(), path);
       hsize_t n = 1;
       for (hsize_t d : dims) n *= d;
       if (n > 0)
@@ -380,8 +417,10 @@ struct ResultsWriter::Impl {
         Handle plist(H5Pcreate(H5P_DATASET_CREATE));
         checked(H5Pset_chunk(plist.get(), rank, chunk.data()));
         Handle space(H5Screate_simple(rank, dims.data(), maxdims.data()));
-        return Handle(H5Dcreate2(id(), path.c_str(), H5T_NATIVE_DOUBLE, space.get(), H5P_DEFAULT,
-                                 plist.get(), H5P_DEFAULT));
+        Handle ds(H5Dcreate2(id(), path.c_str(), file_type_of(path), space.get(), H5P_DEFAULT,
+                             plist.get(), H5P_DEFAULT));
+        label_unit(ds.get(), path);
+        return ds;
       };
       Handle ds = open_or_create();
       std::vector<hsize_t> size(rank);
@@ -456,6 +495,7 @@ void ResultsWriter::attr(const std::string& object, const std::string& name, dou
     Handle space(H5Screate(H5S_SCALAR));
     impl_->write_attr(object, name, H5T_NATIVE_DOUBLE, space.get(), &value);
   });
+  if (const char* unit = units::of_attribute(name)) attr(object, name + "_units", unit);
 }
 void ResultsWriter::attr(const std::string& object, const std::string& name, std::int64_t value) {
   impl_->guarded(object, name, [&] {
@@ -477,6 +517,11 @@ void ResultsWriter::attr(const std::string& object, const std::string& name,
     Handle space(H5Screate_simple(1, &n, nullptr));
     impl_->write_attr(object, name, H5T_NATIVE_DOUBLE, space.get(), value.data());
   });
+  if (const char* unit = units::of_attribute(name)) attr(object, name + "_units", unit);
+}
+void ResultsWriter::attr(const std::string& object, const std::string& name,
+                         const std::vector<std::string>& value) {
+  impl_->write_string_array_attr(object, name, value);
 }
 
 void ResultsWriter::write(const std::string& path, const std::vector<double>& values) {
@@ -710,8 +755,9 @@ ResultsReader::ResultsReader(const fs::path& path) : impl_(std::make_unique<Impl
   } catch (const InputError&) {
     throw InputError(path.string() + ": not a rendulic results file (no schema attribute)");
   }
-  if (schema != kSchema)
-    throw InputError(path.string() + ": schema '" + shown(schema) + "' is not " + kSchema);
+  if (schema != kSchema && schema != kSchemaPrevious)
+    throw InputError(path.string() + ": schema '" + shown(schema) + "' is not " + kSchema +
+                     " (or the previous " + kSchemaPrevious + "); a newer rendulic wrote it?");
 }
 
 ResultsReader::ResultsReader(ResultsReader&&) noexcept = default;
@@ -776,6 +822,33 @@ std::string ResultsReader::attr_string(const std::string& object, const std::str
     std::string v;
     a.read(a.getStrType(), v);
     return v;
+  });
+}
+std::vector<std::string> ResultsReader::attr_strings(const std::string& object,
+                                                     const std::string& name,
+                                                     char separator) const {
+  const std::string where = object + " @" + name;
+  return impl_->guarded(where, [&] {
+    H5::Attribute a = impl_->open_attr(object, name);
+    if (a.getTypeClass() != H5T_STRING) impl_->fail(where, "is not text");
+    const hssize_t n = a.getSpace().getSimpleExtentNpoints();
+    std::vector<std::string> out;
+    if (a.getSpace().getSimpleExtentNdims() == 0) {
+      // Schema rendulic/1 joined a list into one text.
+      std::string joined;
+      a.read(a.getStrType(), joined);
+      std::stringstream ss(joined);
+      for (std::string item; std::getline(ss, item, separator);)
+        if (!item.empty()) out.push_back(item);
+      return out;
+    }
+    if (!a.getStrType().isVariableStr()) impl_->fail(where, "is not a list of variable texts");
+    if (n == 0) return out;
+    std::vector<char*> texts(static_cast<std::size_t>(n), nullptr);
+    a.read(a.getStrType(), texts.data());
+    for (char* t : texts) out.emplace_back(t ? t : "");
+    H5Dvlen_reclaim(a.getStrType().getId(), a.getSpace().getId(), H5P_DEFAULT, texts.data());
+    return out;
   });
 }
 std::vector<double> ResultsReader::attr_doubles(const std::string& object,

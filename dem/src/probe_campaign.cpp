@@ -249,6 +249,7 @@ bool compute_probes(detail::ProbeTaskScope& scope, const ProbeOptions& options,
     } catch (const std::exception& e) {
       errors[p] = e.what();
     }
+    if (options.probe_done) options.probe_done();
   }
   if (share.size > 1) {
     detail::ByteWriter w;

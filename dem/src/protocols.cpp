@@ -153,6 +153,15 @@ double relax_ratio(const DemSystem& sys) {
   return sys.kinetic_energy() / std::max(sys.elastic_energy(), floor);
 }
 
+double relax_fraction(double start_ratio, double ratio, double target, double time_fraction) {
+  double towards = 0.0;
+  if (start_ratio > target && ratio > 0 && std::isfinite(start_ratio) && std::isfinite(ratio))
+    towards = std::log(start_ratio / ratio) / std::log(start_ratio / target);
+  else if (ratio <= target)
+    towards = 1.0;
+  return std::clamp(std::max(towards, time_fraction), 0.0, 1.0);
+}
+
 RelaxSummary relax(DemSystem& sys, const RelaxOptions& options, const ProgressFn& progress) {
   std::string why;
   if (!options.IsValid(&why)) throw InputError("relax: " + why);
@@ -165,6 +174,7 @@ RelaxSummary relax(DemSystem& sys, const RelaxOptions& options, const ProgressFn
   // the ratio alone would stop at once and the probe would record an almost affine, too stiff
   // response; the relaxation peak that follows must be waited out first.
   s.ratio = relax_ratio(sys);
+  const double r0 = s.ratio;
   double previous = std::numeric_limits<double>::infinity();
   bool first = true;
   while (first || !(s.ratio < options.kinetic_to_elastic && s.ratio <= previous)) {
@@ -175,7 +185,9 @@ RelaxSummary relax(DemSystem& sys, const RelaxOptions& options, const ProgressFn
     s.steps += options.check_every;
     s.ratio = relax_ratio(sys);
     if (!std::isfinite(s.ratio)) (void)sys.measure();  // throws with a clear message
-    if (progress) progress(std::min(1.0, (sys.time() - t0) / options.time_cap));
+    if (progress)
+      progress(relax_fraction(r0, s.ratio, options.kinetic_to_elastic,
+                              (sys.time() - t0) / options.time_cap));
   }
   s.converged = s.ratio < options.kinetic_to_elastic && s.ratio <= previous;
   s.time = sys.time() - t0;

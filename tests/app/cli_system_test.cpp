@@ -92,7 +92,9 @@ TEST(Cli, StageFailingMidRunLeavesNoResultsFile) {
   EXPECT_EQ(lines(r.out), 1) << r.out;
   const CmdResult loud = rendulic("run " + scen.string() + " --out " + (d / "out").string());
   EXPECT_EQ(loud.code, 2) << loud.out;
-  EXPECT_EQ(lines(loud.out), 2) << loud.out;  // the plan, then the one-line error
+  // The plan, the stage's start (docs/usage.md "Progress and messages"), the one-line error.
+  EXPECT_EQ(lines(loud.out), 3) << loud.out;
+  EXPECT_NE(loud.out.find("[calibration] started"), std::string::npos) << loud.out;
   EXPECT_NE(loud.out.find("stages calibration"), std::string::npos) << loud.out;
   EXPECT_FALSE(fs::exists(d / "out" / "results.h5"));
   if (fs::exists(d / "out")) {
@@ -120,7 +122,7 @@ TEST(Cli, EffectiveScenarioIsStoredAndInspectable) {
 
   const CmdResult ins = rendulic("inspect " + (out / "results.h5").string());
   EXPECT_EQ(ins.code, 0) << ins.out;
-  EXPECT_NE(ins.out.find("@schema = \"rendulic/1\""), std::string::npos) << ins.out;
+  EXPECT_NE(ins.out.find("@schema = \"rendulic/2\""), std::string::npos) << ins.out;
   EXPECT_NE(ins.out.find("@seed = 42"), std::string::npos) << ins.out;
 }
 

@@ -98,7 +98,7 @@ TEST(CalibrateCli, WritesJsonAndCalibrationGroup) {
   EXPECT_TRUE(r.exists("/calibration/anisotropic_elastic/params"));
   EXPECT_TRUE(r.exists("/calibration/anisotropic_elastic/stderr"));
   EXPECT_TRUE(r.exists("/calibration/anisotropic_elastic/correlation"));
-  EXPECT_TRUE(r.exists("/calibration/anisotropic_elastic/states/s2/envelopes/elastic/stress"));
+  EXPECT_TRUE(r.exists("/calibration/anisotropic_elastic/states/s2/envelopes/elastic/stress_star"));
   EXPECT_EQ(r.attr_int("/calibration/anisotropic_elastic", "converged"), 1);
   EXPECT_GE(r.attr_double("/calibration/anisotropic_elastic", "objective"), 0.0);
   // B recovered from 0.2% noise: well within 1%.

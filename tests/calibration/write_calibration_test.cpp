@@ -44,9 +44,7 @@ TEST(WriteCalibration, StandardErrorsSitBesideTheirParameters) {
   const std::string g = "/calibration/anisotropic_elastic";
   const std::vector<double> p = r.read_vector(g + "/params");
   const std::vector<double> se = r.read_vector(g + "/stderr");
-  std::vector<std::string> names;
-  std::stringstream in(r.attr_string(g, "param_names"));
-  for (std::string n; std::getline(in, n, ',');) names.push_back(n);
+  const std::vector<std::string> names = r.attr_strings(g, "param_names");
   ASSERT_EQ(names.size(), p.size());
   ASSERT_EQ(se.size(), p.size());
   std::size_t matched = 0;

@@ -67,7 +67,7 @@ TEST(Results, RoundTripOfEveryKind) {
   EXPECT_EQ(count_files(d), 1) << "no temporary left behind";
 
   ResultsReader r(f);
-  EXPECT_EQ(r.attr_string("/", "schema"), "rendulic/1");
+  EXPECT_EQ(r.attr_string("/", "schema"), "rendulic/2");
   EXPECT_FALSE(r.attr_string("/", "git_sha").empty());
   EXPECT_DOUBLE_EQ(r.attr_double("/material", "k"), 1e8);
   EXPECT_EQ(r.attr_int("/material", "n_particles"), 9261);
@@ -97,6 +97,61 @@ TEST(Results, RoundTripOfEveryKind) {
   EXPECT_NE(summary.find("@k = 1e+08"), std::string::npos) << summary;
   EXPECT_THROW(r.read_pairs("/path/stress"), InputError);  // wrong shape is named, not UB
   EXPECT_THROW(r.read_vector("/nothing/here"), InputError);
+}
+
+// Schema rendulic/2 (docs/results.md "Schema versions"): lists are string arrays, counters
+// integers, float datasets carry their unit; a rendulic/1 file (lists joined by commas) is
+// still read, and a file of an unknown schema is refused naming it.
+TEST(Results, ListsUnitsCountersAndTheFirstSchema) {
+  const fs::path d = fresh_dir("schema2");
+  const fs::path f = d / "results.h5";
+  {
+    ResultsWriter w(f);
+    w.attr("/calibration/m", "param_names", std::vector<std::string>{"B", "G, with comma", ""});
+    w.attr("/calibration/m", "at_bound", std::vector<std::string>{});
+    w.write("/states/s/envelopes/e/contacts_opened", std::vector<double>{0, 3, 12});
+    w.write("/states/s/envelopes/e/d_stress",
+            std::vector<Eigen::Matrix3d>{Eigen::Matrix3d::Zero()});
+    w.attr("/material", "k_star", 2.5e6);
+    w.attr("/material", "w", 0.2);
+    w.commit();
+  }
+  {
+    const ResultsReader r(f);
+    EXPECT_EQ(r.attr_strings("/calibration/m", "param_names"),
+              (std::vector<std::string>{"B", "G, with comma", ""}));
+    EXPECT_TRUE(r.attr_strings("/calibration/m", "at_bound").empty());
+    EXPECT_EQ(r.read_vector("/states/s/envelopes/e/contacts_opened"),
+              (std::vector<double>{0, 3, 12}));
+    EXPECT_EQ(r.attr_string("/states/s/envelopes/e/d_stress", "units"), "Pa");
+    EXPECT_FALSE(r.has_attr("/states/s/envelopes/e/contacts_opened", "units"));
+    EXPECT_EQ(r.attr_string("/material", "k_star_units"), "Pa");
+    EXPECT_FALSE(r.has_attr("/material", "w_units"));
+  }
+  {
+    H5::H5File h(f.string(), H5F_ACC_RDONLY);
+    EXPECT_EQ(h.openDataSet("/states/s/envelopes/e/contacts_opened").getTypeClass(), H5T_INTEGER);
+  }
+  // The same list as rendulic/1 stored it.
+  {
+    ResultsWriter w = ResultsWriter::update(f);
+    w.attr("/", "schema", "rendulic/1");
+    w.attr("/calibration/m", "param_names", "B,G");
+    w.commit();
+  }
+  EXPECT_EQ(ResultsReader(f).attr_strings("/calibration/m", "param_names"),
+            (std::vector<std::string>{"B", "G"}));
+  {
+    ResultsWriter w = ResultsWriter::update(f);
+    w.attr("/", "schema", "rendulic/9");
+    w.commit();
+  }
+  try {
+    ResultsReader r(f);
+    ADD_FAILURE() << "a file of schema rendulic/9 was read";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("rendulic/9"), std::string::npos) << e.what();
+  }
 }
 
 TEST(Results, FailureMidWriteLeavesNoResultsFile) {

@@ -106,3 +106,18 @@ TEST(WindowMean, MeanAndBatchStandardError) {
 
 }  // namespace
 }  // namespace rendulic::dem
+
+namespace rendulic::dem {
+namespace {
+// A relaxation's progress (protocols.hpp): the decay of kinetic/elastic on a log scale, or the
+// time spent, whichever is further; a decay from 1e-2 to 1e-6 halfway (1e-4) is 0.5.
+TEST(RelaxProgress, CountsTheDecayOnALogScaleOrTheTimeWhicheverIsFurther) {
+  EXPECT_NEAR(relax_fraction(1e-2, 1e-4, 1e-6, 0.1), 0.5, 1e-12);
+  EXPECT_NEAR(relax_fraction(1e-2, 1e-2, 1e-6, 0.3), 0.3, 1e-12);
+  EXPECT_EQ(relax_fraction(1e-2, 1e-7, 1e-6, 0.0), 1.0);
+  EXPECT_EQ(relax_fraction(1e-2, 1e-1, 1e-6, 0.0), 0.0);  // a transient rise: no progress
+  EXPECT_EQ(relax_fraction(1e-8, 1e-8, 1e-6, 0.2), 1.0);  // already below the target
+  EXPECT_EQ(relax_fraction(1e-2, 1e-4, 1e-6, 1.5), 1.0);  // the cap is the end
+}
+}  // namespace
+}  // namespace rendulic::dem

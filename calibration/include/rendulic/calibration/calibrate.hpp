@@ -79,6 +79,7 @@ struct StateSummary {
 struct CalibrationSummary {
   std::string model;
   std::vector<std::string> param_names;  // every parameter of the law
+  std::vector<std::string> param_units;  // their units, from the law's parameter table
   std::vector<bool> free_mask;
   std::vector<std::string> fitted_states, held_out_states;
   FitResult fit;
@@ -94,6 +95,8 @@ struct CalibrationSummary {
   std::string global_start;  // "not needed", or "used (why): costs"
   std::vector<std::string> at_bound;      // free parameters on a bound of their box
   std::vector<std::string> undetermined;  // stderr infinite or above half the value
+  // k* of the data (Pa): the model envelopes are stored starred like the DEM's (0: in Pa).
+  double k_star = 0.0;
   std::string BriefReport() const;
 };
 

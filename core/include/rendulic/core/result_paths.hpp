@@ -8,8 +8,10 @@
 // under its own root (pressure_branch()), hence the builders take a root.
 #pragma once
 
+#include <cstddef>
 #include <cstdio>
 #include <string>
+#include <string_view>
 
 namespace rendulic::paths {
 
@@ -121,3 +123,147 @@ inline constexpr char kStderr[] = "/stderr";
 inline constexpr char kCorrelation[] = "/correlation";
 
 }  // namespace rendulic::datasets
+
+// Units of the results file (docs/results.md "Units"): the `units` attribute every float
+// dataset carries, and the `<name>_units` attribute beside every float attribute with a
+// physical unit. "1" is a dimensionless or starred quantity (stress / k*). One table, by the
+// last component of the name: one name, one meaning, one unit.
+namespace rendulic::units {
+
+struct Entry {
+  const char* name;
+  const char* unit;
+};
+
+// Datasets (without their leading '/').
+inline constexpr Entry kDatasets[] = {
+    {"time", "s"},
+    {"seconds", "s"},
+    {"relax_time", "s"},
+    {"strain", "1"},
+    {"eps_v", "1"},
+    {"eps_dev", "1"},
+    {"stress", "Pa"},
+    {"d_stress", "Pa"},
+    {"pressure", "Pa"},
+    {"stress_star", "1"},
+    {"pressure_star", "1"},
+    {"fabric", "1"},
+    {"d_fabric", "1"},
+    {"d_fabric_volume", "1"},
+    {"d_fabric_rotation", "1"},
+    {"d_fabric_contacts", "1"},
+    {"volume_fraction", "1"},
+    {"coordination", "1"},
+    {"coordination_nonrattler", "1"},
+    {"rattler_fraction", "1"},
+    {"kinetic_energy", "J"},
+    {"elastic_energy", "J"},
+    {"inertial_number", "1"},
+    {"kinetic_to_elastic", "1"},
+    {"positions", "m"},
+    {"radii", "m"},
+    {"cell_lengths", "m"},
+    {"reference_positions", "m"},
+    {"reference_cell_lengths", "m"},
+    {"reference_half_skins", "m"},
+    {"velocities", "m/s"},
+    {"forces", "N"},
+    {"max_force", "N"},
+    {"strain_E", "1"},
+    {"last_D", "1/s"},
+    {"theta_deg", "deg"},
+    {"stiffness", "Pa"},
+    {"fabric_stiffness", "1"},
+    {"fabric_volume_stiffness", "1"},
+    {"fabric_rotation_stiffness", "1"},
+    {"amplitude", "1"},
+    {"minor_over_elastic", "1"},
+    {"major_over_elastic", "1"},
+    {"center_over_a", "1"},
+    {"k_continue", "Pa"},
+    {"k_reverse", "Pa"},
+    {"departure", "1"},
+    {"correlation", "1"},
+};
+
+// Float attributes with a physical unit (every other float attribute is dimensionless).
+inline constexpr Entry kAttributes[] = {
+    {"k", "N/m"},
+    {"gamma", "kg/s"},
+    {"gamma_b", "kg/s"},
+    {"density", "kg/m^3"},
+    {"r_mean", "m"},
+    {"k_star", "Pa"},
+    {"dt", "s"},
+    {"time", "s"},
+    {"seconds", "s"},
+    {"relax_time", "s"},
+    {"relax_time_cap", "s"},
+    {"compression_time", "s"},
+    {"wall_time_s", "s"},
+    {"wall_s", "s"},
+    {"cpu_s", "s"},
+    {"rate", "1/s"},
+    {"elastic_k", "Pa"},
+    {"elastic_major", "Pa"},
+    {"elastic_minor", "Pa"},
+    {"minimise_max_displacement", "m"},
+    {"B", "Pa"},
+    {"G", "Pa"},
+    {"A", "Pa"},
+    {"B_stderr", "Pa"},
+    {"G_stderr", "Pa"},
+    {"A_stderr", "Pa"},
+    {"inclination_deg", "deg"},
+    {"inclination_deg_stderr", "deg"},
+    {"plastic_inclination_deg", "deg"},
+};
+
+// Per-probe and per-state counters: stored as integers, without a unit.
+inline constexpr const char* kCounters[] = {
+    "contacts_opened",
+    "contacts_closed",
+    "backbone_contacts_opened",
+    "backbone_contacts_closed",
+    "load_steps",
+    "relax_steps",
+    "relax_converged",
+    "iterations",
+    "converged",
+    "steps",
+    "minimise_iterations",
+    "n_particles",
+    "n_rattlers",
+    "n_backbone_contacts",
+    "reference_relax_steps",
+};
+
+namespace detail {
+inline std::string_view last_component(std::string_view path) {
+  const auto slash = path.rfind('/');
+  return slash == std::string_view::npos ? path : path.substr(slash + 1);
+}
+template <std::size_t N>
+const char* find(const Entry (&table)[N], std::string_view name) {
+  for (const Entry& e : table)
+    if (name == e.name) return e.unit;
+  return nullptr;
+}
+}  // namespace detail
+
+// The unit of a dataset by its path (nullptr: not in the table).
+inline const char* of_dataset(std::string_view path) {
+  return detail::find(kDatasets, detail::last_component(path));
+}
+// The unit of a float attribute (nullptr: dimensionless).
+inline const char* of_attribute(std::string_view name) { return detail::find(kAttributes, name); }
+// Whether a dataset or attribute of this name counts something (stored as an integer).
+inline bool is_counter(std::string_view path) {
+  const std::string_view name = detail::last_component(path);
+  for (const char* c : kCounters)
+    if (name == c) return true;
+  return false;
+}
+
+}  // namespace rendulic::units

@@ -1,4 +1,4 @@
-// Results files (HDF5 C++ API), schema "rendulic/1" of docs/results.md. The
+// Results files (HDF5 C++ API), schema "rendulic/2" of docs/results.md (rendulic/1 still read). The
 // writer builds the file under a temporary name in the output folder and renames it onto the
 // final name only in commit(): a run that fails or is interrupted leaves no file that looks
 // complete, and a results file from an earlier run stays untouched until the new one is
@@ -42,6 +42,9 @@ class ResultsWriter {
   void attr(const std::string& object, const std::string& name, const std::string& value);
   void attr(const std::string& object, const std::string& name, const char* value);
   void attr(const std::string& object, const std::string& name, const std::vector<double>& value);
+  // A list of texts: an HDF5 array of variable-length strings.
+  void attr(const std::string& object, const std::string& name,
+            const std::vector<std::string>& value);
 
   // Fixed datasets, replacing any dataset of the same path: [n], [n,2], [n,3,3], [3,3], [r,c].
   void write(const std::string& path, const std::vector<double>& values);
@@ -86,8 +89,8 @@ class ResultsWriter {
 class ResultsReader {
  public:
   // InputError naming the file if it is missing, unreadable, not HDF5, corrupt, or lacks
-  // schema rendulic/1. Every accessor below throws an InputError naming the file and the
-  // object when it is missing, of the wrong kind (a group for a dataset), type (text for
+  // schema rendulic/2 or rendulic/1. Every accessor below throws an InputError naming the file and
+  // the object when it is missing, of the wrong kind (a group for a dataset), type (text for
   // numbers) or shape, or cannot be read.
   explicit ResultsReader(const std::filesystem::path& path);
   ResultsReader(ResultsReader&&) noexcept;
@@ -103,6 +106,10 @@ class ResultsReader {
   std::int64_t attr_int(const std::string& object, const std::string& name) const;
   std::string attr_string(const std::string& object, const std::string& name) const;
   std::vector<double> attr_doubles(const std::string& object, const std::string& name) const;
+  // A list of texts: an array of strings, or (schema rendulic/1) one text joined with
+  // `separator`.
+  std::vector<std::string> attr_strings(const std::string& object, const std::string& name,
+                                        char separator = ',') const;
 
   std::vector<std::uint64_t> shape(const std::string& path) const;
   std::vector<double> read_vector(const std::string& path) const;

@@ -17,6 +17,7 @@
 // among the ranks (probe_mpi.hpp), with the same envelope bit for bit.
 #pragma once
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -47,6 +48,9 @@ struct ProbeOptions {
   MinimiseOptions minimise{};
   LinearResponseOptions linear{};
   int threads = 0;  // OpenMP threads over probes; 0: OpenMP's default
+  // Called after each probe this process computes, from the thread that computed it (so it
+  // must be thread-safe): the run's progress display counts probes with it.
+  std::function<void()> probe_done;
   bool IsValid(std::string* why) const;
 };
 

@@ -58,6 +58,10 @@ struct RelaxSummary {
   bool converged = false;
 };
 RelaxSummary relax(DemSystem& sys, const RelaxOptions& options, const ProgressFn& progress = {});
+// The progress of a relaxation: whichever is further, the decay of kinetic/elastic from
+// `start_ratio` towards `target` (on a log scale, as it decays) or the time spent over the
+// cap; in [0, 1].
+double relax_fraction(double start_ratio, double ratio, double target, double time_fraction);
 double relax_ratio(const DemSystem& sys);  // E_kin / max(E_el, E_floor)
 
 // Isotropic strain-controlled compression (or expansion) to `target_nu`, landing exactly on

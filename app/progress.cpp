@@ -1,0 +1,87 @@
+// Progress lines of the run's stages (progress.hpp; docs/usage.md "Progress and messages").
+#include "progress.hpp"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include "rendulic/core/log.hpp"
+
+namespace rendulic::app {
+
+std::string human_seconds(double s) {
+  char buf[48];
+  if (!std::isfinite(s) || s < 0) return "?";
+  if (s < 60) {
+    std::snprintf(buf, sizeof buf, "%.0f s", s);
+  } else if (s < 3600) {
+    const int m = static_cast<int>(s / 60);
+    std::snprintf(buf, sizeof buf, "%d min %02d s", m, static_cast<int>(s - 60 * m));
+  } else {
+    const int h = static_cast<int>(s / 3600);
+    std::snprintf(buf, sizeof buf, "%d h %02d min", h, static_cast<int>((s - 3600 * h) / 60));
+  }
+  return buf;
+}
+
+Progress::Progress(const RunContext& ctx, std::string stage)
+    : live_(log::enabled(log::Level::kInfo) && isatty(STDERR_FILENO)),
+      lines_(log::enabled(log::Level::kInfo) && !live_),
+      every_(ctx.progress_every),
+      stage_(std::move(stage)),
+      start_(Clock::now()),
+      task_start_(start_),
+      last_(start_) {}
+
+Progress::~Progress() {
+  if (live_ && shown_) log::clear_live();
+}
+
+void Progress::start_task(std::string name) {
+  const std::lock_guard<std::mutex> lock(mutex_);
+  task_ = std::move(name);
+  task_start_ = Clock::now();
+}
+
+void Progress::operator()(double fraction) {
+  if (!live_ && !lines_) return;
+  const std::lock_guard<std::mutex> lock(mutex_);
+  show_locked(fraction, "", task_start_);
+}
+
+void Progress::count(long done, long total) {
+  if (!live_ && !lines_) return;
+  const std::lock_guard<std::mutex> lock(mutex_);
+  // Counted work spans the stage's tasks (the probes of every state): paced from its start.
+  show_locked(total > 0 ? double(done) / double(total) : 1.0,
+              std::to_string(done) + "/" + std::to_string(total), start_);
+}
+
+double Progress::elapsed() const {
+  return std::chrono::duration<double>(Clock::now() - start_).count();
+}
+
+void Progress::show_locked(double fraction, const std::string& detail, Clock::time_point from) {
+  const auto now = Clock::now();
+  const double since_last = std::chrono::duration<double>(now - last_).count();
+  // A live line is cheap to redraw; a log line is a line someone scrolls past.
+  if (live_ ? (shown_ && since_last < 0.2) : since_last < every_) return;
+  last_ = now;
+  shown_ = true;
+  const double f = std::clamp(fraction, 0.0, 1.0);
+  const double spent = std::chrono::duration<double>(now - from).count();
+  // The remaining time, if the rest goes at the pace so far.
+  const std::string left = f > 1e-3 ? human_seconds(spent * (1 - f) / f) : std::string("?");
+  char pct[16];
+  std::snprintf(pct, sizeof pct, "%5.1f%%", 100 * f);
+  std::string text = "[" + stage_ + "] " + task_ + (detail.empty() ? "" : " " + detail) + " " +
+                     pct + ", " + human_seconds(elapsed()) + " in stage, about " + left + " left";
+  if (live_)
+    log::live(text);
+  else
+    log::info(text);
+}
+
+}  // namespace rendulic::app

@@ -1,0 +1,162 @@
+// The output a researcher reads (docs/usage.md "Progress and messages", docs/results.md
+// "Units"): a run whose stderr goes to a file (not a terminal) logs every stage's start, end and
+// progress in plain lines, --quiet silences them; every float dataset of a real results file
+// carries its unit, lists are string arrays, counters integers, and the model envelopes are
+// starred like the DEM's. Runs the real binary (the tiny run of tiny_run.hpp).
+#include <H5Cpp.h>
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <regex>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "cli_runner.hpp"
+#include "rendulic/core/result_paths.hpp"
+#include "rendulic/core/results.hpp"
+#include "tiny_run.hpp"
+
+namespace {
+namespace fs = std::filesystem;
+using rendulic::testing::CliResult;
+
+const fs::path kRoot = fs::path(RENDULIC_TEST_TMP) / "app_output_system";
+
+TEST(Progress, ALogGetsPlainLinesForEveryDemStage) {
+  const fs::path out = rendulic::testing::fresh_dir("app_output_system/log");
+  // stderr is a pipe here, as in a batch job's log.
+  const CliResult r = rendulic::testing::run_rendulic(
+      "run " + rendulic::testing::tiny_scenario(kRoot).string() +
+      " --threads 1 --progress-every 0.1 --set run.stages=prepare,isotropic,path,states --out " +
+      out.string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  for (const char* stage : {"prepare", "isotropic", "path", "states"}) {
+    const std::string tag = std::string("[") + stage + "]";
+    EXPECT_NE(r.out.find("rendulic: " + tag + " started\n"), std::string::npos) << stage;
+    EXPECT_TRUE(std::regex_search(r.out, std::regex("rendulic: \\" + tag.substr(0, tag.size() - 1) +
+                                                    "\\] done in [0-9]+ s\n")))
+        << stage << "\n"
+        << r.out;
+  }
+  // Progress with an estimate, as lines: a percentage and the time left.
+  EXPECT_TRUE(std::regex_search(
+      r.out, std::regex("rendulic: \\[[a-z_]+\\] .* [0-9.]+%, .* in stage, about .* left\n")))
+      << r.out;
+  // No terminal control in a log: no carriage return, no erase-line sequence.
+  EXPECT_EQ(r.out.find('\r'), std::string::npos);
+  EXPECT_EQ(r.out.find("\033["), std::string::npos);
+
+  const CliResult q = rendulic::testing::run_rendulic(
+      "run " + rendulic::testing::tiny_scenario(kRoot).string() +
+      " --quiet --threads 1 --progress-every 0.1 --set run.stages=prepare --out " +
+      (out / "quiet").string());
+  ASSERT_EQ(q.code, 0) << q.out;
+  EXPECT_EQ(q.out.find("[prepare]"), std::string::npos) << q.out;
+}
+
+// Every object of a file, with HDF5's own visitor (independent of our reader).
+struct Seen {
+  std::vector<std::string> float_datasets, integer_datasets;
+};
+herr_t visit(hid_t obj, const char* name, const H5O_info_t* info, void* data) {
+  if (info->type != H5O_TYPE_DATASET) return 0;
+  auto* seen = static_cast<Seen*>(data);
+  const hid_t ds = H5Dopen2(obj, name, H5P_DEFAULT);
+  const hid_t type = H5Dget_type(ds);
+  const H5T_class_t cls = H5Tget_class(type);
+  const std::string path = std::string("/") + name;
+  if (cls == H5T_FLOAT) seen->float_datasets.push_back(path);
+  if (cls == H5T_INTEGER) seen->integer_datasets.push_back(path);
+  H5Tclose(type);
+  H5Dclose(ds);
+  return 0;
+}
+
+std::string unit_of(const H5::H5File& f, const std::string& path) {
+  const H5::DataSet ds = f.openDataSet(path);
+  if (!ds.attrExists("units")) return "";
+  const H5::Attribute a = ds.openAttribute("units");
+  if (a.getSpace().getSimpleExtentNdims() == 1) {  // one unit per entry (a law's params)
+    const auto n = static_cast<std::size_t>(a.getSpace().getSimpleExtentNpoints());
+    std::vector<char*> units(n, nullptr);
+    a.read(a.getStrType(), units.data());
+    std::string joined;
+    for (char* u : units) joined += std::string(joined.empty() ? "" : ",") + (u ? u : "?");
+    H5Dvlen_reclaim(a.getStrType().getId(), a.getSpace().getId(), H5P_DEFAULT, units.data());
+    return joined;
+  }
+  std::string unit;
+  a.read(a.getStrType(), unit);
+  return unit;
+}
+
+TEST(Units, EveryFloatDatasetOfARunCarriesItsUnit) {
+  const fs::path file = rendulic::testing::tiny_results(kRoot);
+  ASSERT_TRUE(fs::exists(file));
+  const H5::H5File f(file.string(), H5F_ACC_RDONLY);
+  Seen seen;
+  H5Ovisit(f.getId(), H5_INDEX_NAME, H5_ITER_NATIVE, visit, &seen);
+  ASSERT_GT(seen.float_datasets.size(), 50u);
+  for (const std::string& p : seen.float_datasets) {
+    const std::string unit = unit_of(f, p);
+    EXPECT_FALSE(unit.empty()) << p << " has no units attribute";
+    EXPECT_FALSE(rendulic::units::is_counter(p)) << p << " counts: it should be an integer";
+  }
+  // Spot checks against the conventions: SI stress in Pa, starred stress and strain 1.
+  EXPECT_EQ(unit_of(f, "/path/stress"), "Pa");
+  EXPECT_EQ(unit_of(f, "/path/stress_star"), "1");
+  EXPECT_EQ(unit_of(f, "/path/time"), "s");
+  EXPECT_EQ(unit_of(f, "/states/a/positions"), "m");
+  EXPECT_EQ(unit_of(f, "/states/a/envelopes/dynamic_5e-05/theta_deg"), "deg");
+  // A law's parameters, one unit each (isotropic_elastic: K, G in Pa, n_p dimensionless, ...).
+  EXPECT_EQ(unit_of(f, "/calibration/isotropic_elastic/params").substr(0, 10), "Pa,Pa,1,Pa");
+  // Counters are integers: every per-probe counter of the envelopes.
+  std::set<std::string> counters;
+  for (const std::string& p : seen.integer_datasets)
+    if (rendulic::units::is_counter(p)) counters.insert(p.substr(p.rfind('/') + 1));
+  EXPECT_TRUE(counters.count("contacts_opened")) << "counters stored as integers";
+  EXPECT_TRUE(counters.count("relax_steps"));
+}
+
+TEST(Units, FloatAttributesWithAUnitSayIt) {
+  const rendulic::ResultsReader r(rendulic::testing::tiny_results(kRoot));
+  EXPECT_EQ(r.attr_string("/material", "k_units"), "N/m");
+  EXPECT_EQ(r.attr_string("/material", "k_star_units"), "Pa");
+  EXPECT_EQ(r.attr_string("/material", "dt_units"), "s");
+  EXPECT_EQ(r.attr_string("/states/a", "minimise_max_displacement_units"), "m");
+  EXPECT_FALSE(r.has_attr("/material", "w_units"));  // dimensionless: no companion
+}
+
+TEST(Lists, AreStringArraysAndModelEnvelopesAreStarred) {
+  const fs::path file = rendulic::testing::tiny_results(kRoot);
+  const H5::H5File f(file.string(), H5F_ACC_RDONLY);
+  const std::string g = "/calibration/isotropic_elastic";
+  for (const char* name : {"param_names", "free", "fitted_states", "yardstick_blocks"}) {
+    const H5::Attribute a = f.openGroup(g).openAttribute(name);
+    EXPECT_EQ(a.getTypeClass(), H5T_STRING) << name;
+    EXPECT_EQ(a.getSpace().getSimpleExtentNdims(), 1) << name << " is one joined text";
+  }
+  const rendulic::ResultsReader r(file);
+  const std::vector<std::string> states = r.attr_strings(g, "fitted_states");
+  EXPECT_FALSE(states.empty());
+  for (const std::string& s : states) EXPECT_EQ(s.find(','), std::string::npos) << s;
+  EXPECT_EQ(r.attr_strings(g, "param_names").size(), r.read_vector(g + "/params").size());
+  // The law's envelope beside the DEM's: the same name and unit, starred.
+  const std::string dem = "/states/a/envelopes/dynamic_5e-05";
+  const std::string law = g + "/states/a/envelopes/dynamic_5e-05";
+  ASSERT_TRUE(r.exists(law + "/stress_star")) << "model envelope not starred";
+  EXPECT_FALSE(r.exists(law + "/stress"));
+  EXPECT_EQ(unit_of(f, law + "/stress_star"), unit_of(f, dem + "/stress_star"));
+  // And the same order of magnitude as the DEM's points (a law fitted to them).
+  const auto dem_points = r.read_pairs(dem + "/stress_star");
+  const auto law_points = r.read_pairs(law + "/stress_star");
+  ASSERT_EQ(dem_points.size(), law_points.size());
+  double dem_size = 0, law_size = 0;
+  for (std::size_t i = 0; i < dem_points.size(); ++i)
+    dem_size += dem_points[i].norm(), law_size += law_points[i].norm();
+  EXPECT_GT(law_size, 0.1 * dem_size);
+  EXPECT_LT(law_size, 10 * dem_size);
+}
+
+}  // namespace
