@@ -8,7 +8,7 @@
 # -march=native is off so that the binary runs wherever the job does.
 # Run after .ci/setup.sh (same Debian packages). Environment: BUILD_DIR (default build-asan),
 # JOBS (default: all cores), SANITIZERS_BUILD_ONLY (set: build, run nothing; .ci/setup.sh
-# does that under CI, and the default suite's ci.SanitizedUnitTests runs the unit tests).
+# does that under CI, and the default suite's ci.SanitizedTests runs its tests).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 

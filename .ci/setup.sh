@@ -6,7 +6,7 @@
 # RENDULIC_MPI (default ON: installs OpenMPI and builds with it, so that CI runs the
 # across-ranks tests; OFF builds without MPI and installs no MPI package), CI set -> warnings
 # are errors and the sanitizer build (.ci/sanitizers.sh, build-asan) is made as well, so that
-# the default suite runs its tests (ci.SanitizedUnitTests; RENDULIC_SANITIZERS=OFF
+# the default suite runs its tests (ci.SanitizedTests; RENDULIC_SANITIZERS=OFF
 # skips it).
 set -euo pipefail
 cd "$(dirname "$0")/.."
