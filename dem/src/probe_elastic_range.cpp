@@ -11,6 +11,7 @@
 #include "rendulic/core/conventions.hpp"
 #include "rendulic/core/envelope_record.hpp"
 #include "rendulic/core/errors.hpp"
+#include "rendulic/core/option_table.hpp"
 #include "rendulic/core/result_paths.hpp"
 #include "rendulic/dem/probe_campaign.hpp"
 
@@ -21,17 +22,10 @@ bool ElasticRangeOptions::IsValid(std::string* why) const {
     if (why) *why = m;
     return false;
   };
-  if (amplitudes.size() < 2) return fail("elastic_range: at least two amplitudes");
-  for (std::size_t i = 0; i < amplitudes.size(); ++i) {
-    if (!(amplitudes[i] > 0.0) || !(amplitudes[i] <= 0.05))
-      return fail("elastic_range: amplitudes must be in (0, 0.05]");
-    if (i > 0 && !(amplitudes[i] > amplitudes[i - 1]))
-      return fail("elastic_range: amplitudes must increase");
-  }
-  if (method != "dynamic" && method != "minimisation")
-    return fail("elastic_range: method must be dynamic or minimisation");
-  if (!(tolerance > 0.0) || !(tolerance < 1.0))
-    return fail("elastic_range: tolerance must be in (0, 1)");
+  if (!elastic_range_option_table().check(*this, why)) return false;
+  for (std::size_t i = 1; i < amplitudes.size(); ++i)
+    if (!(amplitudes[i] > amplitudes[i - 1]))
+      return fail("elastic_range.amplitudes: the ladder must increase");
   return true;
 }
 
@@ -177,43 +171,45 @@ void write_elastic_range(ResultsWriter& out, const std::string& g, const Elastic
     out.attr(g, "elastic_reference_note", r.elastic_reference_note);
 }
 
+const OptionTable<ElasticRangeOptions>& elastic_range_option_table() {
+  using Row = OptionRow<ElasticRangeOptions>;
+  static const OptionTable<ElasticRangeOptions> table({
+      Row{{.path = "elastic_range.amplitudes",
+           .unit = "-",
+           .help = "Ladder of probe amplitudes |d_eps| of the elastic_range stage, increasing; "
+                   "each is probed at 35.26, 125.26, 215.26 and 305.26 deg.",
+           .min = 0.0,
+           .max = 0.05,
+           .min_open = true,
+           .min_size = 2},
+          [](ElasticRangeOptions& o) -> std::vector<double>& { return o.amplitudes; }},
+      Row{{.path = "elastic_range.method",
+           .unit = "-",
+           .help = "Probe method of the ladder (dynamic: as the probes stage; minimisation: "
+                   "quasi-static).",
+           .choices = {"dynamic", "minimisation"}},
+          [](ElasticRangeOptions& o) -> std::string& { return o.method; }},
+      Row{{.path = "elastic_range.tolerance",
+           .unit = "-",
+           .help = "The response has left the elastic one where |minor axis / elastic - 1| or "
+                   "|1 - k_continue / k_reverse| reaches this; the yield strain is that "
+                   "amplitude (docs/probes.md).",
+           .min = 0.0,
+           .max = 1.0,
+           .min_open = true,
+           .max_open = true},
+          [](ElasticRangeOptions& o) -> double& { return o.tolerance; }},
+  });
+  return table;
+}
+
 void register_elastic_range_keys(ScenarioSchema& schema) {
-  const ElasticRangeOptions d;
-  schema.add({.path = "elastic_range.amplitudes",
-              .type = KeyType::kDoubleList,
-              .default_value = d.amplitudes,
-              .unit = "-",
-              .help = "Ladder of probe amplitudes |d_eps| of the elastic_range stage, increasing; "
-                      "each is probed at 35.26, 125.26, 215.26 and 305.26 deg.",
-              .min = 0.0,
-              .max = 0.05,
-              .min_open = true,
-              .min_size = 2});
-  schema.add({.path = "elastic_range.method",
-              .type = KeyType::kString,
-              .default_value = d.method,
-              .unit = "-",
-              .help = "Probe method of the ladder (dynamic: as the probes stage; minimisation: "
-                      "quasi-static).",
-              .choices = {"dynamic", "minimisation"}});
-  schema.add({.path = "elastic_range.tolerance",
-              .type = KeyType::kDouble,
-              .default_value = d.tolerance,
-              .unit = "-",
-              .help = "The response has left the elastic one where |minor axis / elastic - 1| or "
-                      "|1 - k_continue / k_reverse| reaches this; the yield strain is that "
-                      "amplitude (docs/probes.md).",
-              .min = 0.0,
-              .max = 1.0,
-              .min_open = true,
-              .max_open = true});
+  elastic_range_option_table().register_keys(schema);
 }
 
 ElasticRangeOptions elastic_range_options_from(const Scenario& scenario) {
   ElasticRangeOptions o;
-  o.amplitudes = scenario.get_doubles("elastic_range.amplitudes");
-  o.method = scenario.get_string("elastic_range.method");
-  o.tolerance = scenario.get_double("elastic_range.tolerance");
+  elastic_range_option_table().read(scenario, o);
   std::string why;
   if (!o.IsValid(&why))
     throw InputError(why + " (" + scenario.origin("elastic_range.amplitudes") + ")");

@@ -20,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "rendulic/core/option_table.hpp"
 #include "rendulic/core/results.hpp"
 #include "rendulic/core/scenario.hpp"
 #include "rendulic/dem/dem_system.hpp"
@@ -78,9 +79,12 @@ std::vector<Envelope> run_probe_campaign_in(const DemSystem& state, const std::s
                                             const std::vector<std::string>& methods,
                                             const ProbeOptions& options, ResultsWriter& out);
 
-// Scenario keys of the probe campaigns (section [probes]) and the options they give. Throws
-// InputError naming the key, also for a probes.dt_factor beyond the stability limit of the
-// scenario's material.
+// The keys of ProbeOptions (section [probes]): their unit, range and help, the defaults being
+// ProbeOptions{}'s. IsValid checks the same ranges.
+const OptionTable<ProbeOptions>& probe_option_table();
+// Scenario keys of the probe campaigns (the table, probes.methods and the elastic range's) and
+// the options they give. Throws InputError naming the key, also for a probes.dt_factor beyond
+// the stability limit of the scenario's material.
 void register_probe_keys(ScenarioSchema& schema);
 ProbeOptions probe_options_from(const Scenario& scenario);
 // The methods of the probes stage: a subset of {"dynamic", "minimisation"} (the

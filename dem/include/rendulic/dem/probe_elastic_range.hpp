@@ -24,6 +24,7 @@
 #include <string>
 #include <vector>
 
+#include "rendulic/core/option_table.hpp"
 #include "rendulic/core/results.hpp"
 #include "rendulic/core/scenario.hpp"
 #include "rendulic/dem/dem_system.hpp"
@@ -81,6 +82,8 @@ ElasticRange elastic_range(const DemSystem& state, const ElasticRangeOptions& op
 void write_elastic_range(ResultsWriter& out, const std::string& group, const ElasticRange& range,
                          const ElasticRangeOptions& options);
 
+// The keys of ElasticRangeOptions (section [elastic_range]), defaults ElasticRangeOptions{}'s.
+const OptionTable<ElasticRangeOptions>& elastic_range_option_table();
 void register_elastic_range_keys(ScenarioSchema& schema);
 ElasticRangeOptions elastic_range_options_from(const Scenario& scenario);
 
