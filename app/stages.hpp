@@ -1,7 +1,8 @@
 // The stage functions of `rendulic run` (pipeline.cpp's table) and the live DEM state they
 // share within one run: the DEM stages leave the relaxed states in memory for the probe
-// stages; stages that need data already written (fits, calibration) read the writer's
-// temporary file through a ResultsReader.
+// stages, in the DemRunSession that run_pipeline owns and hands to each stage; stages that need
+// data already written (fits, calibration) read the writer's temporary file through a
+// ResultsReader.
 #pragma once
 
 #include <optional>
@@ -16,7 +17,7 @@
 
 namespace rendulic::app {
 
-// Live DEM state shared by the stages of one run.
+// Live DEM state shared by the stages of one run (one per run_pipeline call).
 struct DemRunSession {
   std::optional<dem::DemSystem> system;                         // after prepare / isotropic / path
   std::vector<dem::DemSystem> snapshots;                        // on the path, states.labels order
@@ -26,7 +27,6 @@ struct DemRunSession {
   std::vector<std::pair<double, dem::DemSystem>> branches;
   double path_start_pressure = 0;  // Pa, the relaxed state at nu_max the path starts from
 };
-DemRunSession& dem_run_session();
 
 // Pieces of the DEM stages that the pressure branches repeat (stages_dem.cpp).
 // Appends every path sample as a row of the datasets <group>/time, strain, ... (the /path
@@ -43,18 +43,18 @@ void write_state(ResultsWriter& out, const std::string& group, const dem::DemSys
                  const dem::RestSummary& rest, double force_tolerance, bool with_configuration);
 
 // DEM (stages_dem.cpp).
-void stage_prepare(const Scenario&, ResultsWriter&, const RunContext&);
-void stage_isotropic(const Scenario&, ResultsWriter&, const RunContext&);
-void stage_path(const Scenario&, ResultsWriter&, const RunContext&);
-void stage_states(const Scenario&, ResultsWriter&, const RunContext&);
+void stage_prepare(const Scenario&, ResultsWriter&, const RunContext&, DemRunSession&);
+void stage_isotropic(const Scenario&, ResultsWriter&, const RunContext&, DemRunSession&);
+void stage_path(const Scenario&, ResultsWriter&, const RunContext&, DemRunSession&);
+void stage_states(const Scenario&, ResultsWriter&, const RunContext&, DemRunSession&);
 // Probe campaigns and linear response (stages_probes.cpp).
-void stage_probes(const Scenario&, ResultsWriter&, const RunContext&);
-void stage_linear_response(const Scenario&, ResultsWriter&, const RunContext&);
+void stage_probes(const Scenario&, ResultsWriter&, const RunContext&, DemRunSession&);
+void stage_linear_response(const Scenario&, ResultsWriter&, const RunContext&, DemRunSession&);
 // The elastic range of every state (probe_elastic_range.hpp): /states/<label>/elastic_range.
-void stage_elastic_range(const Scenario&, ResultsWriter&, const RunContext&);
+void stage_elastic_range(const Scenario&, ResultsWriter&, const RunContext&, DemRunSession&);
 // The pressure branches (stages_pressure.cpp): path, states at rest, elastic range, probes,
 // linear response and fits from each of the loading's snapshots, under /pressure/nu<nu>.
-void stage_pressure(const Scenario&, ResultsWriter&, const RunContext&);
+void stage_pressure(const Scenario&, ResultsWriter&, const RunContext&, DemRunSession&);
 // Envelope fits (stages_probes.cpp): fit_stress / fit_fabric of every envelope.
 void register_fit_keys(ScenarioSchema& schema);
 void stage_fits(const Scenario&, ResultsWriter&, const RunContext&);

@@ -17,8 +17,8 @@
 
 namespace rendulic::app {
 
-void stage_pressure(const Scenario& sc, ResultsWriter& out, const RunContext& ctx) {
-  auto& session = dem_run_session();
+void stage_pressure(const Scenario& sc, ResultsWriter& out, const RunContext& ctx,
+                    DemRunSession& session) {
   if (!session.options) throw InputError("run: stage 'pressure' needs the stages before it");
   const dem::DemRunOptions& o = *session.options;
   if (o.branch_nu.empty())

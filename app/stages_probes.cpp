@@ -17,8 +17,9 @@
 namespace rendulic::app {
 namespace {
 
-const std::vector<std::pair<std::string, dem::DemSystem>>& relaxed_states(const char* stage) {
-  const auto& relaxed = dem_run_session().relaxed;
+const std::vector<std::pair<std::string, dem::DemSystem>>& relaxed_states(
+    const DemRunSession& session, const char* stage) {
+  const auto& relaxed = session.relaxed;
   if (relaxed.empty())
     throw InputError(std::string("run: stage '") + stage +
                      "' needs the stage 'states' in run.stages");
@@ -26,10 +27,11 @@ const std::vector<std::pair<std::string, dem::DemSystem>>& relaxed_states(const 
 }
 
 void campaign(const Scenario& sc, ResultsWriter& out, const RunContext& ctx,
-              const std::vector<std::string>& methods, const char* stage) {
+              const DemRunSession& session, const std::vector<std::string>& methods,
+              const char* stage) {
   dem::ProbeOptions o = dem::probe_options_from(sc);
   if (ctx.threads > 0) o.threads = ctx.threads;
-  for (const auto& [label, state] : relaxed_states(stage)) {
+  for (const auto& [label, state] : relaxed_states(session, stage)) {
     if (!ctx.quiet) std::cerr << "rendulic: " << stage << " of state " << label << "\n";
     dem::run_probe_campaign(state, label, methods, o, out);
   }
@@ -47,14 +49,16 @@ FitOptions fit_options(const Scenario& sc, const std::string& quantity) {
 
 }  // namespace
 
-void stage_probes(const Scenario& sc, ResultsWriter& out, const RunContext& ctx) {
-  campaign(sc, out, ctx, dem::probe_methods_from(sc), "probes");
+void stage_probes(const Scenario& sc, ResultsWriter& out, const RunContext& ctx,
+                  DemRunSession& session) {
+  campaign(sc, out, ctx, session, dem::probe_methods_from(sc), "probes");
 }
 
-void stage_linear_response(const Scenario& sc, ResultsWriter& out, const RunContext& ctx) {
+void stage_linear_response(const Scenario& sc, ResultsWriter& out, const RunContext& ctx,
+                           DemRunSession& session) {
   dem::ProbeOptions o = dem::probe_options_from(sc);
   if (ctx.threads > 0) o.threads = ctx.threads;
-  for (const auto& [label, state] : relaxed_states("linear_response")) {
+  for (const auto& [label, state] : relaxed_states(session, "linear_response")) {
     if (!ctx.quiet) std::cerr << "rendulic: linear_response of state " << label << "\n";
     try {
       dem::run_probe_campaign(state, label, {"linear_response"}, o, out);
@@ -74,11 +78,12 @@ void stage_linear_response(const Scenario& sc, ResultsWriter& out, const RunCont
   }
 }
 
-void stage_elastic_range(const Scenario& sc, ResultsWriter& out, const RunContext& ctx) {
+void stage_elastic_range(const Scenario& sc, ResultsWriter& out, const RunContext& ctx,
+                         DemRunSession& session) {
   dem::ProbeOptions o = dem::probe_options_from(sc);
   if (ctx.threads > 0) o.threads = ctx.threads;
   const dem::ElasticRangeOptions eo = dem::elastic_range_options_from(sc);
-  for (const auto& [label, state] : relaxed_states("elastic_range")) {
+  for (const auto& [label, state] : relaxed_states(session, "elastic_range")) {
     if (!ctx.quiet) std::cerr << "rendulic: elastic_range of state " << label << "\n";
     const dem::ElasticRange r = dem::elastic_range(state, eo, o);
     dem::write_elastic_range(out, paths::elastic_range(paths::state(label)), r, eo);

@@ -30,21 +30,11 @@
 #include "hdf5_reason.hpp"
 #include "rendulic/core/cleanup.hpp"
 #include "rendulic/core/errors.hpp"
+#include "rendulic/core/result_paths.hpp"
 #include "rendulic/core/version.hpp"
 
 namespace rendulic {
 namespace fs = std::filesystem;
-
-std::string invalid_object_name_reason(const std::string& name) {
-  if (name.empty()) return "is empty";
-  if (name == "." || name == "..") return "is reserved (HDF5 reads '.' and '..' as paths)";
-  for (const char ch : name) {
-    const auto c = static_cast<unsigned char>(ch);
-    if (c == '/') return "contains '/'";
-    if (c < 0x20 || c == 0x7f) return "contains a control character";
-  }
-  return "";
-}
 
 namespace {
 
