@@ -352,9 +352,8 @@ Envelope dynamic_envelope(const DemSystem& given, double amplitude,
   return dynamic_envelope_of(given, amplitude, theta_deg, options, false);
 }
 
-void detail::compute_worker_share(const std::string& method, const DemSystem& state,
-                                  double amplitude, const std::vector<double>& theta_deg,
-                                  const ProbeOptions& options) {
+void compute_worker_share(const std::string& method, const DemSystem& state, double amplitude,
+                          const std::vector<double>& theta_deg, const ProbeOptions& options) {
   if (method == "dynamic") {
     dynamic_envelope_of(state, amplitude, theta_deg, options, true);
   } else if (method == "minimisation") {
