@@ -31,13 +31,6 @@
 
 namespace rendulic::dem {
 
-// Minimisation probes: FIRE to max net force < force_tolerance * mean contact force.
-MinimiseOptions minimise{};
-LinearResponseOptions linear{};
-int threads = 0;  // OpenMP threads over probes; 0: OpenMP's default
-bool IsValid(std::string* why) const;
-};
-
 // A worker's part of one envelope under MPI (MpiSession::serve takes it): the same envelope
 // function as on rank 0, inside a ProbeTaskScope that gives the worker's share. `state` is
 // what rank 0 sent: the relaxed reference for `dynamic` (rank 0 relaxed it once for all), the

@@ -27,9 +27,15 @@ struct ProbeOptions {
   double dt_factor = 0.0;
   // Relaxation after loading (dynamic): E_kin / E_el below kinetic_to_elastic, or time_cap.
   RelaxOptions relax{1e-9, 2e-3, 200};
+  // Minimisation probes: FIRE to max net force < force_tolerance * mean contact force.
+  MinimiseOptions minimise{};
+  LinearResponseOptions linear{};
+  int threads = 0;  // OpenMP threads over probes; 0: OpenMP's default
+  bool IsValid(std::string* why) const;
+};
 
-  // The keys of ProbeOptions (section [probes]): their unit, range and help, the defaults being
-  // ProbeOptions{}'s. IsValid checks the same ranges.
-  const OptionTable<ProbeOptions>& probe_option_table();
+// The keys of ProbeOptions (section [probes]): their unit, range and help, the defaults being
+// ProbeOptions{}'s. IsValid checks the same ranges.
+const OptionTable<ProbeOptions>& probe_option_table();
 
 }  // namespace rendulic::dem
