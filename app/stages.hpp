@@ -12,6 +12,8 @@
 
 #include "pipeline.hpp"
 #include "rendulic/dem/dem_system.hpp"
+#include "rendulic/dem/probe_campaign.hpp"
+#include "rendulic/dem/probe_elastic_range.hpp"
 #include "rendulic/dem/protocols.hpp"
 #include "rendulic/dem/scenario_keys.hpp"
 
@@ -55,6 +57,24 @@ void stage_elastic_range(const Scenario&, ResultsWriter&, const RunContext&, Dem
 // The pressure branches (stages_pressure.cpp): path, states at rest, elastic range, probes,
 // linear response and fits from each of the loading's snapshots, under /pressure/nu<nu>.
 void stage_pressure(const Scenario&, ResultsWriter&, const RunContext&, DemRunSession&);
+// The probe campaign of one state written under <state_group>/envelopes/<paths::envelope_name>
+// (docs/results.md), e.g. /states/<label> or a pressure branch's /pressure/nu0.7/states/<label>;
+// the linear-response envelopes also store the 6x6 Mandel stiffness [Pa] and fabric stiffness as
+// datasets `stiffness` and `fabric_stiffness`. Each envelope is written as soon as it is made.
+std::vector<dem::Envelope> write_probe_campaign(const dem::DemSystem& state,
+                                                const std::string& state_group,
+                                                const std::vector<std::string>& methods,
+                                                const dem::ProbeOptions& options,
+                                                ResultsWriter& out);
+// /states/<label>/elastic_range (docs/results.md): datasets amplitude, minor_over_elastic,
+// major_over_elastic, center_over_a, k_continue, k_reverse, departure, seconds, theta_deg[4],
+// d_stress[n*4,3,3], d_fabric[n*4,3,3], the fabric split and the per-probe diagnostics of the
+// method (e.g. load_steps, relax_steps, iterations) of every probe; attributes
+// yield_strain, elastic_to, yielded, tolerance, method, elastic_major, elastic_minor,
+// elastic_k.
+void write_elastic_range(ResultsWriter& out, const std::string& group,
+                         const dem::ElasticRange& range, const dem::ElasticRangeOptions& options);
+
 // Envelope fits (stages_probes.cpp): fit_stress / fit_fabric of every envelope.
 void register_fit_keys(ScenarioSchema& schema);
 void stage_fits(const Scenario&, ResultsWriter&, const RunContext&);

@@ -58,15 +58,15 @@ void stage_pressure(const Scenario& sc, ResultsWriter& out, const RunContext& ct
       if (with_range) {
         const dem::ElasticRangeOptions eo = dem::elastic_range_options_from(sc);
         const dem::ElasticRange er = dem::elastic_range(state, eo, po);
-        dem::write_elastic_range(out, paths::elastic_range(sg), er, eo);
+        write_elastic_range(out, paths::elastic_range(sg), er, eo);
         if (!ctx.quiet)
           std::cerr << "rendulic: nu " << nu << " state " << label << ": yield strain "
                     << er.yield_strain << "\n";
       }
-      if (with_probes) dem::run_probe_campaign_in(state, sg, dem::probe_methods_from(sc), po, out);
+      if (with_probes) write_probe_campaign(state, sg, dem::probe_methods_from(sc), po, out);
       if (with_lr) {
         try {
-          dem::run_probe_campaign_in(state, sg, {"linear_response"}, po, out);
+          write_probe_campaign(state, sg, {"linear_response"}, po, out);
         } catch (const std::runtime_error& e) {
           std::cerr << "rendulic: warning: no linear response for nu " << nu << " state " << label
                     << ": " << e.what() << "\n";

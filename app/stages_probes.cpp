@@ -5,7 +5,9 @@
 // that cannot be fitted (no fabric change at all, a degenerate set) gets shape "none" and the
 // reason, never an invented fit.
 #include <iostream>
+#include <map>
 
+#include "rendulic/core/envelope_record.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/result_paths.hpp"
 #include "rendulic/dem/probe_campaign.hpp"
@@ -33,7 +35,7 @@ void campaign(const Scenario& sc, ResultsWriter& out, const RunContext& ctx,
   if (ctx.threads > 0) o.threads = ctx.threads;
   for (const auto& [label, state] : relaxed_states(session, stage)) {
     if (!ctx.quiet) std::cerr << "rendulic: " << stage << " of state " << label << "\n";
-    dem::run_probe_campaign(state, label, methods, o, out);
+    write_probe_campaign(state, paths::state(label), methods, o, out);
   }
 }
 
@@ -61,7 +63,7 @@ void stage_linear_response(const Scenario& sc, ResultsWriter& out, const RunCont
   for (const auto& [label, state] : relaxed_states(session, "linear_response")) {
     if (!ctx.quiet) std::cerr << "rendulic: linear_response of state " << label << "\n";
     try {
-      dem::run_probe_campaign(state, label, {"linear_response"}, o, out);
+      write_probe_campaign(state, paths::state(label), {"linear_response"}, o, out);
     } catch (const std::runtime_error& e) {
       // A network with no elastic response (unstable even at its energy minimum) is a
       // finding about that state, not a failure of the run: record it, say it, go on.
@@ -86,11 +88,78 @@ void stage_elastic_range(const Scenario& sc, ResultsWriter& out, const RunContex
   for (const auto& [label, state] : relaxed_states(session, "elastic_range")) {
     if (!ctx.quiet) std::cerr << "rendulic: elastic_range of state " << label << "\n";
     const dem::ElasticRange r = dem::elastic_range(state, eo, o);
-    dem::write_elastic_range(out, paths::elastic_range(paths::state(label)), r, eo);
+    write_elastic_range(out, paths::elastic_range(paths::state(label)), r, eo);
     if (!ctx.quiet)
       std::cerr << "rendulic: state " << label << ": yield strain " << r.yield_strain
                 << (r.yielded ? "" : " (no departure within the ladder: a lower bound)") << "\n";
   }
+}
+
+std::vector<dem::Envelope> write_probe_campaign(const dem::DemSystem& state,
+                                                const std::string& state_group,
+                                                const std::vector<std::string>& methods,
+                                                const dem::ProbeOptions& options,
+                                                ResultsWriter& out) {
+  return dem::probe_campaign(
+      state, methods, options,
+      [&](const std::string& method, double amplitude, const dem::Envelope& env,
+          const dem::LinearResponse* lr) {
+        const std::string group =
+            paths::envelope(state_group, paths::envelope_name(method, amplitude));
+        write_envelope(out, group, env);
+        if (lr) {
+          out.write(group + datasets::kStiffness, Eigen::MatrixXd(lr->stiffness));
+          out.write(group + datasets::kFabricStiffness, Eigen::MatrixXd(lr->fabric_stiffness));
+        }
+      });
+}
+
+void write_elastic_range(ResultsWriter& out, const std::string& g, const dem::ElasticRange& r,
+                         const dem::ElasticRangeOptions& options) {
+  out.create_group(g);
+  out.write(g + datasets::kAmplitude, r.amplitude);
+  out.write(g + datasets::kMinorOverElastic, r.minor_over_elastic);
+  out.write(g + datasets::kMajorOverElastic, r.major_over_elastic);
+  out.write(g + datasets::kCenterOverA, r.center_over_a);
+  out.write(g + datasets::kKContinue, r.k_continue);
+  out.write(g + datasets::kKReverse, r.k_reverse);
+  out.write(g + datasets::kDeparture, r.departure);
+  out.write(g + datasets::kThetaDeg, dem::elastic_range_directions());
+  // Every probe of the ladder, amplitude by amplitude (rows a * 4 + direction).
+  std::vector<Eigen::Matrix3d> ds, df, fv, fr, fc;
+  std::map<std::string, std::vector<double>> diagnostics;
+  for (const dem::Envelope& e : r.envelopes) {
+    ds.insert(ds.end(), e.d_stress.begin(), e.d_stress.end());
+    df.insert(df.end(), e.d_fabric.begin(), e.d_fabric.end());
+    fv.insert(fv.end(), e.d_fabric_volume.begin(), e.d_fabric_volume.end());
+    fr.insert(fr.end(), e.d_fabric_rotation.begin(), e.d_fabric_rotation.end());
+    fc.insert(fc.end(), e.d_fabric_contacts.begin(), e.d_fabric_contacts.end());
+    for (const auto& [name, values] : e.diagnostics) {
+      auto& v = diagnostics[name];
+      v.insert(v.end(), values.begin(), values.end());
+    }
+  }
+  out.write(g + datasets::kDStress, ds);
+  out.write(g + datasets::kDFabric, df);
+  if (fv.size() == ds.size()) {
+    out.write(g + datasets::kDFabricVolume, fv);
+    out.write(g + datasets::kDFabricRotation, fr);
+    out.write(g + datasets::kDFabricContacts, fc);
+  }
+  for (const auto& [name, values] : diagnostics)
+    if (values.size() == ds.size()) out.write(g + "/" + name, values);
+  out.write(g + datasets::kSeconds, r.seconds);
+  out.attr(g, "yield_strain", r.yield_strain);
+  out.attr(g, "yielded", std::int64_t{r.yielded});
+  out.attr(g, "elastic_to", r.elastic_to);
+  out.attr(g, "tolerance", options.tolerance);
+  out.attr(g, "method", options.method);
+  out.attr(g, "elastic_major", r.elastic_major);
+  out.attr(g, "elastic_minor", r.elastic_minor);
+  out.attr(g, "elastic_k", r.elastic_k);
+  out.attr(g, "elastic_reference", r.elastic_reference);
+  if (!r.elastic_reference_note.empty())
+    out.attr(g, "elastic_reference_note", r.elastic_reference_note);
 }
 
 void register_fit_keys(ScenarioSchema& s) {

@@ -13,10 +13,8 @@
 #include <sstream>
 
 #include "rendulic/core/conventions.hpp"
-#include "rendulic/core/envelope_record.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/option_table.hpp"
-#include "rendulic/core/result_paths.hpp"
 #include "rendulic/dem/probe_elastic_range.hpp"
 #include "rendulic/dem/probe_mpi.hpp"
 #include "rendulic/dem/scenario_keys.hpp"
@@ -470,15 +468,9 @@ Envelope linear_response_envelope(const DemSystem& state, double amplitude,
   return env;
 }
 
-std::vector<Envelope> run_probe_campaign(const DemSystem& state, const std::string& label,
-                                         const std::vector<std::string>& methods,
-                                         const ProbeOptions& options, ResultsWriter& out) {
-  return run_probe_campaign_in(state, paths::state(label), methods, options, out);
-}
-
-std::vector<Envelope> run_probe_campaign_in(const DemSystem& state, const std::string& state_group,
-                                            const std::vector<std::string>& methods,
-                                            const ProbeOptions& options, ResultsWriter& out) {
+std::vector<Envelope> probe_campaign(const DemSystem& state,
+                                     const std::vector<std::string>& methods,
+                                     const ProbeOptions& options, const EnvelopeSink& sink) {
   std::string why;
   if (!options.IsValid(&why)) throw InputError(why);
   const std::vector<double> theta = probe_directions(options.directions);
@@ -499,13 +491,7 @@ std::vector<Envelope> run_probe_campaign_in(const DemSystem& state, const std::s
       } else {  // one factorisation serves every amplitude
         env = linear_response_envelope(lr, theta, amplitude, state.material().k_star());
       }
-      const std::string group =
-          paths::envelope(state_group, paths::envelope_name(method, amplitude));
-      write_envelope(out, group, env);
-      if (method == "linear_response") {
-        out.write(group + datasets::kStiffness, Eigen::MatrixXd(lr.stiffness));
-        out.write(group + datasets::kFabricStiffness, Eigen::MatrixXd(lr.fabric_stiffness));
-      }
+      if (sink) sink(method, amplitude, env, method == "linear_response" ? &lr : nullptr);
       envelopes.push_back(std::move(env));
     }
   }

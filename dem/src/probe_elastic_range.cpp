@@ -123,54 +123,6 @@ ElasticRange elastic_range(const DemSystem& state, const ElasticRangeOptions& op
   return r;
 }
 
-void write_elastic_range(ResultsWriter& out, const std::string& g, const ElasticRange& r,
-                         const ElasticRangeOptions& options) {
-  out.create_group(g);
-  out.write(g + datasets::kAmplitude, r.amplitude);
-  out.write(g + datasets::kMinorOverElastic, r.minor_over_elastic);
-  out.write(g + datasets::kMajorOverElastic, r.major_over_elastic);
-  out.write(g + datasets::kCenterOverA, r.center_over_a);
-  out.write(g + datasets::kKContinue, r.k_continue);
-  out.write(g + datasets::kKReverse, r.k_reverse);
-  out.write(g + datasets::kDeparture, r.departure);
-  out.write(g + datasets::kThetaDeg, elastic_range_directions());
-  // Every probe of the ladder, amplitude by amplitude (rows a * 4 + direction).
-  std::vector<Eigen::Matrix3d> ds, df, fv, fr, fc;
-  std::map<std::string, std::vector<double>> diagnostics;
-  for (const Envelope& e : r.envelopes) {
-    ds.insert(ds.end(), e.d_stress.begin(), e.d_stress.end());
-    df.insert(df.end(), e.d_fabric.begin(), e.d_fabric.end());
-    fv.insert(fv.end(), e.d_fabric_volume.begin(), e.d_fabric_volume.end());
-    fr.insert(fr.end(), e.d_fabric_rotation.begin(), e.d_fabric_rotation.end());
-    fc.insert(fc.end(), e.d_fabric_contacts.begin(), e.d_fabric_contacts.end());
-    for (const auto& [name, values] : e.diagnostics) {
-      auto& v = diagnostics[name];
-      v.insert(v.end(), values.begin(), values.end());
-    }
-  }
-  out.write(g + datasets::kDStress, ds);
-  out.write(g + datasets::kDFabric, df);
-  if (fv.size() == ds.size()) {
-    out.write(g + datasets::kDFabricVolume, fv);
-    out.write(g + datasets::kDFabricRotation, fr);
-    out.write(g + datasets::kDFabricContacts, fc);
-  }
-  for (const auto& [name, values] : diagnostics)
-    if (values.size() == ds.size()) out.write(g + "/" + name, values);
-  out.write(g + datasets::kSeconds, r.seconds);
-  out.attr(g, "yield_strain", r.yield_strain);
-  out.attr(g, "yielded", std::int64_t{r.yielded});
-  out.attr(g, "elastic_to", r.elastic_to);
-  out.attr(g, "tolerance", options.tolerance);
-  out.attr(g, "method", options.method);
-  out.attr(g, "elastic_major", r.elastic_major);
-  out.attr(g, "elastic_minor", r.elastic_minor);
-  out.attr(g, "elastic_k", r.elastic_k);
-  out.attr(g, "elastic_reference", r.elastic_reference);
-  if (!r.elastic_reference_note.empty())
-    out.attr(g, "elastic_reference_note", r.elastic_reference_note);
-}
-
 const OptionTable<ElasticRangeOptions>& elastic_range_option_table() {
   using Row = OptionRow<ElasticRangeOptions>;
   static const OptionTable<ElasticRangeOptions> table({

@@ -17,10 +17,10 @@
 // among the ranks (probe_mpi.hpp), with the same envelope bit for bit.
 #pragma once
 
+#include <functional>
 #include <string>
 #include <vector>
 
-#include "rendulic/core/results.hpp"
 #include "rendulic/core/scenario.hpp"
 #include "rendulic/dem/dem_system.hpp"
 #include "rendulic/dem/linear_response.hpp"
@@ -54,18 +54,16 @@ Envelope linear_response_envelope(const DemSystem& state, double amplitude,
                                   const std::vector<double>& theta_deg, const ProbeOptions& options,
                                   LinearResponse* response = nullptr);
 
-// The whole campaign of one state: every method x amplitude, written under
-// /states/<label>/envelopes/<paths::envelope_name> (docs/results.md). The linear-response envelopes
-// also store the 6x6 Mandel stiffness [Pa] and fabric stiffness as datasets `stiffness` and
-// `fabric_stiffness`. Returns the envelopes in the order written.
-std::vector<Envelope> run_probe_campaign(const DemSystem& state, const std::string& label,
-                                         const std::vector<std::string>& methods,
-                                         const ProbeOptions& options, ResultsWriter& out);
-// The same under any group of a state (the envelopes go to <state_group>/envelopes/<name>),
-// e.g. a pressure branch's /pressure/nu0.7/states/<label>.
-std::vector<Envelope> run_probe_campaign_in(const DemSystem& state, const std::string& state_group,
-                                            const std::vector<std::string>& methods,
-                                            const ProbeOptions& options, ResultsWriter& out);
+// What a campaign hands on for each envelope as soon as it is made: its method and amplitude,
+// the envelope, and for the linear response the response itself (its 6x6 Mandel stiffness and
+// fabric stiffness), otherwise nullptr.
+using EnvelopeSink = std::function<void(const std::string& method, double amplitude,
+                                        const Envelope& envelope, const LinearResponse* response)>;
+// The whole campaign of one state: every method x amplitude, in that order, each handed to
+// `sink` (the run's stages write it, app/stages_probes.cpp) and returned in the same order.
+std::vector<Envelope> probe_campaign(const DemSystem& state,
+                                     const std::vector<std::string>& methods,
+                                     const ProbeOptions& options, const EnvelopeSink& sink = {});
 
 // Scenario keys of the probe campaigns (the table, probes.methods and the elastic range's) and
 // the options they give. Throws InputError naming the key, also for a probes.dt_factor beyond
@@ -73,7 +71,7 @@ std::vector<Envelope> run_probe_campaign_in(const DemSystem& state, const std::s
 void register_probe_keys(ScenarioSchema& schema);
 ProbeOptions probe_options_from(const Scenario& scenario);
 // The methods of the probes stage: a subset of {"dynamic", "minimisation"} (the
-// linear_response stage calls run_probe_campaign with {"linear_response"}).
+// linear_response stage calls probe_campaign with {"linear_response"}).
 std::vector<std::string> probe_methods_from(const Scenario& scenario);
 
 }  // namespace rendulic::dem
