@@ -17,9 +17,11 @@
 #include <optional>
 #include <sstream>
 
+#include "cli_options.hpp"
 #include "commands.hpp"
 #include "rendulic/calibration/calibrate.hpp"
 #include "rendulic/calibration/report.hpp"
+#include "rendulic/calibration/settings.hpp"
 #include "rendulic/core/cleanup.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/result_paths.hpp"
@@ -29,12 +31,13 @@
 namespace rendulic::app {
 namespace {
 
+// The settings the calibration stage also takes (calibration/settings.hpp), and what only the
+// command has.
 struct CalibrateArgs {
-  std::string results, model, out, backend = "ceres";
+  calibration::CalibrationSettings settings;
+  std::string results, out;
   std::vector<std::string> states, holdout, free, values;
-  bool no_path = false, features = false, no_write = false, progress = false;
-  int max_iterations = calibration::SolverOptions{}.max_iterations;
-  double function_tolerance = calibration::kDemFunctionTolerance;
+  bool no_path = false, no_write = false, progress = false;
 };
 
 std::vector<std::string> split_commas(const std::vector<std::string>& in) {
@@ -92,24 +95,19 @@ class JsonOut {
 int run_calibrate(const CalibrateArgs& a) {
   using namespace rendulic::calibration;
   // Cheap checks first, so that bad input costs nothing and touches nothing.
-  if (!models::make_law(a.model)) {
+  calibration::CalibrationSettings settings = a.settings;
+  if (!models::make_law(settings.model)) {
     std::string known;
     for (const auto& n : models::law_names()) known += (known.empty() ? "" : ", ") + n;
-    throw InputError("calibrate: unknown model '" + a.model + "' (known: " + known + ")");
+    throw InputError("calibrate: unknown model '" + settings.model + "' (known: " + known + ")");
   }
-  CalibrationOptions opt;
-  opt.model = a.model;
-  opt.solver.backend = backend_from_string(a.backend);
-  opt.solver.max_iterations = a.max_iterations;
-  opt.solver.function_tolerance = a.function_tolerance;
-  opt.solver.gradient_tolerance = calibration::kDemGradientTolerance;
+  settings.states = split_commas(a.states);
+  if (const auto h = split_commas(a.holdout); !h.empty()) settings.holdout = h;
+  settings.path = !a.no_path;
+  CalibrationPlan plan = calibration_plan(settings);
+  CalibrationOptions& opt = plan.options;
   opt.solver.progress = a.progress;
-  opt.holdout = split_commas(a.holdout);
-  if (opt.holdout.empty()) opt.holdout = {"auto"};
-  if (opt.holdout.size() == 1 && opt.holdout[0] == "none") opt.holdout.clear();
   opt.free = split_commas(a.free);
-  opt.objective.path = !a.no_path;
-  opt.objective.envelope_features = a.features;
   for (const auto& kv : split_commas(a.values)) {
     const auto eq = kv.find('=');
     if (eq == std::string::npos) throw InputError("--value '" + kv + "': expected name=number");
@@ -124,14 +122,7 @@ int run_calibrate(const CalibrateArgs& a) {
   }
   std::optional<JsonOut> json_out;
   if (!a.out.empty()) json_out.emplace(a.out);
-  LoadOptions lo;
-  lo.states = split_commas(a.states);
-  for (const auto& h : opt.holdout)
-    if (h != "auto" && !lo.states.empty() &&
-        std::find(lo.states.begin(), lo.states.end(), h) == lo.states.end())
-      lo.states.push_back(h);
-  lo.load_path = !a.no_path;
-  const CalibrationData data = load_calibration_data(a.results, lo);
+  const CalibrationData data = load_calibration_data(a.results, plan.load);
   const CalibrationSummary summary = calibrate(data, opt);
   const std::string json = to_json(summary);
   // "When the file is ours": a rendulic/1 file (the reader refused anything else)
@@ -141,7 +132,7 @@ int run_calibrate(const CalibrateArgs& a) {
   const bool writable =
       ::access(a.results.c_str(), W_OK) == 0 && ::access(folder.c_str(), W_OK) == 0;
   if (!a.no_write && !writable)
-    std::cerr << "rendulic: " << a.results << " is read-only: /calibration/" << a.model
+    std::cerr << "rendulic: " << a.results << " is read-only: /calibration/" << settings.model
               << " not written\n";
   // The JSON is complete on disk before the results file is replaced: a failure to write
   // it must not leave the results file changed and the command failed.
@@ -154,7 +145,7 @@ int run_calibrate(const CalibrateArgs& a) {
       if (r.exists(paths::kCalibration))
         for (const auto& m : r.children(paths::kCalibration)) {
           ModelScore ms;
-          if (m != a.model && read_model_score(r, m, &ms)) scores.push_back(ms);
+          if (m != settings.model && read_model_score(r, m, &ms)) scores.push_back(ms);
         }
     }
     ResultsWriter w = ResultsWriter::update(a.results);
@@ -180,7 +171,8 @@ Subcommand add_calibrate(CLI::App& parent) {
   auto args = std::make_shared<CalibrateArgs>();
   sub->add_option("--results", args->results, "Results file (HDF5, schema rendulic/2 or 1)")
       ->required();
-  sub->add_option("--model", args->model,
+  const auto& keys = calibration::calibration_option_table();
+  sub->add_option("--model", args->settings.model,
                   "Model: isotropic_elastic, anisotropic_elastic, hypoplastic_wu, "
                   "elastoplastic_fabric")
       ->required();
@@ -192,25 +184,18 @@ Subcommand add_calibrate(CLI::App& parent) {
                   "States to predict but not fit (held-out check), comma separated; default "
                   "auto (every second state inside the path), none for no held-out state")
       ->delimiter(',');
-  sub->add_option("--backend", args->backend,
-                  "ceres (default), multistart, global (NLopt global + BOBYQA + Ceres), bobyqa");
+  add_key_option(sub, "--backend", args->settings.backend, keys.key("calibration.backend"));
   sub->add_option("--free", args->free, "Free parameters, comma separated (default: per model)")
       ->delimiter(',');
   sub->add_option("--value", args->values,
                   "name=value: start value of a free parameter or value of a fixed one")
       ->delimiter(',');
   sub->add_flag("--no-path", args->no_path, "Ignore the main path (envelopes only)");
-  sub->add_flag("--features", args->features,
-                "Add the envelope-feature objective (centre and affine matrix of each envelope)");
-  sub->add_option("--max-iterations", args->max_iterations,
-                  "Most iterations of the Ceres stage; a fit that reaches it says so")
-      ->check(CLI::PositiveNumber)
-      ->capture_default_str();
-  sub->add_option("--function-tolerance", args->function_tolerance,
-                  "Ceres stops when an iteration lowers the cost by less than this fraction "
-                  "(a backstop: fits stop by their gradient or parameter tolerance)")
-      ->check(CLI::Range(1e-16, 0.1))
-      ->capture_default_str();
+  sub->add_flag("--features", args->settings.features, keys.key("calibration.features").help);
+  add_key_option(sub, "--max-iterations", args->settings.max_iterations,
+                 keys.key("calibration.max_iterations"));
+  add_key_option(sub, "--function-tolerance", args->settings.function_tolerance,
+                 keys.key("calibration.function_tolerance"));
   sub->add_flag("--progress", args->progress, "Print Ceres's iterations (cost, step) to stdout");
   sub->add_flag("--no-write", args->no_write,
                 "Do not store /calibration/<model> in the results file");

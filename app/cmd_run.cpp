@@ -16,6 +16,7 @@
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/log.hpp"
 #include "rendulic/core/results.hpp"
+#include "rendulic/dem/probe_campaign.hpp"
 #include "rendulic/dem/probe_mpi.hpp"
 
 namespace rendulic::app {
@@ -58,7 +59,7 @@ Subcommand add_run(CLI::App& parent) {
             dem::MpiSession mpi;
             if (mpi.rank() != 0) {
               if (o->threads > 0) omp_set_num_threads(o->threads);
-              mpi.serve();
+              mpi.serve(dem::compute_worker_share);
               return 0;
             }
             if (o->quiet) log::set_level(log::Level::kWarning);

@@ -22,7 +22,10 @@ namespace rendulic::app {
 
 namespace {
 
-using StageFn = std::function<void(const Scenario&, ResultsWriter&, const RunContext&)>;
+// The DEM stages hand the live system on through the session; the stages after them read
+// what was written.
+using StageFn =
+    std::function<void(const Scenario&, ResultsWriter&, const RunContext&, DemRunSession&)>;
 using PostFn =
     std::function<void(const Scenario&, const std::filesystem::path&, const RunContext&)>;
 struct Stage {
@@ -49,8 +52,10 @@ const std::vector<Stage>& stages() {
       {"probes", stage_probes},
       {"linear_response", stage_linear_response},
       {"pressure", stage_pressure},
-      {"fits", stage_fits},
-      {"calibration", run_calibration_stage},
+      {"fits", [](const Scenario& sc, ResultsWriter& out, const RunContext& ctx,
+                  DemRunSession&) { stage_fits(sc, out, ctx); }},
+      {"calibration", [](const Scenario& sc, ResultsWriter& out, const RunContext& ctx,
+                         DemRunSession&) { run_calibration_stage(sc, out, ctx); }},
       {"report", {}, report_stage},
   };
   return table;
@@ -120,13 +125,14 @@ void check_stages_available(const Scenario& scenario) {
 
 void run_pipeline(const Scenario& scenario, ResultsWriter& out, const RunContext& ctx) {
   std::string completed;
+  DemRunSession session;
   for (const auto& s : stages()) {
     if (!stage_requested(scenario, s.name) || !s.run) continue;
     // Every stage says when it starts and ends, in a log as on a terminal: a short stage
     // shows no progress line of its own (progress.hpp).
     log::info("[", s.name, "] started");
     const auto t0 = std::chrono::steady_clock::now();
-    s.run(scenario, out, ctx);
+    s.run(scenario, out, ctx, session);
     const double secs =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     log::info("[", s.name, "] done in ", human_seconds(secs));

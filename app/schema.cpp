@@ -2,6 +2,7 @@
 // knows which modules contribute keys; each module declares its keys next to its options.
 #include "commands.hpp"
 #include "pipeline.hpp"
+#include "rendulic/calibration/settings.hpp"
 #include "rendulic/dem/probe_campaign.hpp"
 #include "rendulic/dem/scenario_keys.hpp"
 #include "stages.hpp"
@@ -16,7 +17,7 @@ const ScenarioSchema& scenario_schema() {
     dem::register_dem_keys(s);
     dem::register_probe_keys(s);
     register_fit_keys(s);
-    register_calibration_keys(s);
+    calibration::register_calibration_keys(s);
     return s;
   }();
   return schema;

@@ -1,7 +1,8 @@
 // The stage functions of `rendulic run` (pipeline.cpp's table) and the live DEM state they
 // share within one run: the DEM stages leave the relaxed states in memory for the probe
-// stages; stages that need data already written (fits, calibration) read the writer's
-// temporary file through a ResultsReader.
+// stages, in the DemRunSession that run_pipeline owns and hands to each stage; stages that need
+// data already written (fits, calibration) read the writer's temporary file through a
+// ResultsReader.
 #pragma once
 
 #include <optional>
@@ -11,12 +12,14 @@
 
 #include "pipeline.hpp"
 #include "rendulic/dem/dem_system.hpp"
+#include "rendulic/dem/probe_campaign.hpp"
+#include "rendulic/dem/probe_elastic_range.hpp"
 #include "rendulic/dem/protocols.hpp"
 #include "rendulic/dem/scenario_keys.hpp"
 
 namespace rendulic::app {
 
-// Live DEM state shared by the stages of one run.
+// Live DEM state shared by the stages of one run (one per run_pipeline call).
 struct DemRunSession {
   std::optional<dem::DemSystem> system;                         // after prepare / isotropic / path
   std::vector<dem::DemSystem> snapshots;                        // on the path, states.labels order
@@ -26,7 +29,6 @@ struct DemRunSession {
   std::vector<std::pair<double, dem::DemSystem>> branches;
   double path_start_pressure = 0;  // Pa, the relaxed state at nu_max the path starts from
 };
-DemRunSession& dem_run_session();
 
 // Pieces of the DEM stages that the pressure branches repeat (stages_dem.cpp).
 // Appends every path sample as a row of the datasets <group>/time, strain, ... (the /path
@@ -43,18 +45,36 @@ void write_state(ResultsWriter& out, const std::string& group, const dem::DemSys
                  const dem::RestSummary& rest, double force_tolerance, bool with_configuration);
 
 // DEM (stages_dem.cpp).
-void stage_prepare(const Scenario&, ResultsWriter&, const RunContext&);
-void stage_isotropic(const Scenario&, ResultsWriter&, const RunContext&);
-void stage_path(const Scenario&, ResultsWriter&, const RunContext&);
-void stage_states(const Scenario&, ResultsWriter&, const RunContext&);
+void stage_prepare(const Scenario&, ResultsWriter&, const RunContext&, DemRunSession&);
+void stage_isotropic(const Scenario&, ResultsWriter&, const RunContext&, DemRunSession&);
+void stage_path(const Scenario&, ResultsWriter&, const RunContext&, DemRunSession&);
+void stage_states(const Scenario&, ResultsWriter&, const RunContext&, DemRunSession&);
 // Probe campaigns and linear response (stages_probes.cpp).
-void stage_probes(const Scenario&, ResultsWriter&, const RunContext&);
-void stage_linear_response(const Scenario&, ResultsWriter&, const RunContext&);
+void stage_probes(const Scenario&, ResultsWriter&, const RunContext&, DemRunSession&);
+void stage_linear_response(const Scenario&, ResultsWriter&, const RunContext&, DemRunSession&);
 // The elastic range of every state (probe_elastic_range.hpp): /states/<label>/elastic_range.
-void stage_elastic_range(const Scenario&, ResultsWriter&, const RunContext&);
+void stage_elastic_range(const Scenario&, ResultsWriter&, const RunContext&, DemRunSession&);
 // The pressure branches (stages_pressure.cpp): path, states at rest, elastic range, probes,
 // linear response and fits from each of the loading's snapshots, under /pressure/nu<nu>.
-void stage_pressure(const Scenario&, ResultsWriter&, const RunContext&);
+void stage_pressure(const Scenario&, ResultsWriter&, const RunContext&, DemRunSession&);
+// The probe campaign of one state written under <state_group>/envelopes/<paths::envelope_name>
+// (docs/results.md), e.g. /states/<label> or a pressure branch's /pressure/nu0.7/states/<label>;
+// the linear-response envelopes also store the 6x6 Mandel stiffness [Pa] and fabric stiffness as
+// datasets `stiffness` and `fabric_stiffness`. Each envelope is written as soon as it is made.
+std::vector<dem::Envelope> write_probe_campaign(const dem::DemSystem& state,
+                                                const std::string& state_group,
+                                                const std::vector<std::string>& methods,
+                                                const dem::ProbeOptions& options,
+                                                ResultsWriter& out);
+// /states/<label>/elastic_range (docs/results.md): datasets amplitude, minor_over_elastic,
+// major_over_elastic, center_over_a, k_continue, k_reverse, departure, seconds, theta_deg[4],
+// d_stress[n*4,3,3], d_fabric[n*4,3,3], the fabric split and the per-probe diagnostics of the
+// method (e.g. load_steps, relax_steps, iterations) of every probe; attributes
+// yield_strain, elastic_to, yielded, tolerance, method, elastic_major, elastic_minor,
+// elastic_k.
+void write_elastic_range(ResultsWriter& out, const std::string& group,
+                         const dem::ElasticRange& range, const dem::ElasticRangeOptions& options);
+
 // Envelope fits (stages_probes.cpp): fit_stress / fit_fabric of every envelope.
 void register_fit_keys(ScenarioSchema& schema);
 void stage_fits(const Scenario&, ResultsWriter&, const RunContext&);

@@ -1,6 +1,6 @@
 // The `calibration` stage of `rendulic run` (pipeline.hpp): calibrates a model
 // against the states and envelopes already written by the earlier stages of the same run and
-// stores /calibration/<model>. Its scenario keys are calibration.*.
+// stores /calibration/<model>. Its scenario keys are calibration.* (calibration/settings.hpp).
 #pragma once
 
 #include "pipeline.hpp"
@@ -9,9 +9,6 @@
 
 namespace rendulic::app {
 
-// calibration.model, calibration.states, calibration.holdout, calibration.backend,
-// calibration.path, calibration.features.
-void register_calibration_keys(ScenarioSchema& schema);
 void run_calibration_stage(const Scenario& scenario, ResultsWriter& out, const RunContext& ctx);
 
 }  // namespace rendulic::app

@@ -5,8 +5,8 @@
 //   states    -> /states/<label> : each snapshot relaxed at fixed cell and minimised to
 //                mechanical equilibrium (rest.hpp), stored with a checkpoint that restarts
 //                bit-identically (same build)
-// The stages of one run share the live system through one DemRunSession (a process holds one
-// run); later stages (probe campaigns) reach it through dem_run_session(). Progress lines
+// The stages of one run share the live system through the DemRunSession the pipeline hands
+// them; later stages (probe campaigns) take the relaxed states from it. Progress lines
 // (progress.hpp) go to the terminal or the log.
 #include <omp.h>
 #include <unistd.h>
@@ -28,15 +28,11 @@
 #include "rendulic/core/result_paths.hpp"
 #include "rendulic/dem/protocols.hpp"
 #include "rendulic/dem/rest.hpp"
+#include "rendulic/dem/run_protocol.hpp"
 #include "rendulic/dem/scenario_keys.hpp"
 #include "stages.hpp"
 
 namespace rendulic::app {
-
-DemRunSession& dem_run_session() {
-  static DemRunSession session;
-  return session;
-}
 
 namespace {
 
@@ -61,8 +57,7 @@ Eigen::MatrixXd as_matrix(const std::vector<double>& x, const std::vector<double
   return m;
 }
 
-dem::DemSystem& live_system(const char* stage) {
-  auto& s = dem_run_session();
+dem::DemSystem& live_system(DemRunSession& s, const char* stage) {
   if (!s.system)
     throw InputError(std::string("run: stage '") + stage +
                      "' needs the stages before it "
@@ -72,8 +67,8 @@ dem::DemSystem& live_system(const char* stage) {
 
 }  // namespace
 
-void stage_prepare(const Scenario& sc, ResultsWriter& out, const RunContext& ctx) {
-  auto& session = dem_run_session();
+void stage_prepare(const Scenario& sc, ResultsWriter& out, const RunContext& ctx,
+                   DemRunSession& session) {
   session = DemRunSession{};
   session.options = dem::dem_options_from_scenario(sc);
   const dem::DemRunOptions& o = *session.options;
@@ -91,40 +86,26 @@ void stage_prepare(const Scenario& sc, ResultsWriter& out, const RunContext& ctx
   out.attr(paths::kMaterial, "dt_factor", o.system.dt_factor);
   out.attr(paths::kMaterial, "n_particles", static_cast<std::int64_t>(o.gas.n_particles));
 
-  progress.start_task("gas");
-  dem::SystemOptions prep = o.system;
-  prep.material.gamma_b = o.prepare_gamma_b;
-  dem::check_time_step(prep.material, prep.dt_factor, "preparation.gamma_b");
-  dem::DemSystem sys =
-      dem::make_gas(prep, o.gas, static_cast<std::uint64_t>(sc.get_int("run.seed")));
-  if (o.mix_time > 0) {
-    const auto n = static_cast<std::int64_t>(std::ceil(o.mix_time / sys.dt()));
-    for (std::int64_t k = 0; k < n; ++k) {
-      sys.step(Eigen::Vector3d::Zero());
-      if (k % 256 == 0) progress(double(k) / n);
-    }
-  }
-  progress.start_task("compress to nu0");
-  const dem::CompressSummary c = dem::compress_isotropic(sys, o.prepare, {}, progress.fn());
-  progress.start_task("relax at nu0");
-  const dem::RelaxSummary r = dem::relax(sys, o.relax, progress.fn());
-  warn_cap("at nu0", r);
-  const dem::Measures me = sys.measure();
+  dem::PreparedPacking p = dem::prepare_packing(
+      o, static_cast<std::uint64_t>(sc.get_int("run.seed")),
+      [&](const std::string& t) { progress.start_task(t); }, progress.fn());
+  warn_cap("at nu0", p.relax);
+  const dem::Measures& me = p.at_nu0;
   out.attr(paths::kPreparation, "nu0", me.volume_fraction);
   out.attr(paths::kPreparation, "pressure_star", me.pressure_star);
   out.attr(paths::kPreparation, "coordination", me.coordination);
-  out.attr(paths::kPreparation, "compression_time", c.time);
-  write_relax(out, paths::kPreparation, "", r);
-  out.attr(paths::kPreparation, "steps", sys.steps());
+  out.attr(paths::kPreparation, "compression_time", p.compression.time);
+  write_relax(out, paths::kPreparation, "", p.relax);
+  out.attr(paths::kPreparation, "steps", p.steps);
   out.attr(paths::kPreparation, "gamma_b", o.prepare_gamma_b);
   out.attr(paths::kPreparation, "wall_time_s", progress.elapsed());
-  // Later stages run with the material's own background damping.
-  session.system = dem::DemSystem::restore(sys.save(), o.system);
+  session.system = std::move(p.system);
 }
 
-void stage_isotropic(const Scenario&, ResultsWriter& out, const RunContext& ctx) {
-  dem::DemSystem& sys = live_system("isotropic");
-  const dem::DemRunOptions& o = *dem_run_session().options;
+void stage_isotropic(const Scenario&, ResultsWriter& out, const RunContext& ctx,
+                     DemRunSession& session) {
+  dem::DemSystem& sys = live_system(session, "isotropic");
+  const dem::DemRunOptions& o = *session.options;
   Progress progress(ctx, "isotropic");
   const std::int64_t steps0 = sys.steps();
   const std::string g = paths::kIsotropic;
@@ -142,17 +123,18 @@ void stage_isotropic(const Scenario&, ResultsWriter& out, const RunContext& ctx)
     out.append(g + datasets::kElasticEnergy, m.elastic_energy);
     out.append(g + datasets::kInertialNumber, m.inertial_number);
   };
-  progress.start_task("loading to nu_max");
-  dem::CompressSummary c = dem::compress_isotropic(sys, o.loading, row, progress.fn());
-  auto& branches = dem_run_session().branches;
+  dem::IsotropicLoading iso = dem::load_isotropic(
+      sys, o.loading, o.relax, row, [&](const std::string& t) { progress.start_task(t); },
+      progress.fn());
+  dem::CompressSummary& c = iso.loading;
+  const dem::RelaxSummary& r = iso.relax;
+  auto& branches = session.branches;
   branches.clear();
   for (std::size_t k = 0; k < c.snapshots.size(); ++k)
     branches.emplace_back(o.loading.snapshot_nu[k], std::move(c.snapshots[k]));
-  progress.start_task("relax at nu_max");
-  const dem::RelaxSummary r = dem::relax(sys, o.relax, progress.fn());
   warn_cap("at nu_max", r);
   const dem::Measures me = sys.measure();
-  dem_run_session().path_start_pressure = me.pressure;
+  session.path_start_pressure = me.pressure;
   out.attr(paths::kIsotropic, "max_inertial_number", c.max_inertial_number);
   out.attr(paths::kIsotropic, "relaxed_pressure_star", me.pressure_star);
   out.attr(paths::kIsotropic, "relaxed_coordination", me.coordination);
@@ -180,9 +162,9 @@ dem::SampleFn path_recorder(ResultsWriter& out, const std::string& g) {
   };
 }
 
-void stage_path(const Scenario&, ResultsWriter& out, const RunContext& ctx) {
-  dem::DemSystem& sys = live_system("path");
-  auto& session = dem_run_session();
+void stage_path(const Scenario&, ResultsWriter& out, const RunContext& ctx,
+                DemRunSession& session) {
+  dem::DemSystem& sys = live_system(session, "path");
   const dem::DemRunOptions& o = *session.options;
   Progress progress(ctx, "path");
   progress.start_task("undrained extension");
@@ -283,8 +265,8 @@ void write_state(ResultsWriter& out, const std::string& g, const dem::DemSystem&
   out.attr(cp, "steps", st.steps);
 }
 
-void stage_states(const Scenario&, ResultsWriter& out, const RunContext& ctx) {
-  auto& session = dem_run_session();
+void stage_states(const Scenario&, ResultsWriter& out, const RunContext& ctx,
+                  DemRunSession& session) {
   if (session.snapshots.empty())
     throw InputError("run: stage 'states' needs the stage 'path' in run.stages");
   const dem::DemRunOptions& o = *session.options;

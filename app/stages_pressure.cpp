@@ -17,8 +17,8 @@
 
 namespace rendulic::app {
 
-void stage_pressure(const Scenario& sc, ResultsWriter& out, const RunContext& ctx) {
-  auto& session = dem_run_session();
+void stage_pressure(const Scenario& sc, ResultsWriter& out, const RunContext& ctx,
+                    DemRunSession& session) {
   if (!session.options) throw InputError("run: stage 'pressure' needs the stages before it");
   const dem::DemRunOptions& o = *session.options;
   if (o.branch_nu.empty())
@@ -58,13 +58,13 @@ void stage_pressure(const Scenario& sc, ResultsWriter& out, const RunContext& ct
       if (with_range) {
         const dem::ElasticRangeOptions eo = dem::elastic_range_options_from(sc);
         const dem::ElasticRange er = dem::elastic_range(state, eo, po);
-        dem::write_elastic_range(out, paths::elastic_range(sg), er, eo);
+        write_elastic_range(out, paths::elastic_range(sg), er, eo);
         log::info("[pressure] nu ", nu, " state ", label, ": yield strain ", er.yield_strain);
       }
-      if (with_probes) dem::run_probe_campaign_in(state, sg, dem::probe_methods_from(sc), po, out);
+      if (with_probes) write_probe_campaign(state, sg, dem::probe_methods_from(sc), po, out);
       if (with_lr) {
         try {
-          dem::run_probe_campaign_in(state, sg, {"linear_response"}, po, out);
+          write_probe_campaign(state, sg, {"linear_response"}, po, out);
         } catch (const std::runtime_error& e) {
           log::warning("no linear response for nu ", nu, " state ", label, ": ", e.what());
         }

@@ -5,8 +5,10 @@
 // that cannot be fitted (no fabric change at all, a degenerate set) gets shape "none" and the
 // reason, never an invented fit.
 #include <atomic>
+#include <map>
 
 #include "progress.hpp"
+#include "rendulic/core/envelope_record.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/log.hpp"
 #include "rendulic/core/result_paths.hpp"
@@ -19,8 +21,9 @@
 namespace rendulic::app {
 namespace {
 
-const std::vector<std::pair<std::string, dem::DemSystem>>& relaxed_states(const char* stage) {
-  const auto& relaxed = dem_run_session().relaxed;
+const std::vector<std::pair<std::string, dem::DemSystem>>& relaxed_states(
+    const DemRunSession& session, const char* stage) {
+  const auto& relaxed = session.relaxed;
   if (relaxed.empty())
     throw InputError(std::string("run: stage '") + stage +
                      "' needs the stage 'states' in run.stages");
@@ -33,10 +36,11 @@ void count_probes(dem::ProbeOptions& o, Progress& progress, std::atomic<long>& d
 }
 
 void campaign(const Scenario& sc, ResultsWriter& out, const RunContext& ctx,
-              const std::vector<std::string>& methods, const char* stage) {
+              const DemRunSession& session, const std::vector<std::string>& methods,
+              const char* stage) {
   dem::ProbeOptions o = dem::probe_options_from(sc);
   if (ctx.threads > 0) o.threads = ctx.threads;
-  const auto& states = relaxed_states(stage);
+  const auto& states = relaxed_states(session, stage);
   Progress progress(ctx, stage);
   std::atomic<long> done{0};
   count_probes(
@@ -44,7 +48,7 @@ void campaign(const Scenario& sc, ResultsWriter& out, const RunContext& ctx,
       static_cast<long>(states.size() * methods.size() * o.amplitudes.size()) * o.directions);
   for (const auto& [label, state] : states) {
     progress.start_task("state " + label + ", probe");
-    dem::run_probe_campaign(state, label, methods, o, out);
+    write_probe_campaign(state, paths::state(label), methods, o, out);
   }
 }
 
@@ -60,21 +64,23 @@ FitOptions fit_options(const Scenario& sc, const std::string& quantity) {
 
 }  // namespace
 
-void stage_probes(const Scenario& sc, ResultsWriter& out, const RunContext& ctx) {
-  campaign(sc, out, ctx, dem::probe_methods_from(sc), "probes");
+void stage_probes(const Scenario& sc, ResultsWriter& out, const RunContext& ctx,
+                  DemRunSession& session) {
+  campaign(sc, out, ctx, session, dem::probe_methods_from(sc), "probes");
 }
 
-void stage_linear_response(const Scenario& sc, ResultsWriter& out, const RunContext& ctx) {
+void stage_linear_response(const Scenario& sc, ResultsWriter& out, const RunContext& ctx,
+                           DemRunSession& session) {
   dem::ProbeOptions o = dem::probe_options_from(sc);
   if (ctx.threads > 0) o.threads = ctx.threads;
-  const auto& states = relaxed_states("linear_response");
+  const auto& states = relaxed_states(session, "linear_response");
   Progress progress(ctx, "linear_response");
   long done = 0;
   for (const auto& [label, state] : states) {
     progress.start_task("state " + label);
     progress.count(done++, static_cast<long>(states.size()));
     try {
-      dem::run_probe_campaign(state, label, {"linear_response"}, o, out);
+      write_probe_campaign(state, paths::state(label), {"linear_response"}, o, out);
     } catch (const std::runtime_error& e) {
       // A network with no elastic response (unstable even at its energy minimum) is a
       // finding about that state, not a failure of the run: record it, say it, go on.
@@ -90,11 +96,12 @@ void stage_linear_response(const Scenario& sc, ResultsWriter& out, const RunCont
   }
 }
 
-void stage_elastic_range(const Scenario& sc, ResultsWriter& out, const RunContext& ctx) {
+void stage_elastic_range(const Scenario& sc, ResultsWriter& out, const RunContext& ctx,
+                         DemRunSession& session) {
   dem::ProbeOptions o = dem::probe_options_from(sc);
   if (ctx.threads > 0) o.threads = ctx.threads;
   const dem::ElasticRangeOptions eo = dem::elastic_range_options_from(sc);
-  const auto& states = relaxed_states("elastic_range");
+  const auto& states = relaxed_states(session, "elastic_range");
   Progress progress(ctx, "elastic_range");
   std::atomic<long> done{0};
   count_probes(o, progress, done,
@@ -103,10 +110,77 @@ void stage_elastic_range(const Scenario& sc, ResultsWriter& out, const RunContex
   for (const auto& [label, state] : states) {
     progress.start_task("state " + label + ", probe");
     const dem::ElasticRange r = dem::elastic_range(state, eo, o);
-    dem::write_elastic_range(out, paths::elastic_range(paths::state(label)), r, eo);
+    write_elastic_range(out, paths::elastic_range(paths::state(label)), r, eo);
     log::info("state ", label, ": yield strain ", r.yield_strain,
               r.yielded ? "" : " (no departure within the ladder: a lower bound)");
   }
+}
+
+std::vector<dem::Envelope> write_probe_campaign(const dem::DemSystem& state,
+                                                const std::string& state_group,
+                                                const std::vector<std::string>& methods,
+                                                const dem::ProbeOptions& options,
+                                                ResultsWriter& out) {
+  return dem::probe_campaign(
+      state, methods, options,
+      [&](const std::string& method, double amplitude, const dem::Envelope& env,
+          const dem::LinearResponse* lr) {
+        const std::string group =
+            paths::envelope(state_group, paths::envelope_name(method, amplitude));
+        write_envelope(out, group, env);
+        if (lr) {
+          out.write(group + datasets::kStiffness, Eigen::MatrixXd(lr->stiffness));
+          out.write(group + datasets::kFabricStiffness, Eigen::MatrixXd(lr->fabric_stiffness));
+        }
+      });
+}
+
+void write_elastic_range(ResultsWriter& out, const std::string& g, const dem::ElasticRange& r,
+                         const dem::ElasticRangeOptions& options) {
+  out.create_group(g);
+  out.write(g + datasets::kAmplitude, r.amplitude);
+  out.write(g + datasets::kMinorOverElastic, r.minor_over_elastic);
+  out.write(g + datasets::kMajorOverElastic, r.major_over_elastic);
+  out.write(g + datasets::kCenterOverA, r.center_over_a);
+  out.write(g + datasets::kKContinue, r.k_continue);
+  out.write(g + datasets::kKReverse, r.k_reverse);
+  out.write(g + datasets::kDeparture, r.departure);
+  out.write(g + datasets::kThetaDeg, dem::elastic_range_directions());
+  // Every probe of the ladder, amplitude by amplitude (rows a * 4 + direction).
+  std::vector<Eigen::Matrix3d> ds, df, fv, fr, fc;
+  std::map<std::string, std::vector<double>> diagnostics;
+  for (const dem::Envelope& e : r.envelopes) {
+    ds.insert(ds.end(), e.d_stress.begin(), e.d_stress.end());
+    df.insert(df.end(), e.d_fabric.begin(), e.d_fabric.end());
+    fv.insert(fv.end(), e.d_fabric_volume.begin(), e.d_fabric_volume.end());
+    fr.insert(fr.end(), e.d_fabric_rotation.begin(), e.d_fabric_rotation.end());
+    fc.insert(fc.end(), e.d_fabric_contacts.begin(), e.d_fabric_contacts.end());
+    for (const auto& [name, values] : e.diagnostics) {
+      auto& v = diagnostics[name];
+      v.insert(v.end(), values.begin(), values.end());
+    }
+  }
+  out.write(g + datasets::kDStress, ds);
+  out.write(g + datasets::kDFabric, df);
+  if (fv.size() == ds.size()) {
+    out.write(g + datasets::kDFabricVolume, fv);
+    out.write(g + datasets::kDFabricRotation, fr);
+    out.write(g + datasets::kDFabricContacts, fc);
+  }
+  for (const auto& [name, values] : diagnostics)
+    if (values.size() == ds.size()) out.write(g + "/" + name, values);
+  out.write(g + datasets::kSeconds, r.seconds);
+  out.attr(g, "yield_strain", r.yield_strain);
+  out.attr(g, "yielded", std::int64_t{r.yielded});
+  out.attr(g, "elastic_to", r.elastic_to);
+  out.attr(g, "tolerance", options.tolerance);
+  out.attr(g, "method", options.method);
+  out.attr(g, "elastic_major", r.elastic_major);
+  out.attr(g, "elastic_minor", r.elastic_minor);
+  out.attr(g, "elastic_k", r.elastic_k);
+  out.attr(g, "elastic_reference", r.elastic_reference);
+  if (!r.elastic_reference_note.empty())
+    out.attr(g, "elastic_reference_note", r.elastic_reference_note);
 }
 
 void register_fit_keys(ScenarioSchema& s) {

@@ -47,27 +47,18 @@ std::string fmt(double x) {
 // The scenario's protocol up to its first snapshot: gas, compression to nu0 and relaxation
 // with the preparation damping, isotropic loading to nu_max and relaxation with the
 // material's, the undrained path to the first states.eps_dev, brought to rest as by the states
-// stage. The same primitives and options as the run stages (stages_dem.cpp), with N replaced and
-// one shortcut: the isotropic loading runs at its constant largest rate (isotropic.rate_max)
+// stage. The run's own sequence (dem/run_protocol.hpp) and options, with N replaced and one
+// shortcut: the isotropic loading runs at its constant largest rate (isotropic.rate_max)
 // instead of holding the inertial number. Held, it crawls through jamming at rate_min
 // (minutes at N = 500); the probed state has the same nu, P* and eps_dev either way, and
 // its preparation history is not what the sweep measures.
 dem::DemSystem isotropic_state(const dem::DemRunOptions& o, int n, std::uint64_t seed) {
-  dem::SystemOptions prep = o.system;
-  prep.material.gamma_b = o.prepare_gamma_b;
-  dem::GasOptions gas = o.gas;
-  gas.n_particles = static_cast<std::size_t>(n);
-  dem::DemSystem sys = dem::make_gas(prep, gas, seed);
-  if (o.mix_time > 0)
-    sys.advance(static_cast<std::int64_t>(std::ceil(o.mix_time / sys.dt())),
-                Eigen::Vector3d::Zero());
-  dem::compress_isotropic(sys, o.prepare);
-  dem::relax(sys, o.relax);
-  sys = dem::DemSystem::restore(sys.save(), o.system);
+  dem::DemRunOptions on = o;
+  on.gas.n_particles = static_cast<std::size_t>(n);
+  dem::DemSystem sys = dem::prepare_packing(on, seed).system;
   dem::CompressOptions loading = o.loading;
   loading.inertial_number = 0.0;
-  dem::compress_isotropic(sys, loading);
-  dem::relax(sys, o.relax);
+  dem::load_isotropic(sys, loading, o.relax);
   return sys;
 }
 

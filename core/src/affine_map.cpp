@@ -39,15 +39,6 @@ std::vector<Eigen::Vector2d> direction_vectors(const std::vector<double>& theta_
   return u;
 }
 
-Eigen::Matrix<double, 3, Eigen::Dynamic> affine_projection(const std::vector<double>& theta_deg) {
-  Eigen::MatrixXd U(theta_deg.size(), 3);
-  for (std::size_t i = 0; i < theta_deg.size(); ++i) {
-    const double t = deg_to_rad(theta_deg[i]);
-    U.row(static_cast<Eigen::Index>(i)) << 1.0, std::cos(t), std::sin(t);
-  }
-  return (U.transpose() * U).ldlt().solve(U.transpose());
-}
-
 MapEllipse ellipse_of_map(const Eigen::Matrix2d& map) {
   const Eigen::JacobiSVD<Eigen::Matrix2d> svd(map, Eigen::ComputeFullU);
   MapEllipse e;

@@ -36,17 +36,6 @@
 namespace rendulic {
 namespace fs = std::filesystem;
 
-std::string invalid_object_name_reason(const std::string& name) {
-  if (name.empty()) return "is empty";
-  if (name == "." || name == "..") return "is reserved (HDF5 reads '.' and '..' as paths)";
-  for (const char ch : name) {
-    const auto c = static_cast<unsigned char>(ch);
-    if (c == '/') return "contains '/'";
-    if (c < 0x20 || c == 0x7f) return "contains a control character";
-  }
-  return "";
-}
-
 namespace {
 
 constexpr hsize_t kChunkRows = 64;

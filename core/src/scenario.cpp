@@ -22,6 +22,7 @@
 #include <stdexcept>
 
 #include "rendulic/core/errors.hpp"
+#include "rendulic/core/option_table.hpp"
 
 namespace rendulic {
 namespace {
@@ -122,6 +123,8 @@ std::string format_value(const ScenarioValue& v) {
   return std::visit(Visitor{}, v);
 }
 
+}  // namespace
+
 std::string format_range(const KeySpec& s) {
   if (!s.choices.empty()) {
     std::string out = "one of ";
@@ -142,6 +145,8 @@ std::string format_range(const KeySpec& s) {
   out += hi ? (s.max_open ? ")" : "]") : ")";
   return out;
 }
+
+namespace {
 
 // Range check of one number; returns the reason or "".
 std::string check_number(const KeySpec& s, double x) {
@@ -380,6 +385,10 @@ void check_key_depth(std::string_view t, const std::string& source_name) {
 }
 
 }  // namespace
+
+std::string validate_value(const KeySpec& spec, const ScenarioValue& value) {
+  return validate(spec, value);
+}
 
 ScenarioSchema& ScenarioSchema::add(KeySpec spec) {
   if (find(spec.path)) throw std::logic_error("scenario key declared twice: " + spec.path);

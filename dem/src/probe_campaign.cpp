@@ -9,12 +9,12 @@
 #include <cstdint>
 #include <cstdio>
 #include <iterator>
+#include <limits>
 #include <sstream>
 
 #include "rendulic/core/conventions.hpp"
-#include "rendulic/core/envelope_record.hpp"
 #include "rendulic/core/errors.hpp"
-#include "rendulic/core/result_paths.hpp"
+#include "rendulic/core/option_table.hpp"
 #include "rendulic/dem/probe_elastic_range.hpp"
 #include "rendulic/dem/probe_mpi.hpp"
 #include "rendulic/dem/scenario_keys.hpp"
@@ -26,16 +26,7 @@ bool ProbeOptions::IsValid(std::string* why) const {
     if (why) *why = m;
     return false;
   };
-  if (directions < 3) return fail("probes: directions must be >= 3");
-  if (amplitudes.empty()) return fail("probes: at least one amplitude");
-  for (double a : amplitudes) {
-    if (!(a > 0.0) || !(a <= 0.05)) return fail("probes: amplitudes must be in (0, 0.05]");
-  }
-  if (!(inertial_number > 0.0) || !(inertial_number <= 1e-2))
-    return fail("probes: inertial_number must be in (0, 1e-2]");
-  if (!(rate >= 0.0) || !std::isfinite(rate)) return fail("probes: rate must be >= 0");
-  if (!(dt_factor >= 0.0) || !std::isfinite(dt_factor))
-    return fail("probes: dt_factor must be >= 0");
+  if (!probe_option_table().check(*this, why)) return false;
   if (threads < 0) return fail("probes: threads must be >= 0");
   if (!relax.IsValid(why)) return false;
   if (!minimise.IsValid(why)) return false;
@@ -360,9 +351,8 @@ Envelope dynamic_envelope(const DemSystem& given, double amplitude,
   return dynamic_envelope_of(given, amplitude, theta_deg, options, false);
 }
 
-void detail::compute_worker_share(const std::string& method, const DemSystem& state,
-                                  double amplitude, const std::vector<double>& theta_deg,
-                                  const ProbeOptions& options) {
+void compute_worker_share(const std::string& method, const DemSystem& state, double amplitude,
+                          const std::vector<double>& theta_deg, const ProbeOptions& options) {
   if (method == "dynamic") {
     dynamic_envelope_of(state, amplitude, theta_deg, options, true);
   } else if (method == "minimisation") {
@@ -479,15 +469,9 @@ Envelope linear_response_envelope(const DemSystem& state, double amplitude,
   return env;
 }
 
-std::vector<Envelope> run_probe_campaign(const DemSystem& state, const std::string& label,
-                                         const std::vector<std::string>& methods,
-                                         const ProbeOptions& options, ResultsWriter& out) {
-  return run_probe_campaign_in(state, paths::state(label), methods, options, out);
-}
-
-std::vector<Envelope> run_probe_campaign_in(const DemSystem& state, const std::string& state_group,
-                                            const std::vector<std::string>& methods,
-                                            const ProbeOptions& options, ResultsWriter& out) {
+std::vector<Envelope> probe_campaign(const DemSystem& state,
+                                     const std::vector<std::string>& methods,
+                                     const ProbeOptions& options, const EnvelopeSink& sink) {
   std::string why;
   if (!options.IsValid(&why)) throw InputError(why);
   const std::vector<double> theta = probe_directions(options.directions);
@@ -508,133 +492,113 @@ std::vector<Envelope> run_probe_campaign_in(const DemSystem& state, const std::s
       } else {  // one factorisation serves every amplitude
         env = linear_response_envelope(lr, theta, amplitude, state.material().k_star());
       }
-      const std::string group =
-          paths::envelope(state_group, paths::envelope_name(method, amplitude));
-      write_envelope(out, group, env);
-      if (method == "linear_response") {
-        out.write(group + datasets::kStiffness, Eigen::MatrixXd(lr.stiffness));
-        out.write(group + datasets::kFabricStiffness, Eigen::MatrixXd(lr.fabric_stiffness));
-      }
+      if (sink) sink(method, amplitude, env, method == "linear_response" ? &lr : nullptr);
       envelopes.push_back(std::move(env));
     }
   }
   return envelopes;
 }
 
-void register_probe_keys(ScenarioSchema& schema) {
-  const ProbeOptions d;
-  KeySpec s;
-  s = {};
-  s.path = "probes.directions";
-  s.type = KeyType::kInt;
-  s.default_value = std::int64_t{d.directions};
-  s.unit = "-";
-  s.help =
-      "Number of probe directions, equally spaced in the Rendulic plane from 35.26 deg (isotropic "
-      "compression); a multiple of 4 includes the isotropic and deviatoric directions.";
-  s.min = 3;
-  s.max = 3600;
-  schema.add(s);
-  s = {};
-  s.path = "probes.amplitudes";
-  s.type = KeyType::kDoubleList;
-  s.default_value = d.amplitudes;
-  s.unit = "-";
+const OptionTable<ProbeOptions>& probe_option_table() {
+  constexpr double kInf = std::numeric_limits<double>::infinity();
   static_assert(kElasticAmplitudeMax == 1e-4 && kPlasticAmplitudeMin == 1e-3,
                 "the help of probes.amplitudes states the thresholds of core/conventions.hpp");
-  s.help = "Probe strain amplitudes |d_eps| (Frobenius): < 1e-4 elastic, > 1e-3 elasto-plastic.";
-  s.min = 0.0;
-  s.min_open = true;
-  s.max = 0.05;
-  s.min_size = 1;
-  schema.add(s);
-  s = {};
-  s.path = "probes.methods";
-  s.type = KeyType::kStringList;
-  s.default_value = std::vector<std::string>{"dynamic"};
-  s.unit = "-";
-  s.help =
-      "Probe methods of the probes stage (dynamic, minimisation); the linear_response stage "
-      "adds the exact elastic envelopes for the same directions and amplitudes.";
-  s.choices = {"dynamic", "minimisation"};
-  s.min_size = 1;
-  schema.add(s);
-  s = {};
-  s.path = "probes.inertial_number";
-  s.type = KeyType::kDouble;
-  s.default_value = d.inertial_number;
-  s.unit = "-";
-  s.help = "Inertial number that sets the dynamic probes' loading rate at the state's pressure.";
-  s.min = 0.0;
-  s.min_open = true;
-  s.max = 1e-2;
-  schema.add(s);
-  s = {};
-  s.path = "probes.rate";
-  s.type = KeyType::kDouble;
-  s.default_value = d.rate;
-  s.unit = "1/s";
-  s.help = "Fixed loading rate of the largest strain component; 0 uses probes.inertial_number.";
-  s.min = 0.0;
-  schema.add(s);
-  s = {};
-  s.path = "probes.dt_factor";
-  s.type = KeyType::kDouble;
-  s.default_value = d.dt_factor;
-  s.unit = "t_c";
-  s.help =
-      "Time step of the dynamic probes as a fraction of the smallest pair's contact "
-      "time; 0 keeps dem.dt_factor. Refused beyond the stability limit.";
-  s.min = 0.0;
-  schema.add(s);
-  s = {};
-  s.path = "probes.relax_kinetic_to_elastic";
-  s.type = KeyType::kDouble;
-  s.default_value = d.relax.kinetic_to_elastic;
-  s.unit = "-";
-  s.help = "Dynamic probes relax at fixed cell until kinetic/elastic energy is below this.";
-  s.min = 0.0;
-  s.min_open = true;
-  s.max = 1.0;
-  s.max_open = true;
-  schema.add(s);
-  s = {};
-  s.path = "probes.relax_time_cap";
-  s.type = KeyType::kDouble;
-  s.default_value = d.relax.time_cap;
-  s.unit = "s";
-  s.help = "Longest relaxation of a dynamic probe (probes that hit it are flagged).";
-  s.min = 0.0;
-  s.min_open = true;
-  schema.add(s);
-  s = {};
-  s.path = "probes.force_tolerance";
-  s.type = KeyType::kDouble;
-  s.default_value = d.minimise.force_tolerance;
-  s.unit = "-";
-  s.help =
-      "Minimisation probes stop when the largest net force is below this x mean contact force.";
-  s.min = 0.0;
-  s.min_open = true;
-  s.max = 1.0;
-  s.max_open = true;
-  schema.add(s);
+  using Row = OptionRow<ProbeOptions>;
+  static const OptionTable<ProbeOptions> table({
+      Row{{.path = "probes.directions",
+           .unit = "-",
+           .help = "Number of probe directions, equally spaced in the Rendulic plane from 35.26 "
+                   "deg (isotropic compression); a multiple of 4 includes the isotropic and "
+                   "deviatoric directions.",
+           .min = 3,
+           .max = 3600},
+          [](ProbeOptions& o) -> int& { return o.directions; }},
+      Row{{.path = "probes.amplitudes",
+           .unit = "-",
+           .help = "Probe strain amplitudes |d_eps| (Frobenius): < 1e-4 elastic, > 1e-3 "
+                   "elasto-plastic.",
+           .min = 0.0,
+           .max = 0.05,
+           .min_open = true,
+           .min_size = 1},
+          [](ProbeOptions& o) -> std::vector<double>& { return o.amplitudes; }},
+      Row{{.path = "probes.inertial_number",
+           .unit = "-",
+           .help = "Inertial number that sets the dynamic probes' loading rate at the state's "
+                   "pressure.",
+           .min = 0.0,
+           .max = 1e-2,
+           .min_open = true},
+          [](ProbeOptions& o) -> double& { return o.inertial_number; }},
+      Row{{.path = "probes.rate",
+           .unit = "1/s",
+           .help = "Fixed loading rate of the largest strain component; 0 uses "
+                   "probes.inertial_number.",
+           .min = 0.0,
+           .max = kInf},
+          [](ProbeOptions& o) -> double& { return o.rate; }},
+      Row{{.path = "probes.dt_factor",
+           .unit = "t_c",
+           .help = "Time step of the dynamic probes as a fraction of the smallest pair's contact "
+                   "time; 0 keeps dem.dt_factor. Refused beyond the stability limit.",
+           .min = 0.0,
+           .max = kInf},
+          [](ProbeOptions& o) -> double& { return o.dt_factor; }},
+      Row{{.path = "probes.relax_kinetic_to_elastic",
+           .unit = "-",
+           .help = "Dynamic probes relax at fixed cell until kinetic/elastic energy is below "
+                   "this.",
+           .min = 0.0,
+           .max = 1.0,
+           .min_open = true,
+           .max_open = true},
+          [](ProbeOptions& o) -> double& { return o.relax.kinetic_to_elastic; }},
+      Row{{.path = "probes.relax_time_cap",
+           .unit = "s",
+           .help = "Longest relaxation of a dynamic probe (probes that hit it are flagged).",
+           .min = 0.0,
+           .max = kInf,
+           .min_open = true},
+          [](ProbeOptions& o) -> double& { return o.relax.time_cap; }},
+      Row{{.path = "probes.force_tolerance",
+           .unit = "-",
+           .help = "Minimisation probes stop when the largest net force is below this x mean "
+                   "contact force.",
+           .min = 0.0,
+           .max = 1.0,
+           .min_open = true,
+           .max_open = true},
+          [](ProbeOptions& o) -> double& { return o.minimise.force_tolerance; }},
+  });
+  return table;
+}
+
+void register_probe_keys(ScenarioSchema& schema) {
+  const OptionTable<ProbeOptions>& table = probe_option_table();
+  for (const auto& row : table.rows()) {
+    schema.add(row.key);
+    // The campaign's methods (not a ProbeOptions member: every stage names its own) follow
+    // the amplitudes, where they always stood in docs/scenario-keys.md.
+    if (row.key.path == "probes.amplitudes")
+      schema.add({.path = "probes.methods",
+                  .type = KeyType::kStringList,
+                  .default_value = std::vector<std::string>{"dynamic"},
+                  .unit = "-",
+                  .help = "Probe methods of the probes stage (dynamic, minimisation); the "
+                          "linear_response stage adds the exact elastic envelopes for the same "
+                          "directions and amplitudes.",
+                  .choices = {"dynamic", "minimisation"},
+                  .min_size = 1});
+  }
   register_elastic_range_keys(schema);
 }
 
 ProbeOptions probe_options_from(const Scenario& scenario) {
   ProbeOptions o;
-  o.directions = static_cast<int>(scenario.get_int("probes.directions"));
-  o.amplitudes = scenario.get_doubles("probes.amplitudes");
-  o.inertial_number = scenario.get_double("probes.inertial_number");
-  o.rate = scenario.get_double("probes.rate");
-  o.dt_factor = scenario.get_double("probes.dt_factor");
+  probe_option_table().read(scenario, o);
   if (o.dt_factor > 0.0)
     check_time_step(material_from_scenario(scenario), o.dt_factor,
                     "probes.dt_factor (" + scenario.origin("probes.dt_factor") + ")");
-  o.relax.kinetic_to_elastic = scenario.get_double("probes.relax_kinetic_to_elastic");
-  o.relax.time_cap = scenario.get_double("probes.relax_time_cap");
-  o.minimise.force_tolerance = scenario.get_double("probes.force_tolerance");
   std::string why;
   if (!o.IsValid(&why)) throw InputError(why);
   return o;

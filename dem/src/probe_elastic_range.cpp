@@ -11,6 +11,7 @@
 #include "rendulic/core/conventions.hpp"
 #include "rendulic/core/envelope_record.hpp"
 #include "rendulic/core/errors.hpp"
+#include "rendulic/core/option_table.hpp"
 #include "rendulic/core/result_paths.hpp"
 #include "rendulic/dem/probe_campaign.hpp"
 
@@ -21,17 +22,10 @@ bool ElasticRangeOptions::IsValid(std::string* why) const {
     if (why) *why = m;
     return false;
   };
-  if (amplitudes.size() < 2) return fail("elastic_range: at least two amplitudes");
-  for (std::size_t i = 0; i < amplitudes.size(); ++i) {
-    if (!(amplitudes[i] > 0.0) || !(amplitudes[i] <= 0.05))
-      return fail("elastic_range: amplitudes must be in (0, 0.05]");
-    if (i > 0 && !(amplitudes[i] > amplitudes[i - 1]))
-      return fail("elastic_range: amplitudes must increase");
-  }
-  if (method != "dynamic" && method != "minimisation")
-    return fail("elastic_range: method must be dynamic or minimisation");
-  if (!(tolerance > 0.0) || !(tolerance < 1.0))
-    return fail("elastic_range: tolerance must be in (0, 1)");
+  if (!elastic_range_option_table().check(*this, why)) return false;
+  for (std::size_t i = 1; i < amplitudes.size(); ++i)
+    if (!(amplitudes[i] > amplitudes[i - 1]))
+      return fail("elastic_range.amplitudes: the ladder must increase");
   return true;
 }
 
@@ -129,91 +123,45 @@ ElasticRange elastic_range(const DemSystem& state, const ElasticRangeOptions& op
   return r;
 }
 
-void write_elastic_range(ResultsWriter& out, const std::string& g, const ElasticRange& r,
-                         const ElasticRangeOptions& options) {
-  out.create_group(g);
-  out.write(g + datasets::kAmplitude, r.amplitude);
-  out.write(g + datasets::kMinorOverElastic, r.minor_over_elastic);
-  out.write(g + datasets::kMajorOverElastic, r.major_over_elastic);
-  out.write(g + datasets::kCenterOverA, r.center_over_a);
-  out.write(g + datasets::kKContinue, r.k_continue);
-  out.write(g + datasets::kKReverse, r.k_reverse);
-  out.write(g + datasets::kDeparture, r.departure);
-  out.write(g + datasets::kThetaDeg, elastic_range_directions());
-  // Every probe of the ladder, amplitude by amplitude (rows a * 4 + direction).
-  std::vector<Eigen::Matrix3d> ds, df, fv, fr, fc;
-  std::map<std::string, std::vector<double>> diagnostics;
-  for (const Envelope& e : r.envelopes) {
-    ds.insert(ds.end(), e.d_stress.begin(), e.d_stress.end());
-    df.insert(df.end(), e.d_fabric.begin(), e.d_fabric.end());
-    fv.insert(fv.end(), e.d_fabric_volume.begin(), e.d_fabric_volume.end());
-    fr.insert(fr.end(), e.d_fabric_rotation.begin(), e.d_fabric_rotation.end());
-    fc.insert(fc.end(), e.d_fabric_contacts.begin(), e.d_fabric_contacts.end());
-    for (const auto& [name, values] : e.diagnostics) {
-      auto& v = diagnostics[name];
-      v.insert(v.end(), values.begin(), values.end());
-    }
-  }
-  out.write(g + datasets::kDStress, ds);
-  out.write(g + datasets::kDFabric, df);
-  if (fv.size() == ds.size()) {
-    out.write(g + datasets::kDFabricVolume, fv);
-    out.write(g + datasets::kDFabricRotation, fr);
-    out.write(g + datasets::kDFabricContacts, fc);
-  }
-  for (const auto& [name, values] : diagnostics)
-    if (values.size() == ds.size()) out.write(g + "/" + name, values);
-  out.write(g + datasets::kSeconds, r.seconds);
-  out.attr(g, "yield_strain", r.yield_strain);
-  out.attr(g, "yielded", std::int64_t{r.yielded});
-  out.attr(g, "elastic_to", r.elastic_to);
-  out.attr(g, "tolerance", options.tolerance);
-  out.attr(g, "method", options.method);
-  out.attr(g, "elastic_major", r.elastic_major);
-  out.attr(g, "elastic_minor", r.elastic_minor);
-  out.attr(g, "elastic_k", r.elastic_k);
-  out.attr(g, "elastic_reference", r.elastic_reference);
-  if (!r.elastic_reference_note.empty())
-    out.attr(g, "elastic_reference_note", r.elastic_reference_note);
+const OptionTable<ElasticRangeOptions>& elastic_range_option_table() {
+  using Row = OptionRow<ElasticRangeOptions>;
+  static const OptionTable<ElasticRangeOptions> table({
+      Row{{.path = "elastic_range.amplitudes",
+           .unit = "-",
+           .help = "Ladder of probe amplitudes |d_eps| of the elastic_range stage, increasing; "
+                   "each is probed at 35.26, 125.26, 215.26 and 305.26 deg.",
+           .min = 0.0,
+           .max = 0.05,
+           .min_open = true,
+           .min_size = 2},
+          [](ElasticRangeOptions& o) -> std::vector<double>& { return o.amplitudes; }},
+      Row{{.path = "elastic_range.method",
+           .unit = "-",
+           .help = "Probe method of the ladder (dynamic: as the probes stage; minimisation: "
+                   "quasi-static).",
+           .choices = {"dynamic", "minimisation"}},
+          [](ElasticRangeOptions& o) -> std::string& { return o.method; }},
+      Row{{.path = "elastic_range.tolerance",
+           .unit = "-",
+           .help = "The response has left the elastic one where |minor axis / elastic - 1| or "
+                   "|1 - k_continue / k_reverse| reaches this; the yield strain is that "
+                   "amplitude (docs/probes.md).",
+           .min = 0.0,
+           .max = 1.0,
+           .min_open = true,
+           .max_open = true},
+          [](ElasticRangeOptions& o) -> double& { return o.tolerance; }},
+  });
+  return table;
 }
 
 void register_elastic_range_keys(ScenarioSchema& schema) {
-  const ElasticRangeOptions d;
-  schema.add({.path = "elastic_range.amplitudes",
-              .type = KeyType::kDoubleList,
-              .default_value = d.amplitudes,
-              .unit = "-",
-              .help = "Ladder of probe amplitudes |d_eps| of the elastic_range stage, increasing; "
-                      "each is probed at 35.26, 125.26, 215.26 and 305.26 deg.",
-              .min = 0.0,
-              .max = 0.05,
-              .min_open = true,
-              .min_size = 2});
-  schema.add({.path = "elastic_range.method",
-              .type = KeyType::kString,
-              .default_value = d.method,
-              .unit = "-",
-              .help = "Probe method of the ladder (dynamic: as the probes stage; minimisation: "
-                      "quasi-static).",
-              .choices = {"dynamic", "minimisation"}});
-  schema.add({.path = "elastic_range.tolerance",
-              .type = KeyType::kDouble,
-              .default_value = d.tolerance,
-              .unit = "-",
-              .help = "The response has left the elastic one where |minor axis / elastic - 1| or "
-                      "|1 - k_continue / k_reverse| reaches this; the yield strain is that "
-                      "amplitude (docs/probes.md).",
-              .min = 0.0,
-              .max = 1.0,
-              .min_open = true,
-              .max_open = true});
+  elastic_range_option_table().register_keys(schema);
 }
 
 ElasticRangeOptions elastic_range_options_from(const Scenario& scenario) {
   ElasticRangeOptions o;
-  o.amplitudes = scenario.get_doubles("elastic_range.amplitudes");
-  o.method = scenario.get_string("elastic_range.method");
-  o.tolerance = scenario.get_double("elastic_range.tolerance");
+  elastic_range_option_table().read(scenario, o);
   std::string why;
   if (!o.IsValid(&why))
     throw InputError(why + " (" + scenario.origin("elastic_range.amplitudes") + ")");

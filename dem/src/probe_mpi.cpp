@@ -13,7 +13,7 @@
 #include <limits>
 #include <thread>
 
-#include "rendulic/dem/probe_campaign.hpp"
+#include "rendulic/dem/probe_options.hpp"
 
 #ifdef RENDULIC_WITH_MPI
 // The C API only: the deprecated C++ bindings are not used and would only add warnings.
@@ -193,7 +193,8 @@ MpiSession::~MpiSession() {
 #endif
 }
 
-void MpiSession::serve() {
+void MpiSession::serve(const ShareFn& compute) {
+  (void)compute;  // a build without MPI has no workers
 #ifdef RENDULIC_WITH_MPI
   if (!initialised_ || rank_ == 0) return;
   for (;;) {
@@ -206,8 +207,7 @@ void MpiSession::serve() {
       ByteReader in(bytes);
       in(task);
       const DemSystem state = DemSystem::restore(task.state, task.system);
-      detail::compute_worker_share(task.method, state, task.amplitude, task.theta_deg,
-                                   task.options);
+      compute(task.method, state, task.amplitude, task.theta_deg, task.options);
       if (!g_serving.replied) throw std::runtime_error("a worker computed no probes");
     } catch (const std::exception& e) {
       if (!g_serving.replied) {

@@ -148,8 +148,8 @@ double inertial_number(const Material& m, double rate, double pressure) {
 
 double relax_ratio(const DemSystem& sys) {
   const Material& m = sys.material();
-  const double floor = static_cast<double>(sys.particles().size()) * 0.5 * m.k * (1e-4 * m.r_mean) *
-                       (1e-4 * m.r_mean);
+  const double floor = static_cast<double>(sys.particles().size()) *
+                       m.contact().energy(kRelaxFloorOverlap * m.r_mean);
   return sys.kinetic_energy() / std::max(sys.elastic_energy(), floor);
 }
 

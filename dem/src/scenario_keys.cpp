@@ -9,7 +9,7 @@
 #include <sstream>
 
 #include "rendulic/core/errors.hpp"
-#include "rendulic/core/results.hpp"
+#include "rendulic/core/result_paths.hpp"
 
 namespace rendulic::dem {
 namespace {

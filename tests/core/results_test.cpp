@@ -18,6 +18,7 @@
 #include <fstream>
 
 #include "rendulic/core/errors.hpp"
+#include "rendulic/core/result_paths.hpp"
 
 namespace rendulic {
 namespace {

@@ -8,7 +8,10 @@
 #pragma once
 
 #include <Eigen/Dense>
+#include <cmath>
 #include <vector>
+
+#include "rendulic/core/conventions.hpp"
 
 namespace rendulic {
 
@@ -32,8 +35,18 @@ std::vector<Eigen::Vector2d> direction_vectors(const std::vector<double>& theta_
 
 // The fit of fit_affine_map() for x = u(theta) as a linear operator: the 3 x m matrix P with
 // [c^T; M^T] = P [R_1^T; ...; R_m^T] (normal equations). Any scalar type passes through it, so
-// the calibration's features of a model envelope carry their derivatives.
-Eigen::Matrix<double, 3, Eigen::Dynamic> affine_projection(const std::vector<double>& theta_deg);
+// the calibration's features of a model envelope carry their derivatives. Inline: compiled out
+// of line, GCC schedules the normal equations differently from where the calibration's
+// objective once held them, and its features moved by ~5e-8 relative.
+inline Eigen::Matrix<double, 3, Eigen::Dynamic> affine_projection(
+    const std::vector<double>& theta_deg) {
+  Eigen::MatrixXd U(theta_deg.size(), 3);
+  for (std::size_t i = 0; i < theta_deg.size(); ++i) {
+    const double t = deg_to_rad(theta_deg[i]);
+    U.row(static_cast<Eigen::Index>(i)) << 1.0, std::cos(t), std::sin(t);
+  }
+  return (U.transpose() * U).ldlt().solve(U.transpose());
+}
 
 // The ellipse of x -> M x for |x| = 1: semi-axes a >= b >= 0 and the inclination of the major
 // axis in [0, 180) deg from the sqrt(2)-lateral axis.

@@ -13,6 +13,25 @@
 #include <string>
 #include <string_view>
 
+namespace rendulic {
+
+// Whether `name` may be one component of a path in a results file: not empty, not "." or
+// "..", no '/', no control characters (HDF5 names are C strings; "." is the group itself).
+// Returns the reason it may not, or "". Here rather than with the writer, so that a scenario
+// can check a label that will name a group without the HDF5 layer.
+inline std::string invalid_object_name_reason(const std::string& name) {
+  if (name.empty()) return "is empty";
+  if (name == "." || name == "..") return "is reserved (HDF5 reads '.' and '..' as paths)";
+  for (const char ch : name) {
+    const auto c = static_cast<unsigned char>(ch);
+    if (c == '/') return "contains '/'";
+    if (c < 0x20 || c == 0x7f) return "contains a control character";
+  }
+  return "";
+}
+
+}  // namespace rendulic
+
 namespace rendulic::paths {
 
 inline constexpr char kMaterial[] = "/material";

@@ -18,11 +18,6 @@
 
 namespace rendulic {
 
-// Whether `name` may be one component of an HDF5 path in a results file: not empty, not "."
-// or "..", no '/', no control characters (HDF5 names are C strings; "." is the group itself).
-// Returns the reason it may not, or "".
-std::string invalid_object_name_reason(const std::string& name);
-
 class ResultsWriter {
  public:
   // A new file that will become `final_path` on commit(); creates the folder if needed and

@@ -21,38 +21,23 @@
 #include <string>
 #include <vector>
 
-#include "rendulic/core/results.hpp"
 #include "rendulic/core/scenario.hpp"
 #include "rendulic/dem/dem_system.hpp"
 #include "rendulic/dem/linear_response.hpp"
 #include "rendulic/dem/probe_envelope.hpp"
 #include "rendulic/dem/probe_minimise.hpp"
+#include "rendulic/dem/probe_options.hpp"
 #include "rendulic/dem/protocols.hpp"
 
 namespace rendulic::dem {
 
-struct ProbeOptions {
-  int directions = 36;                            // equally spaced from 35.26 deg
-  std::vector<double> amplitudes = {5e-5, 2e-3};  // |d_eps|, Frobenius
-  // Loading rate of the largest strain component: from the inertial number
-  // I = rate 2<r> sqrt(rho / P) at the state's pressure, unless `rate` > 0 fixes it (1/s).
-  double inertial_number = 1e-4;
-  double rate = 0.0;
-  // Time step of the dynamic probes as a fraction of t_c (dem.dt_factor's meaning); 0 keeps
-  // the state's own. A probe's answer is the relaxed end state, not the collision dynamics:
-  // docs/accuracy.md measured the same envelope error at 0.02 and 0.1 (relaxed to 1e-9).
-  double dt_factor = 0.0;
-  // Relaxation after loading (dynamic): E_kin / E_el below kinetic_to_elastic, or time_cap.
-  RelaxOptions relax{1e-9, 2e-3, 200};
-  // Minimisation probes: FIRE to max net force < force_tolerance * mean contact force.
-  MinimiseOptions minimise{};
-  LinearResponseOptions linear{};
-  int threads = 0;  // OpenMP threads over probes; 0: OpenMP's default
-  // Called after each probe this process computes, from the thread that computed it (so it
-  // must be thread-safe): the run's progress display counts probes with it.
-  std::function<void()> probe_done;
-  bool IsValid(std::string* why) const;
-};
+// A worker's part of one envelope under MPI (MpiSession::serve takes it): the same envelope
+// function as on rank 0, inside a ProbeTaskScope that gives the worker's share. `state` is
+// what rank 0 sent: the relaxed reference for `dynamic` (rank 0 relaxed it once for all), the
+// given state for `minimisation` (its reference minimisation is repeated on every rank: it is
+// deterministic and costs about one probe, against sending a second kind of state).
+void compute_worker_share(const std::string& method, const DemSystem& state, double amplitude,
+                          const std::vector<double>& theta_deg, const ProbeOptions& options);
 
 // The probe directions: M equally spaced angles from 35.26 deg (core probe_directions_deg).
 std::vector<double> probe_directions(int m);
@@ -69,26 +54,24 @@ Envelope linear_response_envelope(const DemSystem& state, double amplitude,
                                   const std::vector<double>& theta_deg, const ProbeOptions& options,
                                   LinearResponse* response = nullptr);
 
-// The whole campaign of one state: every method x amplitude, written under
-// /states/<label>/envelopes/<paths::envelope_name> (docs/results.md). The linear-response envelopes
-// also store the 6x6 Mandel stiffness [Pa] and fabric stiffness as datasets `stiffness` and
-// `fabric_stiffness`. Returns the envelopes in the order written.
-std::vector<Envelope> run_probe_campaign(const DemSystem& state, const std::string& label,
-                                         const std::vector<std::string>& methods,
-                                         const ProbeOptions& options, ResultsWriter& out);
-// The same under any group of a state (the envelopes go to <state_group>/envelopes/<name>),
-// e.g. a pressure branch's /pressure/nu0.7/states/<label>.
-std::vector<Envelope> run_probe_campaign_in(const DemSystem& state, const std::string& state_group,
-                                            const std::vector<std::string>& methods,
-                                            const ProbeOptions& options, ResultsWriter& out);
+// What a campaign hands on for each envelope as soon as it is made: its method and amplitude,
+// the envelope, and for the linear response the response itself (its 6x6 Mandel stiffness and
+// fabric stiffness), otherwise nullptr.
+using EnvelopeSink = std::function<void(const std::string& method, double amplitude,
+                                        const Envelope& envelope, const LinearResponse* response)>;
+// The whole campaign of one state: every method x amplitude, in that order, each handed to
+// `sink` (the run's stages write it, app/stages_probes.cpp) and returned in the same order.
+std::vector<Envelope> probe_campaign(const DemSystem& state,
+                                     const std::vector<std::string>& methods,
+                                     const ProbeOptions& options, const EnvelopeSink& sink = {});
 
-// Scenario keys of the probe campaigns (section [probes]) and the options they give. Throws
-// InputError naming the key, also for a probes.dt_factor beyond the stability limit of the
-// scenario's material.
+// Scenario keys of the probe campaigns (the table, probes.methods and the elastic range's) and
+// the options they give. Throws InputError naming the key, also for a probes.dt_factor beyond
+// the stability limit of the scenario's material.
 void register_probe_keys(ScenarioSchema& schema);
 ProbeOptions probe_options_from(const Scenario& scenario);
 // The methods of the probes stage: a subset of {"dynamic", "minimisation"} (the
-// linear_response stage calls run_probe_campaign with {"linear_response"}).
+// linear_response stage calls probe_campaign with {"linear_response"}).
 std::vector<std::string> probe_methods_from(const Scenario& scenario);
 
 }  // namespace rendulic::dem

@@ -24,7 +24,7 @@
 #include <string>
 #include <vector>
 
-#include "rendulic/core/results.hpp"
+#include "rendulic/core/option_table.hpp"
 #include "rendulic/core/scenario.hpp"
 #include "rendulic/dem/dem_system.hpp"
 #include "rendulic/dem/probe_envelope.hpp"
@@ -72,15 +72,8 @@ void locate_yield(ElasticRange& range, double tolerance);
 ElasticRange elastic_range(const DemSystem& state, const ElasticRangeOptions& options,
                            const ProbeOptions& probe);
 
-// /states/<label>/elastic_range (docs/results.md): datasets amplitude, minor_over_elastic,
-// major_over_elastic, center_over_a, k_continue, k_reverse, departure, seconds, theta_deg[4],
-// d_stress[n*4,3,3], d_fabric[n*4,3,3], the fabric split and the per-probe diagnostics of the
-// method (e.g. load_steps, relax_steps, iterations) of every probe; attributes
-// yield_strain, elastic_to, yielded, tolerance, method, elastic_major, elastic_minor,
-// elastic_k.
-void write_elastic_range(ResultsWriter& out, const std::string& group, const ElasticRange& range,
-                         const ElasticRangeOptions& options);
-
+// The keys of ElasticRangeOptions (section [elastic_range]), defaults ElasticRangeOptions{}'s.
+const OptionTable<ElasticRangeOptions>& elastic_range_option_table();
 void register_elastic_range_keys(ScenarioSchema& schema);
 ElasticRangeOptions elastic_range_options_from(const Scenario& scenario);
 

@@ -17,6 +17,7 @@
 #include <Eigen/Core>
 #include <cstdint>
 #include <cstring>
+#include <functional>
 #include <stdexcept>
 #include <string>
 #include <type_traits>
@@ -45,9 +46,14 @@ class MpiSession {
 
   int rank() const { return rank_; }
   int size() const { return size_; }
+  // A worker's share of one envelope: dem::compute_worker_share (probe_campaign.hpp), passed
+  // in so that the campaigns call this layer and not the other way round.
+  using ShareFn =
+      std::function<void(const std::string& method, const DemSystem& state, double amplitude,
+                         const std::vector<double>& theta_deg, const ProbeOptions& options)>;
   // Ranks != 0: compute shares of the campaigns rank 0 sends until it releases them. Never
   // prints and never writes files; an error of a task is sent back to rank 0, which reports it.
-  void serve();
+  void serve(const ShareFn& compute);
 
  private:
   int rank_ = 0;
@@ -172,14 +178,6 @@ class ProbeTaskScope {
   ProbeShare share_;
   int next_reply_ = 0;  // rank 0: the next worker whose reply is due (0: none is)
 };
-
-// A worker's part of one envelope (probe_campaign.cpp): the same envelope function as on
-// rank 0, inside a ProbeTaskScope that gives the worker's share. `state` is what rank 0 sent:
-// the relaxed reference for `dynamic` (rank 0 relaxed it once for all), the given state for
-// `minimisation` (its reference minimisation is repeated on every rank: it is deterministic
-// and costs about one probe, against sending a second kind of state).
-void compute_worker_share(const std::string& method, const DemSystem& state, double amplitude,
-                          const std::vector<double>& theta_deg, const ProbeOptions& options);
 
 }  // namespace detail
 }  // namespace rendulic::dem

@@ -45,6 +45,8 @@ DemSystem make_gas(const SystemOptions& options, const GasOptions& gas, std::uin
 // energy of a 1e-4 <r> overlap (for the seed, 5e-7 J: with the default 1e-5, velocities of
 // ~1e-3 m/s, small against the affine velocities of the loading that follows). Jammed states
 // have E_el >> E_floor, so for them this is the plain E_kin / E_el.
+// The overlap of E_floor, in units of <r>; its energy is the contact law's (NormalContact).
+inline constexpr double kRelaxFloorOverlap = 1e-4;
 struct RelaxOptions {
   double kinetic_to_elastic = 1e-6;
   double time_cap = 1e-3;          // s; reported if hit

@@ -9,27 +9,11 @@
 #include <vector>
 
 #include "rendulic/core/scenario.hpp"
-#include "rendulic/dem/protocols.hpp"
-#include "rendulic/dem/rest.hpp"
+#include "rendulic/dem/run_protocol.hpp"
 
 namespace rendulic::dem {
 
 void register_dem_keys(ScenarioSchema& schema);
-
-struct DemRunOptions {
-  SystemOptions system;
-  GasOptions gas;
-  double mix_time = 0;           // s at fixed cell before compressing the gas
-  double prepare_gamma_b = 0.1;  // background damping during gas, compression, relax at nu0
-  CompressOptions prepare;       // gas -> nu0 (constant rate)
-  RelaxOptions relax;            // at nu0 and at nu_max
-  CompressOptions loading;       // nu0 -> nu_max (isotropic branch)
-  PathOptions path;
-  // Volume fractions of the pressure branches (snapshots of the loading, loading.snapshot_nu).
-  std::vector<double> branch_nu;
-  std::vector<std::string> state_labels;  // one per path.snapshot_eps_dev
-  RestOptions state_rest;                 // dynamic relaxation, then FIRE to equilibrium (rest.hpp)
-};
 
 // The material.* keys.
 Material material_from_scenario(const Scenario& scenario);

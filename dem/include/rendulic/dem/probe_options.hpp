@@ -1,0 +1,45 @@
+// The settings of a probe campaign (docs/physics.md section 5, docs/probes.md): ProbeOptions
+// with its defaults and the table of its scenario keys (core/option_table.hpp). Apart from the
+// campaigns (probe_campaign.hpp), so that the MPI layer (probe_mpi.cpp), which sends them to
+// the workers, needs the settings and not the campaigns.
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "rendulic/core/option_table.hpp"
+#include "rendulic/dem/linear_response.hpp"
+#include "rendulic/dem/probe_minimise.hpp"
+#include "rendulic/dem/protocols.hpp"
+
+namespace rendulic::dem {
+
+struct ProbeOptions {
+  int directions = 36;                            // equally spaced from 35.26 deg
+  std::vector<double> amplitudes = {5e-5, 2e-3};  // |d_eps|, Frobenius
+  // Loading rate of the largest strain component: from the inertial number
+  // I = rate 2<r> sqrt(rho / P) at the state's pressure, unless `rate` > 0 fixes it (1/s).
+  double inertial_number = 1e-4;
+  double rate = 0.0;
+  // Time step of the dynamic probes as a fraction of t_c (dem.dt_factor's meaning); 0 keeps
+  // the state's own. A probe's answer is the relaxed end state, not the collision dynamics:
+  // docs/accuracy.md measured the same envelope error at 0.02 and 0.1 (relaxed to 1e-9).
+  double dt_factor = 0.0;
+  // Relaxation after loading (dynamic): E_kin / E_el below kinetic_to_elastic, or time_cap.
+  RelaxOptions relax{1e-9, 2e-3, 200};
+  // Minimisation probes: FIRE to max net force < force_tolerance * mean contact force.
+  MinimiseOptions minimise{};
+  LinearResponseOptions linear{};
+  int threads = 0;  // OpenMP threads over probes; 0: OpenMP's default
+  // Called after each probe this process computes, from the thread that computed it (so it
+  // must be thread-safe): the run's progress display counts probes with it.
+  std::function<void()> probe_done;
+  bool IsValid(std::string* why) const;
+};
+
+// The keys of ProbeOptions (section [probes]): their unit, range and help, the defaults being
+// ProbeOptions{}'s. IsValid checks the same ranges.
+const OptionTable<ProbeOptions>& probe_option_table();
+
+}  // namespace rendulic::dem

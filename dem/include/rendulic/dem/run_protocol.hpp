@@ -1,0 +1,61 @@
+// The protocol of a run up to the isotropic state (docs/physics.md section 4, docs/dem.md):
+// the options of every step and the sequence gas -> mixing -> compression to nu0 ->
+// relaxation at nu0 (at the preparation's own background damping) -> isotropic loading to
+// nu_max -> relaxation there. The `run` stages (app/stages_dem.cpp) and the sweep
+// (app/sweep.cpp) both take their packings from here, so the sequence is written once; the
+// engine's side only, with no scenario file and no results file (scenario_keys.hpp makes the
+// options from a scenario).
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "rendulic/dem/protocols.hpp"
+#include "rendulic/dem/rest.hpp"
+
+namespace rendulic::dem {
+
+struct DemRunOptions {
+  SystemOptions system;
+  GasOptions gas;
+  double mix_time = 0;           // s at fixed cell before compressing the gas
+  double prepare_gamma_b = 0.1;  // background damping during gas, compression, relax at nu0
+  CompressOptions prepare;       // gas -> nu0 (constant rate)
+  RelaxOptions relax;            // at nu0 and at nu_max
+  CompressOptions loading;       // nu0 -> nu_max (isotropic branch)
+  PathOptions path;
+  // Volume fractions of the pressure branches (snapshots of the loading, loading.snapshot_nu).
+  std::vector<double> branch_nu;
+  std::vector<std::string> state_labels;  // one per path.snapshot_eps_dev
+  RestOptions state_rest;                 // dynamic relaxation, then FIRE to equilibrium (rest.hpp)
+};
+
+// Called with the name of each step as it starts ("gas", "compress to nu0", "relax at nu0").
+using TaskFn = std::function<void(const std::string&)>;
+
+struct PreparedPacking {
+  DemSystem system;             // at nu0, running with the material's own background damping
+  Measures at_nu0;              // measured at the end of the relaxation at nu0
+  CompressSummary compression;  // gas -> nu0
+  RelaxSummary relax;           // at nu0
+  std::int64_t steps = 0;
+};
+// The random gas of `seed`, its mixing, its compression to nu0 and the relaxation there, all at
+// options.prepare_gamma_b (refused with an InputError naming preparation.gamma_b if that makes
+// the time step unstable).
+PreparedPacking prepare_packing(const DemRunOptions& options, std::uint64_t seed,
+                                const TaskFn& task = {}, const ProgressFn& progress = {});
+
+struct IsotropicLoading {
+  CompressSummary loading;  // nu0 -> nu_max, with the snapshots at loading.snapshot_nu
+  RelaxSummary relax;       // at nu_max
+};
+// The isotropic loading of `sys` to loading.target_nu, then its relaxation ("loading to nu_max",
+// "relax at nu_max").
+IsotropicLoading load_isotropic(DemSystem& sys, const CompressOptions& loading,
+                                const RelaxOptions& relax, const SampleFn& sample = {},
+                                const TaskFn& task = {}, const ProgressFn& progress = {});
+
+}  // namespace rendulic::dem

@@ -1,0 +1,46 @@
+// The protocol of a run up to the isotropic state (run_protocol.hpp; docs/physics.md section 4).
+#include "rendulic/dem/run_protocol.hpp"
+
+#include <cmath>
+
+namespace rendulic::dem {
+
+PreparedPacking prepare_packing(const DemRunOptions& o, std::uint64_t seed, const TaskFn& task,
+                                const ProgressFn& progress) {
+  auto start = [&](const char* name) {
+    if (task) task(name);
+  };
+  start("gas");
+  SystemOptions prep = o.system;
+  prep.material.gamma_b = o.prepare_gamma_b;
+  check_time_step(prep.material, prep.dt_factor, "preparation.gamma_b");
+  DemSystem sys = make_gas(prep, o.gas, seed);
+  if (o.mix_time > 0) {
+    const auto n = static_cast<std::int64_t>(std::ceil(o.mix_time / sys.dt()));
+    for (std::int64_t k = 0; k < n; ++k) {
+      sys.step(Eigen::Vector3d::Zero());
+      if (progress && k % 256 == 0) progress(double(k) / n);
+    }
+  }
+  start("compress to nu0");
+  CompressSummary c = compress_isotropic(sys, o.prepare, {}, progress);
+  start("relax at nu0");
+  const RelaxSummary r = relax(sys, o.relax, progress);
+  const Measures at_nu0 = sys.measure();
+  const std::int64_t steps = sys.steps();
+  // Every later step runs with the material's own background damping.
+  return {DemSystem::restore(sys.save(), o.system), at_nu0, std::move(c), r, steps};
+}
+
+IsotropicLoading load_isotropic(DemSystem& sys, const CompressOptions& loading,
+                                const RelaxOptions& relax_options, const SampleFn& sample,
+                                const TaskFn& task, const ProgressFn& progress) {
+  IsotropicLoading out;
+  if (task) task("loading to nu_max");
+  out.loading = compress_isotropic(sys, loading, sample, progress);
+  if (task) task("relax at nu_max");
+  out.relax = relax(sys, relax_options, progress);
+  return out;
+}
+
+}  // namespace rendulic::dem

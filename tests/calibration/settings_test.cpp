@@ -1,0 +1,70 @@
+// CalibrationSettings (calibration/settings.hpp): the calibration.* keys carry its defaults,
+// and calibration_plan() is the one translation of the settings that the run stage and
+// `rendulic calibrate` share.
+#include "rendulic/calibration/settings.hpp"
+
+#include <gtest/gtest.h>
+
+#include "rendulic/core/errors.hpp"
+#include "rendulic/models/law.hpp"
+
+namespace rendulic::calibration {
+namespace {
+
+TEST(CalibrationSettings, KeysCarryTheStructsDefaults) {
+  ScenarioSchema schema;
+  register_calibration_keys(schema);
+  const CalibrationSettings d;
+  const CalibrationSettings s = calibration_settings_from(Scenario(schema));
+  EXPECT_EQ(s.model, d.model);
+  EXPECT_EQ(s.holdout, d.holdout);
+  EXPECT_EQ(s.max_iterations, d.max_iterations);
+  EXPECT_EQ(s.function_tolerance, kDemFunctionTolerance);
+  EXPECT_EQ(std::get<double>(schema.find("calibration.function_tolerance")->default_value),
+            kDemFunctionTolerance);
+}
+
+TEST(CalibrationSettings, PlanTranslatesOnce) {
+  CalibrationSettings s;
+  s.model = "all";
+  s.holdout = {"none"};
+  s.path = false;
+  s.features = true;
+  s.max_iterations = 17;
+  CalibrationPlan p = calibration_plan(s);
+  EXPECT_EQ(p.models, models::law_names());
+  EXPECT_TRUE(p.options.holdout.empty());
+  EXPECT_FALSE(p.options.objective.path);
+  EXPECT_FALSE(p.load.load_path);
+  EXPECT_TRUE(p.options.objective.envelope_features);
+  EXPECT_EQ(p.options.solver.max_iterations, 17);
+  EXPECT_EQ(p.options.solver.gradient_tolerance, kDemGradientTolerance);
+  // A held-out state is loaded with an explicit list of states, once.
+  s.model = "isotropic_elastic";
+  s.states = {"a", "c"};
+  s.holdout = {"b", "c"};
+  p = calibration_plan(s);
+  EXPECT_EQ(p.models, std::vector<std::string>{"isotropic_elastic"});
+  EXPECT_EQ(p.load.states, (std::vector<std::string>{"a", "c", "b"}));
+  // Every state (an empty list) stays every state.
+  s.states.clear();
+  EXPECT_TRUE(calibration_plan(s).load.states.empty());
+}
+
+TEST(CalibrationSettings, OutOfRangeIsRefusedNamingTheKey) {
+  CalibrationSettings s;
+  s.function_tolerance = 0.5;
+  try {
+    calibration_plan(s);
+    FAIL() << "accepted a function tolerance of 0.5";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("calibration.function_tolerance"), std::string::npos)
+        << e.what();
+  }
+  s = {};
+  s.max_iterations = 0;
+  EXPECT_THROW(calibration_plan(s), InputError);
+}
+
+}  // namespace
+}  // namespace rendulic::calibration
