@@ -19,8 +19,10 @@ namespace fs = std::filesystem;
 
 const double kKStar = 5e10;  // Pa: k / (2 <r>) of docs/physics.md
 
+// Each test's file in a folder of its own: ctest runs the tests of this file in parallel, and
+// one test's check of "no temporary left" must not see another's file being written.
 fs::path make_results_file(const std::string& name) {
-  const fs::path dir = fs::path(RENDULIC_TEST_TMP) / "calibration_cli";
+  const fs::path dir = fs::path(RENDULIC_TEST_TMP) / "calibration_cli" / fs::path(name).stem();
   fs::create_directories(dir);
   const fs::path file = dir / name;
   const auto law = testing::law_with("anisotropic_elastic",
