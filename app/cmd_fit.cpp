@@ -48,7 +48,8 @@ std::string to_json(const EnvelopeFit& f) {
   j["used_theta"] = f.used_theta;
   j["selection"] = f.selection_note;
   if (f.line_p_value) j["line_p_value"] = *f.line_p_value;
-  return j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace);
+  // One line: one fit, one JSON object (docs/fitting.md "The fit command").
+  return j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
 }
 
 }  // namespace
