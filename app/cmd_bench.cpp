@@ -23,6 +23,7 @@
 #include <iomanip>
 #include <iostream>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "commands.hpp"
@@ -201,9 +202,7 @@ Subcommand add_bench(CLI::App& parent) {
             if (!o->lammps_dir.empty()) std::filesystem::create_directories(o->lammps_dir);
             std::vector<int> settings = o->threads;
             settings.push_back(0);  // the default
-            std::ostringstream json;
-            json << "[";
-            bool first = true;
+            nlohmann::ordered_json json = nlohmann::ordered_json::array();
             if (!o->json)
               std::cout << "volume_fraction  threads  n_particles  ns_per_particle_step"
                         << (o->load ? "  loaded" : "") << "\n";
@@ -224,12 +223,13 @@ Subcommand add_bench(CLI::App& parent) {
               for (std::size_t k = 0; k < settings.size(); ++k) {
                 const int t = settings[k];
                 if (o->json) {
-                  json << (first ? "" : ",") << "{\"volume_fraction\":" << nu
-                       << ",\"threads\":" << t << ",\"n_particles\":" << o->n_particles
-                       << ",\"ns_per_particle_step\":" << std::setprecision(4) << idle[k].best;
-                  if (o->load) json << ",\"ns_per_particle_step_loaded\":" << loaded[k].mean;
-                  json << "}";
-                  first = false;
+                  nlohmann::ordered_json row;
+                  row["volume_fraction"] = nu;
+                  row["threads"] = t;
+                  row["n_particles"] = o->n_particles;
+                  row["ns_per_particle_step"] = idle[k].best;
+                  if (o->load) row["ns_per_particle_step_loaded"] = loaded[k].mean;
+                  json.push_back(row);
                 } else {
                   std::cout << std::setw(15) << nu << std::setw(9)
                             << (t > 0 ? std::to_string(t) : "default") << std::setw(13)
@@ -243,7 +243,7 @@ Subcommand add_bench(CLI::App& parent) {
                 std::cout << "  loaded, default against 1 thread: " << std::setprecision(3)
                           << loaded.back().mean / loaded.front().mean << "x\n";
             }
-            if (o->json) std::cout << json.str() << "]\n";
+            if (o->json) std::cout << json.dump(2) << "\n";
             omp_set_num_threads(all_cores);
             return 0;
           }};

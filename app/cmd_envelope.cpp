@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <iostream>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
 
@@ -30,17 +31,10 @@ struct EnvelopeCli {
   int substeps = 1;
 };
 
-std::string num(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.17g", v);
-  return buf;
-}
-
-std::string pairs(const Eigen::Matrix<double, Eigen::Dynamic, 2>& m) {
-  std::string s = "[";
-  for (int i = 0; i < m.rows(); ++i)
-    s += (i ? ", [" : "[") + num(m(i, 0)) + ", " + num(m(i, 1)) + "]";
-  return s + "]";
+nlohmann::ordered_json pairs(const Eigen::Matrix<double, Eigen::Dynamic, 2>& m) {
+  nlohmann::ordered_json a = nlohmann::ordered_json::array();
+  for (int i = 0; i < m.rows(); ++i) a.push_back({m(i, 0), m(i, 1)});
+  return a;
 }
 
 int run_envelope(const EnvelopeCli& o) {
@@ -73,17 +67,20 @@ int run_envelope(const EnvelopeCli& o) {
               << "); use --scheme modified-euler\n";
 
   if (o.json) {
-    std::ostringstream os;
-    os << "{\"model\": \"" << law->name() << "\", \"amplitude\": " << num(o.amplitude)
-       << ", \"method\": \"" << o.method << "\", \"scheme\": \"" << o.scheme
-       << "\", \"tolerance\": " << num(o.tolerance)
-       << ", \"max_error_estimate\": " << num(env.max_error_estimate)
-       << ", \"within_tolerance\": " << (env.within_tolerance ? "true" : "false")
-       << ", \"theta_deg\": [";
-    for (int i = 0; i < env.theta_deg.size(); ++i) os << (i ? ", " : "") << num(env.theta_deg(i));
-    os << "], \"strain\": " << pairs(env.strain) << ", \"stress\": " << pairs(env.stress)
-       << ", \"fabric\": " << pairs(env.fabric) << "}\n";
-    std::cout << os.str();
+    nlohmann::ordered_json j;
+    j["model"] = law->name();
+    j["amplitude"] = o.amplitude;
+    j["method"] = o.method;
+    j["scheme"] = o.scheme;
+    j["tolerance"] = o.tolerance;
+    j["max_error_estimate"] = env.max_error_estimate;
+    j["within_tolerance"] = env.within_tolerance;
+    j["theta_deg"] =
+        std::vector<double>(env.theta_deg.data(), env.theta_deg.data() + env.theta_deg.size());
+    j["strain"] = pairs(env.strain);
+    j["stress"] = pairs(env.stress);
+    j["fabric"] = pairs(env.fabric);
+    std::cout << j.dump(2) << "\n";
     return 0;
   }
   std::printf("# %s envelope, |d_eps| = %g, %d directions, %s (%s, tolerance %g)\n",

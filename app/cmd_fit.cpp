@@ -6,6 +6,7 @@
 #include <cmath>
 #include <iostream>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "commands.hpp"
@@ -25,48 +26,30 @@ struct FitCliOptions {
   bool ignore_theta = false;
 };
 
-std::string num(double v) {
-  if (!std::isfinite(v)) return "null";  // never reached for a valid fit; JSON has no NaN
-  std::ostringstream o;
-  o.precision(17);
-  o << v;
-  return o.str();
-}
-
-std::string str(const std::string& s) {
-  std::string o = "\"";
-  for (char c : s) {
-    if (c == '"' || c == '\\') o += '\\';
-    if (static_cast<unsigned char>(c) < 0x20) {
-      o += ' ';
-      continue;
-    }
-    o += c;
-  }
-  return o + "\"";
-}
-
-std::string pair(double x, double y) { return "[" + num(x) + ", " + num(y) + "]"; }
-
+// The fit as JSON (docs/fitting.md "The fit command"); a non-finite number is null.
 std::string to_json(const EnvelopeFit& f) {
-  std::ostringstream o;
-  o << "{\"shape\": " << str(to_string(f.shape))
-    << ", \"center\": " << pair(f.center.x(), f.center.y()) << ", \"semi_axes\": " << pair(f.a, f.b)
-    << ", \"inclination_deg\": " << (f.inclination_deg ? num(*f.inclination_deg) : "null")
-    << ", \"rms\": " << num(f.rms) << ", \"stderr\": {";
+  nlohmann::ordered_json j;
+  j["shape"] = to_string(f.shape);
+  j["center"] = {f.center.x(), f.center.y()};
+  j["semi_axes"] = {f.a, f.b};
+  j["inclination_deg"] = f.inclination_deg ? nlohmann::ordered_json(*f.inclination_deg) : nullptr;
+  j["rms"] = f.rms;
+  nlohmann::ordered_json se = nlohmann::ordered_json::object();
   if (f.has_stderr) {
-    o << "\"center\": " << pair(f.center_stderr.x(), f.center_stderr.y())
-      << ", \"semi_axes\": " << pair(f.a_stderr, f.b_stderr);
-    if (f.inclination_stderr_deg) o << ", \"inclination_deg\": " << num(*f.inclination_stderr_deg);
+    se["center"] = {f.center_stderr.x(), f.center_stderr.y()};
+    se["semi_axes"] = {f.a_stderr, f.b_stderr};
+    if (f.inclination_stderr_deg) se["inclination_deg"] = *f.inclination_stderr_deg;
   }
-  o << "}, \"n_points\": " << f.n_points << ", \"loss\": " << str(to_string(f.loss))
-    << ", \"loss_scale\": " << num(f.loss_scale)
-    << ", \"converged\": " << (f.converged ? "true" : "false")
-    << ", \"used_theta\": " << (f.used_theta ? "true" : "false")
-    << ", \"selection\": " << str(f.selection_note);
-  if (f.line_p_value) o << ", \"line_p_value\": " << num(*f.line_p_value);
-  o << "}";
-  return o.str();
+  j["stderr"] = se;
+  j["n_points"] = f.n_points;
+  j["loss"] = to_string(f.loss);
+  j["loss_scale"] = f.loss_scale;
+  j["converged"] = f.converged;
+  j["used_theta"] = f.used_theta;
+  j["selection"] = f.selection_note;
+  if (f.line_p_value) j["line_p_value"] = *f.line_p_value;
+  // One line: one fit, one JSON object (docs/fitting.md "The fit command").
+  return j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
 }
 
 }  // namespace

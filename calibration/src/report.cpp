@@ -2,178 +2,135 @@
 #include "rendulic/calibration/report.hpp"
 
 #include <cmath>
-#include <cstdio>
-#include <sstream>
+#include <nlohmann/json.hpp>
 
 #include "rendulic/core/result_paths.hpp"
 
 namespace rendulic::calibration {
 namespace {
 
-std::string num(double v) {
-  if (!std::isfinite(v)) return "null";
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.17g", v);
-  return buf;
+using Json = nlohmann::ordered_json;
+
+// JSON has no NaN or infinity: a non-finite number (an undetermined standard error) is null.
+Json num(double v) { return std::isfinite(v) ? Json(v) : Json(nullptr); }
+Json pair(const Eigen::Vector2d& v) { return Json::array({num(v(0)), num(v(1))}); }
+
+void add_stiffness(Json& o, const RendulicStiffness& s) {
+  o["B"] = num(s.B);
+  o["G"] = num(s.G);
+  o["A"] = num(s.A);
+  o["B_stderr"] = num(s.B_stderr);
+  o["G_stderr"] = num(s.G_stderr);
+  o["A_stderr"] = num(s.A_stderr);
+  o["elastic_center"] = pair(s.center);
+  o["elastic_rms"] = num(s.rms);
+  o["elastic_semi_axes"] = Json::array({num(s.a), num(s.b)});
+  o["elastic_inclination_deg"] = num(s.inclination_deg);
 }
 
-std::string str(const std::string& s) {
-  std::string o = "\"";
-  for (char c : s) {
-    switch (c) {
-      case '"':
-        o += "\\\"";
-        break;
-      case '\\':
-        o += "\\\\";
-        break;
-      case '\n':
-        o += "\\n";
-        break;
-      case '\t':
-        o += "\\t";
-        break;
-      default:
-        if (static_cast<unsigned char>(c) < 0x20) {
-          char b[8];
-          std::snprintf(b, sizeof b, "\\u%04x", c);
-          o += b;
-        } else {
-          o += c;
-        }
-    }
-  }
-  return o + "\"";
-}
-
-std::string pair(const Eigen::Vector2d& v) {
-  std::string s = "[";
-  s.append(num(v(0))).append(", ").append(num(v(1))).append("]");
-  return s;
-}
-
-std::string stiffness_json(const RendulicStiffness& s) {
-  std::ostringstream o;
-  o << "\"B\": " << num(s.B) << ", \"G\": " << num(s.G) << ", \"A\": " << num(s.A)
-    << ", \"B_stderr\": " << num(s.B_stderr) << ", \"G_stderr\": " << num(s.G_stderr)
-    << ", \"A_stderr\": " << num(s.A_stderr) << ", \"elastic_center\": " << pair(s.center)
-    << ", \"elastic_rms\": " << num(s.rms) << ", \"elastic_semi_axes\": [" << num(s.a) << ", "
-    << num(s.b) << "], \"elastic_inclination_deg\": " << num(s.inclination_deg);
-  return o.str();
-}
-
-std::string plastic_json(const PlasticFeatures& p) {
-  std::ostringstream o;
-  o << "{\"amplitude\": " << num(p.amplitude) << ", \"shift\": " << pair(p.shift)
-    << ", \"shift_ratio\": " << num(p.shift_ratio) << ", \"semi_axes\": [" << num(p.a) << ", "
-    << num(p.b) << "], \"thinning\": " << num(p.thinning)
-    << ", \"inclination_deg\": " << num(p.inclination_deg) << ", \"rms\": " << num(p.rms)
-    << ", \"fabric_shift\": " << pair(p.fabric_shift) << ", \"fabric_semi_axes\": ["
-    << num(p.fabric_a) << ", " << num(p.fabric_b)
-    << "], \"fabric_inclination_deg\": " << num(p.fabric_inclination_deg) << "}";
-  return o.str();
+Json plastic_json(const PlasticFeatures& p) {
+  Json o;
+  o["amplitude"] = num(p.amplitude);
+  o["shift"] = pair(p.shift);
+  o["shift_ratio"] = num(p.shift_ratio);
+  o["semi_axes"] = Json::array({num(p.a), num(p.b)});
+  o["thinning"] = num(p.thinning);
+  o["inclination_deg"] = num(p.inclination_deg);
+  o["rms"] = num(p.rms);
+  o["fabric_shift"] = pair(p.fabric_shift);
+  o["fabric_semi_axes"] = Json::array({num(p.fabric_a), num(p.fabric_b)});
+  o["fabric_inclination_deg"] = num(p.fabric_inclination_deg);
+  return o;
 }
 
 }  // namespace
 
 std::string to_json(const CalibrationSummary& s) {
-  std::ostringstream o;
   const FitResult& f = s.fit;
-  o << "{\n  \"model\": " << str(s.model) << ",\n  \"params\": {";
+  Json o;
+  o["model"] = s.model;
+  Json params = Json::object();
   for (std::size_t i = 0; i < s.param_names.size(); ++i)
-    o << (i ? ", " : "") << str(s.param_names[i]) << ": " << num(f.params[i]);
-  o << "},\n  \"free\": [";
-  for (std::size_t k = 0; k < f.names.size(); ++k) o << (k ? ", " : "") << str(f.names[k]);
-  o << "],\n  \"stderr\": {";
-  for (std::size_t k = 0; k < f.names.size(); ++k)
-    o << (k ? ", " : "") << str(f.names[k]) << ": " << num(f.stderr_[k]);
-  o << "},\n  \"correlation\": {\"names\": [";
-  for (std::size_t k = 0; k < f.names.size(); ++k) o << (k ? ", " : "") << str(f.names[k]);
-  o << "], \"matrix\": [";
+    params[s.param_names[i]] = num(f.params[i]);
+  o["params"] = params;
+  o["free"] = f.names;
+  Json se = Json::object();
+  for (std::size_t k = 0; k < f.names.size(); ++k) se[f.names[k]] = num(f.stderr_[k]);
+  o["stderr"] = se;
+  Json matrix = Json::array();
   for (Eigen::Index a = 0; a < f.correlation.rows(); ++a) {
-    o << (a ? ", " : "") << "[";
-    for (Eigen::Index b = 0; b < f.correlation.cols(); ++b)
-      o << (b ? ", " : "") << num(f.correlation(a, b));
-    o << "]";
+    Json row = Json::array();
+    for (Eigen::Index b = 0; b < f.correlation.cols(); ++b) row.push_back(num(f.correlation(a, b)));
+    matrix.push_back(row);
   }
-  o << "]},\n  \"objective\": " << num(f.cost)
-    << ",\n  \"converged\": " << (f.converged ? "true" : "false")
-    << ",\n  \"backend\": " << str(f.backend) << ",\n  \"jacobian\": " << str(f.jacobian)
-    << ",\n  \"termination\": " << str(f.termination) << ",\n  \"solver_report\": " << str(f.report)
-    << ",\n  \"at_bound\": [";
-  for (std::size_t k = 0; k < f.at_bound.size(); ++k) o << (k ? ", " : "") << str(f.at_bound[k]);
-  o << "],\n  \"evaluations\": " << f.evaluations << ",\n  \"seconds\": " << num(f.seconds)
-    << ",\n  \"n_residuals\": " << f.uncertainty.n_residuals
-    << ",\n  \"rank\": " << f.uncertainty.rank
-    << ",\n  \"condition_number\": " << num(f.uncertainty.condition_number)
-    << ",\n  \"global_start\": " << str(s.global_start) << ",\n  \"undetermined\": [";
-  for (std::size_t k = 0; k < s.undetermined.size(); ++k)
-    o << (k ? ", " : "") << str(s.undetermined[k]);
+  o["correlation"] = {{"names", f.names}, {"matrix", matrix}};
+  o["objective"] = num(f.cost);
+  o["converged"] = f.converged;
+  o["backend"] = f.backend;
+  o["jacobian"] = f.jacobian;
+  o["termination"] = f.termination;
+  o["solver_report"] = f.report;
+  o["at_bound"] = f.at_bound;
+  o["evaluations"] = f.evaluations;
+  o["seconds"] = num(f.seconds);
+  o["n_residuals"] = f.uncertainty.n_residuals;
+  o["rank"] = f.uncertainty.rank;
+  o["condition_number"] = num(f.uncertainty.condition_number);
+  o["global_start"] = s.global_start;
+  o["undetermined"] = s.undetermined;
   const SetScore all = score_set(s.score, BlockSet::kAll);
   const SetScore stress = score_set(s.score, BlockSet::kStress);
-  o << "],\n  \"information_criterion\": " << num(all.bic)
-    << ",\n  \"information_criterion_stress\": " << num(stress.bic)
-    << ",\n  \"held_out_score\": " << num(all.held_out_score)
-    << ",\n  \"held_out_score_stress\": " << num(stress.held_out_score)
-    << ",\n  \"misfit_by_kind\": {";
-  bool first = true;
-  for (const auto& [k, v] : all.fitted_by_kind) {
-    o << (first ? "" : ", ") << str(k) << ": " << num(v);
-    first = false;
-  }
-  o << "},\n  \"held_out_misfit_by_kind\": {";
-  first = true;
-  for (const auto& [k, v] : all.held_out_by_kind) {
-    o << (first ? "" : ", ") << str(k) << ": " << num(v);
-    first = false;
-  }
-  o << "},\n  \"yardstick\": [";
-  for (std::size_t k = 0; k < s.score.blocks.size(); ++k) {
-    const BlockScore& b = s.score.blocks[k];
-    o << (k ? "," : "") << "\n    {\"id\": " << str(b.id)
-      << ", \"held_out\": " << (b.held_out ? "true" : "false")
-      << ", \"components\": " << b.components << ", \"scale\": " << num(b.scale)
-      << ", \"noise\": " << num(b.noise) << ", \"misfit\": " << num(b.misfit) << "}";
-  }
-  o << "]"
-    << ",\n  \"fitted_misfit\": " << num(s.fitted_misfit)
-    << ",\n  \"held_out_misfit\": " << (s.held_out_misfit ? num(*s.held_out_misfit) : "null")
-    << ",\n  \"path_misfit\": " << (s.path_misfit >= 0 ? num(s.path_misfit) : "null")
-    << ",\n  \"fitted_states\": [";
-  for (std::size_t k = 0; k < s.fitted_states.size(); ++k)
-    o << (k ? ", " : "") << str(s.fitted_states[k]);
-  o << "],\n  \"held_out_states\": [";
-  for (std::size_t k = 0; k < s.held_out_states.size(); ++k)
-    o << (k ? ", " : "") << str(s.held_out_states[k]);
-  o << "],\n  \"warnings\": [";
-  for (std::size_t k = 0; k < s.warnings.size(); ++k) o << (k ? ", " : "") << str(s.warnings[k]);
-  o << "],\n  \"per_state\": {";
-  for (std::size_t k = 0; k < s.states.size(); ++k) {
-    const StateSummary& st = s.states[k];
-    o << (k ? "," : "") << "\n    " << str(st.label)
-      << ": {\"held_out\": " << (st.held_out ? "true" : "false")
-      << ", \"pressure\": " << num(st.pressure) << ", \"F_dev\": " << num(st.f_dev)
-      << ", \"eps_dev\": " << num(st.eps_dev)
-      << ", \"volume_fraction\": " << num(st.volume_fraction)
-      << ", \"misfit\": " << (st.misfit >= 0 ? num(st.misfit) : "null");
-    if (st.has_elastic) o << ", " << stiffness_json(st.elastic);
-    if (st.has_plastic) o << ", \"plastic\": " << plastic_json(st.plastic);
+  o["information_criterion"] = num(all.bic);
+  o["information_criterion_stress"] = num(stress.bic);
+  o["held_out_score"] = num(all.held_out_score);
+  o["held_out_score_stress"] = num(stress.held_out_score);
+  Json fitted_kind = Json::object(), held_kind = Json::object();
+  for (const auto& [k, v] : all.fitted_by_kind) fitted_kind[k] = num(v);
+  for (const auto& [k, v] : all.held_out_by_kind) held_kind[k] = num(v);
+  o["misfit_by_kind"] = fitted_kind;
+  o["held_out_misfit_by_kind"] = held_kind;
+  Json yardstick = Json::array();
+  for (const BlockScore& b : s.score.blocks)
+    yardstick.push_back({{"id", b.id},
+                         {"held_out", b.held_out},
+                         {"components", b.components},
+                         {"scale", num(b.scale)},
+                         {"noise", num(b.noise)},
+                         {"misfit", num(b.misfit)}});
+  o["yardstick"] = yardstick;
+  o["fitted_misfit"] = num(s.fitted_misfit);
+  o["held_out_misfit"] = s.held_out_misfit ? num(*s.held_out_misfit) : Json(nullptr);
+  o["path_misfit"] = s.path_misfit >= 0 ? num(s.path_misfit) : Json(nullptr);
+  o["fitted_states"] = s.fitted_states;
+  o["held_out_states"] = s.held_out_states;
+  o["warnings"] = s.warnings;
+  Json per_state = Json::object();
+  for (const StateSummary& st : s.states) {
+    Json j;
+    j["held_out"] = st.held_out;
+    j["pressure"] = num(st.pressure);
+    j["F_dev"] = num(st.f_dev);
+    j["eps_dev"] = num(st.eps_dev);
+    j["volume_fraction"] = num(st.volume_fraction);
+    j["misfit"] = st.misfit >= 0 ? num(st.misfit) : Json(nullptr);
+    if (st.has_elastic) add_stiffness(j, st.elastic);
+    if (st.has_plastic) j["plastic"] = plastic_json(st.plastic);
     if (st.has_model) {
-      o << ", \"model\": {";
-      bool first = true;
+      Json m = Json::object();
       if (st.model_elastic.ok) {
-        o << "\"B\": " << num(st.model_elastic.B) << ", \"G\": " << num(st.model_elastic.G)
-          << ", \"A\": " << num(st.model_elastic.A);
-        first = false;
+        m["B"] = num(st.model_elastic.B);
+        m["G"] = num(st.model_elastic.G);
+        m["A"] = num(st.model_elastic.A);
       }
-      if (st.model_plastic.ok)
-        o << (first ? "" : ", ") << "\"plastic\": " << plastic_json(st.model_plastic);
-      o << "}";
+      if (st.model_plastic.ok) m["plastic"] = plastic_json(st.model_plastic);
+      j["model"] = m;
     }
-    o << "}";
+    per_state[st.label] = j;
   }
-  o << "\n  }\n}\n";
-  return o.str();
+  o["per_state"] = per_state;
+  // Texts come from the solver and the data (state labels): invalid UTF-8 is replaced, not
+  // thrown.
+  return o.dump(2, ' ', false, Json::error_handler_t::replace) + "\n";
 }
 
 void write_calibration(ResultsWriter& out, const CalibrationSummary& s) {

@@ -564,7 +564,11 @@ void Scenario::apply_override(std::string_view assignment) {
       v = text;
     } else if (spec->type == KeyType::kStringList) {
       std::vector<std::string> xs;
-      std::stringstream ss(text);
+      // [a,b] as a shell user types it (TOML wants ["a","b"]): the brackets enclose the list.
+      std::string_view inner = text;
+      if (inner.size() >= 2 && inner.front() == '[' && inner.back() == ']')
+        inner = inner.substr(1, inner.size() - 2);
+      std::stringstream ss{std::string(inner)};
       for (std::string item; std::getline(ss, item, ',');) xs.push_back(trim(item));
       v = xs;
     } else {

@@ -184,6 +184,8 @@ TEST(Scenario, OverridesAreValidatedLikeTheFile) {
   EXPECT_EQ(sc.get_doubles("states.eps_dev").size(), 3u);
   sc.apply_override("run.stages=a,c");  // bare list
   EXPECT_EQ(sc.get_strings("run.stages"), (std::vector<std::string>{"a", "c"}));
+  sc.apply_override("run.stages=[c, a]");  // bare list in brackets: the brackets are no part
+  EXPECT_EQ(sc.get_strings("run.stages"), (std::vector<std::string>{"c", "a"}));
   sc.apply_override("output.report=false");
   EXPECT_FALSE(sc.get_bool("output.report"));
 

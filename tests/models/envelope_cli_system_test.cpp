@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <vector>
 
@@ -56,26 +57,19 @@ fs::path write(const std::string& name, const std::string& text) {
   return p;
 }
 
-// The numbers of the JSON array following "key": (a flat read of a nested array).
+// The numbers of the JSON array at `key`, flattened, read by a JSON parser independent of the
+// writer (output that is not valid JSON fails here).
+void flatten(const nlohmann::json& j, std::vector<double>& v) {
+  if (j.is_array())
+    for (const auto& x : j) flatten(x, v);
+  else
+    v.push_back(j.get<double>());
+}
 std::vector<double> numbers_of(const std::string& json, const std::string& key) {
-  const size_t at = json.find("\"" + key + "\": [");
-  EXPECT_NE(at, std::string::npos) << key;
+  const nlohmann::json j = nlohmann::json::parse(json);
+  EXPECT_TRUE(j.contains(key)) << key;
   std::vector<double> v;
-  if (at == std::string::npos) return v;
-  size_t i = json.find('[', at);
-  int depth = 0;
-  for (; i < json.size(); ++i) {
-    const char c = json[i];
-    if (c == '[')
-      ++depth;
-    else if (c == ']') {
-      if (--depth == 0) break;
-    } else if (c == '-' || std::isdigit(static_cast<unsigned char>(c))) {
-      char* end = nullptr;
-      v.push_back(std::strtod(json.c_str() + i, &end));
-      i = static_cast<size_t>(end - json.c_str()) - 1;
-    }
-  }
+  if (j.contains(key)) flatten(j[key], v);
   return v;
 }
 

@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "cli_runner.hpp"
@@ -48,19 +49,15 @@ fs::path envelope_csv(const std::string& name, const Envelope& env) {
   return write_csv(name, o.str());
 }
 
-// The number after "key": in a one-line JSON object (our own writer's format), or the
-// first element of the array that follows it.
+// The number at `key` (the index-th element if it holds an array), read by a JSON parser
+// independent of the writer: output that is not valid JSON fails here.
 double json_number(const std::string& json, const std::string& key, int index = 0) {
-  const auto k = json.find("\"" + key + "\": ");
-  EXPECT_NE(k, std::string::npos) << key << " in " << json;
-  if (k == std::string::npos) return std::nan("");
-  std::size_t p = k + key.size() + 4;
-  if (json[p] == '[') {
-    ++p;
-    for (int i = 0; i < index; ++i) p = json.find(',', p) + 1;
-  }
-  return std::strtod(json.c_str() + p, nullptr);
+  const nlohmann::json j = nlohmann::json::parse(json);
+  EXPECT_TRUE(j.contains(key)) << key << " in " << json;
+  if (!j.contains(key)) return std::nan("");
+  return j[key].is_array() ? j[key][index].get<double>() : j[key].get<double>();
 }
+nlohmann::json parsed(const std::string& json) { return nlohmann::json::parse(json); }
 
 TEST(FitCli, EllipseJson) {
   test::TrueEllipse e{{0.01, -0.02}, 0.5, 0.05, 30.0};
@@ -68,22 +65,22 @@ TEST(FitCli, EllipseJson) {
   const CmdResult r = run_fit("--in " + csv.string() + " --json");
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 1) << "one JSON object, one line";
-  EXPECT_NE(r.out.find("\"shape\": \"ellipse\""), std::string::npos) << r.out;
+  EXPECT_EQ(parsed(r.out)["shape"], "ellipse") << r.out;
   // Noiseless: exact to the solver's tolerance (the JSON carries 17 digits).
   EXPECT_NEAR(json_number(r.out, "center", 0), 0.01, 1e-9);
   EXPECT_NEAR(json_number(r.out, "center", 1), -0.02, 1e-9);
   EXPECT_NEAR(json_number(r.out, "semi_axes", 0), 0.5, 1e-9);
   EXPECT_NEAR(json_number(r.out, "semi_axes", 1), 0.05, 1e-9);
   EXPECT_NEAR(json_number(r.out, "inclination_deg"), 30.0, 1e-6);
-  EXPECT_NE(r.out.find("\"stderr\": {\"center\": ["), std::string::npos) << r.out;
-  EXPECT_NE(r.out.find("\"used_theta\": true"), std::string::npos);
+  EXPECT_EQ(parsed(r.out)["stderr"]["center"].size(), 2u) << r.out;
+  EXPECT_EQ(parsed(r.out)["used_theta"], true);
 }
 
 TEST(FitCli, LineAndCircleAndText) {
   const fs::path line = envelope_csv("line.csv", test::line_envelope({1.0, 2.0}, 3.0, 35.26, 24));
   const CmdResult rl = run_fit("--in " + line.string() + " --json --shape auto");
   ASSERT_EQ(rl.code, 0) << rl.err;
-  EXPECT_NE(rl.out.find("\"shape\": \"line\""), std::string::npos) << rl.out;
+  EXPECT_EQ(parsed(rl.out)["shape"], "line") << rl.out;
   EXPECT_NEAR(json_number(rl.out, "semi_axes", 1), 0.0, 0.0);
   EXPECT_NEAR(json_number(rl.out, "inclination_deg"), 35.26, 1e-9);
 
@@ -91,8 +88,8 @@ TEST(FitCli, LineAndCircleAndText) {
   const fs::path circle = envelope_csv("circle.csv", test::ellipse_envelope(c, 20));
   const CmdResult rc = run_fit("--in " + circle.string() + " --json --loss huber");
   ASSERT_EQ(rc.code, 0) << rc.err;
-  EXPECT_NE(rc.out.find("\"shape\": \"circle\""), std::string::npos) << rc.out;
-  EXPECT_NE(rc.out.find("\"inclination_deg\": null"), std::string::npos) << rc.out;
+  EXPECT_EQ(parsed(rc.out)["shape"], "circle") << rc.out;
+  EXPECT_TRUE(parsed(rc.out)["inclination_deg"].is_null()) << rc.out;
   EXPECT_EQ(rc.out.find("nan"), std::string::npos);
 
   const CmdResult rt = run_fit("--in " + circle.string());
