@@ -24,6 +24,7 @@
 #include "rendulic/calibration/settings.hpp"
 #include "rendulic/core/cleanup.hpp"
 #include "rendulic/core/errors.hpp"
+#include "rendulic/core/log.hpp"
 #include "rendulic/core/result_paths.hpp"
 #include "rendulic/core/results.hpp"
 #include "rendulic/models/law.hpp"
@@ -132,8 +133,7 @@ int run_calibrate(const CalibrateArgs& a) {
   const bool writable =
       ::access(a.results.c_str(), W_OK) == 0 && ::access(folder.c_str(), W_OK) == 0;
   if (!a.no_write && !writable)
-    std::cerr << "rendulic: " << a.results << " is read-only: /calibration/" << settings.model
-              << " not written\n";
+    log::warning(a.results, " is read-only: /calibration/", settings.model, " not written");
   // The JSON is complete on disk before the results file is replaced: a failure to write
   // it must not leave the results file changed and the command failed.
   if (json_out) json_out->write(json);
@@ -149,7 +149,7 @@ int run_calibrate(const CalibrateArgs& a) {
         }
     }
     ResultsWriter w = ResultsWriter::update(a.results);
-    for (const auto& note : w.notes()) std::cerr << "rendulic: " << note << "\n";
+    for (const auto& note : w.notes()) log::info(note);
     write_calibration(w, summary);
     write_selection(w, select_model(scores));
     w.commit();

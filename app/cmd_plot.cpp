@@ -25,6 +25,7 @@
 #include "plot_script.hpp"
 #include "rendulic/core/cleanup.hpp"
 #include "rendulic/core/errors.hpp"
+#include "rendulic/core/log.hpp"
 #include "rendulic/core/results.hpp"
 
 namespace rendulic::app {
@@ -136,12 +137,15 @@ int plot_results(const std::filesystem::path& file, const std::filesystem::path&
     args.insert(args.end(), {"-c", kPlotScript});
   } else {
     args.push_back(script_file.string());
-    std::cerr << "rendulic: figures drawn by " << script_file.string() << "\n";
+    log::info("figures drawn by ", script_file.string());
   }
   args.insert(args.end(), {file.string(), out_dir.string()});
   const Spawned r = spawn(args, false, true);
   if (r.code == 0) {
-    std::cerr << r.err;  // the figures it skipped, and why
+    // The figures it skipped, and why: one note per line, as every message of the tool.
+    std::istringstream notes(r.err);
+    for (std::string line; std::getline(notes, line);)
+      if (!line.empty()) log::info(line);
     return 0;
   }
   if (r.code == 2)  // plot.py's one line about data it cannot draw

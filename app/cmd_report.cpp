@@ -6,6 +6,7 @@
 #include <memory>
 
 #include "commands.hpp"
+#include "rendulic/core/log.hpp"
 #include "report.hpp"
 
 namespace rendulic::app {
@@ -24,7 +25,7 @@ Subcommand add_report(CLI::App& parent) {
   sub->add_flag("--no-figures", o->no_figures, "report.md only");
   return {sub, [o]() -> int {
             const auto path = write_report(o->file, !o->no_figures);
-            std::cerr << "rendulic: wrote " << path.string() << "\n";
+            log::info("wrote ", path.string());
             return 0;
           }};
 }

@@ -13,6 +13,7 @@
 
 #include "commands.hpp"
 #include "rendulic/core/errors.hpp"
+#include "rendulic/core/log.hpp"
 #include "rendulic/core/results.hpp"
 #include "sweep.hpp"
 
@@ -79,10 +80,9 @@ Subcommand add_sweep(CLI::App& parent) {
             const std::filesystem::path dir = o->out;
             // Only now, every input checked, does anything touch the disk.
             ResultsWriter out(dir / "sweep.h5");
-            const bool quiet = o->quiet;
-            const SweepSummary summary = run_sweep(scenario, so, [quiet](const std::string& l) {
-              if (!quiet) std::cerr << "sweep: " << l << "\n";
-            });
+            if (o->quiet) log::set_level(log::Level::kWarning);
+            const SweepSummary summary =
+                run_sweep(scenario, so, [](const std::string& l) { log::info("[sweep] ", l); });
             write_sweep_h5(summary, out);
             {
               const std::filesystem::path tmp = dir / "sweep.csv.tmp";
@@ -95,20 +95,16 @@ Subcommand add_sweep(CLI::App& parent) {
               std::filesystem::rename(tmp, dir / "sweep_path.csv");
             }
             out.commit();
-            if (!quiet) {
-              for (const auto& l : summary.breaks) std::cerr << "sweep: break: " << l << "\n";
-              for (const auto& l : summary.recommendations)
-                std::cerr << "sweep: cheapest: " << l << "\n";
-            }
+            for (const auto& l : summary.breaks) log::info("[sweep] break: ", l);
+            for (const auto& l : summary.recommendations) log::info("[sweep] cheapest: ", l);
             try {
               plot_results(out.final_path(), dir);
             } catch (const std::exception& e) {
               // The numbers are written and valid; a missing matplotlib only costs the chart.
-              std::cerr << "rendulic: warning: no Pareto chart: " << e.what() << "\n";
+              log::warning("no Pareto chart: ", e.what());
             }
-            if (!quiet)
-              std::cerr << "rendulic: wrote " << out.final_path().string() << " ("
-                        << summary.points.size() << " points, " << summary.wall_s << " s)\n";
+            log::info("wrote ", out.final_path().string(), " (", summary.points.size(), " points, ",
+                      summary.wall_s, " s)");
             return 0;
           }};
 }
