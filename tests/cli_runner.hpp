@@ -63,4 +63,14 @@ inline std::filesystem::path fresh_dir(const std::string& name) {
   return d;
 }
 
+// The lines of a command's stderr that are not warnings: --quiet keeps warnings (docs/usage.md
+// "Progress and messages"), and a failure is still one line beside them.
+inline int error_lines(const std::string& err) {
+  int n = 0;
+  std::istringstream in(err);
+  for (std::string line; std::getline(in, line);)
+    n += line.rfind("rendulic: warning: ", 0) == 0 ? 0 : 1;
+  return n;
+}
+
 }  // namespace rendulic::testing

@@ -39,16 +39,6 @@ using rendulic::testing::CliResult;
 const fs::path kRoot = fs::path(RENDULIC_TEST_TMP) / "app_faults_system";
 
 int lines(const std::string& s) { return static_cast<int>(std::count(s.begin(), s.end(), '\n')); }
-// Lines that are not warnings: --quiet keeps warnings (docs/usage.md "Progress and
-// messages"), and a failure is still one line beside them.
-int error_lines(const std::string& s) {
-  int n = 0;
-  std::istringstream in(s);
-  for (std::string line; std::getline(in, line);)
-    n += line.rfind("rendulic: warning: ", 0) == 0 ? 0 : 1;
-  return n;
-}
-
 std::string read_file(const fs::path& p) {
   std::ifstream in(p, std::ios::binary);
   return {std::istreambuf_iterator<char>(in), {}};
@@ -379,7 +369,7 @@ TEST(FaultsSystem, ARunOnAFullDiskFailsInOneLineAndLeavesNoTemporary) {
           160),
       false);
   EXPECT_EQ(r.code, 2) << r.err;
-  EXPECT_EQ(error_lines(r.err), 1) << r.err;
+  EXPECT_EQ(rendulic::testing::error_lines(r.err), 1) << r.err;
   EXPECT_NE(r.err.find(disk.reason()), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(out / "results.h5"));
   if (fs::exists(out)) {
@@ -407,7 +397,7 @@ TEST(FaultsSystem, CalibrateOnAFullDiskFailsInOneLine) {
                    size_kib + 8),
       false);
   EXPECT_EQ(r.code, 2) << r.err;
-  EXPECT_EQ(error_lines(r.err), 1) << r.err;
+  EXPECT_EQ(rendulic::testing::error_lines(r.err), 1) << r.err;
   EXPECT_NE(r.err.find(disk.reason()), std::string::npos) << r.err;
   EXPECT_TRUE(temporaries(f.parent_path()).empty()) << temporaries(f.parent_path()).front();
   EXPECT_EQ(read_file(f), read_file(base)) << "the file is as it was";
@@ -432,7 +422,7 @@ TEST(FaultsSystem, ALateStageFailureKeepsTheCompletedStagesAsPartial) {
           out.string(),
       false);
   EXPECT_EQ(r.code, 2) << r.err;
-  EXPECT_EQ(error_lines(r.err), 1) << r.err;
+  EXPECT_EQ(rendulic::testing::error_lines(r.err), 1) << r.err;
   EXPECT_NE(r.err.find("; completed stages (prepare, isotropic, path, states) kept in " +
                        (out / "results.h5.partial").string()),
             std::string::npos)

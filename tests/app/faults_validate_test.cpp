@@ -7,7 +7,6 @@
 
 #include <filesystem>
 #include <fstream>
-#include <sstream>
 
 #include "cli_runner.hpp"
 #include "rendulic/core/results.hpp"
@@ -29,11 +28,7 @@ TEST(FaultsValidate, MinimisationProbesWithoutEquilibriumExitTwoAndKeepTheStages
           out.string(),
       false);
   EXPECT_EQ(r.code, 2) << r.err;
-  int error_lines = 0;  // --quiet keeps warnings; the failure is one line beside them
-  std::istringstream lines(r.err);
-  for (std::string line; std::getline(lines, line);)
-    error_lines += line.rfind("rendulic: warning: ", 0) == 0 ? 0 : 1;
-  EXPECT_EQ(error_lines, 1) << r.err;
+  EXPECT_EQ(rendulic::testing::error_lines(r.err), 1) << r.err;  // warnings kept by --quiet
   EXPECT_NE(r.err.find("minimisation probes: the state reaches no force equilibrium"),
             std::string::npos)
       << r.err;
