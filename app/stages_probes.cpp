@@ -8,7 +8,7 @@
 #include <map>
 
 #include "progress.hpp"
-#include "rendulic/core/envelope_record.hpp"
+#include "rendulic/core/envelope_io.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/log.hpp"
 #include "rendulic/core/result_paths.hpp"
