@@ -25,6 +25,8 @@ struct CalibrationSettings {
   int max_iterations = SolverOptions{}.max_iterations;
   double function_tolerance = kDemFunctionTolerance;
   bool features = false;  // the envelope-feature objective
+  // Local relative error of the driver's substeps in the integrated predictions.
+  double driver_tolerance = ObjectiveOptions{}.step.tolerance;
   bool IsValid(std::string* why) const;
 };
 
