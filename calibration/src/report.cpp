@@ -4,6 +4,7 @@
 #include <cmath>
 #include <nlohmann/json.hpp>
 
+#include "rendulic/core/envelope_io.hpp"
 #include "rendulic/core/result_paths.hpp"
 
 namespace rendulic::calibration {
@@ -229,19 +230,18 @@ void write_calibration(ResultsWriter& out, const CalibrationSummary& s) {
       out.attr(sg, "plastic_inclination_deg", st.plastic.inclination_deg);
     }
     for (const auto& pe : st.predicted) {
-      const std::string eg = paths::envelope(sg, pe.name);
-      out.write(eg + datasets::kThetaDeg, pe.theta_deg);
-      out.write(eg + datasets::kStrain, pe.strain);
-      // Starred like the DEM envelope beside it (docs/results.md "Units"), when k* is known.
-      if (s.k_star > 0) {
-        std::vector<Eigen::Vector2d> star;
-        for (const auto& p : pe.stress) star.push_back(p / s.k_star);
-        out.write(eg + datasets::kStressStar, star);
-      } else {
-        out.write(eg + datasets::kStress, pe.stress);  // Pa
-      }
-      out.write(eg + datasets::kFabric, pe.fabric);
-      out.attr(eg, "amplitude", pe.amplitude);
+      // The law's envelope is stored as the DEM's beside it, by the one writer: starred with the
+      // file's k* (docs/results.md "Units"), or with k* = 1 Pa (stress_star in Pa) for data
+      // that came without one.
+      EnvelopeRecord record;
+      record.method = "model";
+      record.amplitude = pe.amplitude;
+      record.k_star = s.k_star > 0 ? s.k_star : 1.0;
+      record.theta_deg = pe.theta_deg;
+      record.strain = pe.strain;
+      for (const auto& p : pe.stress) record.stress_star.push_back(p / record.k_star);
+      record.fabric = pe.fabric;
+      write_envelope(out, paths::envelope(sg, pe.name), record);
     }
   }
 }

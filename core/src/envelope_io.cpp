@@ -13,9 +13,11 @@ namespace rendulic {
 
 void write_envelope(ResultsWriter& out, const std::string& group, const EnvelopeRecord& envelope) {
   const std::size_t m = envelope.size();
+  // The tensors are all or nothing: a prediction made in the Rendulic plane has only pairs.
+  const bool tensors = !envelope.d_stress.empty() || !envelope.d_fabric.empty();
   if (envelope.strain.size() != m || envelope.stress_star.size() != m ||
-      envelope.fabric.size() != m || envelope.d_stress.size() != m ||
-      envelope.d_fabric.size() != m) {
+      envelope.fabric.size() != m ||
+      (tensors && (envelope.d_stress.size() != m || envelope.d_fabric.size() != m))) {
     throw std::logic_error("write_envelope: inconsistent envelope sizes");
   }
   out.create_group(group);
@@ -27,8 +29,10 @@ void write_envelope(ResultsWriter& out, const std::string& group, const Envelope
   out.write(group + datasets::kStrain, envelope.strain);
   out.write(group + datasets::kStressStar, envelope.stress_star);
   out.write(group + datasets::kFabric, envelope.fabric);
-  out.write(group + datasets::kDStress, envelope.d_stress);
-  out.write(group + datasets::kDFabric, envelope.d_fabric);
+  if (tensors) {
+    out.write(group + datasets::kDStress, envelope.d_stress);
+    out.write(group + datasets::kDFabric, envelope.d_fabric);
+  }
   if (!envelope.d_fabric_volume.empty()) {
     if (envelope.d_fabric_volume.size() != m || envelope.d_fabric_rotation.size() != m ||
         envelope.d_fabric_contacts.size() != m)

@@ -10,7 +10,8 @@
 
 namespace rendulic {
 
-// std::logic_error if the record's sizes disagree (a bug of its maker, not bad input).
+// std::logic_error if the record's sizes disagree (a bug of its maker, not bad input). The
+// tensors d_stress and d_fabric may be left empty together (a prediction made from pairs).
 void write_envelope(ResultsWriter& out, const std::string& group, const EnvelopeRecord& envelope);
 
 // What is stored at `group`, every part optional but the group itself: an envelope that could
