@@ -758,7 +758,7 @@ void write_sweep_h5(const SweepSummary& s, ResultsWriter& out) {
     for (const auto& [k, v] : values) out.attr(group, k, v);
   };
   for (const SweepState& st : s.states) {
-    const std::string sg = g + "/states/n" + std::to_string(st.n_particles);
+    const std::string sg = paths::state("n" + std::to_string(st.n_particles), g);
     out.attr(sg, "n_particles", std::int64_t{st.n_particles});
     put(sg, {{"volume_fraction", st.volume_fraction},
              {"pressure_star", st.pressure_star},
