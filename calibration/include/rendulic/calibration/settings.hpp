@@ -24,7 +24,8 @@ struct CalibrationSettings {
   bool path = true;  // fit the main path with the envelopes
   int max_iterations = SolverOptions{}.max_iterations;
   double function_tolerance = kDemFunctionTolerance;
-  bool features = false;  // the envelope-feature objective
+  bool features = false;          // the envelope-feature objective
+  std::string umat, umat_params;  // model umat: the UMAT's library and parameters file
   bool IsValid(std::string* why) const;
 };
 
@@ -40,7 +41,8 @@ struct CalibrationPlan {
   LoadOptions load;
 };
 // The one translation of the settings: holdout "none" is none, a held-out state joins an explicit
-// list of states once, the DEM tolerances of solver.hpp. InputError for settings out of range.
+// list of states once, the DEM tolerances of solver.hpp; model umat loads the UMAT and makes it
+// the session's (models/umat.hpp). InputError for settings out of range.
 CalibrationPlan calibration_plan(const CalibrationSettings& settings);
 
 }  // namespace rendulic::calibration
