@@ -10,6 +10,8 @@
 
 #include "rendulic/calibration/calibrate.hpp"
 #include "rendulic/calibration/selection.hpp"
+#include "rendulic/calibration/settings.hpp"
+#include "rendulic/core/errors.hpp"
 #include "rendulic/models/umat.hpp"
 #include "synthetic.hpp"
 
@@ -92,6 +94,26 @@ TEST(UmatCalibration, HypoplasticUmatRecoversTheBuiltInFit) {
         << umat.score.blocks[b].id;
   }
   EXPECT_NEAR(umat.fitted_misfit / builtin.fitted_misfit, 1.0, 1e-3);
+}
+
+// The calibration stage's keys: model umat with calibration.umat and calibration.umat_params
+// loads the UMAT and makes it the one make_law("umat") finds; without the library it is an
+// InputError naming --umat, and "all" stays the built-in laws.
+TEST(UmatCalibration, StageKeysLoadTheUmat) {
+  models::set_session_umat(nullptr);
+  CalibrationSettings s;
+  s.model = "umat";
+  EXPECT_THROW(calibration_plan(s), InputError);
+  s.umat = std::string(RENDULIC_UMAT_DIR) + "/hypoplastic_wu.so";
+  s.umat_params = std::string(RENDULIC_SOURCE_DIR) + "/data/umat/hypoplastic_wu_params.toml";
+  const CalibrationPlan plan = calibration_plan(s);
+  EXPECT_EQ(plan.models, std::vector<std::string>{"umat"});
+  ASSERT_TRUE(models::session_umat());
+  EXPECT_EQ(models::make_law("umat")->parameter_info()[3].name, "c4");
+  s.model = "all";
+  EXPECT_THROW(calibration_plan(s), InputError);  // --umat with another model
+  s.umat.clear();
+  EXPECT_EQ(calibration_plan(s).models, models::law_names());
 }
 
 }  // namespace
