@@ -29,7 +29,8 @@ std::string envelope_args(const std::string& method) {
 
 std::vector<double> stresses(const std::string& json) {
   std::vector<double> v;
-  for (const auto& p : nlohmann::json::parse(json).at("stress"))
+  const nlohmann::json j = nlohmann::json::parse(json);  // kept: the loop reads into it
+  for (const auto& p : j.at("stress"))
     for (const auto& x : p) v.push_back(x.get<double>());
   return v;
 }
