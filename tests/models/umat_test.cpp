@@ -11,6 +11,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <iostream>
 #include <string>
 
 #include "rendulic/core/conventions.hpp"
@@ -126,18 +127,19 @@ TEST(Umat, HypoplasticUmatRateEnvelopeIsTheBuiltInLaws) {
 TEST(Umat, HypoplasticUmatIntegratedEnvelopeAndPathAreTheBuiltInLaws) {
   auto builtin = make_law("hypoplastic_wu");
   const UmatLaw law(umat_lib("hypoplastic_wu"), spec_of("hypoplastic_wu"));
-  // Both drivers at tolerance 1e-8: each is then within ~1e-8 of the exact response, and the
-  // two agree to a few times that (the UMAT's forward Euler under step doubling is first order,
-  // so its error is the larger).
+  // Both drivers at tolerance 1e-8: each is then within ~1e-8 of the exact response (modified
+  // Euler, and step doubling with the stress extrapolated), and the two agree to twice that.
+  // 12 directions: the 2e-3 probes at this tolerance are what costs.
   constexpr double tol = 1e-8;
   for (const MaterialState& s : {isotropic(law, 1e5), sheared(law)}) {
     for (double amp : {5e-5, 2e-3}) {
-      const ModelEnvelope a =
-          model_envelope(law, s, options(EnvelopeMethod::kIntegrated, amp, tol));
-      const ModelEnvelope b =
-          model_envelope(*builtin, s, options(EnvelopeMethod::kIntegrated, amp, tol));
+      EnvelopeOptions eo = options(EnvelopeMethod::kIntegrated, amp, tol);
+      eo.directions = 12;
+      const ModelEnvelope a = model_envelope(law, s, eo), b = model_envelope(*builtin, s, eo);
       ASSERT_TRUE(a.success && b.success) << a.reason << b.reason;
-      EXPECT_LE(relative(a.stress, b.stress), 20 * tol) << "amplitude " << amp;
+      std::cout << "amplitude " << amp << ": UMAT against built-in, relative "
+                << relative(a.stress, b.stress) << "\n";
+      EXPECT_LE(relative(a.stress, b.stress), 2 * tol) << "amplitude " << amp;
     }
   }
   PathOptions po;
@@ -149,7 +151,7 @@ TEST(Umat, HypoplasticUmatIntegratedEnvelopeAndPathAreTheBuiltInLaws) {
   ASSERT_TRUE(a.success && b.success) << a.reason << b.reason;
   ASSERT_EQ(a.stress.size(), b.stress.size());
   for (std::size_t k = 0; k < a.stress.size(); ++k) {
-    EXPECT_LE((a.stress[k] - b.stress[k]).norm(), 20 * tol * b.stress[k].norm()) << "row " << k;
+    EXPECT_LE((a.stress[k] - b.stress[k]).norm(), 2 * tol * b.stress[k].norm()) << "row " << k;
     EXPECT_NEAR(a.eps_dev[k], b.eps_dev[k], 1e-15);
   }
 }
