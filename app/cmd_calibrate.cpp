@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
@@ -113,7 +114,8 @@ int run_calibrate(const CalibrateArgs& a) {
   // A UMAT's props are also named by their 1-based PROPS index (docs/umat.md).
   if (settings.model == "umat")
     for (auto& f : opt.free)
-      if (!f.empty() && std::all_of(f.begin(), f.end(), ::isdigit)) {
+      if (!f.empty() &&
+          std::all_of(f.begin(), f.end(), [](unsigned char c) { return std::isdigit(c); })) {
         const auto& info = models::session_umat()->parameter_info();
         const std::size_t i = std::stoul(f);
         if (i < 1 || i > info.size())

@@ -95,6 +95,10 @@ CalibrationPlan calibration_plan(const CalibrationSettings& s) {
   std::string why;
   if (!s.IsValid(&why)) throw InputError(why);
   if (s.model == "umat") {
+    if (s.umat.empty() || s.umat_params.empty())
+      throw InputError(
+          "model umat needs calibration.umat and calibration.umat_params (--umat "
+          "PATH.so and --params FILE.toml): the UMAT's library and parameters file");
     std::shared_ptr<const models::UmatLaw> u = models::make_umat_law(s.umat, s.umat_params);
     models::set_session_umat(std::move(u));
   } else if (!s.umat.empty()) {
