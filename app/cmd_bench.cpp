@@ -147,7 +147,7 @@ void write_lammps(const dem::DemSystem& s, const std::filesystem::path& file) {
   std::ofstream out(file);
   if (!out) throw InputError("bench --lammps: cannot write " + file.string());
   const dem::Particles& p = s.particles();
-  const Eigen::Vector3d L = s.cell().lengths;
+  const Eigen::Vector3d L = s.cell().lengths();
   out << std::setprecision(17) << "rendulic bench state (N = " << p.size()
       << ", nu = " << s.volume_fraction() << ", dt = " << s.dt() << " s)\n\n"
       << p.size() << " atoms\n1 atom types\n\n"

@@ -214,6 +214,8 @@ Subcommand add_calibrate(CLI::App& parent) {
                  keys.key("calibration.max_iterations"));
   add_key_option(sub, "--function-tolerance", args->settings.function_tolerance,
                  keys.key("calibration.function_tolerance"));
+  add_key_option(sub, "--driver-tolerance", args->settings.driver_tolerance,
+                 keys.key("calibration.driver_tolerance"));
   sub->add_flag("--progress", args->progress, "Print Ceres's iterations (cost, step) to stdout");
   sub->add_flag("--no-write", args->no_write,
                 "Do not store /calibration/<model> in the results file");

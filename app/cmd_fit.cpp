@@ -2,8 +2,12 @@
 // (docs/fitting.md "The fit command"): fits one envelope from a CSV file. --json prints one object
 // with shape, center, semi_axes, inclination_deg (null for a circle: undefined), rms and stderr
 // (same keys, where defined), plus n_points, loss, loss_scale, converged, selection and
-// line_p_value. Bad input is an InputError (exit 2) naming the culprit.
+// line_p_value. `rendulic fit --results FILE.h5` fits every envelope of a results file again
+// with today's fits (an older run's fits are replaced; the file is updated atomically), so that
+// `rendulic report` judges the claims on them without repeating the DEM. Bad input is an
+// InputError (exit 2) naming the culprit.
 #include <cmath>
+#include <filesystem>
 #include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -13,12 +17,14 @@
 #include "rendulic/core/errors.hpp"
 #include "rendulic/probes/envelope_csv.hpp"
 #include "rendulic/probes/envelope_fit.hpp"
+#include "rendulic/probes/fit_io.hpp"
 
 namespace rendulic::app {
 namespace {
 
 struct FitCliOptions {
   std::string in;
+  std::string results;
   std::string shape = "auto";
   std::string loss = "none";
   double loss_scale = 0.0;
@@ -57,17 +63,20 @@ std::string to_json(const EnvelopeFit& f) {
 Subcommand add_fit(CLI::App& parent) {
   auto o = std::make_shared<FitCliOptions>();
   auto* sub = parent.add_subcommand("fit", "Fit an ellipse or a line to one envelope (CSV)");
-  sub->add_option("--in", o->in,
-                  "CSV file; header names the columns: x,y required (Rendulic response "
-                  "coordinates), theta_deg optional (probe directions)")
-      ->required();
+  auto* in = sub->add_option("--in", o->in,
+                             "CSV file; header names the columns: x,y required (Rendulic "
+                             "response coordinates), theta_deg optional (probe directions)");
+  auto* results = sub->add_option("--results", o->results,
+                                  "results file (HDF5): fit every envelope's stress and fabric "
+                                  "pairs again and store the fits in place (atomically)");
+  in->excludes(results);
   sub->add_option("--shape", o->shape,
                   "ellipse, line, or auto (line unless the ellipse fits significantly better: "
                   "docs/fitting.md); a circle is reported as such, without inclination")
-      ->check(CLI::IsMember({"ellipse", "line", "auto"}))
+      ->check(CLI::IsMember(fit_shape_choices()))
       ->capture_default_str();
   sub->add_option("--loss", o->loss, "robust loss of the orthogonal distances")
-      ->check(CLI::IsMember({"none", "huber", "cauchy"}))
+      ->check(CLI::IsMember(fit_loss_choices()))
       ->capture_default_str();
   sub->add_option("--loss-scale", o->loss_scale,
                   "distance at which the robust loss starts to discount a point, in data units "
@@ -78,12 +87,29 @@ Subcommand add_fit(CLI::App& parent) {
                 "do not use the theta_deg column (fit the points alone)");
   sub->add_flag("--json", o->json, "print one JSON object");
   return {sub, [o]() -> int {
-            Envelope env = read_envelope_csv(o->in);
+            if (o->in.empty() == o->results.empty())
+              throw InputError("fit: give --in FILE.csv (one envelope) or --results FILE.h5");
             FitOptions opts;
             opts.shape = fit_shape_from_string(o->shape);
             opts.loss = fit_loss_from_string(o->loss);
             opts.loss_scale = o->loss_scale;
             opts.use_theta = !o->ignore_theta;
+            if (!o->results.empty()) {
+              if (!std::filesystem::is_regular_file(o->results))
+                throw InputError("fit: results file " + o->results + " not found");
+              const FitAllSummary s = fit_all_envelopes(o->results, opts);
+              if (o->json) {
+                nlohmann::json j;
+                j["fitted"] = s.fitted;
+                j["not_fittable"] = s.failed;
+                std::cout << j.dump() << "\n";
+              } else {
+                std::cout << "fits: " << s.fitted << " fitted, " << s.failed
+                          << " not fittable, stored in " << o->results << "\n";
+              }
+              return 0;
+            }
+            Envelope env = read_envelope_csv(o->in);
             const EnvelopeFit f = fit_envelope(env, opts);
             if (o->json)
               std::cout << to_json(f) << "\n";

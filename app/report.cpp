@@ -13,7 +13,7 @@
 
 #include "commands.hpp"
 #include "rendulic/core/conventions.hpp"
-#include "rendulic/core/envelope_record.hpp"
+#include "rendulic/core/envelope_io.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/result_paths.hpp"
 #include "rendulic/core/version.hpp"

@@ -247,8 +247,8 @@ void write_state(ResultsWriter& out, const std::string& g, const dem::DemSystem&
   const dem::Particles& p = sys.particles();
   out.write(g + datasets::kPositions, as_matrix(p.x, p.y, p.z));
   out.write(g + datasets::kRadii, p.radius);
-  out.write(g + datasets::kCellLengths,
-            std::vector<double>(sys.cell().lengths.data(), sys.cell().lengths.data() + 3));
+  const Eigen::Vector3d lengths = sys.cell().lengths();
+  out.write(g + datasets::kCellLengths, std::vector<double>(lengths.data(), lengths.data() + 3));
   // Checkpoint: everything DemSystem::restore() needs for a bit-identical continuation.
   const dem::State st = sys.save();
   const std::string cp = g + paths::kCheckpoint;

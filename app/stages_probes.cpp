@@ -8,7 +8,7 @@
 #include <map>
 
 #include "progress.hpp"
-#include "rendulic/core/envelope_record.hpp"
+#include "rendulic/core/envelope_io.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/log.hpp"
 #include "rendulic/core/result_paths.hpp"
@@ -190,20 +190,20 @@ void register_fit_keys(ScenarioSchema& s) {
          .unit = "-",
          .help = "Shape fitted to stress envelopes; auto chooses ellipse or line by the "
                  "statistical test of docs/fitting.md (steady-state envelopes collapse to lines).",
-         .choices = {"auto", "ellipse", "line"}});
+         .choices = fit_shape_choices()});
   s.add({.path = "fits.fabric_shape",
          .type = KeyType::kString,
          .default_value = std::string("auto"),
          .unit = "-",
          .help = "Shape fitted to fabric envelopes; auto chooses ellipse or line by the same "
                  "test as the stress (the seed draws lines; line forces that).",
-         .choices = {"auto", "ellipse", "line"}});
+         .choices = fit_shape_choices()});
   s.add({.path = "fits.loss",
          .type = KeyType::kString,
          .default_value = std::string("none"),
          .unit = "-",
          .help = "Robust loss of the fits (none, huber, cauchy; scales in docs/fitting.md).",
-         .choices = {"none", "huber", "cauchy"}});
+         .choices = fit_loss_choices()});
   s.add({.path = "fits.use_theta",
          .type = KeyType::kBool,
          .default_value = true,

@@ -66,7 +66,7 @@ void BM_ProbeCampaign(benchmark::State& state) {
   const PackingData& p = packing(static_cast<int>(state.range(0)), 0.80);
   std::vector<double> radii(p.radii.data(), p.radii.data() + p.size());
   const DemSystem sys =
-      system_from_positions(p.positions, radii, p.cell.diagonal(), SystemOptions{});
+      system_from_positions(p.positions, radii, p.cell.lengths(), SystemOptions{});
   const ProbeOptions opt;
   const std::vector<double> theta = probe_directions(opt.directions);
   double steps = 0.0;

@@ -5,7 +5,7 @@
 #include <cmath>
 
 #include "rendulic/core/conventions.hpp"
-#include "rendulic/core/envelope_record.hpp"
+#include "rendulic/core/envelope_io.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/result_paths.hpp"
 #include "rendulic/core/results.hpp"

@@ -60,6 +60,8 @@ DemSystem::DemSystem(Particles particles, const PeriodicCell& cell, const System
   std::string why;
   if (!options_.IsValid(&why)) throw InputError("DEM options: " + why);
   check_time_step(options_.material, options_.dt_factor, "dem.dt_factor");
+  if (!cell_.is_orthorhombic() || !(cell_.lengths().minCoeff() > 0) || !cell_.h.allFinite())
+    throw InputError("DEM system: the cell must be orthorhombic with positive finite lengths");
   if (p_.size() < 2) throw InputError("DEM system needs at least 2 particles");
   dt_ = time_step(options_.material, options_.dt_factor);
   solid_volume_ = p_.total_volume();
@@ -75,7 +77,7 @@ DemSystem DemSystem::restore(const State& s, const SystemOptions& options) {
   DemSystem d;
   d.options_ = options;
   d.p_ = s.particles;
-  d.cell_.lengths = s.lengths;
+  d.cell_ = PeriodicCell::orthorhombic(s.lengths);
   d.strain_E_ = s.strain_E;
   d.last_D_ = s.last_D;
   d.time_ = s.time;
@@ -100,7 +102,7 @@ DemSystem DemSystem::restore(const State& s, const SystemOptions& options) {
 State DemSystem::save() const {
   State s;
   s.particles = p_;
-  s.lengths = cell_.lengths;
+  s.lengths = cell_.lengths();
   s.strain_E = strain_E_;
   s.last_D = last_D_;
   s.time = time_;
@@ -114,7 +116,7 @@ State DemSystem::save() const {
 }
 
 void DemSystem::rebuild_list() {
-  const Eigen::Vector3d L = cell_.lengths;
+  const Eigen::Vector3d L = cell_.lengths();
   const std::size_t n = p_.size();
   const double skin = options_.skin * options_.material.r_mean;
   const int team = last_team_;
@@ -251,7 +253,7 @@ int DemSystem::choose_team(bool* adaptive) {
 template <bool kStress>
 void DemSystem::force_block(std::size_t b) {
   const std::size_t n = p_.size();
-  const Eigen::Vector3d L = cell_.lengths;
+  const Eigen::Vector3d L = cell_.lengths();
   // A pair is handled as whole 4-double records: one vector operation per record instead of
   // three scalar ones. The fourth lanes carry the radii (positions) and zeros (velocities, the
   // shifts, D), so that of the branch vector l holds r_i - r_j: it never enters a sum (r2 and
@@ -368,7 +370,7 @@ void DemSystem::sum_stress() {
   const double* sd = stress_scratch_.data();
   Eigen::Vector3d s = Eigen::Vector3d::Zero();
   for (std::size_t i = 0; i < n; ++i) s += Eigen::Vector3d(sd[3 * i], sd[3 * i + 1], sd[3 * i + 2]);
-  last_stress_diag_ = s / cell_.volume();
+  last_stress_diag_ = s / volume();
 }
 
 template <bool kStress>
@@ -411,7 +413,7 @@ void DemSystem::step_impl(const Eigen::Vector3d& D) {
   last_team_ = team;
   const double dt = dt_, h = 0.5 * dt_;
   const Eigen::Vector3d s = (D * dt).array().exp();
-  const Eigen::Vector3d L = cell_.lengths.cwiseProduct(s);
+  const Eigen::Vector3d L = cell_.lengths().cwiseProduct(s);
   const Eigen::Vector3d sref = L.cwiseQuotient(list_.ref_lengths());
   const double s_min = list_.s_min(L);
   const double sx = s[0], sy = s[1], sz = s[2];
@@ -430,7 +432,7 @@ void DemSystem::step_impl(const Eigen::Vector3d& D) {
   if (blocks_builds_ != list_.builds()) make_blocks();
   double* __restrict W = va8_.data();
   double* __restrict P = pos4_.data();
-  cell_.lengths = L;
+  cell_.h.diagonal() = L;
   strain_E_ += D * dt;
   time_ += dt;
   last_D_ = D;
@@ -520,7 +522,7 @@ void DemSystem::step(const CellControl& control) {
 std::vector<Contact> DemSystem::contacts() const {
   std::vector<Contact> out;
   const std::size_t n = p_.size();
-  const Eigen::Vector3d L = cell_.lengths;
+  const Eigen::Vector3d L = cell_.lengths();
   const NormalContact law = options_.material.contact();
   for (std::size_t i = 0; i < n; ++i) {
     for (std::int64_t e = list_.offset[i]; e < list_.offset[i + 1]; ++e) {
@@ -553,7 +555,7 @@ Eigen::Matrix3d DemSystem::stress() const {
   Eigen::Matrix3d s = Eigen::Matrix3d::Zero();
   for (const Contact& c : contacts())
     s += c.force / c.branch.norm() * c.branch * c.branch.transpose();
-  return s / cell_.volume();
+  return s / volume();
 }
 
 Eigen::Matrix3d DemSystem::fabric() const {
@@ -564,7 +566,7 @@ Eigen::Matrix3d DemSystem::fabric() const {
     const Eigen::Vector3d nrm = c.branch.normalized();
     f += c43 * (ri * ri * ri + rj * rj * rj) * nrm * nrm.transpose();
   }
-  return f / cell_.volume();
+  return f / volume();
 }
 
 double DemSystem::kinetic_energy() const {
@@ -607,7 +609,7 @@ std::vector<bool> non_rattlers(std::size_t n, const std::vector<Contact>& contac
 Measures DemSystem::measure() const {
   Measures m;
   const std::vector<Contact> cs = contacts();
-  const double V = cell_.volume();
+  const double V = volume();
   const NormalContact law = options_.material.contact();
   const double c43 = 4.0 / 3.0 * std::numbers::pi;
   m.time = time_;

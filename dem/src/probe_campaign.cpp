@@ -371,7 +371,7 @@ PackingData packing_of(const DemSystem& state) {
     x.row(i) << p.x[i], p.y[i], p.z[i];
     r(i) = p.radius[i];
   }
-  return PackingData::orthorhombic(std::move(x), std::move(r), state.cell().lengths);
+  return PackingData::orthorhombic(std::move(x), std::move(r), state.cell().lengths());
 }
 
 Envelope minimisation_envelope(const DemSystem& state, double amplitude,

@@ -19,15 +19,8 @@ PackingData PackingData::orthorhombic(Eigen::MatrixX3d positions, Eigen::VectorX
   PackingData p;
   p.positions = std::move(positions);
   p.radii = std::move(radii);
-  p.cell = cell_lengths.asDiagonal();
+  p.cell = PeriodicCell::orthorhombic(cell_lengths);
   return p;
-}
-
-Eigen::Vector3d minimum_image(const Eigen::Matrix3d& cell, const Eigen::Matrix3d& cell_inverse,
-                              const Eigen::Vector3d& separation) {
-  Eigen::Vector3d s = cell_inverse * separation;
-  for (int a = 0; a < 3; ++a) s(a) -= std::nearbyint(s(a));
-  return cell * s;
 }
 
 namespace {
@@ -39,7 +32,7 @@ void check_packing(const PackingData& packing) {
     os << "packing: " << packing.positions.rows() << " positions but " << n << " radii";
     throw InputError(os.str());
   }
-  if (!(packing.volume() > 0.0) || !packing.cell.allFinite()) {
+  if (!(packing.volume() > 0.0) || !packing.cell.h.allFinite()) {
     throw InputError("packing: the cell matrix is not finite with a positive volume");
   }
   if (!packing.positions.allFinite() || !packing.radii.allFinite() ||
@@ -55,7 +48,7 @@ std::vector<PairGeometry> find_pairs(const PackingData& packing, double skin) {
   const int n = packing.size();
   std::vector<PairGeometry> pairs;
   if (n < 2) return pairs;
-  const Eigen::Matrix3d& h = packing.cell;
+  const Eigen::Matrix3d& h = packing.cell.h;
   const Eigen::Matrix3d h_inv = h.inverse();
   const double cutoff = 2.0 * packing.radii.maxCoeff() + skin;
   // Perpendicular width of the cell along each fractional axis: V / |h_b x h_c|.
@@ -113,7 +106,7 @@ std::vector<PairGeometry> find_pairs(const PackingData& packing, double skin) {
             const int q = members[m];
             if (q <= p) continue;
             const Eigen::Vector3d l =
-                minimum_image(h, h_inv, xp - packing.positions.row(q).transpose());
+                minimum_image(packing.cell, h_inv, xp - packing.positions.row(q).transpose());
             const double r = l.norm();
             const double overlap = packing.radii(p) + packing.radii(q) - r;
             if (overlap > -skin) pairs.push_back({p, q, l, r, overlap});
@@ -153,7 +146,7 @@ StressFabric measure_stress_fabric(const PackingData& packing, double k,
 
 Eigen::Matrix3d fabric_of_pairs(const PackingData& packing,
                                 const std::vector<std::pair<int, int>>& pairs) {
-  const Eigen::Matrix3d h_inv = packing.cell.inverse();
+  const Eigen::Matrix3d h_inv = packing.cell.h.inverse();
   Eigen::Matrix3d f = Eigen::Matrix3d::Zero();
   for (const auto& [i, j] : pairs) {
     const Eigen::Vector3d l = minimum_image(

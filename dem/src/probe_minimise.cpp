@@ -82,7 +82,7 @@ MinimiseSummary minimise_energy(PackingData& packing, const MinimiseOptions& opt
   }
   const double r_mean = packing.radii.mean();
   const double skin = options.skin * r_mean;
-  const Eigen::Matrix3d h_inv = packing.cell.inverse();
+  const Eigen::Matrix3d h_inv = packing.cell.h.inverse();
   const double k = options.k;
   const NormalContact law{k, 0.0};  // at rest: the spring alone
 

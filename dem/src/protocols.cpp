@@ -137,7 +137,7 @@ DemSystem make_gas(const SystemOptions& options, const GasOptions& gas, std::uin
     q.vx[k] = p.vx[i], q.vy[k] = p.vy[i], q.vz[k] = p.vz[i];
     q.radius[k] = p.radius[i], q.inv_mass[k] = p.inv_mass[i];
   }
-  return DemSystem(std::move(q), PeriodicCell{Eigen::Vector3d::Constant(L)}, options);
+  return DemSystem(std::move(q), PeriodicCell::orthorhombic(Eigen::Vector3d::Constant(L)), options);
 }
 
 double inertial_number(const Material& m, double rate, double pressure) {
@@ -393,7 +393,7 @@ DemSystem system_from_positions(const Eigen::MatrixXd& positions, const std::vec
     p.y[i] = positions(i, 1);
     p.z[i] = positions(i, 2);
   }
-  return DemSystem(std::move(p), PeriodicCell{lengths}, options);
+  return DemSystem(std::move(p), PeriodicCell::orthorhombic(lengths), options);
 }
 
 }  // namespace rendulic::dem

@@ -67,7 +67,7 @@ RestSummary bring_to_rest(DemSystem& sys, const RestOptions& options) {
   // The minimum becomes the state: positions wrapped into the cell, at rest, and a neighbour
   // list built afresh from there (restore() builds it from the reference positions).
   State st = sys.save();
-  const Eigen::Vector3d L = sys.cell().lengths;
+  const Eigen::Vector3d L = sys.cell().lengths();
   Particles& p = st.particles;
   for (int i = 0; i < packing.size(); ++i) {
     const auto u = static_cast<std::size_t>(i);

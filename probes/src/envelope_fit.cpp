@@ -66,6 +66,18 @@ FitLoss fit_loss_from_string(const std::string& name) {
   throw InputError("fit: unknown loss '" + name + "' (none, huber, cauchy)");
 }
 
+const std::vector<std::string>& fit_shape_choices() {
+  static const std::vector<std::string> names{
+      to_string(FitShape::kAuto), to_string(FitShape::kEllipse), to_string(FitShape::kLine)};
+  return names;
+}
+
+const std::vector<std::string>& fit_loss_choices() {
+  static const std::vector<std::string> names{to_string(FitLoss::kNone), to_string(FitLoss::kHuber),
+                                              to_string(FitLoss::kCauchy)};
+  return names;
+}
+
 bool FitOptions::IsValid(std::string* why) const {
   auto fail = [why](const char* msg) {
     if (why) *why = msg;

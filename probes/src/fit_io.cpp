@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "rendulic/core/conventions.hpp"
+#include "rendulic/core/envelope_io.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/result_paths.hpp"
 

@@ -159,4 +159,37 @@ TEST(Lists, AreStringArraysAndModelEnvelopesAreStarred) {
   EXPECT_LT(law_size, 10 * dem_size);
 }
 
+// `rendulic fit --results` fits a stored run again in place: forced to lines, every stored stress
+// fit becomes a line with b = 0 while the envelopes themselves keep every bit; a missing file
+// and --in with --results are one-line errors (exit 2) that leave the file as it was.
+TEST(Refit, AResultsFileIsFittedAgainInPlace) {
+  const fs::path dir = rendulic::testing::fresh_dir("app_output_system/refit");
+  const fs::path file = dir / "results.h5";
+  fs::copy_file(rendulic::testing::tiny_results(kRoot), file);
+  const std::string env = "/states/a/envelopes/dynamic_5e-05";  // elastic: an ellipse
+  Eigen::MatrixXd pairs_before;
+  {
+    const rendulic::ResultsReader r(file);
+    pairs_before = r.read_matrix(env + "/stress_star");
+    ASSERT_EQ(r.attr_string(env + "/fit_stress", "shape"), "ellipse");
+  }
+  const CliResult ok =
+      rendulic::testing::run_rendulic("fit --results " + file.string() + " --shape line --json");
+  ASSERT_EQ(ok.code, 0) << ok.out;
+  EXPECT_NE(ok.out.find("\"fitted\""), std::string::npos) << ok.out;
+  const rendulic::ResultsReader r(file);
+  EXPECT_EQ(r.attr_string(env + "/fit_stress", "shape"), "line");
+  EXPECT_EQ(r.attr_doubles(env + "/fit_stress", "semi_axes")[1], 0.0);
+  EXPECT_TRUE(r.read_matrix(env + "/stress_star") == pairs_before);
+
+  const auto stamp = fs::last_write_time(file);
+  for (const std::string& bad : {"fit --results " + (dir / "absent.h5").string(),
+                                 "fit --results " + file.string() + " --in x.csv"}) {
+    const CliResult e = rendulic::testing::run_rendulic(bad, /*merge_stderr=*/true);
+    EXPECT_EQ(e.code, 2) << bad;
+    EXPECT_EQ(rendulic::testing::error_lines(e.out), 1) << e.out;
+  }
+  EXPECT_EQ(fs::last_write_time(file), stamp);
+}
+
 }  // namespace

@@ -20,6 +20,7 @@ TEST(CalibrationSettings, KeysCarryTheStructsDefaults) {
   EXPECT_EQ(s.holdout, d.holdout);
   EXPECT_EQ(s.max_iterations, d.max_iterations);
   EXPECT_EQ(s.function_tolerance, kDemFunctionTolerance);
+  EXPECT_EQ(s.driver_tolerance, 1e-6);  // the driver's own default (docs/models.md "Tolerance")
   EXPECT_EQ(std::get<double>(schema.find("calibration.function_tolerance")->default_value),
             kDemFunctionTolerance);
 }
@@ -31,7 +32,9 @@ TEST(CalibrationSettings, PlanTranslatesOnce) {
   s.path = false;
   s.features = true;
   s.max_iterations = 17;
+  s.driver_tolerance = 1e-4;
   CalibrationPlan p = calibration_plan(s);
+  EXPECT_EQ(p.options.objective.step.tolerance, 1e-4);
   EXPECT_EQ(p.models, models::law_names());
   EXPECT_TRUE(p.options.holdout.empty());
   EXPECT_FALSE(p.options.objective.path);

@@ -113,7 +113,7 @@ double ring_energy_growth(double h, int steps) {
   o.material = mat;
   o.skin = 0.05;  // in <r>: the cell of four small spheres must exceed twice the list's range
   o.dt_factor = h / omega / time_step(mat, 1.0);
-  DemSystem s(p, PeriodicCell{Eigen::Vector3d::Constant(L)}, o);
+  DemSystem s(p, PeriodicCell::orthorhombic(Eigen::Vector3d::Constant(L)), o);
   EXPECT_NEAR(s.dt() * omega, h, 1e-12 * h);
   const double k0 = s.kinetic_energy();
   const Eigen::Vector3d still = Eigen::Vector3d::Zero();

@@ -23,7 +23,7 @@ inline DemSystem two_spheres(const Material& mat, double r, double v_rel, double
   SystemOptions o;
   o.material = mat;
   o.dt_factor = dt_factor;
-  return DemSystem(p, PeriodicCell{Eigen::Vector3d::Constant(L)}, o);
+  return DemSystem(p, PeriodicCell::orthorhombic(Eigen::Vector3d::Constant(L)), o);
 }
 
 }  // namespace rendulic::dem::testing

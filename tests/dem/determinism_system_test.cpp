@@ -80,7 +80,7 @@ TEST(Determinism, ChangingTheTeamWhileRunningOrOnRestartChangesNothing) {
   drive(c, 300, 600);
   omp_set_num_threads(saved);
   EXPECT_EQ(flat(a.particles()), flat(c.particles()));
-  EXPECT_EQ(a.cell().lengths, c.cell().lengths);
+  EXPECT_EQ(a.cell().lengths(), c.cell().lengths());
 }
 
 }  // namespace

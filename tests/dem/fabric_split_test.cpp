@@ -25,7 +25,7 @@ using Key = std::pair<int, int>;
 std::map<Key, Eigen::Vector3d> contacts_of(const PackingData& p,
                                            std::map<Key, double>* overlaps = nullptr) {
   std::map<Key, Eigen::Vector3d> out;  // (i, j) -> unit normal from j to i
-  const Eigen::Vector3d L = p.cell.diagonal();
+  const Eigen::Vector3d L = p.cell.lengths();
   for (int i = 0; i < p.size(); ++i)
     for (int j = i + 1; j < p.size(); ++j) {
       Eigen::Vector3d best = Eigen::Vector3d::Constant(1e300);
@@ -67,7 +67,7 @@ TEST_P(FabricSplitAffine, AffineStepMatchesTheClosedForms) {
   const Eigen::Matrix3d A = (-eps.diagonal()).array().exp().matrix().asDiagonal();
   PackingData after = before;
   after.positions = before.positions * A.transpose();
-  after.cell = A * before.cell;
+  after.cell.h = A * before.cell.h;
 
   std::map<Key, double> overlap0;
   const auto c0 = contacts_of(before, &overlap0), c1 = contacts_of(after);
@@ -137,7 +137,7 @@ TEST(FabricSplitLinearResponse, VolumeAndRotationParts) {
     const Eigen::Matrix3d A = (-eps.diagonal()).array().exp().matrix().asDiagonal();
     PackingData after = fcc;
     after.positions = fcc.positions * A.transpose();
-    after.cell = A * fcc.cell;
+    after.cell.h = A * fcc.cell.h;
     std::vector<std::pair<int, int>> pairs;
     for (const PairGeometry& c : find_pairs(fcc, 0.0))
       if (c.overlap > 0) pairs.emplace_back(c.i, c.j);

@@ -19,7 +19,7 @@ using PairList = std::vector<std::pair<int, int>>;
 
 PairList brute_force_contacts(const DemSystem& s) {
   const Particles& p = s.particles();
-  const Eigen::Vector3d L = s.cell().lengths;
+  const Eigen::Vector3d L = s.cell().lengths();
   PairList out;
   for (std::size_t i = 0; i < p.size(); ++i)
     for (std::size_t j = i + 1; j < p.size(); ++j) {

@@ -23,7 +23,7 @@ DemSystem jammed(double nu) {
   g.minimise.force_tolerance = 1e-6;
   const PackingData p = generate_packing(g, nullptr);
   std::vector<double> radii(p.radii.data(), p.radii.data() + p.size());
-  return system_from_positions(p.positions, radii, p.cell.diagonal(), SystemOptions{});
+  return system_from_positions(p.positions, radii, p.cell.lengths(), SystemOptions{});
 }
 
 double expected_inertial(const Material& m, double rate, double pressure) {

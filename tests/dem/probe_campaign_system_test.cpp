@@ -36,8 +36,8 @@ class ProbeCampaign : public ::testing::Test {
     const PackingData p = generate_packing(g, &s);
     ASSERT_TRUE(s.converged) << s.message;
     std::vector<double> radii(p.radii.data(), p.radii.data() + p.size());
-    state_ = new DemSystem(
-        system_from_positions(p.positions, radii, p.cell.diagonal(), SystemOptions{}));
+    state_ =
+        new DemSystem(system_from_positions(p.positions, radii, p.cell.lengths(), SystemOptions{}));
   }
   static void TearDownTestSuite() { delete state_; }
   static DemSystem* state_;
@@ -190,7 +190,7 @@ TEST(ProbeCampaignThreads, IdenticalForAnyThreadCount) {
   ASSERT_TRUE(s.converged) << s.message;
   std::vector<double> radii(p.radii.data(), p.radii.data() + p.size());
   const DemSystem state =
-      system_from_positions(p.positions, radii, p.cell.diagonal(), SystemOptions{});
+      system_from_positions(p.positions, radii, p.cell.lengths(), SystemOptions{});
   ProbeOptions one, two;
   one.threads = 1;
   two.threads = 2;

@@ -4,7 +4,7 @@
 
 #include <filesystem>
 
-#include "rendulic/core/envelope_record.hpp"
+#include "rendulic/core/envelope_io.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/result_paths.hpp"
 #include "rendulic/dem/probe_envelope.hpp"

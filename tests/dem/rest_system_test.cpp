@@ -24,7 +24,7 @@ TEST(RestLinearResponse, EqualsAFiniteRelaxedProbeAtTheMinimum) {
   const PackingData packing = generate_packing(g, nullptr);
   std::vector<double> radii(packing.radii.data(), packing.radii.data() + packing.size());
   DemSystem sys =
-      system_from_positions(packing.positions, radii, packing.cell.diagonal(), SystemOptions{});
+      system_from_positions(packing.positions, radii, packing.cell.lengths(), SystemOptions{});
   RestOptions ro;
   ro.relax.time_cap = 2e-6;
   const RestSummary rest = bring_to_rest(sys, ro);
@@ -54,7 +54,7 @@ TEST(RestLinearResponse, EqualsAFiniteRelaxedProbeAtTheMinimum) {
       const Eigen::Matrix3d A =
           (-probe_strain(theta[q], amp).diagonal()).array().exp().matrix().asDiagonal();
       after.positions = start.positions * A.transpose();
-      after.cell = A * start.cell;
+      after.cell.h = A * start.cell.h;
       MinimiseOptions mo = po.minimise;
       EXPECT_TRUE(minimise_energy(after, mo).converged);
       return Eigen::Matrix3d(fabric_of_pairs(after, backbone) - fabric_of_pairs(start, backbone));

@@ -92,7 +92,7 @@ TEST(BringToRest, ADisturbedPackingEndsAtAMinimumWithItsOwnStress) {
   for (int i = 0; i < x.rows(); ++i)  // a deterministic disturbance of ~1e-3 <r>
     x.row(i) += 1e-6 * Eigen::RowVector3d(std::sin(1.0 + i), std::cos(2.0 * i), std::sin(3.0 * i));
   std::vector<double> radii(packing.radii.data(), packing.radii.data() + packing.size());
-  DemSystem sys = system_from_positions(x, radii, packing.cell.diagonal(), SystemOptions{});
+  DemSystem sys = system_from_positions(x, radii, packing.cell.lengths(), SystemOptions{});
   sys.advance(50, Eigen::Vector3d(1.0, -0.5, -0.5));  // some strain, some motion
   const Eigen::Vector3d strain = sys.strain_E();
   const ForceBalance before = force_balance(packing_of(sys), kK);
@@ -115,7 +115,7 @@ TEST(BringToRest, ADisturbedPackingEndsAtAMinimumWithItsOwnStress) {
   EXPECT_EQ(sys.strain_E(), strain);
   for (std::size_t i = 0; i < radii.size(); ++i) {  // wrapped into the cell
     EXPECT_GE(sys.particles().x[i], 0.0);
-    EXPECT_LT(sys.particles().x[i], sys.cell().lengths[0]);
+    EXPECT_LT(sys.particles().x[i], sys.cell().lengths()[0]);
   }
   // Continuing from there: nothing moves (forces of 1e-9 of the mean contact force).
   DemSystem again = sys;

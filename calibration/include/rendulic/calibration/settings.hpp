@@ -24,7 +24,9 @@ struct CalibrationSettings {
   bool path = true;  // fit the main path with the envelopes
   int max_iterations = SolverOptions{}.max_iterations;
   double function_tolerance = kDemFunctionTolerance;
-  bool features = false;          // the envelope-feature objective
+  bool features = false;  // the envelope-feature objective
+  // Local relative error of the driver's substeps in the integrated predictions.
+  double driver_tolerance = ObjectiveOptions{}.step.tolerance;
   std::string umat, umat_params;  // model umat: the UMAT's library and parameters file
   bool IsValid(std::string* why) const;
 };

@@ -1,8 +1,9 @@
 // The response envelope as the results file stores it (docs/results.md,
 // /states/<label>/envelopes/<name>; docs/probes.md): the one record of an envelope whatever
 // made it (dynamic probes, minimisation probes, the linear response, another DEM code's data
-// converted to the schema), with its one writer and one reader. The DEM writes it, the fits,
-// the calibration and the report read it; each takes the view it needs from this record
+// converted to the schema). Plain data: the engine fills it without knowing the results file;
+// its one writer and one reader live in envelope_io.hpp. The DEM writes it, the fits, the
+// calibration and the report read it; each takes the view it needs from this record
 // (docs/architecture.md "Where each concept lives").
 //
 // Stored: attributes amplitude, method, directions, k_star and the envelope's own scalar
@@ -17,8 +18,6 @@
 #include <map>
 #include <string>
 #include <vector>
-
-#include "rendulic/core/results.hpp"
 
 namespace rendulic {
 
@@ -51,16 +50,5 @@ struct EnvelopeRecord {
            const Eigen::Matrix3d& d_f, const Eigen::Matrix3d& d_f_volume,
            const Eigen::Matrix3d& d_f_rotation, const Eigen::Matrix3d& d_f_contacts);
 };
-
-// std::logic_error if the record's sizes disagree (a bug of its maker, not bad input).
-void write_envelope(ResultsWriter& out, const std::string& group, const EnvelopeRecord& envelope);
-
-// What is stored at `group`, every part optional but the group itself: an envelope that could
-// not be measured holds only attributes (its `error` says why), and files from elsewhere may
-// lack what our writer adds. A missing amplitude reads as NaN, a missing method as "". Empty
-// datasets read as absent. InputError (naming the file and group) if the group is missing,
-// a dataset is malformed, or the non-empty per-probe datasets (and `directions`) disagree in
-// length.
-EnvelopeRecord read_envelope(const ResultsReader& in, const std::string& group);
 
 }  // namespace rendulic

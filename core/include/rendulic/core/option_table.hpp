@@ -28,8 +28,8 @@ template <class Options>
 struct OptionRow {
   template <class T>
   using Member = T& (*)(Options&);
-  using Access = std::variant<Member<bool>, Member<int>, Member<std::int64_t>, Member<double>,
-                              Member<std::string>, Member<std::vector<double>>,
+  using Access = std::variant<Member<bool>, Member<int>, Member<std::int64_t>, Member<std::size_t>,
+                              Member<double>, Member<std::string>, Member<std::vector<double>>,
                               Member<std::vector<std::string>>>;
   // Path, unit, help and range; type and default_value are filled from the member.
   KeySpec key;
@@ -69,6 +69,8 @@ class OptionTable {
               m = static_cast<int>(scenario.get_int(p));
             else if constexpr (std::is_same_v<T, std::int64_t>)
               m = scenario.get_int(p);
+            else if constexpr (std::is_same_v<T, std::size_t>)  // the key's range is >= 0
+              m = static_cast<std::size_t>(scenario.get_int(p));
             else if constexpr (std::is_same_v<T, double>)
               m = scenario.get_double(p);
             else if constexpr (std::is_same_v<T, std::string>)
@@ -103,6 +105,8 @@ class OptionTable {
           using T = std::decay_t<decltype(v)>;
           if constexpr (std::is_same_v<T, int>)
             return std::int64_t{v};
+          else if constexpr (std::is_same_v<T, std::size_t>)
+            return static_cast<std::int64_t>(v);
           else
             return v;
         },
@@ -116,7 +120,8 @@ class OptionTable {
           using T = std::decay_t<decltype(member(std::declval<Options&>()))>;
           if constexpr (std::is_same_v<T, bool>)
             return KeyType::kBool;
-          else if constexpr (std::is_same_v<T, int> || std::is_same_v<T, std::int64_t>)
+          else if constexpr (std::is_same_v<T, int> || std::is_same_v<T, std::int64_t> ||
+                             std::is_same_v<T, std::size_t>)
             return KeyType::kInt;
           else if constexpr (std::is_same_v<T, double>)
             return KeyType::kDouble;

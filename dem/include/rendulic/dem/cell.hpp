@@ -7,18 +7,42 @@
 
 #include <Eigen/Dense>
 #include <array>
+#include <cmath>
 #include <string>
 
 namespace rendulic::dem {
 
-// The engine's cell: orthorhombic, so that its hot loop takes the periodic images from a table
-// of 27 shifts (neighbor_list.hpp). The probe tools, which also deform a cell by any strain,
-// hold it as a 3x3 matrix (PackingData, probe_geometry.hpp; lengths.asDiagonal() here) with the
-// one minimum image for such cells (minimum_image() there).
+// The periodic cell of every packing: its matrix h, whose columns are the cell vectors. The
+// engine's cells are orthorhombic (h = diag(L); DemSystem refuses others), so that its hot loop
+// takes the periodic images from a table of 27 shifts (neighbor_list.hpp); the probe tools,
+// which also deform a cell by any strain (PackingData, probe_geometry.hpp), use the general h
+// with the one minimum image below.
 struct PeriodicCell {
-  Eigen::Vector3d lengths = Eigen::Vector3d::Ones();  // m
-  double volume() const { return lengths.prod(); }
+  Eigen::Matrix3d h = Eigen::Matrix3d::Identity();  // columns: cell vectors, m
+
+  static PeriodicCell orthorhombic(const Eigen::Vector3d& lengths) {
+    PeriodicCell c;
+    c.h = lengths.asDiagonal();
+    return c;
+  }
+  bool is_orthorhombic() const { return h.isDiagonal(0.0); }
+  // The edge lengths of an orthorhombic cell (h's diagonal).
+  Eigen::Vector3d lengths() const { return h.diagonal(); }
+  // det h. (The engine, whose cells are orthorhombic, takes the product of the lengths in its
+  // own order of operations: DemSystem::volume().)
+  double volume() const { return h.determinant(); }
+  // The homogeneous deformation x -> F x of the cell (F the deformation gradient).
+  void deform(const Eigen::Matrix3d& F) { h = F * h; }
 };
+
+// Minimum-image vector of a separation in a (nearly orthorhombic) cell; h_inverse = cell.h^-1,
+// passed in because callers take it once for many pairs.
+inline Eigen::Vector3d minimum_image(const PeriodicCell& cell, const Eigen::Matrix3d& h_inverse,
+                                     const Eigen::Vector3d& separation) {
+  Eigen::Vector3d s = h_inverse * separation;
+  for (int a = 0; a < 3; ++a) s(a) -= std::nearbyint(s(a));
+  return cell.h * s;
+}
 
 // How one axis of the cell moves.
 struct AxisControl {

@@ -99,11 +99,15 @@ class DemSystem {
   Eigen::Matrix3d fabric() const;  // eq. 2
   double kinetic_energy() const;
   double elastic_energy() const;
-  double volume_fraction() const { return solid_volume_ / cell_.volume(); }
+  double volume_fraction() const { return solid_volume_ / volume(); }
 
   const Particles& particles() const { return p_; }
   Particles& mutable_particles() { return p_; }  // e.g. to set gas velocities; forces stale
   const PeriodicCell& cell() const { return cell_; }
+  // The cell's volume as the engine computes it: the product of its lengths, in the order of
+  // operations that the stored runs were made with (cell().volume() is det h, which may differ
+  // from it in the last bit).
+  double volume() const { return cell_.lengths().prod(); }
   const SystemOptions& options() const { return options_; }
   const Material& material() const { return options_.material; }
   double dt() const { return dt_; }

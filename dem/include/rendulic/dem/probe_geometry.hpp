@@ -11,20 +11,22 @@
 #include <utility>
 #include <vector>
 
+#include "rendulic/dem/cell.hpp"
+
 namespace rendulic::dem {
 
 // Particles of a periodic packing: plain data, as stored under /states/<label>.
 struct PackingData {
-  Eigen::MatrixX3d positions;                          // [N,3], m
-  Eigen::VectorXd radii;                               // [N], m
-  Eigen::Matrix3d cell = Eigen::Matrix3d::Identity();  // columns: cell vectors, m
+  Eigen::MatrixX3d positions;  // [N,3], m
+  Eigen::VectorXd radii;       // [N], m
+  PeriodicCell cell;           // any cell (cell.hpp)
   int size() const { return static_cast<int>(radii.size()); }
-  double volume() const { return cell.determinant(); }
+  double volume() const { return cell.volume(); }
   // The homogeneous deformation x -> F x of positions and cell (F the deformation gradient):
   // the one affine map of the probe tools (an affine probe step, apply_affine_strain()).
   void deform(const Eigen::Matrix3d& F) {
     positions = positions * F.transpose();
-    cell = F * cell;
+    cell.deform(F);
   }
   // An orthorhombic cell of lengths L.
   static PackingData orthorhombic(Eigen::MatrixX3d positions, Eigen::VectorXd radii,
@@ -44,10 +46,6 @@ struct PairGeometry {
 // (sorted by (i, j)). Throws InputError if the cell is too thin for a unique minimum image
 // (perpendicular width < 2 (2 r_max + skin)) or the data are inconsistent.
 std::vector<PairGeometry> find_pairs(const PackingData& packing, double skin);
-
-// Minimum-image vector of a separation in a (nearly orthorhombic) cell.
-Eigen::Vector3d minimum_image(const Eigen::Matrix3d& cell, const Eigen::Matrix3d& cell_inverse,
-                              const Eigen::Vector3d& separation);
 
 // Static stress (compression positive, Pa) and fabric of the contacts with overlap > 0:
 // sigma = (1/V) sum l (x) f, F = (1/V) sum_p V_p sum_{c in p} n n. Particles with

@@ -17,19 +17,26 @@
 
 namespace rendulic::dem {
 
+// The in-class values are the scenario keys' defaults (scenario_keys.hpp reads its table's
+// defaults from DemRunOptions{}): the seed study's run. Where a step's own struct has other
+// defaults (a relaxation or a compression used on its own), the run's are set here.
 struct DemRunOptions {
-  SystemOptions system;
-  GasOptions gas;
+  SystemOptions system;  // Material{} (the seed's material), dt_factor, skin
+  GasOptions gas{.n_particles = 9261, .volume_fraction = 0.3, .velocity = 1.0};
   double mix_time = 0;           // s at fixed cell before compressing the gas
   double prepare_gamma_b = 0.1;  // background damping during gas, compression, relax at nu0
-  CompressOptions prepare;       // gas -> nu0 (constant rate)
-  RelaxOptions relax;            // at nu0 and at nu_max
-  CompressOptions loading;       // nu0 -> nu_max (isotropic branch)
-  PathOptions path;
+  // gas -> nu0 at one constant rate
+  CompressOptions prepare{.target_nu = 0.64, .rate_max = 300, .rate_min = 300};
+  RelaxOptions relax{.kinetic_to_elastic = 1e-5, .time_cap = 2e-3};  // at nu0 and at nu_max
+  // nu0 -> nu_max (isotropic branch)
+  CompressOptions loading{
+      .target_nu = 0.82, .rate_max = 400, .rate_min = 50, .inertial_number = 5e-4, .samples = 60};
+  PathOptions path{.rate = 400};
   // Volume fractions of the pressure branches (snapshots of the loading, loading.snapshot_nu).
   std::vector<double> branch_nu;
-  std::vector<std::string> state_labels;  // one per path.snapshot_eps_dev
-  RestOptions state_rest;                 // dynamic relaxation, then FIRE to equilibrium (rest.hpp)
+  std::vector<std::string> state_labels{"a", "b", "c", "d", "e"};  // one per snapshot_eps_dev
+  // Dynamic relaxation, then FIRE to equilibrium (rest.hpp); minimise.k is the material's.
+  RestOptions state_rest{.relax = {.kinetic_to_elastic = 1e-6, .time_cap = 2e-3}};
 };
 
 // Called with the name of each step as it starts ("gas", "compress to nu0", "relax at nu0").

@@ -33,6 +33,10 @@ std::string to_string(FitShape shape);
 std::string to_string(FitLoss loss);
 FitShape fit_shape_from_string(const std::string& name);
 FitLoss fit_loss_from_string(const std::string& name);
+// The shapes a caller may request (auto, ellipse, line; a circle is a finding, not a request)
+// and the losses: the choices of the fits.* keys and of `rendulic fit`'s options.
+const std::vector<std::string>& fit_shape_choices();
+const std::vector<std::string>& fit_loss_choices();
 
 struct FitOptions {
   // kAuto chooses line or ellipse by a parametric-bootstrap likelihood-ratio test (below),

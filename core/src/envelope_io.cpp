@@ -1,0 +1,111 @@
+// The writer and reader of the envelope record in the results file (envelope_io.hpp;
+// docs/results.md).
+#include "rendulic/core/envelope_io.hpp"
+
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+
+#include "rendulic/core/errors.hpp"
+#include "rendulic/core/result_paths.hpp"
+
+namespace rendulic {
+
+void write_envelope(ResultsWriter& out, const std::string& group, const EnvelopeRecord& envelope) {
+  const std::size_t m = envelope.size();
+  if (envelope.strain.size() != m || envelope.stress_star.size() != m ||
+      envelope.fabric.size() != m || envelope.d_stress.size() != m ||
+      envelope.d_fabric.size() != m) {
+    throw std::logic_error("write_envelope: inconsistent envelope sizes");
+  }
+  out.create_group(group);
+  out.attr(group, "amplitude", envelope.amplitude);
+  out.attr(group, "method", envelope.method);
+  out.attr(group, "directions", static_cast<std::int64_t>(m));
+  out.attr(group, "k_star", envelope.k_star);
+  out.write(group + datasets::kThetaDeg, envelope.theta_deg);
+  out.write(group + datasets::kStrain, envelope.strain);
+  out.write(group + datasets::kStressStar, envelope.stress_star);
+  out.write(group + datasets::kFabric, envelope.fabric);
+  out.write(group + datasets::kDStress, envelope.d_stress);
+  out.write(group + datasets::kDFabric, envelope.d_fabric);
+  if (!envelope.d_fabric_volume.empty()) {
+    if (envelope.d_fabric_volume.size() != m || envelope.d_fabric_rotation.size() != m ||
+        envelope.d_fabric_contacts.size() != m)
+      throw std::logic_error("write_envelope: inconsistent fabric split sizes");
+    out.write(group + datasets::kDFabricVolume, envelope.d_fabric_volume);
+    out.write(group + datasets::kDFabricRotation, envelope.d_fabric_rotation);
+    out.write(group + datasets::kDFabricContacts, envelope.d_fabric_contacts);
+  }
+  std::vector<std::string> names;
+  for (const auto& [name, values] : envelope.diagnostics) {
+    if (values.size() != m) throw std::logic_error("write_envelope: diagnostic " + name);
+    out.write(group + "/" + name, values);
+    names.push_back(name);
+  }
+  out.attr(group, "diagnostics", names);
+  names.clear();
+  for (const auto& [name, value] : envelope.attributes) {
+    out.attr(group, name, value);
+    names.push_back(name);
+  }
+  out.attr(group, "attributes", names);
+}
+
+EnvelopeRecord read_envelope(const ResultsReader& in, const std::string& group) {
+  const std::string where = in.path().string() + ": envelope " + group;
+  if (!in.exists(group)) throw InputError(in.path().string() + ": no envelope at " + group);
+  EnvelopeRecord env;
+  env.amplitude = in.has_attr(group, "amplitude") ? in.attr_double(group, "amplitude")
+                                                  : std::numeric_limits<double>::quiet_NaN();
+  if (in.has_attr(group, "method")) env.method = in.attr_string(group, "method");
+  if (in.has_attr(group, "k_star")) env.k_star = in.attr_double(group, "k_star");
+  auto vector = [&](const char* name, std::vector<double>& v) {
+    if (in.exists(group + name)) v = in.read_vector(group + name);
+  };
+  auto pairs = [&](const char* name, std::vector<Eigen::Vector2d>& v) {
+    if (in.exists(group + name)) v = in.read_pairs(group + name);
+  };
+  auto tensors = [&](const char* name, std::vector<Eigen::Matrix3d>& v) {
+    if (in.exists(group + name)) v = in.read_tensors(group + name);
+  };
+  vector(datasets::kThetaDeg, env.theta_deg);
+  pairs(datasets::kStrain, env.strain);
+  pairs(datasets::kStressStar, env.stress_star);
+  pairs(datasets::kFabric, env.fabric);
+  tensors(datasets::kDStress, env.d_stress);
+  tensors(datasets::kDFabric, env.d_fabric);
+  tensors(datasets::kDFabricVolume, env.d_fabric_volume);
+  tensors(datasets::kDFabricRotation, env.d_fabric_rotation);
+  tensors(datasets::kDFabricContacts, env.d_fabric_contacts);
+  if (in.has_attr(group, "diagnostics")) {
+    for (const std::string& name : in.attr_strings(group, "diagnostics")) {
+      env.diagnostics[name] = in.read_vector(group + "/" + name);
+    }
+  }
+  if (in.has_attr(group, "attributes")) {
+    for (const std::string& name : in.attr_strings(group, "attributes")) {
+      env.attributes[name] = in.attr_double(group, name);
+    }
+  }
+  // Every probe has one entry in each per-probe dataset that is stored.
+  std::size_t m = 0;
+  bool agree = true;
+  auto count = [&](std::size_t n) {
+    if (n == 0) return;
+    if (m == 0) m = n;
+    agree = agree && n == m;
+  };
+  for (std::size_t n :
+       {env.theta_deg.size(), env.strain.size(), env.stress_star.size(), env.fabric.size(),
+        env.d_stress.size(), env.d_fabric.size(), env.d_fabric_volume.size(),
+        env.d_fabric_rotation.size(), env.d_fabric_contacts.size()})
+    count(n);
+  for (const auto& [name, values] : env.diagnostics) count(values.size());
+  if (in.has_attr(group, "directions") && m > 0)
+    agree = agree && in.attr_int(group, "directions") == static_cast<std::int64_t>(m);
+  if (!agree) throw InputError(where + " has datasets of different lengths");
+  return env;
+}
+
+}  // namespace rendulic
