@@ -110,5 +110,29 @@ TEST(UmatCalibrateCli, BadUmatInputExitsTwoWithOneLine) {
   }
 }
 
+// The calibration stage is checked before the DEM runs: model umat without its library, or
+// with a library that is not there, stops `rendulic run` at once with one line.
+TEST(UmatCalibrateCli, RunRefusesAMissingUmatBeforeTheDem) {
+  const fs::path dir = fresh_dir("calibration_umat_cli_run");
+  const std::string run = "run " + std::string(RENDULIC_SOURCE_DIR) +
+                          "/data/scenarios/quick.toml --out " + dir.string() +
+                          " --set calibration.model=umat";
+  const struct {
+    std::string args, culprit;
+  } cases[] = {
+      {run, "calibration.umat"},
+      {run + " --set calibration.umat=" + (dir / "missing.so").string() +
+           " --set calibration.umat_params=" + params(),
+       "missing.so: no such file"},
+  };
+  for (const auto& c : cases) {
+    const auto r = run_rendulic(c.args, false);
+    EXPECT_EQ(r.code, 2) << c.args << "\n" << r.err;
+    EXPECT_EQ(error_lines(r.err), 1) << r.err;
+    EXPECT_NE(r.err.find(c.culprit), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(dir / "results.h5"));
+  }
+}
+
 }  // namespace
 }  // namespace rendulic::calibration
