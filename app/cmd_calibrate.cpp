@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
@@ -28,6 +29,7 @@
 #include "rendulic/core/result_paths.hpp"
 #include "rendulic/core/results.hpp"
 #include "rendulic/models/law.hpp"
+#include "rendulic/models/umat.hpp"
 
 namespace rendulic::app {
 namespace {
@@ -97,7 +99,7 @@ int run_calibrate(const CalibrateArgs& a) {
   using namespace rendulic::calibration;
   // Cheap checks first, so that bad input costs nothing and touches nothing.
   calibration::CalibrationSettings settings = a.settings;
-  if (!models::make_law(settings.model)) {
+  if (settings.model != "umat" && !models::make_law(settings.model)) {
     std::string known;
     for (const auto& n : models::law_names()) known += (known.empty() ? "" : ", ") + n;
     throw InputError("calibrate: unknown model '" + settings.model + "' (known: " + known + ")");
@@ -109,6 +111,18 @@ int run_calibrate(const CalibrateArgs& a) {
   CalibrationOptions& opt = plan.options;
   opt.solver.progress = a.progress;
   opt.free = split_commas(a.free);
+  // A UMAT's props are also named by their 1-based PROPS index (docs/umat.md).
+  if (settings.model == "umat")
+    for (auto& f : opt.free)
+      if (!f.empty() &&
+          std::all_of(f.begin(), f.end(), [](unsigned char c) { return std::isdigit(c); })) {
+        const auto& info = models::session_umat()->parameter_info();
+        const std::size_t i = std::stoul(f);
+        if (i < 1 || i > info.size())
+          throw InputError("--free " + f + ": the UMAT has PROPS(1.." +
+                           std::to_string(info.size()) + ")");
+        f = info[i - 1].name;
+      }
   for (const auto& kv : split_commas(a.values)) {
     const auto eq = kv.find('=');
     if (eq == std::string::npos) throw InputError("--value '" + kv + "': expected name=number");
@@ -174,8 +188,10 @@ Subcommand add_calibrate(CLI::App& parent) {
   const auto& keys = calibration::calibration_option_table();
   sub->add_option("--model", args->settings.model,
                   "Model: isotropic_elastic, anisotropic_elastic, hypoplastic_wu, "
-                  "elastoplastic_fabric")
+                  "elastoplastic_fabric, umat (with --umat and --params)")
       ->required();
+  add_key_option(sub, "--umat", args->settings.umat, keys.key("calibration.umat"));
+  add_key_option(sub, "--params", args->settings.umat_params, keys.key("calibration.umat_params"));
   sub->add_option("--states", args->states,
                   "States to use, comma separated (default: all with envelopes)")
       ->delimiter(',');
@@ -185,7 +201,9 @@ Subcommand add_calibrate(CLI::App& parent) {
                   "auto (every second state inside the path), none for no held-out state")
       ->delimiter(',');
   add_key_option(sub, "--backend", args->settings.backend, keys.key("calibration.backend"));
-  sub->add_option("--free", args->free, "Free parameters, comma separated (default: per model)")
+  sub->add_option("--free", args->free,
+                  "Free parameters, comma separated (default: per model; a UMAT's props by name "
+                  "or PROPS index)")
       ->delimiter(',');
   sub->add_option("--value", args->values,
                   "name=value: start value of a free parameter or value of a fixed one")

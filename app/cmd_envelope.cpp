@@ -14,12 +14,14 @@
 #include "rendulic/core/errors.hpp"
 #include "rendulic/models/envelope.hpp"
 #include "rendulic/models/material_io.hpp"
+#include "rendulic/models/umat.hpp"
 
 namespace rendulic::app {
 namespace {
 
 struct EnvelopeCli {
   std::string model;
+  std::string umat;
   std::string params;
   std::string state;
   double amplitude = 0.0;
@@ -38,13 +40,21 @@ nlohmann::ordered_json pairs(const Eigen::Matrix<double, Eigen::Dynamic, 2>& m) 
 }
 
 int run_envelope(const EnvelopeCli& o) {
-  auto law = models::make_law(o.model);
-  if (!law) {
-    std::string names;
-    for (const auto& n : models::law_names()) names += (names.empty() ? "" : ", ") + n;
-    throw InputError("--model: unknown model '" + o.model + "' (known: " + names + ")");
+  // A user's UMAT (docs/umat.md): the library from --umat, its PROPS from --params.
+  if (o.model == "umat" ? o.umat.empty() : !o.umat.empty())
+    throw InputError("--umat PATH.so goes with --model umat, and --model umat needs it");
+  std::unique_ptr<models::Law> law;
+  if (o.model == "umat") {
+    law = models::make_umat_law(o.umat, o.params);
+  } else {
+    law = models::make_law(o.model);
+    if (!law) {
+      std::string names;
+      for (const auto& n : models::law_names()) names += (names.empty() ? "" : ", ") + n;
+      throw InputError("--model: unknown model '" + o.model + "' (known: " + names + ", umat)");
+    }
+    if (!o.params.empty()) models::load_parameters_toml(o.params, law.get());
   }
-  if (!o.params.empty()) models::load_parameters_toml(o.params, law.get());
   const models::MaterialState state = models::load_state_toml(o.state, *law);
 
   models::EnvelopeOptions opt;
@@ -69,6 +79,7 @@ int run_envelope(const EnvelopeCli& o) {
   if (o.json) {
     nlohmann::ordered_json j;
     j["model"] = law->name();
+    if (!o.umat.empty()) j["umat"] = o.umat;
     j["amplitude"] = o.amplitude;
     j["method"] = o.method;
     j["scheme"] = o.scheme;
@@ -103,10 +114,14 @@ Subcommand add_envelope(CLI::App& parent) {
   auto* sub = parent.add_subcommand("envelope", "Envelope predicted by a constitutive model");
   std::string names;
   for (const auto& n : models::law_names()) names += (names.empty() ? "" : ", ") + n;
-  sub->add_option("--model", opts->model, "Constitutive law: " + names)->required();
+  sub->add_option("--model", opts->model, "Constitutive law: " + names + ", umat (with --umat)")
+      ->required();
+  sub->add_option("--umat", opts->umat,
+                  "Shared library of an Abaqus UMAT (entry umat_ or umat), with --model umat "
+                  "(docs/umat.md)");
   sub->add_option("--params", opts->params,
                   "TOML file of parameters (keys = the law's parameter names; missing keys keep "
-                  "their defaults)");
+                  "their defaults; for a UMAT: props, prop_names, nstatv, statev, bounds)");
   sub->add_option("--state", opts->state,
                   "TOML file of the state: stress (3x3, Pa), fabric (3x3), volume_fraction")
       ->required();

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "progress.hpp"
+#include "rendulic/calibration/settings.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/log.hpp"
 #include "rendulic/core/result_paths.hpp"
@@ -121,6 +122,9 @@ void check_stages_available(const Scenario& scenario) {
       scenario.get_doubles("pressure.volume_fractions").empty())
     throw InputError("run: stage 'pressure' needs pressure.volume_fractions (" +
                      scenario.origin("pressure.volume_fractions") + ")");
+  // The calibration's settings too (a UMAT's library and parameters file are loaded here).
+  if (stage_requested(scenario, "calibration"))
+    calibration::calibration_plan(calibration::calibration_settings_from(scenario));
 }
 
 void run_pipeline(const Scenario& scenario, ResultsWriter& out, const RunContext& ctx) {

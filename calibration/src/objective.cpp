@@ -14,6 +14,7 @@
 #include "rendulic/models/driver_core.hpp"
 #include "rendulic/models/law_model.hpp"
 #include "rendulic/models/paths.hpp"
+#include "rendulic/models/umat.hpp"
 
 namespace rendulic::calibration {
 
@@ -361,6 +362,201 @@ class Kernel final : public KernelBase {
   const Objective::Impl* o_;
 };
 
+// A UMAT (models/umat.hpp) is compiled elsewhere and cannot carry Jets: its residuals are
+// computed in double, and its Jacobian by central differences with the UMAT driver's increments
+// frozen at those of the residual evaluation (models::UmatSchedule), so that, as for the built-in
+// laws' Jets, the derivative is that of the integrator with its accepted increments fixed and the
+// differences see a smooth function rather than the driver's step-size decisions.
+class UmatKernel final : public KernelBase {
+ public:
+  UmatKernel(const Objective::Impl* o, const models::UmatLaw& law) : o_(o), law_(law) {}
+
+  // Residuals at z; `schedules` (if given) records the increments of every integration in
+  // evaluation order, or, with `replay`, replays them.
+  bool eval(const double* z, double* r, std::vector<models::UmatSchedule>* schedules,
+            bool replay) const {
+    std::vector<double> p(o_->space.base().size());
+    o_->space.full(z, p.data());
+    const models::UmatLaw law = with(p.data());
+    std::size_t next = 0;
+    Schedules sc{schedules, replay, &next};
+    if (o_->path_task.active && !path_residuals(law, sc, r)) return false;
+    for (const EnvTask& t : o_->tasks) {
+      std::vector<Eigen::Vector2d> ps, pf;
+      if (!predict(law, o_->states[t.state], t.env, t.integrated, sc, &ps, &pf)) return false;
+      const int m = t.env.size();
+      if (t.stress_offset >= 0)
+        for (int i = 0; i < m; ++i)
+          for (int c = 0; c < 2; ++c)
+            r[t.stress_offset + 2 * i + c] = t.stress_w * (ps[i](c) - t.env.stress[i](c));
+      if (t.features_offset >= 0)
+        for (int c = 0; c < 2; ++c)
+          for (int k = 0; k < 3; ++k) {
+            double f = 0.0;
+            for (int i = 0; i < m; ++i) f += t.projection(k, i) * ps[i](c);
+            r[t.features_offset + 3 * c + k] = t.features_w * (f - t.data_features(k, c));
+          }
+    }
+    for (int i = 0; i < o_->n_residuals; ++i)
+      if (!std::isfinite(r[i])) return false;
+    return true;
+  }
+
+  bool residuals(const double* z, double* r) const override { return eval(z, r, nullptr, false); }
+
+  class Cost final : public ceres::CostFunction {
+   public:
+    explicit Cost(const UmatKernel* k) : k_(k) {
+      mutable_parameter_block_sizes()->push_back(k->o_->space.size());
+      set_num_residuals(k->o_->n_residuals);
+    }
+    bool Evaluate(double const* const* z, double* r, double** jac) const override {
+      std::vector<models::UmatSchedule> schedules;
+      if (!k_->eval(z[0], r, &schedules, false)) return false;
+      if (!jac || !jac[0]) return true;
+      const int n = parameter_block_sizes()[0], m = num_residuals();
+      std::vector<double> zz(z[0], z[0] + n), rp(m), rm(m);
+      for (int j = 0; j < n; ++j) {
+        // Relative step 1e-6 (as the built-in laws' numeric check): with the increments frozen
+        // the truncation error is O(h^2) and the rounding error ~1e-10 of the residuals.
+        const double h = 1e-6 * std::max(std::abs(zz[j]), 1.0);
+        zz[j] = z[0][j] + h;
+        if (!k_->eval(zz.data(), rp.data(), &schedules, true)) return false;
+        zz[j] = z[0][j] - h;
+        if (!k_->eval(zz.data(), rm.data(), &schedules, true)) return false;
+        zz[j] = z[0][j];
+        for (int i = 0; i < m; ++i) jac[0][i * n + j] = (rp[i] - rm[i]) / (2.0 * h);
+      }
+      return true;
+    }
+
+   private:
+    const UmatKernel* k_;
+  };
+
+  ceres::CostFunction* cost_function() const override { return new Cost(this); }
+
+  bool envelope(const double* p, const StateData& s, const EnvelopeData& probes, bool integrated,
+                EnvelopeData* out) const override {
+    std::vector<Eigen::Vector2d> ps, pf;
+    *out = probes;
+    out->method = "model";
+    std::size_t next = 0;
+    if (!predict(with(p), s, probes, integrated, {nullptr, false, &next}, &ps, &pf)) return false;
+    out->stress = ps;
+    out->fabric = pf;
+    return true;
+  }
+
+  bool path(const double* p, PathData* out) const override {
+    std::vector<models::MaterialState> states;
+    std::size_t next = 0;
+    if (!run_path(with(p), {nullptr, false, &next}, &states)) return false;
+    out->eps_dev = o_->path.eps_dev;
+    out->stress.clear();
+    out->fabric.clear();
+    for (const auto& y : states) {
+      out->stress.push_back(y.stress);
+      out->fabric.push_back(y.fabric);
+    }
+    out->volume_fraction = o_->path.volume_fraction;
+    return true;
+  }
+
+ private:
+  struct Schedules {
+    std::vector<models::UmatSchedule>* all;
+    bool replay;
+    std::size_t* next;
+    models::UmatSchedule* take() const {
+      if (!all) return nullptr;
+      if (!replay) {
+        all->emplace_back();
+        return &all->back();
+      }
+      if (*next >= all->size()) return nullptr;
+      models::UmatSchedule* s = &(*all)[(*next)++];
+      s->replay = true;
+      return s;
+    }
+  };
+
+  models::UmatLaw with(const double* p) const {
+    models::UmatLaw law = law_;
+    law.set_props_unchecked(std::vector<double>(p, p + o_->space.base().size()));
+    return law;
+  }
+
+  bool integrate(const models::UmatLaw& law, const models::UmatState& y, const Eigen::Matrix3d& de,
+                 const Schedules& sc, models::UmatState* end) const {
+    models::UmatSchedule* s = sc.take();
+    // A replay must use the recorded increments: a missing schedule is a failed evaluation.
+    if (sc.all && sc.replay && !s) return false;
+    return law.integrate(y, de, o_->options.step, end, s).success;
+  }
+
+  bool predict(const models::UmatLaw& law, const StateData& s, const EnvelopeData& env,
+               bool integrated, const Schedules& sc, std::vector<Eigen::Vector2d>* ps,
+               std::vector<Eigen::Vector2d>* pf) const {
+    const int m = env.size();
+    ps->assign(m, Eigen::Vector2d::Zero());
+    pf->assign(m, Eigen::Vector2d::Zero());
+    const models::MaterialState st = law.make_state(s.stress, s.fabric, s.volume_fraction);
+    const models::UmatState us = law.umat_state(st);
+    for (int i = 0; i < m; ++i) {
+      Eigen::Matrix3d ds;
+      if (integrated) {
+        models::UmatState end;
+        if (!integrate(law, us, env.d_eps[i], sc, &end)) return false;
+        ds = end.point.stress - st.stress;
+      } else {
+        models::LawRate r;
+        if (!law.rate_checked(st, env.d_eps[i], &r, nullptr)) return false;
+        ds = r.d_stress;
+      }
+      (*ps)[i] = rendulic_pair(ds);
+    }
+    return true;
+  }
+
+  bool run_path(const models::UmatLaw& law, const Schedules& sc,
+                std::vector<models::MaterialState>* states) const {
+    const PathData& d = o_->path;
+    models::UmatState y =
+        law.umat_state(law.make_state(d.stress[0], d.fabric[0], d.volume_fraction));
+    states->assign(1, y.point);
+    for (std::size_t k = 1; k < d.eps_dev.size(); ++k) {
+      models::UmatState next;
+      if (!integrate(law, y, models::undrained_axisymmetric_strain(d.eps_dev[k] - d.eps_dev[k - 1]),
+                     sc, &next))
+        return false;
+      y = std::move(next);
+      states->push_back(y.point);
+    }
+    return true;
+  }
+
+  bool path_residuals(const models::UmatLaw& law, const Schedules& sc, double* r) const {
+    const PathData& d = o_->path;
+    std::vector<models::MaterialState> s;
+    if (!run_path(law, sc, &s)) return false;
+    const Eigen::Matrix2d R = rendulic_to_iso_dev();
+    const PathTask& t = o_->path_task;
+    for (std::size_t k = 1; k < d.eps_dev.size(); ++k) {
+      const Eigen::Vector2d ds = R * rendulic_pair(Eigen::Matrix3d(s[k].stress - d.stress[k]));
+      const int i = 2 * (static_cast<int>(k) - 1);
+      if (t.stress_offset >= 0) {
+        r[t.stress_offset + i] = t.stress_w * ds(0);
+        r[t.stress_offset + i + 1] = t.stress_w * ds(1);
+      }
+    }
+    return true;
+  }
+
+  const Objective::Impl* o_;
+  models::UmatLaw law_;
+};
+
 double rms_norm(const std::vector<Eigen::Vector2d>& v) {
   double s = 0.0;
   for (const auto& x : v) s += x.squaredNorm();
@@ -427,8 +623,11 @@ Objective::Objective(std::string law_name, const CalibrationData& data,
   std::string why;
   if (!options.IsValid(&why)) throw InputError("calibration objective: " + why);
   Impl& o = *impl_;
-  const bool law_fabric = detail::dispatch_law(
-      law_name, [](auto tag) { return detail::kHasFabric<typename decltype(tag)::type>; });
+  // A UMAT knows no fabric (models/umat.hpp).
+  const bool umat = law_name == "umat";
+  const bool law_fabric = !umat && detail::dispatch_law(law_name, [](auto tag) {
+    return detail::kHasFabric<typename decltype(tag)::type>;
+  });
   int offset = 0;
   auto add_block = [&](const std::string& st, const std::string& kind, const std::string& env,
                        double amplitude, int size, double scale, double weight, bool integrated,
@@ -549,6 +748,14 @@ Objective::Objective(std::string law_name, const CalibrationData& data,
   o.n_residuals = offset;
   if (o.n_residuals == 0) throw InputError("calibration: nothing to fit (no residual blocks)");
   if (o.space.size() == 0) throw InputError("calibration: no free parameters");
+  if (umat) {
+    const std::shared_ptr<const models::UmatLaw> u = models::session_umat();
+    if (!u) throw InputError("calibration: model umat without a UMAT (--umat PATH.so)");
+    if (o.space.base().size() != u->parameters().size())
+      throw InputError("calibration: parameter vector does not match the UMAT's PROPS");
+    o.kernel = std::make_unique<UmatKernel>(&o, *u);
+    return;
+  }
   o.kernel = detail::dispatch_law(law_name, [&](auto tag) -> std::unique_ptr<KernelBase> {
     using M = typename decltype(tag)::type;
     if (static_cast<int>(o.space.base().size()) != M::kCount)
@@ -566,7 +773,7 @@ const std::vector<ResidualBlock>& Objective::blocks() const { return impl_->bloc
 int Objective::num_residuals() const { return impl_->n_residuals; }
 int Objective::num_parameters() const { return impl_->space.size(); }
 bool Objective::exact_derivatives() const {
-  return impl_->options.derivatives == Derivatives::kExact;
+  return impl_->options.derivatives == Derivatives::kExact && impl_->law_name != "umat";
 }
 bool Objective::integrated() const { return impl_->any_integrated; }
 
@@ -622,6 +829,15 @@ std::vector<std::string> default_free_parameters(const std::string& law_name, in
     }
   } else if (law_name == "hypoplastic_wu") {
     f = {"c1", "c2", "c3", "c4"};
+  } else if (law_name == "umat") {
+    // The props the parameters file gives search bounds (docs/umat.md).
+    if (const auto u = models::session_umat())
+      for (const auto& pi : u->parameter_info())
+        if (std::isfinite(pi.lower) && std::isfinite(pi.upper)) f.push_back(pi.name);
+    if (f.empty())
+      throw InputError(
+          "calibration of a UMAT: no free props (name them with --free, and give them bounds "
+          "in the parameters file's [bounds] table)");
   } else {
     detail::dispatch_law(law_name, [](auto) { return 0; });  // throws the InputError
   }

@@ -5,6 +5,7 @@
 
 #include "rendulic/core/errors.hpp"
 #include "rendulic/models/law.hpp"
+#include "rendulic/models/umat.hpp"
 
 namespace rendulic::calibration {
 
@@ -13,11 +14,13 @@ const OptionTable<CalibrationSettings>& calibration_option_table() {
   static const OptionTable<CalibrationSettings> table = [] {
     std::vector<std::string> models = models::law_names();
     models.insert(models.begin(), "all");
+    models.push_back("umat");
     return OptionTable<CalibrationSettings>({
         Row{{.path = "calibration.model",
              .unit = "-",
              .help = "Constitutive law to calibrate against the envelopes and the path; all: "
-                     "every family in turn, each under /calibration/<model>.",
+                     "every family in turn, each under /calibration/<model>; umat: the Abaqus "
+                     "UMAT of calibration.umat (docs/umat.md).",
              .choices = models},
             [](CalibrationSettings& s) -> std::string& { return s.model; }},
         Row{{.path = "calibration.states",
@@ -68,6 +71,16 @@ const OptionTable<CalibrationSettings>& calibration_option_table() {
              .min = 1e-10,
              .max = 1e-2},
             [](CalibrationSettings& s) -> double& { return s.driver_tolerance; }},
+        Row{{.path = "calibration.umat",
+             .unit = "-",
+             .help = "Shared library of an Abaqus UMAT (entry umat_ or umat) for model umat "
+                     "(docs/umat.md)."},
+            [](CalibrationSettings& s) -> std::string& { return s.umat; }},
+        Row{{.path = "calibration.umat_params",
+             .unit = "-",
+             .help = "Parameters file of the UMAT: props, prop_names, nstatv, statev and the "
+                     "[bounds] of the free props (docs/umat.md)."},
+            [](CalibrationSettings& s) -> std::string& { return s.umat_params; }},
     });
   }();
   return table;
@@ -90,6 +103,16 @@ CalibrationSettings calibration_settings_from(const Scenario& scenario) {
 CalibrationPlan calibration_plan(const CalibrationSettings& s) {
   std::string why;
   if (!s.IsValid(&why)) throw InputError(why);
+  if (s.model == "umat") {
+    if (s.umat.empty() || s.umat_params.empty())
+      throw InputError(
+          "model umat needs calibration.umat and calibration.umat_params (--umat "
+          "PATH.so and --params FILE.toml): the UMAT's library and parameters file");
+    std::shared_ptr<const models::UmatLaw> u = models::make_umat_law(s.umat, s.umat_params);
+    models::set_session_umat(std::move(u));
+  } else if (!s.umat.empty()) {
+    throw InputError("calibration.umat (--umat) goes with model umat, not " + s.model);
+  }
   CalibrationPlan p;
   p.models = s.model == "all" ? models::law_names() : std::vector<std::string>{s.model};
   CalibrationOptions& opt = p.options;

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "rendulic/models/driver_core.hpp"
+#include "rendulic/models/umat.hpp"
 
 namespace rendulic::models {
 namespace {
@@ -152,6 +153,9 @@ StepResult integrate(const Law& law, const MaterialState& start, const Eigen::Ma
     res.end = start;
     return res;
   }
+  // A UMAT is an incremental update with a driver of its own (umat.hpp).
+  if (const auto* umat = dynamic_cast<const UmatLaw*>(&law))
+    return umat->integrate(umat->umat_state(start), d_eps, options);
   if (options.scheme == Scheme::kExplicitEuler || !options.adaptive)
     return integrate_fixed(law, start, d_eps, options);
   return integrate_adaptive(VirtualLawOps{law}, start, d_eps, options);

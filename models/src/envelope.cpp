@@ -3,6 +3,8 @@
 
 #include <cmath>
 
+#include "rendulic/models/umat.hpp"
+
 namespace rendulic::models {
 
 bool EnvelopeOptions::IsValid(std::string* why) const {
@@ -27,6 +29,8 @@ ModelEnvelope model_envelope(const Law& law, const MaterialState& state,
     env.reason = "start state: " + why;
     return env;
   }
+  // A UMAT's rate is DDSDDE : d_eps; its failures name the UMAT's increment (umat.hpp).
+  const auto* umat = dynamic_cast<const UmatLaw*>(&law);
   const int m = options.directions;
   env.theta_deg = probe_directions_deg(m);
   env.strain.resize(m, 2);
@@ -37,7 +41,12 @@ ModelEnvelope model_envelope(const Law& law, const MaterialState& state,
   for (int i = 0; i < m; ++i) {
     const Eigen::Matrix3d de = probe_strain(env.theta_deg(i), options.amplitude);
     if (options.method == EnvelopeMethod::kRate) {
-      const LawRate r = law.rate(state, de);
+      LawRate r;
+      if (umat && !umat->rate_checked(state, de, &r, &why)) {
+        env.reason = "probe theta = " + format_g(env.theta_deg(i)) + " deg: " + why;
+        return env;
+      }
+      if (!umat) r = law.rate(state, de);
       env.d_stress[i] = r.d_stress;
       env.d_fabric[i] = r.d_fabric;
       ++env.total_substeps;

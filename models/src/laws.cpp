@@ -8,6 +8,7 @@
 #include "rendulic/models/elastoplastic_fabric.hpp"
 #include "rendulic/models/hypoplastic_wu.hpp"
 #include "rendulic/models/law_model.hpp"
+#include "rendulic/models/umat.hpp"
 
 namespace rendulic::models {
 
@@ -167,6 +168,9 @@ std::unique_ptr<Law> make_law(std::string_view name) {
   if (name == AnisotropicElastic::kName) return std::make_unique<LawModel<AnisotropicElastic>>();
   if (name == HypoplasticWu::kName) return std::make_unique<LawModel<HypoplasticWu>>();
   if (name == ElastoplasticFabric::kName) return std::make_unique<LawModel<ElastoplasticFabric>>();
+  // A user's UMAT, once a run has loaded one (umat.hpp).
+  if (name == "umat")
+    if (const auto u = session_umat()) return std::make_unique<UmatLaw>(*u);
   return nullptr;
 }
 

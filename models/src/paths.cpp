@@ -1,6 +1,8 @@
 // Isotropic compression and undrained axisymmetric paths through a law (paths.hpp).
 #include "rendulic/models/paths.hpp"
 
+#include "rendulic/models/umat.hpp"
+
 namespace rendulic::models {
 namespace {
 
@@ -16,6 +18,8 @@ void record(PathSeries* s, const Eigen::Matrix3d& eps, const MaterialState& y) {
 
 PathSeries run_path(const Law& law, const MaterialState& start, const Eigen::Matrix3d& total,
                     const PathOptions& o) {
+  // A UMAT's path carries its whole STATEV (umat.hpp).
+  if (const auto* umat = dynamic_cast<const UmatLaw*>(&law)) return umat->run_path(start, total, o);
   PathSeries s;
   std::string why;
   if (!o.IsValid(&why)) {

@@ -27,6 +27,7 @@ struct CalibrationSettings {
   bool features = false;  // the envelope-feature objective
   // Local relative error of the driver's substeps in the integrated predictions.
   double driver_tolerance = ObjectiveOptions{}.step.tolerance;
+  std::string umat, umat_params;  // model umat: the UMAT's library and parameters file
   bool IsValid(std::string* why) const;
 };
 
@@ -42,7 +43,8 @@ struct CalibrationPlan {
   LoadOptions load;
 };
 // The one translation of the settings: holdout "none" is none, a held-out state joins an explicit
-// list of states once, the DEM tolerances of solver.hpp. InputError for settings out of range.
+// list of states once, the DEM tolerances of solver.hpp; model umat loads the UMAT and makes it
+// the session's (models/umat.hpp). InputError for settings out of range.
 CalibrationPlan calibration_plan(const CalibrationSettings& settings);
 
 }  // namespace rendulic::calibration
