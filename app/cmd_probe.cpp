@@ -260,10 +260,12 @@ Subcommand add_probe(CLI::App& parent) {
             throw InputError(packing.origin + ": not at rest after minimisation (net force " +
                              std::to_string(rest.at_rest.ratio) + " of the mean contact force)");
           const Moved m = what_moved(packing, *sys, r_mean);
-          log::info("at rest: net force ", rest.at_rest.ratio, " of the mean contact force after ",
-                    rest.minimised.iterations, " FIRE iterations; ", m.count, " of ",
-                    packing.size(), " particles moved more than ", kMovedOverR, " <r> (largest ",
-                    m.max_over_r, " <r>, rms ", m.rms_over_r, " <r>); stress changed by ",
+          log::info("at rest: relaxed for ", rest.relaxed.time, " s (", rest.relaxed.steps,
+                    " steps), then ", rest.minimised.iterations, " FIRE iterations: net force ",
+                    rest.at_rest.ratio, " of the mean contact force; ", m.count, " of ",
+                    packing.size(), " particles moved more than ", kMovedOverR,
+                    " <r> from the file's positions (largest ", m.max_over_r, " <r>, rms ",
+                    m.rms_over_r, " <r>); the minimisation changed the stress by ",
                     rest.stress_change.norm() / std::max(sys->measure().pressure, 1e-300), " of p");
         } else {
           log::info("at rest as read: net force ", rest.at_rest.ratio,

@@ -8,6 +8,7 @@
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
+#include <sys/file.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -36,7 +37,10 @@ fs::path scenario() {
       text.find(from), from.size(),
       R"(stages = ["prepare", "isotropic", "path", "states", "probes", "linear_response", "fits", "calibration"])");
   fs::create_directories(kRoot);
-  std::ofstream(kRoot / "resume.toml") << text;
+  // Written aside and renamed: tests running side by side read it while another writes it.
+  const fs::path aside = kRoot / ("resume.toml." + std::to_string(::getpid()));
+  std::ofstream(aside) << text;
+  fs::rename(aside, kRoot / "resume.toml");
   return kRoot / "resume.toml";
 }
 
@@ -169,11 +173,24 @@ void expect_same(const Contents& a, const Contents& b) {
     if (!a.count(k)) ADD_FAILURE() << k << " only in the resumed run";
 }
 
+// The uninterrupted run, made once per build and shared by the tests (each is its own process
+// under ctest) through a lock, as tiny_run.hpp does.
 const Contents& uninterrupted() {
   static const Contents c = [] {
-    const fs::path dir = rendulic::testing::fresh_dir("app_resume/uninterrupted");
-    EXPECT_EQ(run(dir, ""), 0);
-    return contents(dir / "results.h5");
+    const fs::path dir = kRoot / "uninterrupted", f = dir / "results.h5";
+    fs::create_directories(kRoot);
+    const int lock =
+        ::open((kRoot / ".uninterrupted.lock").c_str(), O_CREAT | O_RDWR | O_CLOEXEC, 0644);
+    flock(lock, LOCK_EX);
+    std::error_code ec;
+    if (!fs::exists(f) || fs::last_write_time(f, ec) < fs::last_write_time(RENDULIC_EXE, ec)) {
+      fs::remove_all(dir);
+      EXPECT_EQ(run(dir, ""), 0);
+    }
+    Contents out = contents(f);
+    flock(lock, LOCK_UN);
+    ::close(lock);
+    return out;
   }();
   return c;
 }
