@@ -108,7 +108,7 @@ constexpr double kMovedOverR = 1e-3;
 Moved what_moved(const Packing& before, const dem::DemSystem& after, double r_mean) {
   Moved m;
   const dem::Particles& p = after.particles();
-  const Eigen::Vector3d L = after.cell().lengths;
+  const Eigen::Vector3d L = after.cell().lengths();
   double sum = 0;
   for (std::size_t i = 0; i < p.size(); ++i) {
     Eigen::Vector3d d =

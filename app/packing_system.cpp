@@ -19,7 +19,7 @@ Packing packing_of_system(const dem::DemSystem& s) {
     out.velocities.row(i) << p.vx[k], p.vy[k], p.vz[k];
   }
   out.radii = p.radius;
-  out.lengths = s.cell().lengths;
+  out.lengths = s.cell().lengths();
   return out;
 }
 
