@@ -19,7 +19,6 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <iomanip>
 #include <iostream>
 #include <memory>
@@ -27,7 +26,9 @@
 #include <sstream>
 
 #include "commands.hpp"
+#include "packing_system.hpp"
 #include "rendulic/core/errors.hpp"
+#include "rendulic/core/packing_file.hpp"
 #include "rendulic/dem/protocols.hpp"
 
 namespace rendulic::app {
@@ -141,31 +142,13 @@ Figure time_steps(const dem::DemSystem& base, int threads, int all_cores, const 
   return f;
 }
 
-// The state as a LAMMPS data file (atom_style sphere: id type diameter density x y z), with
-// its peculiar velocities.
+// The state as a LAMMPS data file (the writer of `rendulic export`), its time step in the
+// title, where bench/lammps_compare.sh reads it.
 void write_lammps(const dem::DemSystem& s, const std::filesystem::path& file) {
-  std::ofstream out(file);
-  if (!out) throw InputError("bench --lammps: cannot write " + file.string());
-  const dem::Particles& p = s.particles();
-  const Eigen::Vector3d L = s.cell().lengths();
-  out << std::setprecision(17) << "rendulic bench state (N = " << p.size()
-      << ", nu = " << s.volume_fraction() << ", dt = " << s.dt() << " s)\n\n"
-      << p.size() << " atoms\n1 atom types\n\n"
-      << "0 " << L[0] << " xlo xhi\n0 " << L[1] << " ylo yhi\n0 " << L[2] << " zlo zhi\n\n"
-      << "Atoms # sphere\n\n";
-  for (std::size_t i = 0; i < p.size(); ++i) {
-    const Eigen::Vector3d x = p.position(i);
-    Eigen::Vector3d q;
-    for (int a = 0; a < 3; ++a) {
-      q[a] = x[a] - L[a] * std::floor(x[a] / L[a]);
-      if (q[a] >= L[a]) q[a] = 0;
-    }
-    out << i + 1 << " 1 " << 2 * p.radius[i] << " " << s.material().density << " " << q[0] << " "
-        << q[1] << " " << q[2] << "\n";
-  }
-  out << "\nVelocities\n\n";
-  for (std::size_t i = 0; i < p.size(); ++i)
-    out << i + 1 << " " << p.vx[i] << " " << p.vy[i] << " " << p.vz[i] << " 0 0 0\n";
+  std::ostringstream title;
+  title << std::setprecision(17) << "rendulic bench state (N = " << s.particles().size()
+        << ", nu = " << s.volume_fraction() << ", dt = " << s.dt() << " s)";
+  write_lammps_data(file, packing_of_system(s), s.material().density, title.str());
 }
 
 }  // namespace

@@ -3,13 +3,15 @@
 // exits 2 and writes nothing. The results file is written under a temporary name and renamed
 // to DIR/results.h5 only when every stage succeeded; a run that fails (or is stopped by a
 // signal) after a stage completed keeps those stages in DIR/results.h5.partial and says so in
-// its error line (docs/usage.md "Results are atomic").
+// its error line (docs/usage.md "Results are atomic"); `--resume` continues from them
+// (docs/usage.md "Resuming a run").
 // Under `mpirun -np K` (a build with RENDULIC_MPI) rank 0 runs all of this and alone prints and
 // writes; ranks 1..K-1 only compute their share of the probe campaigns (probe_mpi.hpp) and are
 // released when rank 0 returns or throws.
 #include <omp.h>
 
 #include <memory>
+#include <optional>
 
 #include "commands.hpp"
 #include "pipeline.hpp"
@@ -27,6 +29,7 @@ struct RunOptions {
   std::vector<std::string> sets;
   int threads = 0;
   bool quiet = false;
+  bool resume = false;
   double progress_every = 30.0;
 };
 }  // namespace
@@ -47,6 +50,9 @@ Subcommand add_run(CLI::App& parent) {
                   "pays: never below N = 1000, and only while it measures faster than one thread "
                   "(a busy core makes it slower); results do not depend on it")
       ->check(CLI::NonNegativeNumber);
+  sub->add_flag("--resume", o->resume,
+                "continue an interrupted run from the stages it kept in DIR/results.h5.partial "
+                "(same scenario and --set values): the result is that of an uninterrupted run");
   sub->add_flag("--quiet", o->quiet,
                 "no progress display and no progress lines; warnings and errors still print");
   sub->add_option("--progress-every", o->progress_every,
@@ -54,48 +60,73 @@ Subcommand add_run(CLI::App& parent) {
                   "(a log file, a batch job); a terminal gets a live line instead")
       ->check(CLI::Range(0.1, 86400.0))
       ->capture_default_str();
-  return {sub, [o]() -> int {
-            // Before anything else, so that the workers never parse, print or write.
-            dem::MpiSession mpi;
-            if (mpi.rank() != 0) {
-              if (o->threads > 0) omp_set_num_threads(o->threads);
-              mpi.serve(dem::compute_worker_share);
-              return 0;
-            }
-            if (o->quiet) log::set_level(log::Level::kWarning);
-            Scenario scenario = Scenario::from_file(o->scenario, scenario_schema());
-            for (const auto& s : o->sets) scenario.apply_override(s);
-            check_stages_available(scenario);
-            if (o->threads > 0) omp_set_num_threads(o->threads);
+  return {
+      sub, [o]() -> int {
+        // Before anything else, so that the workers never parse, print or write.
+        dem::MpiSession mpi;
+        if (mpi.rank() != 0) {
+          if (o->threads > 0) omp_set_num_threads(o->threads);
+          mpi.serve(dem::compute_worker_share);
+          return 0;
+        }
+        if (o->quiet) log::set_level(log::Level::kWarning);
+        Scenario scenario = Scenario::from_file(o->scenario, scenario_schema());
+        for (const auto& s : o->sets) scenario.apply_override(s);
+        check_stages_available(scenario);
+        if (o->threads > 0) omp_set_num_threads(o->threads);
 
-            const std::filesystem::path out_dir = o->out;
-            ResultsWriter out(out_dir / "results.h5");
-            for (const auto& note : out.notes()) log::info(note);
-            out.attr("/", "seed", scenario.get_int("run.seed"));
-            out.attr("/", "scenario", scenario.to_toml());
-            out.attr("/", "scenario_file", o->scenario);
-            RunContext ctx{out_dir, o->threads, o->quiet, o->progress_every};
-            {
-              // Say first what will run, on what, and where it goes.
-              std::string plan;
-              for (const auto& st : scenario.get_strings("run.stages"))
-                plan += (plan.empty() ? "" : ", ") + st;
-              log::info(o->scenario, ": N = ", scenario.get_int("dem.n_particles"), ", stages ",
-                        plan, "; writing ", (out_dir / "results.h5").string(),
-                        " (on 2 idle cores quick.toml takes ~2 min, paper.toml ~25 min)");
-            }
-            if (mpi.size() > 1) log::info(mpi.size(), " MPI ranks share the probe campaigns");
-            try {
-              run_pipeline(scenario, out, ctx);
-              out.commit();
-            } catch (...) {
-              if (const std::string kept = out.keep_partial(); !kept.empty())
-                rethrow_with_note(kept);
-              throw;
-            }
-            log::info("wrote ", out.final_path().string());
-            run_post_commit(scenario, out.final_path(), ctx);
-            return 0;
-          }};
+        const std::filesystem::path out_dir = o->out;
+        const std::filesystem::path final_path = out_dir / "results.h5";
+        std::optional<ResultsWriter> writer;
+        std::vector<std::string> completed;
+        if (o->resume) {
+          writer.emplace(ResultsWriter::resume(final_path));
+          for (const auto& note : writer->notes()) log::info(note);
+          const ResumePlan plan = resume_plan(scenario, ResultsReader(writer->temporary_path()));
+          completed = plan.completed;
+          if (completed.empty()) {
+            log::info("resume: ", plan.why_not.empty() ? "no completed stage kept" : plan.why_not,
+                      "; running every stage");
+            writer.reset();  // its temporary file goes before the new writer makes its own
+          } else {
+            std::string kept;
+            for (const auto& c : completed) kept += (kept.empty() ? "" : ", ") + c;
+            log::info("resume: the stages ", kept, " are taken from ", final_path.string(),
+                      ".partial");
+          }
+        }
+        if (!writer) writer.emplace(final_path);
+        ResultsWriter& out = *writer;
+        if (!o->resume)
+          for (const auto& note : out.notes()) log::info(note);
+        out.attr("/", "seed", scenario.get_int("run.seed"));
+        out.attr("/", "scenario", scenario.to_toml());
+        out.attr("/", "scenario_file", o->scenario);
+        RunContext ctx{out_dir, o->threads, o->quiet, o->progress_every};
+        {
+          // Say first what will run, on what, and where it goes.
+          std::string plan;
+          for (const auto& st : scenario.get_strings("run.stages"))
+            plan += (plan.empty() ? "" : ", ") + st;
+          log::info(o->scenario, ": N = ", scenario.get_int("dem.n_particles"), ", stages ", plan,
+                    "; writing ", (out_dir / "results.h5").string(),
+                    " (on 2 idle cores quick.toml takes ~2 min, paper.toml ~25 min)");
+        }
+        if (mpi.size() > 1) log::info(mpi.size(), " MPI ranks share the probe campaigns");
+        try {
+          run_pipeline(scenario, out, ctx, completed);
+          out.commit();
+        } catch (...) {
+          if (const std::string kept = out.keep_partial(); !kept.empty()) rethrow_with_note(kept);
+          throw;
+        }
+        if (o->resume) {
+          std::error_code ec;  // the kept stages are in the final file now, or were redone
+          std::filesystem::remove(final_path.string() + ".partial", ec);
+        }
+        log::info("wrote ", out.final_path().string());
+        run_post_commit(scenario, out.final_path(), ctx);
+        return 0;
+      }};
 }
 }  // namespace rendulic::app

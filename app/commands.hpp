@@ -27,6 +27,8 @@ Subcommand add_plot(CLI::App& parent);
 Subcommand add_keys(CLI::App& parent);
 Subcommand add_sweep(CLI::App& parent);
 Subcommand add_report(CLI::App& parent);
+Subcommand add_probe(CLI::App& parent);
+Subcommand add_export(CLI::App& parent);
 
 // Draws the figures of a results file into out_dir (cmd_plot.cpp); used by the report stage.
 // The figure script is `script` if given, else the first of RENDULIC_PLOT_SCRIPT, plot.py

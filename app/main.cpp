@@ -35,7 +35,7 @@ int main(int argc, char** argv) {
   std::vector<app::Subcommand> subs = {
       app::add_run(cli),   app::add_fit(cli),     app::add_envelope(cli), app::add_calibrate(cli),
       app::add_bench(cli), app::add_inspect(cli), app::add_plot(cli),     app::add_keys(cli),
-      app::add_sweep(cli), app::add_report(cli)};
+      app::add_sweep(cli), app::add_report(cli),  app::add_probe(cli),    app::add_export(cli)};
   try {
     cli.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

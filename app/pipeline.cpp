@@ -2,11 +2,13 @@
 // protocol of docs/physics.md section 4.
 #include "pipeline.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <functional>
 #include <string>
 #include <vector>
 
+#include "packing_system.hpp"
 #include "progress.hpp"
 #include "rendulic/calibration/settings.hpp"
 #include "rendulic/core/errors.hpp"
@@ -127,11 +129,57 @@ void check_stages_available(const Scenario& scenario) {
     calibration::calibration_plan(calibration::calibration_settings_from(scenario));
 }
 
-void run_pipeline(const Scenario& scenario, ResultsWriter& out, const RunContext& ctx) {
-  std::string completed;
-  DemRunSession session;
+ResumePlan resume_plan(const Scenario& scenario, const ResultsReader& kept) {
+  ResumePlan plan;
+  if (!kept.has_attr("/", "scenario")) return plan;  // nothing kept
+  if (kept.attr_string("/", "scenario") != scenario.to_toml())
+    throw InputError("run --resume: " + kept.path().string() +
+                     " holds the stages of another scenario (or other --set values); give the "
+                     "interrupted run's, or run without --resume");
   for (const auto& s : stages()) {
     if (!stage_requested(scenario, s.name) || !s.run) continue;
+    if (kept.has_attr(paths::kTimings, s.name)) {
+      plan.completed.emplace_back(s.name);
+      continue;
+    }
+    // Only the states at rest are stored with their checkpoints; the live system before them
+    // and the loading's snapshots are not.
+    for (const char* live : {"prepare", "isotropic", "path", "states", "pressure"})
+      if (s.name == std::string(live)) {
+        plan.why_not = std::string("stage '") + s.name +
+                       "' needs the live DEM system of the stages before it, which the file does "
+                       "not keep";
+        plan.completed.clear();
+        return plan;
+      }
+  }
+  return plan;
+}
+
+void run_pipeline(const Scenario& scenario, ResultsWriter& out, const RunContext& ctx,
+                  const std::vector<std::string>& completed_before) {
+  std::string completed;
+  DemRunSession session;
+  auto was_completed = [&](const std::string& name) {
+    return std::find(completed_before.begin(), completed_before.end(), name) !=
+           completed_before.end();
+  };
+  if (was_completed("states")) {
+    // The states as the states stage left them: restarted bit for bit from their checkpoints.
+    session.options = dem::dem_options_from_scenario(scenario);
+    const ResultsReader kept(out.temporary_path());
+    for (const std::string& label : session.options->state_labels) {
+      auto sys = restore_checkpoint(kept, paths::state(label), session.options->system);
+      if (!sys)
+        throw InputError("run --resume: state " + label + " has no checkpoint in " +
+                         out.temporary_path().string());
+      session.relaxed.emplace_back(label, std::move(*sys));
+    }
+  }
+  for (const auto& name : completed_before) completed += (completed.empty() ? "" : ", ") + name;
+  for (const auto& s : stages()) {
+    if (!stage_requested(scenario, s.name) || !s.run) continue;
+    if (was_completed(s.name)) continue;
     // Every stage says when it starts and ends, in a log as on a terminal: a short stage
     // shows no progress line of its own (progress.hpp).
     log::info("[", s.name, "] started");

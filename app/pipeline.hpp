@@ -4,6 +4,8 @@
 #pragma once
 
 #include <filesystem>
+#include <string>
+#include <vector>
 
 #include "rendulic/core/results.hpp"
 #include "rendulic/core/scenario.hpp"
@@ -26,8 +28,21 @@ void register_run_keys(ScenarioSchema& schema);
 // cross-key rules of the requested stages hold (InputError otherwise).
 void check_stages_available(const Scenario& scenario);
 // Runs every requested stage, in order, writing into `out`; wall time per stage goes to the
-// attributes of /timings.
-void run_pipeline(const Scenario& scenario, ResultsWriter& out, const RunContext& ctx);
+// attributes of /timings. The stages in `completed` (a resumed run's, resume_plan()) are
+// already in `out` and are skipped; the states they left are restored from their checkpoints.
+void run_pipeline(const Scenario& scenario, ResultsWriter& out, const RunContext& ctx,
+                  const std::vector<std::string>& completed = {});
+// What the kept stages of an interrupted run (ResultsWriter::resume) let `run --resume` skip
+// (docs/usage.md "Resuming a run"): `completed` its requested stages that are in `kept`, or
+// empty, with the reason in `why_not`, when the run must start over: a stage still to run needs
+// the live system of the DEM stages before it (prepare .. states, and pressure, which needs the
+// loading's snapshots), which a results file does not keep. InputError if `kept` is another
+// scenario's.
+struct ResumePlan {
+  std::vector<std::string> completed;
+  std::string why_not;
+};
+ResumePlan resume_plan(const Scenario& scenario, const ResultsReader& kept);
 // Stages that read the committed results file (the report), run after commit().
 void run_post_commit(const Scenario& scenario, const std::filesystem::path& results,
                      const RunContext& ctx);

@@ -44,6 +44,9 @@ std::vector<std::pair<dem::DemSystem, dem::RestSummary>> rest_states(
 void write_state(ResultsWriter& out, const std::string& group, const dem::DemSystem& sys,
                  const dem::RestSummary& rest, double force_tolerance, bool with_configuration);
 
+// /material (docs/results.md): the contact law, density, size distribution and time step.
+void write_material(ResultsWriter& out, const dem::SystemOptions& system, std::int64_t n_particles);
+
 // DEM (stages_dem.cpp).
 void stage_prepare(const Scenario&, ResultsWriter&, const RunContext&, DemRunSession&);
 void stage_isotropic(const Scenario&, ResultsWriter&, const RunContext&, DemRunSession&);

@@ -67,14 +67,9 @@ dem::DemSystem& live_system(DemRunSession& s, const char* stage) {
 
 }  // namespace
 
-void stage_prepare(const Scenario& sc, ResultsWriter& out, const RunContext& ctx,
-                   DemRunSession& session) {
-  session = DemRunSession{};
-  session.options = dem::dem_options_from_scenario(sc);
-  const dem::DemRunOptions& o = *session.options;
-  const dem::Material& m = o.system.material;
-  Progress progress(ctx, "prepare");
-
+void write_material(ResultsWriter& out, const dem::SystemOptions& system,
+                    std::int64_t n_particles) {
+  const dem::Material& m = system.material;
   out.attr(paths::kMaterial, "k", m.k);
   out.attr(paths::kMaterial, "gamma", m.gamma);
   out.attr(paths::kMaterial, "gamma_b", m.gamma_b);
@@ -82,9 +77,19 @@ void stage_prepare(const Scenario& sc, ResultsWriter& out, const RunContext& ctx
   out.attr(paths::kMaterial, "r_mean", m.r_mean);
   out.attr(paths::kMaterial, "w", m.w);
   out.attr(paths::kMaterial, "k_star", m.k_star());
-  out.attr(paths::kMaterial, "dt", dem::time_step(m, o.system.dt_factor));
-  out.attr(paths::kMaterial, "dt_factor", o.system.dt_factor);
-  out.attr(paths::kMaterial, "n_particles", static_cast<std::int64_t>(o.gas.n_particles));
+  out.attr(paths::kMaterial, "dt", dem::time_step(m, system.dt_factor));
+  out.attr(paths::kMaterial, "dt_factor", system.dt_factor);
+  out.attr(paths::kMaterial, "n_particles", n_particles);
+}
+
+void stage_prepare(const Scenario& sc, ResultsWriter& out, const RunContext& ctx,
+                   DemRunSession& session) {
+  session = DemRunSession{};
+  session.options = dem::dem_options_from_scenario(sc);
+  const dem::DemRunOptions& o = *session.options;
+  Progress progress(ctx, "prepare");
+
+  write_material(out, o.system, static_cast<std::int64_t>(o.gas.n_particles));
 
   dem::PreparedPacking p = dem::prepare_packing(
       o, static_cast<std::uint64_t>(sc.get_int("run.seed")),

@@ -475,6 +475,31 @@ ResultsWriter ResultsWriter::update(const fs::path& existing_path) {
   return w;
 }
 
+ResultsWriter ResultsWriter::resume(const fs::path& final_path) {
+  detail::quiet_hdf5();
+  ResultsWriter w;
+  w.impl_ = std::make_unique<Impl>();
+  Impl& m = *w.impl_;
+  m.final_path = final_path;
+  m.make_folder();
+  m.sweep_stale();  // a killed run's saved copy becomes FINAL.partial here
+  const fs::path partial = with_suffix(final_path, ".partial");
+  m.tmp_path = temporary_for(final_path);
+  m.tmp_handle = cleanup::remove_on_death(m.tmp_path);
+  if (!fs::exists(partial)) {
+    m.open(true, "cannot create results file");
+    w.attr("/", "schema", kSchema);
+    w.attr("/", "version", kVersion);
+    w.attr("/", "git_sha", kGitSha);
+    return w;
+  }
+  { ResultsReader check(partial); }  // refuses files that are not ours
+  if (const std::string why = copy_whole_file(partial, m.tmp_path); !why.empty())
+    throw InputError(partial.string() + ": cannot copy to resume: " + why);
+  m.open(false, "cannot open to resume");
+  return w;
+}
+
 ResultsWriter::ResultsWriter(ResultsWriter&&) noexcept = default;
 ResultsWriter& ResultsWriter::operator=(ResultsWriter&&) noexcept = default;
 ResultsWriter::~ResultsWriter() = default;

@@ -26,6 +26,11 @@ class ResultsWriter {
   // Modifies an existing results file atomically: works on a temporary copy, renamed back
   // over the original on commit().
   static ResultsWriter update(const std::filesystem::path& existing_path);
+  // Continues an interrupted run (docs/usage.md "Resuming a run"): starts from a copy of the
+  // stages it kept in FINAL.partial (after taking over a killed run's saved copy, as the
+  // constructor does), or from a new file like the constructor when there is none. The partial
+  // file is left alone: the caller removes it once commit() succeeded.
+  static ResultsWriter resume(const std::filesystem::path& final_path);
   ResultsWriter(ResultsWriter&&) noexcept;
   ResultsWriter& operator=(ResultsWriter&&) noexcept;
   // Without commit(), removes the temporary file: nothing half-written survives.

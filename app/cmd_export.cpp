@@ -1,0 +1,73 @@
+// `rendulic export RESULTS.h5 --state LABEL --lammps FILE` (docs/interop.md): a state of a
+// results file as a LAMMPS data file (atom_style sphere, its peculiar velocities included), from
+// which LAMMPS, with the pair settings that docs/interop.md gives and this command prints,
+// computes the stored stress to round-off. The same writer serves `rendulic bench --lammps`.
+#include <cmath>
+#include <iomanip>
+#include <iostream>
+#include <memory>
+#include <sstream>
+
+#include "commands.hpp"
+#include "rendulic/core/errors.hpp"
+#include "rendulic/core/log.hpp"
+#include "rendulic/core/packing_file.hpp"
+#include "rendulic/core/result_paths.hpp"
+#include "rendulic/core/results.hpp"
+
+namespace rendulic::app {
+namespace {
+struct ExportOptions {
+  std::string results;
+  std::string state;
+  std::string lammps;
+};
+
+// The pair settings of the contact law (contact.hpp) in LAMMPS: a Hookean normal spring with
+// a velocity dashpot, no tangential force (docs/interop.md).
+std::string lammps_pair_lines(double k, double gamma) {
+  std::ostringstream s;
+  s << std::setprecision(17) << "pair_style granular\npair_coeff * * hooke " << k << " " << gamma
+    << " damping velocity tangential linear_nohistory 0 0\n";
+  return s.str();
+}
+}  // namespace
+
+Subcommand add_export(CLI::App& parent) {
+  auto o = std::make_shared<ExportOptions>();
+  auto* sub = parent.add_subcommand(
+      "export",
+      "Write a state of a results file as a LAMMPS data file (atom_style sphere, velocities "
+      "included); the LAMMPS settings that reproduce its stress are in docs/interop.md");
+  sub->add_option("results", o->results, "results file (HDF5)")->required();
+  sub->add_option("--state", o->state,
+                  "the state: a label (a for /states/a) or a group (/pressure/nu0.7/states/a)")
+      ->required();
+  sub->add_option("--lammps", o->lammps, "the LAMMPS data file to write")->required();
+  return {sub, [o]() -> int {
+            std::string group = o->state;
+            if (group.empty() || group.front() != '/') {
+              if (const std::string why = invalid_object_name_reason(group); !why.empty())
+                throw InputError("export --state '" + o->state + "' " + why);
+              group = paths::state(group);
+            }
+            const Packing p = read_results_state(o->results, group);
+            const ResultsReader in(o->results);
+            const double k = in.attr_double(paths::kMaterial, "k");
+            const double gamma = in.attr_double(paths::kMaterial, "gamma");
+            const double density = in.attr_double(paths::kMaterial, "density");
+            const double dt = in.attr_double(paths::kMaterial, "dt");
+            std::ostringstream title;
+            title << std::setprecision(17) << "rendulic state " << group << " of " << o->results
+                  << " (N = " << p.size() << ", nu = " << p.volume_fraction() << ", k = " << k
+                  << ", gamma = " << gamma << ", dt = " << dt << " s)";
+            write_lammps_data(o->lammps, p, density, title.str());
+            log::info("wrote ", o->lammps, ": ", p.size(),
+                      " spheres; the LAMMPS pair settings of its material follow (units si, "
+                      "atom_style sphere; docs/interop.md)");
+            std::cout << lammps_pair_lines(k, gamma);
+            return 0;
+          }};
+}
+
+}  // namespace rendulic::app

@@ -1,0 +1,318 @@
+// `rendulic probe PACKING --out DIR [--methods ...] [--amplitudes ...] [--directions M]
+// [--set key=value ...]` (docs/interop.md, docs/usage.md): the probes, linear response and fits
+// of a packing made elsewhere (a LAMMPS data file or dump) or of a state of a results file,
+// written as DIR/results.h5 in the usual schema (docs/results.md), the packing under
+// /states/<label>.
+//
+// The settings are the scenario keys, so a packing is probed exactly as `rendulic run` probes
+// its states. A results file's state keeps that run's scenario (its material and probe keys) and
+// restarts from its checkpoint, so probing it again gives the envelopes the run stored; a LAMMPS
+// packing takes the seed's defaults, with <r> and w from its own radii (k* = k / 2<r> then
+// scales its stress). Like the run's states, the packing is probed from rest: if its net
+// forces are not balanced (rest.hpp's criterion) or it moves, it is relaxed and minimised at
+// its fixed box first, and what moved is reported.
+#include <omp.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <iomanip>
+#include <iostream>
+#include <memory>
+#include <optional>
+
+#include "commands.hpp"
+#include "packing_system.hpp"
+#include "pipeline.hpp"
+#include "progress.hpp"
+#include "rendulic/core/errors.hpp"
+#include "rendulic/core/log.hpp"
+#include "rendulic/core/packing_file.hpp"
+#include "rendulic/core/result_paths.hpp"
+#include "rendulic/core/results.hpp"
+#include "rendulic/dem/probe_campaign.hpp"
+#include "rendulic/dem/rest.hpp"
+#include "rendulic/dem/scenario_keys.hpp"
+#include "stages.hpp"
+
+namespace rendulic::app {
+namespace {
+
+constexpr char kLinear[] = "linear_response";
+
+struct ProbeCmdOptions {
+  std::string packing;
+  std::string out = "out";
+  std::string label = "imported";
+  std::vector<std::string> methods;
+  std::vector<double> amplitudes;
+  int directions = 0;
+  std::vector<std::string> sets;
+  int threads = 0;
+  bool quiet = false;
+  double progress_every = 30.0;
+};
+
+using Clock = std::chrono::steady_clock;
+double since(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+// The scenario the packing is probed with: a results file's own (its material and probe keys,
+// so that its stored envelopes come out again), else the defaults; then the overrides.
+Scenario probe_scenario(const PackingSource& src, const ProbeCmdOptions& o) {
+  Scenario sc(scenario_schema());
+  if (src.format == PackingFormat::kResultsState) {
+    const ResultsReader in(src.file);
+    if (in.has_attr("/", "scenario")) {
+      try {
+        sc = Scenario::from_string(in.attr_string("/", "scenario"),
+                                   src.file.string() + ":/scenario", scenario_schema());
+      } catch (const InputError& e) {
+        log::warning("the scenario stored in ", src.file.string(),
+                     " does not parse with this version (", e.what(),
+                     "); the defaults and the file's /material are used");
+        for (const char* key : {"k", "gamma", "gamma_b", "density", "r_mean", "w", "dt_factor"})
+          if (in.has_attr(paths::kMaterial, key))
+            sc.set(
+                std::string(key) == "dt_factor" ? "dem.dt_factor" : std::string("material.") + key,
+                in.attr_double(paths::kMaterial, key));
+      }
+    }
+  }
+  for (const auto& s : o.sets) sc.apply_override(s);
+  if (!o.amplitudes.empty()) sc.set("probes.amplitudes", o.amplitudes);
+  if (o.directions > 0) sc.set("probes.directions", std::int64_t{o.directions});
+  return sc;
+}
+
+// A packing from another engine: its size distribution sets <r> (hence k*) and w (hence the
+// smallest contact duration and the time step), unless the keys say otherwise.
+void size_keys_from_packing(Scenario& sc, const Packing& p) {
+  const auto [lo, hi] = std::minmax_element(p.radii.begin(), p.radii.end());
+  try {
+    if (!sc.is_set("material.r_mean")) sc.set("material.r_mean", p.mean_radius());
+    if (!sc.is_set("material.w")) sc.set("material.w", *hi / *lo);
+  } catch (const InputError& e) {
+    throw InputError(p.origin + ": its radii do not fit the material keys: " + e.what());
+  }
+}
+
+struct Moved {
+  double max_over_r = 0, rms_over_r = 0;
+  long count = 0;  // particles moved by more than kMovedOverR <r>
+};
+constexpr double kMovedOverR = 1e-3;
+
+Moved what_moved(const Packing& before, const dem::DemSystem& after, double r_mean) {
+  Moved m;
+  const dem::Particles& p = after.particles();
+  const Eigen::Vector3d L = after.cell().lengths();
+  double sum = 0;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    Eigen::Vector3d d =
+        p.position(i) - before.positions.row(static_cast<Eigen::Index>(i)).transpose();
+    for (int a = 0; a < 3; ++a) d[a] -= L[a] * std::round(d[a] / L[a]);
+    const double u = d.norm() / r_mean;
+    m.max_over_r = std::max(m.max_over_r, u);
+    sum += u * u;
+    m.count += u > kMovedOverR;
+  }
+  m.rms_over_r = std::sqrt(sum / static_cast<double>(std::max<std::size_t>(p.size(), 1)));
+  return m;
+}
+
+// One line per envelope: the stress fit's semi-axes per unit strain (in k*) and inclination.
+void print_summary(const ResultsReader& in, const std::string& group) {
+  std::cout << std::left << std::setw(26) << "envelope" << std::setw(9) << "shape" << std::right
+            << std::setw(14) << "a/strain[k*]" << std::setw(14) << "b/strain[k*]" << std::setw(18)
+            << "inclination[deg]"
+            << "\n";
+  const std::string envs = paths::envelopes(group);
+  if (!in.is_group(envs)) return;
+  for (const std::string& name : in.children(envs)) {
+    const std::string g = paths::envelope(group, name), f = g + paths::kFitStress;
+    std::cout << std::left << std::setw(26) << name;
+    if (!in.is_group(f) || !in.has_attr(f, "semi_axes")) {
+      std::cout << (in.has_attr(g, "error") ? in.attr_string(g, "error") : "no fit") << "\n";
+      continue;
+    }
+    const double amp = in.attr_double(g, "amplitude");
+    const std::vector<double> ab = in.attr_doubles(f, "semi_axes");
+    std::cout << std::setw(9) << in.attr_string(f, "shape") << std::right << std::setprecision(5)
+              << std::setw(14) << ab.at(0) / amp << std::setw(14) << ab.at(1) / amp << std::setw(18)
+              << (in.has_attr(f, "inclination_deg") ? in.attr_double(f, "inclination_deg")
+                                                    : std::nan(""))
+              << "\n";
+  }
+}
+
+}  // namespace
+
+Subcommand add_probe(CLI::App& parent) {
+  auto o = std::make_shared<ProbeCmdOptions>();
+  auto* sub = parent.add_subcommand(
+      "probe",
+      "Probe a packing made elsewhere (LAMMPS data file or dump) or a results file's state "
+      "(FILE.h5:/states/a): rest, probes, linear response and fits into DIR/results.h5");
+  sub->add_option("packing", o->packing,
+                  "LAMMPS data file (atom_style sphere), LAMMPS text dump (id, radius or diameter, "
+                  "x y z), or RESULTS.h5:/states/LABEL")
+      ->required();
+  sub->add_option("--out", o->out, "output folder")->capture_default_str();
+  sub->add_option("--label", o->label, "the packing's state label in the results file")
+      ->capture_default_str()
+      ->check(CLI::Validator(
+          [](std::string& s) {
+            const std::string why = invalid_object_name_reason(s);
+            return why.empty() ? why : "label '" + s + "' " + why;
+          },
+          "LABEL"));
+  sub->add_option("--methods", o->methods,
+                  "probe methods (default: probes.methods and linear_response)")
+      ->check(CLI::IsMember({"dynamic", "minimisation", kLinear}));
+  sub->add_option("--amplitudes", o->amplitudes, "probe strain amplitudes (probes.amplitudes)");
+  sub->add_option("--directions", o->directions, "probe directions M (probes.directions)")
+      ->check(CLI::PositiveNumber);
+  sub->add_option("--set", o->sets, "override a scenario key by its dotted path: a.b=value")
+      ->take_all();
+  sub->add_option("--threads", o->threads, "OpenMP threads over the probes (0: all cores)")
+      ->check(CLI::NonNegativeNumber);
+  sub->add_flag("--quiet", o->quiet, "no progress; warnings and errors still print");
+  sub->add_option("--progress-every", o->progress_every,
+                  "seconds between progress lines when stderr is not a terminal")
+      ->check(CLI::Range(0.1, 86400.0))
+      ->capture_default_str();
+  return {
+      sub, [o]() -> int {
+        if (o->quiet) log::set_level(log::Level::kWarning);
+        // Everything is read and checked before the output folder is touched.
+        const PackingSource src = packing_source(o->packing);
+        const Packing packing = read_packing(src);
+        Scenario sc = probe_scenario(src, *o);
+        const bool from_results = src.format == PackingFormat::kResultsState;
+        if (!from_results) size_keys_from_packing(sc, packing);
+        const dem::DemRunOptions dro = dem::dem_options_from_scenario(sc);
+        dem::ProbeOptions po = dem::probe_options_from(sc);
+        if (o->threads > 0) {
+          po.threads = o->threads;
+          omp_set_num_threads(o->threads);
+        }
+        std::vector<std::string> methods = o->methods;
+        if (methods.empty()) {
+          methods = dem::probe_methods_from(sc);
+          methods.push_back(kLinear);
+        }
+        const double r_mean = dro.system.material.r_mean;
+        log::info(packing.origin, ": N = ", packing.size(), ", nu = ", packing.volume_fraction(),
+                  ", <r> = ", r_mean, " m, box ", packing.lengths.transpose());
+        if (!packing.densities.empty() &&
+            std::any_of(packing.densities.begin(), packing.densities.end(), [&](double d) {
+              return std::abs(d - dro.system.material.density) >
+                     1e-12 * dro.system.material.density;
+            }))
+          log::warning(packing.origin, ": its densities differ from material.density (",
+                       dro.system.material.density,
+                       " kg/m^3), which is used (only the dynamic probes depend on it)");
+
+        std::optional<dem::DemSystem> sys;
+        if (from_results) sys = restore_checkpoint(ResultsReader(src.file), src.object, dro.system);
+        if (!sys) {
+          try {
+            sys = system_of_packing(packing, dro.system);
+          } catch (const InputError& e) {
+            throw InputError(packing.origin + ": " + e.what());
+          }
+        }
+        if (!from_results && packing.velocities.rows() > 0 && !packing.velocities.isZero(0))
+          log::info(packing.origin,
+                    ": its velocities are not used (a packing is probed from rest)");
+
+        const std::filesystem::path out_dir = o->out;
+        ResultsWriter out(out_dir / "results.h5");
+        for (const auto& note : out.notes()) log::info(note);
+        out.attr("/", "seed", sc.get_int("run.seed"));
+        out.attr("/", "scenario", sc.to_toml());
+        out.attr("/", "packing", o->packing);
+        write_material(out, dro.system, static_cast<std::int64_t>(packing.size()));
+        RunContext ctx{out_dir, o->threads, o->quiet, o->progress_every};
+
+        // At rest, as the run's states are (rest.hpp): the criterion first, and only a
+        // packing that fails it (or moves) is relaxed and minimised.
+        auto t0 = Clock::now();
+        log::info("[rest] started");
+        dem::RestSummary rest;
+        rest.after_relax = rest.at_rest =
+            dem::force_balance(dem::packing_of(*sys), dro.system.material.k);
+        rest.stress_change.setZero();
+        rest.relaxed.converged = true;
+        const bool moving = sys->kinetic_energy() > 0;
+        if (rest.at_rest.ratio >= dem::kEquilibrium || moving) {
+          log::info("net force ", rest.at_rest.ratio, " of the mean contact force (at rest: below ",
+                    dem::kEquilibrium, "): relaxing and minimising at the fixed box");
+          try {
+            rest = dem::bring_to_rest(*sys, dro.state_rest);
+          } catch (const std::runtime_error& e) {
+            throw InputError(packing.origin + ": cannot be brought to rest: " + e.what());
+          }
+          if (!(rest.at_rest.ratio < dem::kEquilibrium))
+            throw InputError(packing.origin + ": not at rest after minimisation (net force " +
+                             std::to_string(rest.at_rest.ratio) + " of the mean contact force)");
+          const Moved m = what_moved(packing, *sys, r_mean);
+          log::info("at rest: relaxed for ", rest.relaxed.time, " s (", rest.relaxed.steps,
+                    " steps), then ", rest.minimised.iterations, " FIRE iterations: net force ",
+                    rest.at_rest.ratio, " of the mean contact force; ", m.count, " of ",
+                    packing.size(), " particles moved more than ", kMovedOverR,
+                    " <r> from the file's positions (largest ", m.max_over_r, " <r>, rms ",
+                    m.rms_over_r, " <r>); the minimisation changed the stress by ",
+                    rest.stress_change.norm() / std::max(sys->measure().pressure, 1e-300), " of p");
+        } else {
+          log::info("at rest as read: net force ", rest.at_rest.ratio,
+                    " of the mean contact force; nothing moved");
+        }
+        const std::string group = paths::state(o->label);
+        write_state(out, group, *sys, rest, dro.state_rest.minimise.force_tolerance, true);
+        out.attr(group, "source", packing.origin);
+        out.attr(paths::kTimings, "rest", since(t0));
+        log::info("[rest] done in ", human_seconds(since(t0)));
+
+        t0 = Clock::now();
+        log::info("[probes] started");
+        {
+          Progress progress(ctx, "probes");
+          std::atomic<long> done{0};
+          long total = 0;
+          for (const auto& m : methods)
+            total += m == kLinear ? 0 : static_cast<long>(po.amplitudes.size()) * po.directions;
+          po.probe_done = [&progress, &done, total] { progress.count(++done, total); };
+          for (const auto& m : methods) {
+            progress.start_task(m);
+            try {
+              write_probe_campaign(*sys, group, {m}, po, out);
+            } catch (const std::runtime_error& e) {
+              if (m != kLinear || dynamic_cast<const InputError*>(&e)) throw;
+              // As in the run: a network with no elastic response is a finding, recorded.
+              for (double a : po.amplitudes) {
+                const std::string g = paths::envelope(group, paths::envelope_name(m, a));
+                out.attr(g, "method", m);
+                out.attr(g, "amplitude", a);
+                out.attr(g, "error", std::string(e.what()));
+              }
+              log::warning("no linear response: ", e.what());
+            }
+          }
+        }
+        out.attr(paths::kTimings, "probes", since(t0));
+        log::info("[probes] done in ", human_seconds(since(t0)));
+        t0 = Clock::now();
+        fit_state_envelopes(sc, out, group);
+        out.attr(paths::kTimings, "fits", since(t0));
+        print_summary(ResultsReader(out.temporary_path()), group);
+        out.commit();
+        log::info("wrote ", out.final_path().string());
+        return 0;
+      }};
+}
+
+}  // namespace rendulic::app

@@ -1,0 +1,83 @@
+// Conversions between Packing and DemSystem, and the checkpoint reader (see packing_system.hpp).
+#include "packing_system.hpp"
+
+#include "rendulic/core/errors.hpp"
+#include "rendulic/core/result_paths.hpp"
+#include "rendulic/dem/protocols.hpp"
+
+namespace rendulic::app {
+
+Packing packing_of_system(const dem::DemSystem& s) {
+  const dem::Particles& p = s.particles();
+  Packing out;
+  const auto n = static_cast<Eigen::Index>(p.size());
+  out.positions.resize(n, 3);
+  out.velocities.resize(n, 3);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    out.positions.row(i) << p.x[k], p.y[k], p.z[k];
+    out.velocities.row(i) << p.vx[k], p.vy[k], p.vz[k];
+  }
+  out.radii = p.radius;
+  out.lengths = s.cell().lengths();
+  return out;
+}
+
+dem::DemSystem system_of_packing(const Packing& packing, const dem::SystemOptions& options) {
+  return dem::system_from_positions(packing.positions, packing.radii, packing.lengths, options);
+}
+
+namespace {
+std::vector<double> column(const Eigen::MatrixXd& m, int c) {
+  std::vector<double> v(static_cast<std::size_t>(m.rows()));
+  for (Eigen::Index i = 0; i < m.rows(); ++i) v[static_cast<std::size_t>(i)] = m(i, c);
+  return v;
+}
+Eigen::Vector3d three(const ResultsReader& in, const std::string& path) {
+  const std::vector<double> v = in.read_vector(path);
+  if (v.size() != 3) throw InputError(in.path().string() + ": " + path + " must hold 3 numbers");
+  return {v[0], v[1], v[2]};
+}
+}  // namespace
+
+std::optional<dem::DemSystem> restore_checkpoint(const ResultsReader& in, const std::string& group,
+                                                 const dem::SystemOptions& options) {
+  const std::string cp = group + paths::kCheckpoint;
+  if (!in.is_group(cp)) return std::nullopt;
+  const std::string where = in.path().string() + ":" + cp;
+  const Eigen::MatrixXd x = in.read_matrix(group + datasets::kPositions);
+  const std::vector<double> radii = in.read_vector(group + datasets::kRadii);
+  const Eigen::MatrixXd v = in.read_matrix(cp + datasets::kVelocities);
+  const Eigen::MatrixXd f = in.read_matrix(cp + datasets::kForces);
+  const Eigen::MatrixXd ref = in.read_matrix(cp + datasets::kReferencePositions);
+  const auto n = static_cast<Eigen::Index>(radii.size());
+  for (const Eigen::MatrixXd* m : {&x, &v, &f, &ref})
+    if (m->rows() != n || m->cols() != 3)
+      throw InputError(where +
+                       ": positions, velocities, forces and reference positions must be "
+                       "[N,3] with N = number of radii");
+  dem::State s;
+  dem::Particles& p = s.particles;
+  p.resize(radii.size());
+  p.x = column(x, 0), p.y = column(x, 1), p.z = column(x, 2);
+  p.vx = column(v, 0), p.vy = column(v, 1), p.vz = column(v, 2);
+  p.fx = column(f, 0), p.fy = column(f, 1), p.fz = column(f, 2);
+  p.radius = radii;
+  for (std::size_t i = 0; i < radii.size(); ++i) {
+    if (!(radii[i] > 0)) throw InputError(where + ": radius " + std::to_string(i) + " <= 0");
+    p.inv_mass[i] = 1.0 / options.material.sphere_mass(radii[i]);
+  }
+  s.lengths = three(in, group + datasets::kCellLengths);
+  s.strain_E = three(in, cp + datasets::kStrainE);
+  s.last_D = three(in, cp + datasets::kLastD);
+  s.time = in.attr_double(cp, "time");
+  s.steps = in.attr_int(cp, "steps");
+  s.ref_x = column(ref, 0), s.ref_y = column(ref, 1), s.ref_z = column(ref, 2);
+  s.ref_lengths = three(in, cp + datasets::kReferenceCellLengths);
+  s.ref_half_skin = in.read_vector(cp + datasets::kReferenceHalfSkins);
+  if (!s.ref_half_skin.empty() && s.ref_half_skin.size() != radii.size())
+    throw InputError(where + ": reference_half_skins must hold one number per particle");
+  return dem::DemSystem::restore(s, options);
+}
+
+}  // namespace rendulic::app

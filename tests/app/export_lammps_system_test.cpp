@@ -1,0 +1,100 @@
+// `rendulic export --lammps` (docs/interop.md): the data file holds the stored state exactly
+// (positions, radii, velocities read back to the same doubles), and LAMMPS, an independent
+// implementation of the same contact law, computes from it the stress the results file stored,
+// to round-off, with the pair settings docs/interop.md gives (skipped where Debian's `lmp` is
+// not installed).
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <sstream>
+
+#include "cli_runner.hpp"
+#include "rendulic/core/packing_file.hpp"
+#include "rendulic/core/result_paths.hpp"
+#include "rendulic/core/results.hpp"
+#include "tiny_run.hpp"
+
+namespace {
+namespace fs = std::filesystem;
+using rendulic::testing::run_command;
+using rendulic::testing::run_rendulic;
+
+const fs::path kRoot = fs::path(RENDULIC_TEST_TMP) / "app_export";
+
+bool have_lammps() { return run_command("command -v lmp > /dev/null").code == 0; }
+
+// The LAMMPS input of docs/interop.md "Checking a state in LAMMPS": read the data file, the pair
+// settings `rendulic export` printed, the virial stress after `run 0`, printed in full.
+std::string lammps_input(const std::string& pair_lines) {
+  return "units si\natom_style sphere\nboundary p p p\ncomm_modify vel yes\n"
+         "read_data ${data}\n" +
+         pair_lines +
+         "compute sigma all pressure NULL virial\n"
+         "thermo_style custom step c_sigma[1]\n"
+         "run 0\n"
+         "print \"STRESS $(c_sigma[1]:%.17g) $(c_sigma[2]:%.17g) $(c_sigma[3]:%.17g) "
+         "$(c_sigma[4]:%.17g) $(c_sigma[5]:%.17g) $(c_sigma[6]:%.17g)\"\n";
+}
+
+TEST(Export, DataFileHoldsTheStoredStateExactlyAndLammpsReproducesItsStress) {
+  const fs::path results = rendulic::testing::tiny_results(kRoot);
+  const fs::path dir = rendulic::testing::fresh_dir("app_export/state_a");
+  const fs::path data = dir / "a.data";
+  const auto r =
+      run_rendulic("export " + results.string() + " --state a --lammps " + data.string(), false);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("pair_coeff * * hooke 100000000 1 damping velocity"), std::string::npos)
+      << r.out;
+
+  // Read back: the same doubles, in the same order.
+  const rendulic::ResultsReader in(results);
+  const std::string g = rendulic::paths::state("a");
+  const Eigen::MatrixXd x = in.read_matrix(g + rendulic::datasets::kPositions);
+  const std::vector<double> radii = in.read_vector(g + rendulic::datasets::kRadii);
+  const Eigen::MatrixXd v =
+      in.read_matrix(g + rendulic::paths::kCheckpoint + rendulic::datasets::kVelocities);
+  const rendulic::Packing p = rendulic::read_lammps_data(data);
+  ASSERT_EQ(p.size(), radii.size());
+  EXPECT_EQ(p.radii, radii);
+  EXPECT_TRUE(p.positions == x);
+  EXPECT_TRUE(p.velocities == v);
+  const std::vector<double> L = in.read_vector(g + rendulic::datasets::kCellLengths);
+  EXPECT_EQ(p.lengths, Eigen::Vector3d(L[0], L[1], L[2]));
+  for (double d : p.densities) EXPECT_EQ(d, in.attr_double("/material", "density"));
+
+  if (!have_lammps()) GTEST_SKIP() << "lmp not installed: the LAMMPS check is skipped";
+  std::ofstream(dir / "in.stress") << lammps_input(r.out);
+  const auto l =
+      run_command("cd " + dir.string() + " && lmp -nocite -log none -echo none -var data " +
+                  data.string() + " -in in.stress");
+  ASSERT_EQ(l.code, 0) << l.out;
+  const std::regex line("STRESS ([^ ]+) ([^ ]+) ([^ ]+) ([^ ]+) ([^ ]+) ([^ \n]+)");
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(l.out, m, line)) << l.out;
+  // LAMMPS's order: xx, yy, zz, xy, xz, yz.
+  const int ij[6][2] = {{0, 0}, {1, 1}, {2, 2}, {0, 1}, {0, 2}, {1, 2}};
+  const Eigen::Matrix3d stored = in.read_tensor(g + rendulic::datasets::kStress);
+  const double p_stored = stored.trace() / 3;
+  ASSERT_GT(p_stored, 0);
+  for (int k = 0; k < 6; ++k) {
+    const double lammps = std::stod(m[k + 1].str());
+    // Round-off: the sums run over ~750 contacts in another order.
+    EXPECT_NEAR(lammps, stored(ij[k][0], ij[k][1]), 1e-12 * p_stored)
+        << "component " << k << " (LAMMPS " << lammps << ")";
+  }
+}
+
+TEST(Export, RefusesAStateThatIsNotThere) {
+  const fs::path results = rendulic::testing::tiny_results(kRoot);
+  const fs::path dir = rendulic::testing::fresh_dir("app_export/missing");
+  const auto r = run_rendulic(
+      "export " + results.string() + " --state zz --lammps " + (dir / "z.data").string(), false);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_EQ(rendulic::testing::error_lines(r.err), 1) << r.err;
+  EXPECT_NE(r.err.find("/states/zz"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "z.data"));
+}
+
+}  // namespace

@@ -1,0 +1,110 @@
+// The packing readers and writer (core/packing_file.hpp, docs/interop.md) on small files whose
+// packing is known by construction: a box not at the origin, atoms out of order, positions
+// outside the box and image flags, sections to skip, velocities matched by id; a dump with two
+// snapshots in scaled, unwrapped and plain coordinates; and the writer read back bit for bit.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
+#include "rendulic/core/errors.hpp"
+#include "rendulic/core/packing_file.hpp"
+
+namespace {
+namespace fs = std::filesystem;
+using rendulic::Packing;
+
+fs::path write(const std::string& name, const std::string& text) {
+  const fs::path dir = fs::path(RENDULIC_TEST_TMP) / "app_packing_file";
+  fs::create_directories(dir);
+  std::ofstream(dir / name) << text;
+  return dir / name;
+}
+
+TEST(PackingFile, DataFileIsReadRelativeToItsBoxOrderedByIdAndWrapped) {
+  const fs::path f = write("shifted.data",
+                           "LAMMPS data file via write_data\n\n3 atoms\n1 atom types\n\n"
+                           "-1 1 xlo xhi\n2 4 ylo yhi\n0 3 zlo zhi\n0 0 0 xy xz yz\n\n"
+                           "Masses\n\n1 1.0\n\n"
+                           "Atoms # sphere\n\n"
+                           "3 1 0.2 2000 0.5 2.5 2.5 0 0 0\n"
+                           "1 1 0.4 1000 -0.5 3.0 0.25 1 0 0\n"
+                           "2 1 0.6 2000 1.25 1.5 3.5 0 0 -1\n\n"
+                           "Velocities\n\n2 0.2 0.0 0.0 0 0 0\n1 0.1 0.0 0.0 0 0 0\n"
+                           "3 0.3 0.0 0.0 0 0 0\n");
+  const rendulic::PackingSource src = rendulic::packing_source(f.string());
+  EXPECT_EQ(src.format, rendulic::PackingFormat::kLammpsData);
+  const Packing p = rendulic::read_packing(src);
+  ASSERT_EQ(p.size(), 3u);
+  EXPECT_EQ(p.lengths, Eigen::Vector3d(2, 2, 3));
+  EXPECT_EQ(p.radii, (std::vector<double>{0.2, 0.3, 0.1}));
+  EXPECT_EQ(p.densities, (std::vector<double>{1000, 2000, 2000}));
+  // Relative to (xlo, ylo, zlo) = (-1, 2, 0), wrapped into [0, L): image flags do not matter.
+  EXPECT_EQ(p.positions.row(0), Eigen::RowVector3d(0.5, 1.0, 0.25));
+  EXPECT_EQ(p.positions.row(1), Eigen::RowVector3d(0.25, 1.5, 0.5));  // y 1.5 - 2 + 2, z 3.5 - 3
+  EXPECT_EQ(p.positions.row(2), Eigen::RowVector3d(1.5, 0.5, 2.5));
+  EXPECT_EQ(p.velocities.col(0), Eigen::Vector3d(0.1, 0.2, 0.3));
+  EXPECT_NEAR(p.mean_radius(), 0.2, 1e-15);
+}
+
+TEST(PackingFile, DumpGivesItsLastSnapshotInAnyCoordinateColumns) {
+  const std::string head =
+      "ITEM: TIMESTEP\n{T}\nITEM: NUMBER OF ATOMS\n2\n"
+      "ITEM: BOX BOUNDS pp pp pp\n1 3\n0 2\n0 4\n";
+  auto snapshot = [&](const std::string& t, const std::string& cols, const std::string& rows) {
+    std::string h = head;
+    h.replace(h.find("{T}"), 3, t);
+    return h + "ITEM: ATOMS " + cols + "\n" + rows;
+  };
+  // Scaled, then unwrapped, then plain coordinates of the same two spheres.
+  const std::string scaled = snapshot("0", "id type xs ys zs radius vx vy vz",
+                                      "2 1 0.25 0.75 0.5 0.1 0 0 1\n1 1 0.5 0.5 0.125 0.2 1 0 0\n");
+  const std::string unwrapped =
+      snapshot("10", "id diameter xu yu zu", "1 0.4 4 3 -3.5\n2 0.2 1.5 -0.5 2\n");
+  const std::string plain = snapshot("20", "diameter x y z id", "0.4 2 1 0.5 1\n0.2 1.5 1.5 2 2\n");
+  for (const std::string& text : {scaled, plain + unwrapped, scaled + plain}) {
+    const fs::path f = write("two.dump", text);
+    EXPECT_EQ(rendulic::packing_source(f.string()).format, rendulic::PackingFormat::kLammpsDump);
+    const Packing p = rendulic::read_lammps_dump(f);
+    ASSERT_EQ(p.size(), 2u);
+    EXPECT_EQ(p.lengths, Eigen::Vector3d(2, 2, 4));
+    EXPECT_EQ(p.radii, (std::vector<double>{0.2, 0.1}));
+    EXPECT_EQ(p.positions.row(0), Eigen::RowVector3d(1, 1, 0.5));
+    EXPECT_EQ(p.positions.row(1), Eigen::RowVector3d(0.5, 1.5, 2));
+    EXPECT_EQ(p.velocities.rows(), text == scaled ? 2 : 0);
+  }
+}
+
+TEST(PackingFile, WriterIsReadBackToTheSameDoubles) {
+  Packing p;
+  p.lengths = Eigen::Vector3d(0.1, std::sqrt(0.02), 1.0 / 3.0);
+  p.positions.resize(4, 3);
+  p.velocities.resize(4, 3);
+  for (int i = 0; i < 4; ++i)
+    for (int a = 0; a < 3; ++a) {
+      p.positions(i, a) = std::fmod(std::sqrt(2.0 + i + 3 * a), 1.0) * p.lengths[a];
+      p.velocities(i, a) = std::sin(1.0 + i - a);
+    }
+  p.radii = {1.0 / 77, 1.0 / 91, std::sqrt(1e-5), 0.0123456789012345};
+  const fs::path f = write("round.data", "");
+  rendulic::write_lammps_data(f, p, 2500, "round trip");
+  const Packing q = rendulic::read_lammps_data(f);
+  EXPECT_EQ(q.radii, p.radii);
+  EXPECT_TRUE(q.positions == p.positions);
+  EXPECT_TRUE(q.velocities == p.velocities);
+  EXPECT_EQ(q.lengths, p.lengths);
+  EXPECT_EQ(q.densities, std::vector<double>(4, 2500));
+}
+
+TEST(PackingFile, AResultsFileArgumentNeedsAState) {
+  const fs::path f = write("fake.h5", "\x89HDF\r\n");
+  EXPECT_THROW(rendulic::packing_source(f.string()), rendulic::InputError);
+  const rendulic::PackingSource s = rendulic::packing_source(f.string() + ":b");
+  EXPECT_EQ(s.format, rendulic::PackingFormat::kResultsState);
+  EXPECT_EQ(s.object, "/states/b");
+  EXPECT_EQ(rendulic::packing_label(s, "imported"), "b");
+  EXPECT_THROW(rendulic::packing_source(f.string() + ":"), rendulic::InputError);
+}
+
+}  // namespace

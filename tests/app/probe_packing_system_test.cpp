@@ -1,0 +1,231 @@
+// `rendulic probe` (docs/interop.md) against independent routes to the same numbers:
+//  - a results file's state probed again gives the envelopes and fits the run stored (the state
+//    restarts from its checkpoint, with the run's own scenario);
+//  - a state exported to a LAMMPS data file and imported again is the same packing, at rest as
+//    read (nothing moved), and the data file, a LAMMPS dump of it (written by LAMMPS when `lmp`
+//    is installed, and by this test in another column layout) and the results file's state give
+//    the same linear-response envelopes;
+//  - a packing away from equilibrium is brought to rest, and the report says what moved;
+//  - bad packing files exit 2 with one line and write nothing.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <numeric>
+#include <sstream>
+
+#include "cli_runner.hpp"
+#include "rendulic/core/packing_file.hpp"
+#include "rendulic/core/result_paths.hpp"
+#include "rendulic/core/results.hpp"
+#include "tiny_run.hpp"
+
+namespace {
+namespace fs = std::filesystem;
+using rendulic::ResultsReader;
+using rendulic::testing::CliResult;
+using rendulic::testing::run_command;
+using rendulic::testing::run_rendulic;
+namespace ds = rendulic::datasets;
+namespace paths = rendulic::paths;
+
+const fs::path kRoot = fs::path(RENDULIC_TEST_TMP) / "app_probe";
+
+fs::path tiny() { return rendulic::testing::tiny_results(kRoot); }
+
+CliResult probe(const std::string& args) {
+  return run_rendulic("probe " + args + " --quiet --threads 1", false);
+}
+
+// The largest difference of two stacks of tensors over the largest entry of the first.
+double relative_difference(const std::vector<Eigen::Matrix3d>& a,
+                           const std::vector<Eigen::Matrix3d>& b) {
+  EXPECT_EQ(a.size(), b.size());
+  double diff = 0, scale = 0;
+  for (std::size_t k = 0; k < std::min(a.size(), b.size()); ++k) {
+    diff = std::max(diff, (a[k] - b[k]).cwiseAbs().maxCoeff());
+    scale = std::max(scale, a[k].cwiseAbs().maxCoeff());
+  }
+  return scale > 0 ? diff / scale : diff;
+}
+
+void expect_same_envelope(const ResultsReader& a, const std::string& ga, const ResultsReader& b,
+                          const std::string& gb, double tolerance) {
+  SCOPED_TRACE(ga + " vs " + gb);
+  EXPECT_LE(
+      relative_difference(a.read_tensors(ga + ds::kDStress), b.read_tensors(gb + ds::kDStress)),
+      tolerance);
+  EXPECT_LE(
+      relative_difference(a.read_tensors(ga + ds::kDFabric), b.read_tensors(gb + ds::kDFabric)),
+      tolerance);
+  EXPECT_EQ(a.read_vector(ga + ds::kThetaDeg), b.read_vector(gb + ds::kThetaDeg));
+}
+
+TEST(Probe, AResultsFileStateGivesTheStoredEnvelopesAndFits) {
+  const fs::path base = tiny();
+  const fs::path out = rendulic::testing::fresh_dir("app_probe/state_b");
+  const CliResult r =
+      probe(base.string() + ":/states/b --label b --methods dynamic --out " + out.string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  const ResultsReader stored(base), again(out / "results.h5");
+  const std::string g = paths::state("b");
+  for (const std::string& name : stored.children(paths::envelopes(g))) {
+    const std::string e = paths::envelope(g, name);
+    // The same state, restarted bit for bit, under the same scenario: the same numbers.
+    expect_same_envelope(stored, e, again, e, 0.0);
+    EXPECT_EQ(stored.attr_doubles(e + paths::kFitStress, "semi_axes"),
+              again.attr_doubles(e + paths::kFitStress, "semi_axes"));
+  }
+  EXPECT_EQ(stored.read_tensor(g + ds::kStress), again.read_tensor(g + ds::kStress));
+  EXPECT_EQ(again.attr_int(g, "minimise_iterations"), 0);  // at rest as stored: nothing moved
+}
+
+// The state as a LAMMPS dump in another layout than LAMMPS writes: atoms in reverse order,
+// radius instead of diameter, scaled coordinates, an extra column.
+void write_dump(const rendulic::Packing& p, const fs::path& file) {
+  std::ofstream out(file);
+  out << std::setprecision(17) << "ITEM: TIMESTEP\n0\nITEM: NUMBER OF ATOMS\n"
+      << p.size() << "\nITEM: BOX BOUNDS pp pp pp\n";
+  for (int a = 0; a < 3; ++a) out << "0 " << p.lengths[a] << "\n";
+  out << "ITEM: ATOMS id type radius x y z mass\n";
+  for (std::size_t k = p.size(); k-- > 0;) {
+    out << k + 1 << " 1 " << p.radii[k];
+    for (int a = 0; a < 3; ++a) out << " " << p.positions(static_cast<Eigen::Index>(k), a);
+    out << " 1\n";
+  }
+}
+
+TEST(Probe, ExportedDataFileAndDumpsGiveTheSamePackingAndEnvelopes) {
+  const fs::path base = tiny();
+  const fs::path dir = rendulic::testing::fresh_dir("app_probe/round_trip");
+  const fs::path data = dir / "a.data", dump = dir / "a.dump";
+  ASSERT_EQ(run_rendulic("export " + base.string() + " --state a --lammps " + data.string()).code,
+            0);
+  write_dump(rendulic::read_lammps_data(data), dump);
+  std::vector<fs::path> inputs = {data, dump};
+  if (run_command("command -v lmp > /dev/null").code == 0) {
+    std::ofstream(dir / "in.dump") << "units si\natom_style sphere\nboundary p p p\n"
+                                      "read_data a.data\nwrite_dump all custom lammps.dump id "
+                                      "diameter x y z modify sort id format float %.17g\n";
+    const CliResult l = run_command("cd " + dir.string() + " && lmp -nocite -log none -in in.dump");
+    ASSERT_EQ(l.code, 0) << l.out;
+    inputs.push_back(dir / "lammps.dump");
+  }
+  // The run's material (<r>, w), which the packing files do not carry.
+  const std::string common =
+      " --methods linear_response --directions 12 --set material.r_mean=1e-3 --set material.w=3 ";
+  const CliResult rs = probe(base.string() + ":a" + common + "--out " + (dir / "from_h5").string());
+  ASSERT_EQ(rs.code, 0) << rs.err;
+  const ResultsReader ref(dir / "from_h5" / "results.h5");
+  const std::string ga = paths::state("a"), gi = paths::state("imported");
+  const ResultsReader stored(base);
+  for (const fs::path& in : inputs) {
+    SCOPED_TRACE(in.string());
+    const fs::path out = dir / ("from_" + in.filename().string());
+    const CliResult r = probe(in.string() + common + "--out " + out.string());
+    ASSERT_EQ(r.code, 0) << r.err;
+    const ResultsReader got(out / "results.h5");
+    // The same packing, taken as it was: at rest as read.
+    EXPECT_TRUE(got.read_matrix(gi + ds::kPositions) == stored.read_matrix(ga + ds::kPositions));
+    EXPECT_EQ(got.read_vector(gi + ds::kRadii), stored.read_vector(ga + ds::kRadii));
+    EXPECT_EQ(got.attr_int(gi, "minimise_iterations"), 0);
+    EXPECT_EQ(got.attr_string(gi, "source").find(in.string()), 0u);
+    for (const std::string& name : ref.children(paths::envelopes(ga)))
+      expect_same_envelope(ref, paths::envelope(ga, name), got, paths::envelope(gi, name), 1e-12);
+  }
+}
+
+TEST(Probe, APackingAwayFromEquilibriumIsBroughtToRestAndSaysWhatMoved) {
+  const fs::path base = tiny();
+  const fs::path dir = rendulic::testing::fresh_dir("app_probe/shaken");
+  rendulic::Packing p = rendulic::read_results_state(base, paths::state("a"));
+  // Every particle displaced by up to 2 % of <r>: contact forces no longer balance.
+  for (Eigen::Index i = 0; i < p.positions.rows(); ++i)
+    for (int a = 0; a < 3; ++a)
+      p.positions(i, a) += 2e-5 * std::sin(1.7 * static_cast<double>(3 * i + a));
+  rendulic::write_lammps_data(dir / "shaken.data", p, 2000, "shaken");
+  const CliResult r = run_rendulic(
+      "probe " + (dir / "shaken.data").string() +
+          " --methods linear_response --directions 8 --threads 1 --out " + (dir / "out").string(),
+      false);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("relaxing and minimising"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("particles moved more than"), std::string::npos) << r.err;
+  const ResultsReader got(dir / "out" / "results.h5");
+  const std::string g = paths::state("imported");
+  EXPECT_LT(got.attr_double(g, "force_balance"), 1e-4);
+  EXPECT_GT(got.attr_double(g, "force_balance_relaxed"), 0);
+  EXPECT_GT(got.attr_double(g, "minimise_max_displacement"), 0);
+  // Linear response and its fit: an ellipse per amplitude, semi-axes printed per unit strain.
+  EXPECT_NE(r.out.find("linear_response_5e-05"), std::string::npos) << r.out;
+}
+
+// Exit 2, one line that names `what`, no results file.
+void expect_refused(const std::string& name, const std::string& text, const std::string& what) {
+  SCOPED_TRACE(name);
+  const fs::path dir = rendulic::testing::fresh_dir("app_probe/bad_" + name);
+  const fs::path f = dir / name;
+  std::ofstream(f) << text;
+  const CliResult r = probe(f.string() + " --out " + (dir / "out").string());
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_EQ(rendulic::testing::error_lines(r.err), 1) << r.err;
+  EXPECT_NE(r.err.find(what), std::string::npos) << "expected '" << what << "' in: " << r.err;
+  EXPECT_FALSE(fs::exists(dir / "out" / "results.h5"));
+}
+
+std::string data_file(const std::string& box, const std::string& atoms_header,
+                      const std::string& atoms) {
+  return "title\n\n2 atoms\n1 atom types\n\n" + box + "\n" + atoms_header + "\n\n" + atoms;
+}
+const std::string kBox = "0 0.01 xlo xhi\n0 0.01 ylo yhi\n0 0.01 zlo zhi\n";
+
+TEST(Probe, BadPackingFilesExitTwoWithOneLine) {
+  expect_refused(
+      "noradius.dump",
+      "ITEM: TIMESTEP\n0\nITEM: NUMBER OF ATOMS\n1\nITEM: BOX BOUNDS pp pp pp\n0 1\n0 1\n"
+      "0 1\nITEM: ATOMS id type x y z\n1 1 0.5 0.5 0.5\n",
+      "no radius or diameter column");
+  expect_refused(
+      "walls.dump",
+      "ITEM: TIMESTEP\n0\nITEM: NUMBER OF ATOMS\n1\nITEM: BOX BOUNDS pp ff pp\n0 1\n0 1\n"
+      "0 1\nITEM: ATOMS id radius x y z\n1 0.1 0.5 0.5 0.5\n",
+      "periodic on every axis");
+  expect_refused("degenerate.data",
+                 data_file("0 0.01 xlo xhi\n0.01 0.01 ylo yhi\n0 0.01 zlo zhi\n", "Atoms # sphere",
+                           "1 1 0.002 2000 0.001 0.001 0.001\n2 1 0.002 2000 0.005 0.005 0.005\n"),
+                 "degenerate box");
+  expect_refused("triclinic.data",
+                 data_file(kBox + "0.001 0 0 xy xz yz\n", "Atoms # sphere",
+                           "1 1 0.002 2000 0.001 0.001 0.001\n2 1 0.002 2000 0.005 0.005 0.005\n"),
+                 "triclinic");
+  expect_refused("nan.data",
+                 data_file(kBox, "Atoms # sphere",
+                           "1 1 0.002 2000 0.001 nan 0.001\n2 1 0.002 2000 0.005 0.005 0.005\n"),
+                 "not a finite number");
+  expect_refused(
+      "atomic.data",
+      data_file(kBox, "Atoms # atomic", "1 1 0.001 0.001 0.001\n2 1 0.005 0.005 0.005\n"),
+      "atom_style atomic");
+  expect_refused("atomic_unnamed.data",
+                 data_file(kBox, "Atoms", "1 1 0.001 0.001 0.001\n2 1 0.005 0.005 0.005\n"),
+                 "not atom_style sphere");
+  // Spheres as large as the box: each overlaps its own periodic image.
+  expect_refused("overlapping.data",
+                 data_file(kBox, "Atoms # sphere",
+                           "1 1 0.009 2000 0.001 0.001 0.001\n2 1 0.009 2000 0.005 0.005 0.005\n"),
+                 "periodic cell too small");
+  expect_refused("duplicate.data",
+                 data_file(kBox, "Atoms # sphere",
+                           "1 1 0.002 2000 0.001 0.001 0.001\n1 1 0.002 2000 0.005 0.005 0.005\n"),
+                 "appears twice");
+  expect_refused("short.data",
+                 data_file(kBox, "Atoms # sphere", "1 1 0.002 2000 0.001 0.001 0.001\n"),
+                 "the header 2 atoms");
+  const CliResult missing = probe("/nonexistent/packing.data --out /tmp/never");
+  EXPECT_EQ(missing.code, 2);
+  EXPECT_NE(missing.err.find("no such packing file"), std::string::npos) << missing.err;
+}
+
+}  // namespace
