@@ -205,7 +205,9 @@ TEST_P(Resume, AfterSigtermGivesTheUninterruptedRunsFile) {
   EXPECT_TRUE((WIFSIGNALED(stopped) && WTERMSIG(stopped) == SIGTERM) ||
               (WIFEXITED(stopped) && WEXITSTATUS(stopped) == 0))
       << stopped;
-  if (WIFSIGNALED(stopped)) EXPECT_FALSE(fs::exists(dir / "results.h5"));
+  if (WIFSIGNALED(stopped)) {
+    EXPECT_FALSE(fs::exists(dir / "results.h5"));
+  }
   const int resumed = run(dir, "", true);
   ASSERT_TRUE(WIFEXITED(resumed) && WEXITSTATUS(resumed) == 0) << resumed;
   EXPECT_FALSE(fs::exists(dir / "results.h5.partial"));
