@@ -135,6 +135,20 @@ struct KernelBase {
   virtual bool envelope(const double* p, const StateData& s, const EnvelopeData& probes,
                         bool integrated, EnvelopeData* out) const = 0;
   virtual bool path(const double* p, PathData* out) const = 0;
+
+ protected:
+  // The law's path states as PathData at the calibration's path samples.
+  static void fill_path(const std::vector<models::MaterialState>& states, const PathData& data,
+                        PathData* out) {
+    out->eps_dev = data.eps_dev;
+    out->stress.clear();
+    out->fabric.clear();
+    for (const auto& y : states) {
+      out->stress.push_back(y.stress);
+      out->fabric.push_back(y.fabric);
+    }
+    out->volume_fraction = data.volume_fraction;
+  }
 };
 
 struct Objective::Impl {
@@ -260,14 +274,7 @@ class Kernel final : public KernelBase {
   bool path(const double* p, PathData* out) const override {
     std::vector<models::MaterialState> states;
     if (!run_path<double>(p, p, &states)) return false;
-    out->eps_dev = o_->path.eps_dev;
-    out->stress.clear();
-    out->fabric.clear();
-    for (const auto& y : states) {
-      out->stress.push_back(y.stress);
-      out->fabric.push_back(y.fabric);
-    }
-    out->volume_fraction = o_->path.volume_fraction;
+    fill_path(states, o_->path, out);
     return true;
   }
 
@@ -452,14 +459,7 @@ class UmatKernel final : public KernelBase {
     std::vector<models::MaterialState> states;
     std::size_t next = 0;
     if (!run_path(with(p), {nullptr, false, &next}, &states)) return false;
-    out->eps_dev = o_->path.eps_dev;
-    out->stress.clear();
-    out->fabric.clear();
-    for (const auto& y : states) {
-      out->stress.push_back(y.stress);
-      out->fabric.push_back(y.fabric);
-    }
-    out->volume_fraction = o_->path.volume_fraction;
+    fill_path(states, o_->path, out);
     return true;
   }
 

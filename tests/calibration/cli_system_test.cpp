@@ -11,6 +11,7 @@
 
 #include "rendulic/core/results.hpp"
 #include "synthetic.hpp"
+#include "synthetic_file.hpp"
 
 namespace rendulic::calibration {
 namespace {
@@ -31,34 +32,7 @@ fs::path make_results_file(const std::string& name) {
   spec.noise = {0.002, 9};
   const CalibrationData d = testing::synthetic_data(*law, spec);
   ResultsWriter w(file);
-  w.attr("/material", "k_star", kKStar);
-  w.attr("/material", "k", 1e8);
-  for (const auto& s : d.states) {
-    const std::string g = "/states/" + s.label;
-    w.write(g + "/stress", s.stress);
-    w.write(g + "/fabric", s.fabric);
-    w.attr(g, "volume_fraction", s.volume_fraction);
-    w.attr(g, "eps_dev", -0.01);
-    for (const auto& e : s.envelopes) {
-      const std::string eg = g + "/envelopes/" + e.name;
-      w.attr(eg, "amplitude", e.amplitude);
-      w.attr(eg, "method", "linear_response");
-      w.attr(eg, "directions", std::int64_t{e.size()});
-      w.write(eg + "/theta_deg", e.theta_deg);
-      w.write(eg + "/strain", e.strain);
-      std::vector<Eigen::Vector2d> star;
-      std::vector<Eigen::Matrix3d> ds, df;
-      for (int i = 0; i < e.size(); ++i) {
-        star.push_back(e.stress[i] / kKStar);
-        ds.push_back(from_rendulic_pair(e.stress[i]));
-        df.push_back(from_rendulic_pair(e.fabric[i]));
-      }
-      w.write(eg + "/stress_star", star);
-      w.write(eg + "/fabric", e.fabric);
-      w.write(eg + "/d_stress", ds);
-      w.write(eg + "/d_fabric", df);
-    }
-  }
+  testing::write_results(w, d, kKStar);
   w.create_group("/states/no_envelopes");
   w.write("/states/no_envelopes/stress", Eigen::Matrix3d(Eigen::Matrix3d::Identity() * 1e9));
   w.commit();
