@@ -116,7 +116,7 @@ def _envelope(d: dict) -> Envelope:
 class Results:
     """A results file (docs/results.md), read through the same reader as the CLI.
 
-    r = Results("out/quick/results.h5"); r.states(); r.state("a").stress;
+    r = Results("out/quick/results.h5"); r.states(); r.state("a").stress; r.file;
     r.envelopes(state="a"); r.fits(state="a"); r.calibration(); r.path(); r.isotropic()
     A pressure branch's states: root=r.branches()[0].
     """
@@ -125,7 +125,8 @@ class Results:
         self._r = _rendulic._Reader(os.fspath(path))
 
     @property
-    def path(self) -> str:
+    def file(self) -> str:
+        """The results file's path."""
         return self._r.path
 
     def attributes(self, obj: str = "/") -> dict:
