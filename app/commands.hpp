@@ -63,6 +63,7 @@ struct ProbeRequest {
   int threads = 0;
   bool quiet = false;
   double progress_every = 30.0;
+  bool summary = true;  // the CLI's table of the fits on stdout
 };
 std::filesystem::path probe_packing(const ProbeRequest& request);
 

@@ -23,7 +23,9 @@ void request_stop() { g_stop.store(true, std::memory_order_relaxed); }
 void clear_stop() { g_stop.store(false, std::memory_order_relaxed); }
 bool stop_requested() { return g_stop.load(std::memory_order_relaxed); }
 void throw_if_stopped() {
-  if (stop_requested() && !omp_in_parallel()) throw Cancelled("stopped on request");
+  // omp_get_level, not omp_in_parallel: a team of one thread is a parallel region too, and no
+  // exception may leave one.
+  if (stop_requested() && omp_get_level() == 0) throw Cancelled("stopped on request");
 }
 std::function<bool()> stop_checker() {
   return [] { return stop_requested(); };

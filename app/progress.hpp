@@ -35,7 +35,8 @@ void set_progress_observer(ProgressObserver observer);
 void request_stop();
 void clear_stop();
 bool stop_requested();
-// Throws Cancelled if a stop was requested and no OpenMP parallel region is open here.
+// Throws Cancelled if a stop was requested and no OpenMP parallel region (of any team size) is
+// open here.
 void throw_if_stopped();
 // The check a probe campaign takes (dem::ProbeOptions::stop).
 std::function<bool()> stop_checker();

@@ -612,6 +612,7 @@ PYBIND11_MODULE(_rendulic, m) {
         r.sets = sets_of(sets);
         r.threads = threads;
         r.quiet = quiet;
+        r.summary = false;  // the caller has the file
         return long_work(progress, quiet, [&] { return app::probe_packing(r).string(); });
       },
       "packing"_a, "out"_a, "label"_a = "imported", "methods"_a = std::vector<std::string>{},

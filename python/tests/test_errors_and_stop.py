@@ -106,3 +106,20 @@ def test_sigint_from_another_thread_stops_the_run(tiny_toml, tmp_path):
     # And the next call runs normally (the stop request does not linger).
     env = rendulic.model_envelope("isotropic_elastic", {"stress": np.eye(3) * 1e6})
     assert env["stress"].shape == (36, 2)
+
+
+def test_callback_raising_during_the_probes_stops_them(cli_run, tmp_path):
+    # Raised from a report made while the probes run (inside their parallel loop): the
+    # remaining probes are skipped (ProbeOptions::stop) and the exception comes back.
+    seen = []
+
+    def progress(stage, task, fraction):
+        seen.append((stage, task, fraction))
+        if stage == "probes" and task == "dynamic":
+            raise LookupError("stop the probes")
+
+    with pytest.raises(LookupError, match="stop the probes"):
+        rendulic.probe(f"{cli_run}:/states/a", tmp_path / "out", methods=["dynamic"],
+                       directions=16, threads=1, quiet=True, progress=progress)
+    assert seen[-1][:2] == ("probes", "dynamic") and seen[-1][2] < 1.0
+    assert not (tmp_path / "out" / "results.h5").exists()
