@@ -5,7 +5,8 @@
 # UBSan stops at its first finding, ASan at every finding (including leaks at exit).
 # Optimised lightly (-O1) with debug information: fast enough for the system tests, exact
 # enough for the stack traces. MPI and the benchmarks are off (the MPI tests skip without it),
-# -march=native is off so that the binary runs wherever the job does.
+# -march=native is off so that the binary runs wherever the job does. The Python module and its
+# tests are off: an ASan runtime cannot be loaded into a Python interpreter started without it.
 # Run after .ci/setup.sh (same Debian packages). Environment: BUILD_DIR (default build-asan),
 # JOBS (default: all cores), SANITIZERS_BUILD_ONLY (set: build, run nothing; .ci/setup.sh
 # does that under CI, and the default suite's ci.SanitizedTests runs its tests).
@@ -20,7 +21,7 @@ start=$(date +%s)
 cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
       -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g" -DCMAKE_CXX_FLAGS="$sanitize" \
       -DCMAKE_EXE_LINKER_FLAGS="$sanitize" -DCMAKE_SHARED_LINKER_FLAGS="$sanitize" \
-      -DRENDULIC_MPI=OFF -DRENDULIC_BENCH=OFF -DRENDULIC_NATIVE=OFF \
+      -DRENDULIC_MPI=OFF -DRENDULIC_BENCH=OFF -DRENDULIC_NATIVE=OFF -DRENDULIC_PYTHON=OFF \
       -DRENDULIC_SANITIZER_BUILD= >/dev/null
 cmake --build "$build_dir" -j "$jobs"
 built=$(date +%s)

@@ -19,66 +19,87 @@
 namespace rendulic::app {
 namespace {
 
-struct EnvelopeCli {
-  std::string model;
-  std::string umat;
-  std::string params;
-  std::string state;
-  double amplitude = 0.0;
-  int directions = 36;
-  bool json = false;
-  std::string method = "integrated";
-  std::string scheme = "modified-euler";
-  double tolerance = models::StepOptions{}.tolerance;
-  int substeps = 1;
-};
-
 nlohmann::ordered_json pairs(const Eigen::Matrix<double, Eigen::Dynamic, 2>& m) {
   nlohmann::ordered_json a = nlohmann::ordered_json::array();
   for (int i = 0; i < m.rows(); ++i) a.push_back({m(i, 0), m(i, 1)});
   return a;
 }
 
-int run_envelope(const EnvelopeCli& o) {
-  // A user's UMAT (docs/umat.md): the library from --umat, its PROPS from --params.
-  if (o.model == "umat" ? o.umat.empty() : !o.umat.empty())
-    throw InputError("--umat PATH.so goes with --model umat, and --model umat needs it");
-  std::unique_ptr<models::Law> law;
-  if (o.model == "umat") {
-    law = models::make_umat_law(o.umat, o.params);
-  } else {
-    law = models::make_law(o.model);
-    if (!law) {
-      std::string names;
-      for (const auto& n : models::law_names()) names += (names.empty() ? "" : ", ") + n;
-      throw InputError("--model: unknown model '" + o.model + "' (known: " + names + ", umat)");
-    }
-    if (!o.params.empty()) models::load_parameters_toml(o.params, law.get());
-  }
-  const models::MaterialState state = models::load_state_toml(o.state, *law);
+}  // namespace
 
+std::unique_ptr<models::Law> law_for(const std::string& model, const std::string& umat,
+                                     const std::string& params, bool params_is_text) {
+  // A user's UMAT (docs/umat.md): the library from --umat, its PROPS from --params.
+  if (model == "umat" ? umat.empty() : !umat.empty())
+    throw InputError("--umat PATH.so goes with --model umat, and --model umat needs it");
+  if (model == "umat") {
+    if (params_is_text) throw InputError("a UMAT's parameters come from a TOML file (--params)");
+    return models::make_umat_law(umat, params);
+  }
+  std::unique_ptr<models::Law> law = models::make_law(model);
+  if (!law) {
+    std::string names;
+    for (const auto& n : models::law_names()) names += (names.empty() ? "" : ", ") + n;
+    throw InputError("--model: unknown model '" + model + "' (known: " + names + ", umat)");
+  }
+  if (params_is_text)
+    models::parse_parameters_toml(params, "parameters", law.get());
+  else if (!params.empty())
+    models::load_parameters_toml(params, law.get());
+  return law;
+}
+
+models::MaterialState state_for(const models::Law& law, const std::string& state,
+                                bool state_is_text) {
+  return state_is_text ? models::parse_state_toml(state, "state", law)
+                       : models::load_state_toml(state, law);
+}
+
+models::StepOptions step_options_for(const std::string& scheme, double tolerance, int substeps) {
+  models::StepOptions step;
+  if (scheme != "modified-euler" && scheme != "explicit")
+    throw InputError("--scheme: unknown scheme '" + scheme + "' (known: modified-euler, explicit)");
+  step.scheme =
+      scheme == "explicit" ? models::Scheme::kExplicitEuler : models::Scheme::kModifiedEuler;
+  step.tolerance = tolerance;
+  step.fixed_substeps = substeps;
+  return step;
+}
+
+models::ModelEnvelope envelope_for(const EnvelopeRequest& o, std::string* law_name) {
+  const std::unique_ptr<models::Law> law = law_for(o.model, o.umat, o.params, o.params_is_text);
+  const models::MaterialState state = state_for(*law, o.state, o.state_is_text);
+  if (o.method != "integrated" && o.method != "rate")
+    throw InputError("--method: unknown method '" + o.method + "' (known: integrated, rate)");
   models::EnvelopeOptions opt;
   opt.amplitude = o.amplitude;
   opt.directions = o.directions;
   opt.method =
       o.method == "rate" ? models::EnvelopeMethod::kRate : models::EnvelopeMethod::kIntegrated;
-  opt.step.scheme =
-      o.scheme == "explicit" ? models::Scheme::kExplicitEuler : models::Scheme::kModifiedEuler;
-  opt.step.tolerance = o.tolerance;
-  opt.step.fixed_substeps = o.substeps;
+  opt.step = step_options_for(o.scheme, o.tolerance, o.substeps);
   std::string why;
   if (!opt.IsValid(&why)) throw InputError("envelope options: " + why);
-  const models::ModelEnvelope env = models::model_envelope(*law, state, opt);
+  models::ModelEnvelope env = models::model_envelope(*law, state, opt);
   if (!env.success)
-    throw InputError("envelope of " + o.model + " at " + o.state + ": " + env.reason);
+    throw InputError("envelope of " + o.model + " at " + (o.state_is_text ? "the state" : o.state) +
+                     ": " + env.reason);
+  if (law_name) *law_name = std::string(law->name());
+  return env;
+}
+
+namespace {
+
+int run_envelope(const EnvelopeRequest& o, bool json) {
+  std::string law_name;
+  const models::ModelEnvelope env = envelope_for(o, &law_name);
   if (!env.within_tolerance)
     std::cerr << "rendulic: warning: explicit probes exceeded the tolerance " << o.tolerance
               << " (largest local error estimate " << env.max_error_estimate
               << "); use --scheme modified-euler\n";
 
-  if (o.json) {
+  if (json) {
     nlohmann::ordered_json j;
-    j["model"] = law->name();
+    j["model"] = law_name;
     if (!o.umat.empty()) j["umat"] = o.umat;
     j["amplitude"] = o.amplitude;
     j["method"] = o.method;
@@ -95,8 +116,8 @@ int run_envelope(const EnvelopeCli& o) {
     return 0;
   }
   std::printf("# %s envelope, |d_eps| = %g, %d directions, %s (%s, tolerance %g)\n",
-              std::string(law->name()).c_str(), o.amplitude, o.directions, o.method.c_str(),
-              o.scheme.c_str(), o.tolerance);
+              law_name.c_str(), o.amplitude, o.directions, o.method.c_str(), o.scheme.c_str(),
+              o.tolerance);
   std::printf("# Rendulic pairs (sqrt2 lateral, axial); stress in Pa\n");
   std::printf("%10s %14s %14s %16s %16s %14s %14s\n", "theta_deg", "strain_x", "strain_y",
               "stress_x", "stress_y", "fabric_x", "fabric_y");
@@ -110,7 +131,8 @@ int run_envelope(const EnvelopeCli& o) {
 }  // namespace
 
 Subcommand add_envelope(CLI::App& parent) {
-  auto opts = std::make_shared<EnvelopeCli>();
+  auto opts = std::make_shared<EnvelopeRequest>();
+  auto json = std::make_shared<bool>(false);
   auto* sub = parent.add_subcommand("envelope", "Envelope predicted by a constitutive model");
   std::string names;
   for (const auto& n : models::law_names()) names += (names.empty() ? "" : ", ") + n;
@@ -129,7 +151,7 @@ Subcommand add_envelope(CLI::App& parent) {
       ->required();
   sub->add_option("--directions", opts->directions, "Number of probe directions")
       ->capture_default_str();
-  sub->add_flag("--json", opts->json, "Print one JSON object");
+  sub->add_flag("--json", *json, "Print one JSON object");
   sub->add_option("--method", opts->method,
                   "integrated: each probe integrated by the driver; rate: one evaluation of the "
                   "rate law (the exact incremental envelope)")
@@ -144,7 +166,7 @@ Subcommand add_envelope(CLI::App& parent) {
       ->capture_default_str();
   sub->add_option("--substeps", opts->substeps, "Substeps of the explicit scheme")
       ->capture_default_str();
-  return {sub, [opts]() -> int { return run_envelope(*opts); }};
+  return {sub, [opts, json]() -> int { return run_envelope(*opts, *json); }};
 }
 
 }  // namespace rendulic::app

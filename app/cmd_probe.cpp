@@ -41,19 +41,6 @@ namespace {
 
 constexpr char kLinear[] = "linear_response";
 
-struct ProbeCmdOptions {
-  std::string packing;
-  std::string out = "out";
-  std::string label = "imported";
-  std::vector<std::string> methods;
-  std::vector<double> amplitudes;
-  int directions = 0;
-  std::vector<std::string> sets;
-  int threads = 0;
-  bool quiet = false;
-  double progress_every = 30.0;
-};
-
 using Clock = std::chrono::steady_clock;
 double since(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
@@ -61,7 +48,7 @@ double since(Clock::time_point t0) {
 
 // The scenario the packing is probed with: a results file's own (its material and probe keys,
 // so that its stored envelopes come out again), else the defaults; then the overrides.
-Scenario probe_scenario(const PackingSource& src, const ProbeCmdOptions& o) {
+Scenario probe_scenario(const PackingSource& src, const ProbeRequest& o) {
   Scenario sc(scenario_schema());
   if (src.format == PackingFormat::kResultsState) {
     const ResultsReader in(src.file);
@@ -150,8 +137,145 @@ void print_summary(const ResultsReader& in, const std::string& group) {
 
 }  // namespace
 
+std::filesystem::path probe_packing(const ProbeRequest& r) {
+  // What the CLI's option checks say before this runs, for callers without them (Python).
+  for (const auto& m : r.methods)
+    if (m != "dynamic" && m != "minimisation" && m != kLinear)
+      throw InputError("--methods: unknown method '" + m +
+                       "' (dynamic, minimisation, linear_response)");
+  if (const std::string why = invalid_object_name_reason(r.label); !why.empty())
+    throw InputError("--label: label '" + r.label + "' " + why);
+  if (r.directions < 0 || r.threads < 0)
+    throw InputError("--directions and --threads must not be negative");
+  if (r.quiet) log::set_level(log::Level::kWarning);
+  // Everything is read and checked before the output folder is touched.
+  const PackingSource src = packing_source(r.packing);
+  const Packing packing = read_packing(src);
+  Scenario sc = probe_scenario(src, r);
+  const bool from_results = src.format == PackingFormat::kResultsState;
+  if (!from_results) size_keys_from_packing(sc, packing);
+  const dem::DemRunOptions dro = dem::dem_options_from_scenario(sc);
+  dem::ProbeOptions po = dem::probe_options_from(sc);
+  if (r.threads > 0) {
+    po.threads = r.threads;
+    omp_set_num_threads(r.threads);
+  }
+  std::vector<std::string> methods = r.methods;
+  if (methods.empty()) {
+    methods = dem::probe_methods_from(sc);
+    methods.push_back(kLinear);
+  }
+  const double r_mean = dro.system.material.r_mean;
+  log::info(packing.origin, ": N = ", packing.size(), ", nu = ", packing.volume_fraction(),
+            ", <r> = ", r_mean, " m, box ", packing.lengths.transpose());
+  if (!packing.densities.empty() &&
+      std::any_of(packing.densities.begin(), packing.densities.end(), [&](double d) {
+        return std::abs(d - dro.system.material.density) > 1e-12 * dro.system.material.density;
+      }))
+    log::warning(packing.origin, ": its densities differ from material.density (",
+                 dro.system.material.density,
+                 " kg/m^3), which is used (only the dynamic probes depend on it)");
+
+  std::optional<dem::DemSystem> sys;
+  if (from_results) sys = restore_checkpoint(ResultsReader(src.file), src.object, dro.system);
+  if (!sys) {
+    try {
+      sys = system_of_packing(packing, dro.system);
+    } catch (const InputError& e) {
+      throw InputError(packing.origin + ": " + e.what());
+    }
+  }
+  if (!from_results && packing.velocities.rows() > 0 && !packing.velocities.isZero(0))
+    log::info(packing.origin, ": its velocities are not used (a packing is probed from rest)");
+
+  const std::filesystem::path out_dir = r.out;
+  ResultsWriter out(out_dir / "results.h5");
+  for (const auto& note : out.notes()) log::info(note);
+  out.attr("/", "seed", sc.get_int("run.seed"));
+  out.attr("/", "scenario", sc.to_toml());
+  out.attr("/", "packing", r.packing);
+  write_material(out, dro.system, static_cast<std::int64_t>(packing.size()));
+  RunContext ctx{out_dir, r.threads, r.quiet, r.progress_every};
+
+  // At rest, as the run's states are (rest.hpp): the criterion first, and only a
+  // packing that fails it (or moves) is relaxed and minimised.
+  auto t0 = Clock::now();
+  log::info("[rest] started");
+  dem::RestSummary rest;
+  rest.after_relax = rest.at_rest =
+      dem::force_balance(dem::packing_of(*sys), dro.system.material.k);
+  rest.stress_change.setZero();
+  rest.relaxed.converged = true;
+  const bool moving = sys->kinetic_energy() > 0;
+  if (rest.at_rest.ratio >= dem::kEquilibrium || moving) {
+    log::info("net force ", rest.at_rest.ratio, " of the mean contact force (at rest: below ",
+              dem::kEquilibrium, "): relaxing and minimising at the fixed box");
+    try {
+      rest = dem::bring_to_rest(*sys, dro.state_rest);
+    } catch (const std::runtime_error& e) {
+      throw InputError(packing.origin + ": cannot be brought to rest: " + e.what());
+    }
+    if (!(rest.at_rest.ratio < dem::kEquilibrium))
+      throw InputError(packing.origin + ": not at rest after minimisation (net force " +
+                       std::to_string(rest.at_rest.ratio) + " of the mean contact force)");
+    const Moved m = what_moved(packing, *sys, r_mean);
+    log::info("at rest: relaxed for ", rest.relaxed.time, " s (", rest.relaxed.steps,
+              " steps), then ", rest.minimised.iterations, " FIRE iterations: net force ",
+              rest.at_rest.ratio, " of the mean contact force; ", m.count, " of ", packing.size(),
+              " particles moved more than ", kMovedOverR,
+              " <r> from the file's positions (largest ", m.max_over_r, " <r>, rms ", m.rms_over_r,
+              " <r>); the minimisation changed the stress by ",
+              rest.stress_change.norm() / std::max(sys->measure().pressure, 1e-300), " of p");
+  } else {
+    log::info("at rest as read: net force ", rest.at_rest.ratio,
+              " of the mean contact force; nothing moved");
+  }
+  const std::string group = paths::state(r.label);
+  write_state(out, group, *sys, rest, dro.state_rest.minimise.force_tolerance, true);
+  out.attr(group, "source", packing.origin);
+  out.attr(paths::kTimings, "rest", since(t0));
+  log::info("[rest] done in ", human_seconds(since(t0)));
+
+  t0 = Clock::now();
+  log::info("[probes] started");
+  {
+    Progress progress(ctx, "probes");
+    std::atomic<long> done{0};
+    long total = 0;
+    for (const auto& m : methods)
+      total += m == kLinear ? 0 : static_cast<long>(po.amplitudes.size()) * po.directions;
+    po.probe_done = [&progress, &done, total] { progress.count(++done, total); };
+    po.stop = stop_checker();
+    for (const auto& m : methods) {
+      progress.start_task(m);
+      try {
+        write_probe_campaign(*sys, group, {m}, po, out);
+      } catch (const std::runtime_error& e) {
+        if (m != kLinear || dynamic_cast<const InputError*>(&e)) throw;
+        // As in the run: a network with no elastic response is a finding, recorded.
+        for (double a : po.amplitudes) {
+          const std::string g = paths::envelope(group, paths::envelope_name(m, a));
+          out.attr(g, "method", m);
+          out.attr(g, "amplitude", a);
+          out.attr(g, "error", std::string(e.what()));
+        }
+        log::warning("no linear response: ", e.what());
+      }
+    }
+  }
+  out.attr(paths::kTimings, "probes", since(t0));
+  log::info("[probes] done in ", human_seconds(since(t0)));
+  t0 = Clock::now();
+  fit_state_envelopes(sc, out, group);
+  out.attr(paths::kTimings, "fits", since(t0));
+  if (r.summary) print_summary(ResultsReader(out.temporary_path()), group);
+  out.commit();
+  log::info("wrote ", out.final_path().string());
+  return out.final_path();
+}
+
 Subcommand add_probe(CLI::App& parent) {
-  auto o = std::make_shared<ProbeCmdOptions>();
+  auto o = std::make_shared<ProbeRequest>();
   auto* sub = parent.add_subcommand(
       "probe",
       "Probe a packing made elsewhere (LAMMPS data file or dump) or a results file's state "
@@ -184,135 +308,10 @@ Subcommand add_probe(CLI::App& parent) {
                   "seconds between progress lines when stderr is not a terminal")
       ->check(CLI::Range(0.1, 86400.0))
       ->capture_default_str();
-  return {
-      sub, [o]() -> int {
-        if (o->quiet) log::set_level(log::Level::kWarning);
-        // Everything is read and checked before the output folder is touched.
-        const PackingSource src = packing_source(o->packing);
-        const Packing packing = read_packing(src);
-        Scenario sc = probe_scenario(src, *o);
-        const bool from_results = src.format == PackingFormat::kResultsState;
-        if (!from_results) size_keys_from_packing(sc, packing);
-        const dem::DemRunOptions dro = dem::dem_options_from_scenario(sc);
-        dem::ProbeOptions po = dem::probe_options_from(sc);
-        if (o->threads > 0) {
-          po.threads = o->threads;
-          omp_set_num_threads(o->threads);
-        }
-        std::vector<std::string> methods = o->methods;
-        if (methods.empty()) {
-          methods = dem::probe_methods_from(sc);
-          methods.push_back(kLinear);
-        }
-        const double r_mean = dro.system.material.r_mean;
-        log::info(packing.origin, ": N = ", packing.size(), ", nu = ", packing.volume_fraction(),
-                  ", <r> = ", r_mean, " m, box ", packing.lengths.transpose());
-        if (!packing.densities.empty() &&
-            std::any_of(packing.densities.begin(), packing.densities.end(), [&](double d) {
-              return std::abs(d - dro.system.material.density) >
-                     1e-12 * dro.system.material.density;
-            }))
-          log::warning(packing.origin, ": its densities differ from material.density (",
-                       dro.system.material.density,
-                       " kg/m^3), which is used (only the dynamic probes depend on it)");
-
-        std::optional<dem::DemSystem> sys;
-        if (from_results) sys = restore_checkpoint(ResultsReader(src.file), src.object, dro.system);
-        if (!sys) {
-          try {
-            sys = system_of_packing(packing, dro.system);
-          } catch (const InputError& e) {
-            throw InputError(packing.origin + ": " + e.what());
-          }
-        }
-        if (!from_results && packing.velocities.rows() > 0 && !packing.velocities.isZero(0))
-          log::info(packing.origin,
-                    ": its velocities are not used (a packing is probed from rest)");
-
-        const std::filesystem::path out_dir = o->out;
-        ResultsWriter out(out_dir / "results.h5");
-        for (const auto& note : out.notes()) log::info(note);
-        out.attr("/", "seed", sc.get_int("run.seed"));
-        out.attr("/", "scenario", sc.to_toml());
-        out.attr("/", "packing", o->packing);
-        write_material(out, dro.system, static_cast<std::int64_t>(packing.size()));
-        RunContext ctx{out_dir, o->threads, o->quiet, o->progress_every};
-
-        // At rest, as the run's states are (rest.hpp): the criterion first, and only a
-        // packing that fails it (or moves) is relaxed and minimised.
-        auto t0 = Clock::now();
-        log::info("[rest] started");
-        dem::RestSummary rest;
-        rest.after_relax = rest.at_rest =
-            dem::force_balance(dem::packing_of(*sys), dro.system.material.k);
-        rest.stress_change.setZero();
-        rest.relaxed.converged = true;
-        const bool moving = sys->kinetic_energy() > 0;
-        if (rest.at_rest.ratio >= dem::kEquilibrium || moving) {
-          log::info("net force ", rest.at_rest.ratio, " of the mean contact force (at rest: below ",
-                    dem::kEquilibrium, "): relaxing and minimising at the fixed box");
-          try {
-            rest = dem::bring_to_rest(*sys, dro.state_rest);
-          } catch (const std::runtime_error& e) {
-            throw InputError(packing.origin + ": cannot be brought to rest: " + e.what());
-          }
-          if (!(rest.at_rest.ratio < dem::kEquilibrium))
-            throw InputError(packing.origin + ": not at rest after minimisation (net force " +
-                             std::to_string(rest.at_rest.ratio) + " of the mean contact force)");
-          const Moved m = what_moved(packing, *sys, r_mean);
-          log::info("at rest: relaxed for ", rest.relaxed.time, " s (", rest.relaxed.steps,
-                    " steps), then ", rest.minimised.iterations, " FIRE iterations: net force ",
-                    rest.at_rest.ratio, " of the mean contact force; ", m.count, " of ",
-                    packing.size(), " particles moved more than ", kMovedOverR,
-                    " <r> from the file's positions (largest ", m.max_over_r, " <r>, rms ",
-                    m.rms_over_r, " <r>); the minimisation changed the stress by ",
-                    rest.stress_change.norm() / std::max(sys->measure().pressure, 1e-300), " of p");
-        } else {
-          log::info("at rest as read: net force ", rest.at_rest.ratio,
-                    " of the mean contact force; nothing moved");
-        }
-        const std::string group = paths::state(o->label);
-        write_state(out, group, *sys, rest, dro.state_rest.minimise.force_tolerance, true);
-        out.attr(group, "source", packing.origin);
-        out.attr(paths::kTimings, "rest", since(t0));
-        log::info("[rest] done in ", human_seconds(since(t0)));
-
-        t0 = Clock::now();
-        log::info("[probes] started");
-        {
-          Progress progress(ctx, "probes");
-          std::atomic<long> done{0};
-          long total = 0;
-          for (const auto& m : methods)
-            total += m == kLinear ? 0 : static_cast<long>(po.amplitudes.size()) * po.directions;
-          po.probe_done = [&progress, &done, total] { progress.count(++done, total); };
-          for (const auto& m : methods) {
-            progress.start_task(m);
-            try {
-              write_probe_campaign(*sys, group, {m}, po, out);
-            } catch (const std::runtime_error& e) {
-              if (m != kLinear || dynamic_cast<const InputError*>(&e)) throw;
-              // As in the run: a network with no elastic response is a finding, recorded.
-              for (double a : po.amplitudes) {
-                const std::string g = paths::envelope(group, paths::envelope_name(m, a));
-                out.attr(g, "method", m);
-                out.attr(g, "amplitude", a);
-                out.attr(g, "error", std::string(e.what()));
-              }
-              log::warning("no linear response: ", e.what());
-            }
-          }
-        }
-        out.attr(paths::kTimings, "probes", since(t0));
-        log::info("[probes] done in ", human_seconds(since(t0)));
-        t0 = Clock::now();
-        fit_state_envelopes(sc, out, group);
-        out.attr(paths::kTimings, "fits", since(t0));
-        print_summary(ResultsReader(out.temporary_path()), group);
-        out.commit();
-        log::info("wrote ", out.final_path().string());
-        return 0;
-      }};
+  return {sub, [o]() -> int {
+            probe_packing(*o);
+            return 0;
+          }};
 }
 
 }  // namespace rendulic::app

@@ -22,20 +22,68 @@
 #include "rendulic/dem/probe_mpi.hpp"
 
 namespace rendulic::app {
-namespace {
-struct RunOptions {
-  std::string scenario;
-  std::string out = "out";
-  std::vector<std::string> sets;
-  int threads = 0;
-  bool quiet = false;
-  bool resume = false;
-  double progress_every = 30.0;
-};
-}  // namespace
+std::filesystem::path run_scenario(const RunRequest& r) {
+  if (r.threads < 0) throw InputError("--threads must not be negative");
+  if (r.quiet) log::set_level(log::Level::kWarning);
+  Scenario scenario = Scenario::from_file(r.scenario, scenario_schema());
+  for (const auto& s : r.sets) scenario.apply_override(s);
+  check_stages_available(scenario);
+  if (r.threads > 0) omp_set_num_threads(r.threads);
+  const std::filesystem::path out_dir = r.out;
+  const std::filesystem::path final_path = out_dir / "results.h5";
+  std::optional<ResultsWriter> writer;
+  std::vector<std::string> completed;
+  if (r.resume) {
+    writer.emplace(ResultsWriter::resume(final_path));
+    for (const auto& note : writer->notes()) log::info(note);
+    const ResumePlan plan = resume_plan(scenario, ResultsReader(writer->temporary_path()));
+    completed = plan.completed;
+    if (completed.empty()) {
+      log::info("resume: ", plan.why_not.empty() ? "no completed stage kept" : plan.why_not,
+                "; running every stage");
+      writer.reset();  // its temporary file goes before the new writer makes its own
+    } else {
+      std::string kept;
+      for (const auto& c : completed) kept += (kept.empty() ? "" : ", ") + c;
+      log::info("resume: the stages ", kept, " are taken from ", final_path.string(), ".partial");
+    }
+  }
+  if (!writer) writer.emplace(final_path);
+  ResultsWriter& out = *writer;
+  if (!r.resume)
+    for (const auto& note : out.notes()) log::info(note);
+  out.attr("/", "seed", scenario.get_int("run.seed"));
+  out.attr("/", "scenario", scenario.to_toml());
+  out.attr("/", "scenario_file", r.scenario);
+  RunContext ctx{out_dir, r.threads, r.quiet, r.progress_every};
+  {
+    // Say first what will run, on what, and where it goes.
+    std::string plan;
+    for (const auto& st : scenario.get_strings("run.stages"))
+      plan += (plan.empty() ? "" : ", ") + st;
+    log::info(r.scenario, ": N = ", scenario.get_int("dem.n_particles"), ", stages ", plan,
+              "; writing ", (out_dir / "results.h5").string(),
+              " (on 2 idle cores quick.toml takes ~2 min, paper.toml ~25 min)");
+  }
+  if (r.mpi_ranks > 1) log::info(r.mpi_ranks, " MPI ranks share the probe campaigns");
+  try {
+    run_pipeline(scenario, out, ctx, completed);
+    out.commit();
+  } catch (...) {
+    if (const std::string kept = out.keep_partial(); !kept.empty()) rethrow_with_note(kept);
+    throw;
+  }
+  if (r.resume) {
+    std::error_code ec;  // the kept stages are in the final file now, or were redone
+    std::filesystem::remove(final_path.string() + ".partial", ec);
+  }
+  log::info("wrote ", out.final_path().string());
+  run_post_commit(scenario, out.final_path(), ctx);
+  return out.final_path();
+}
 
 Subcommand add_run(CLI::App& parent) {
-  auto o = std::make_shared<RunOptions>();
+  auto o = std::make_shared<RunRequest>();
   auto* sub = parent.add_subcommand(
       "run",
       "Run the stages of a scenario; writes DIR/results.h5. In a build with MPI, `mpirun -np K "
@@ -60,73 +108,18 @@ Subcommand add_run(CLI::App& parent) {
                   "(a log file, a batch job); a terminal gets a live line instead")
       ->check(CLI::Range(0.1, 86400.0))
       ->capture_default_str();
-  return {
-      sub, [o]() -> int {
-        // Before anything else, so that the workers never parse, print or write.
-        dem::MpiSession mpi;
-        if (mpi.rank() != 0) {
-          if (o->threads > 0) omp_set_num_threads(o->threads);
-          mpi.serve(dem::compute_worker_share);
-          return 0;
-        }
-        if (o->quiet) log::set_level(log::Level::kWarning);
-        Scenario scenario = Scenario::from_file(o->scenario, scenario_schema());
-        for (const auto& s : o->sets) scenario.apply_override(s);
-        check_stages_available(scenario);
-        if (o->threads > 0) omp_set_num_threads(o->threads);
-
-        const std::filesystem::path out_dir = o->out;
-        const std::filesystem::path final_path = out_dir / "results.h5";
-        std::optional<ResultsWriter> writer;
-        std::vector<std::string> completed;
-        if (o->resume) {
-          writer.emplace(ResultsWriter::resume(final_path));
-          for (const auto& note : writer->notes()) log::info(note);
-          const ResumePlan plan = resume_plan(scenario, ResultsReader(writer->temporary_path()));
-          completed = plan.completed;
-          if (completed.empty()) {
-            log::info("resume: ", plan.why_not.empty() ? "no completed stage kept" : plan.why_not,
-                      "; running every stage");
-            writer.reset();  // its temporary file goes before the new writer makes its own
-          } else {
-            std::string kept;
-            for (const auto& c : completed) kept += (kept.empty() ? "" : ", ") + c;
-            log::info("resume: the stages ", kept, " are taken from ", final_path.string(),
-                      ".partial");
-          }
-        }
-        if (!writer) writer.emplace(final_path);
-        ResultsWriter& out = *writer;
-        if (!o->resume)
-          for (const auto& note : out.notes()) log::info(note);
-        out.attr("/", "seed", scenario.get_int("run.seed"));
-        out.attr("/", "scenario", scenario.to_toml());
-        out.attr("/", "scenario_file", o->scenario);
-        RunContext ctx{out_dir, o->threads, o->quiet, o->progress_every};
-        {
-          // Say first what will run, on what, and where it goes.
-          std::string plan;
-          for (const auto& st : scenario.get_strings("run.stages"))
-            plan += (plan.empty() ? "" : ", ") + st;
-          log::info(o->scenario, ": N = ", scenario.get_int("dem.n_particles"), ", stages ", plan,
-                    "; writing ", (out_dir / "results.h5").string(),
-                    " (on 2 idle cores quick.toml takes ~2 min, paper.toml ~25 min)");
-        }
-        if (mpi.size() > 1) log::info(mpi.size(), " MPI ranks share the probe campaigns");
-        try {
-          run_pipeline(scenario, out, ctx, completed);
-          out.commit();
-        } catch (...) {
-          if (const std::string kept = out.keep_partial(); !kept.empty()) rethrow_with_note(kept);
-          throw;
-        }
-        if (o->resume) {
-          std::error_code ec;  // the kept stages are in the final file now, or were redone
-          std::filesystem::remove(final_path.string() + ".partial", ec);
-        }
-        log::info("wrote ", out.final_path().string());
-        run_post_commit(scenario, out.final_path(), ctx);
-        return 0;
-      }};
+  return {sub, [o]() -> int {
+            // Before anything else, so that the workers never parse, print or write.
+            dem::MpiSession mpi;
+            if (mpi.rank() != 0) {
+              if (o->threads > 0) omp_set_num_threads(o->threads);
+              mpi.serve(dem::compute_worker_share);
+              return 0;
+            }
+            RunRequest request = *o;
+            request.mpi_ranks = mpi.size();
+            run_scenario(request);
+            return 0;
+          }};
 }
 }  // namespace rendulic::app

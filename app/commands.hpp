@@ -6,8 +6,14 @@
 #include <CLI/CLI.hpp>
 #include <filesystem>
 #include <functional>
+#include <memory>
+#include <string>
+#include <vector>
 
 #include "rendulic/core/scenario.hpp"
+#include "rendulic/models/driver.hpp"
+#include "rendulic/models/envelope.hpp"
+#include "rendulic/models/law.hpp"
 
 namespace rendulic::app {
 
@@ -29,6 +35,60 @@ Subcommand add_sweep(CLI::App& parent);
 Subcommand add_report(CLI::App& parent);
 Subcommand add_probe(CLI::App& parent);
 Subcommand add_export(CLI::App& parent);
+
+// The work of `rendulic run` and `rendulic probe` behind their options, callable from a program
+// (the Python module, docs/python.md) with the same results and the same errors. run_scenario
+// is one process: the CLI's MPI workers are the CLI's own (cmd_run.cpp). Both return the results
+// file they wrote.
+struct RunRequest {
+  std::string scenario;  // the scenario file (TOML)
+  std::string out = "out";
+  std::vector<std::string> sets;  // key=value overrides
+  int threads = 0;
+  bool quiet = false;
+  bool resume = false;
+  double progress_every = 30.0;
+  int mpi_ranks = 1;  // said in the log only; the ranks are started by the caller
+};
+std::filesystem::path run_scenario(const RunRequest& request);
+
+struct ProbeRequest {
+  std::string packing;  // a LAMMPS data file or dump, or RESULTS.h5:/states/LABEL
+  std::string out = "out";
+  std::string label = "imported";
+  std::vector<std::string> methods;
+  std::vector<double> amplitudes;
+  int directions = 0;
+  std::vector<std::string> sets;
+  int threads = 0;
+  bool quiet = false;
+  double progress_every = 30.0;
+  bool summary = true;  // the CLI's table of the fits on stdout
+};
+std::filesystem::path probe_packing(const ProbeRequest& request);
+
+// `rendulic envelope`'s computation (cmd_envelope.cpp), for the CLI and the Python module: the
+// law (built-in by name, or `umat` with its library), its parameters and the state from TOML
+// files, or from TOML text when *_is_text (messages then name "parameters" and "state").
+// InputError on any problem, with the CLI's messages.
+struct EnvelopeRequest {
+  std::string model, umat, params, state;
+  bool params_is_text = false, state_is_text = false;
+  double amplitude = 0.0;
+  int directions = 36;
+  std::string method = "integrated";      // or "rate"
+  std::string scheme = "modified-euler";  // or "explicit"
+  double tolerance = models::StepOptions{}.tolerance;
+  int substeps = 1;
+};
+models::ModelEnvelope envelope_for(const EnvelopeRequest& request, std::string* law_name = nullptr);
+// Its pieces: the law with its parameters (params empty: the defaults), the state, the driver's
+// step options.
+std::unique_ptr<models::Law> law_for(const std::string& model, const std::string& umat,
+                                     const std::string& params, bool params_is_text);
+models::MaterialState state_for(const models::Law& law, const std::string& state,
+                                bool state_is_text);
+models::StepOptions step_options_for(const std::string& scheme, double tolerance, int substeps);
 
 // Draws the figures of a results file into out_dir (cmd_plot.cpp); used by the report stage.
 // The figure script is `script` if given, else the first of RENDULIC_PLOT_SCRIPT, plot.py

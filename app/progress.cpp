@@ -1,15 +1,35 @@
 // Progress lines of the run's stages (progress.hpp; docs/usage.md "Progress and messages").
 #include "progress.hpp"
 
+#include <omp.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdio>
 
+#include "rendulic/core/errors.hpp"
 #include "rendulic/core/log.hpp"
 
 namespace rendulic::app {
+namespace {
+ProgressObserver g_observer;
+std::atomic<bool> g_stop{false};
+}  // namespace
+
+void set_progress_observer(ProgressObserver observer) { g_observer = std::move(observer); }
+void request_stop() { g_stop.store(true, std::memory_order_relaxed); }
+void clear_stop() { g_stop.store(false, std::memory_order_relaxed); }
+bool stop_requested() { return g_stop.load(std::memory_order_relaxed); }
+void throw_if_stopped() {
+  // omp_get_level, not omp_in_parallel: a team of one thread is a parallel region too, and no
+  // exception may leave one.
+  if (stop_requested() && omp_get_level() == 0) throw Cancelled("stopped on request");
+}
+std::function<bool()> stop_checker() {
+  return [] { return stop_requested(); };
+}
 
 std::string human_seconds(double s) {
   char buf[48];
@@ -33,30 +53,61 @@ Progress::Progress(const RunContext& ctx, std::string stage)
       stage_(std::move(stage)),
       start_(Clock::now()),
       task_start_(start_),
-      last_(start_) {}
+      last_(start_) {
+  observe(0.0);  // the observer learns of the stage at once; a stop asked for ends here
+}
+
+void Progress::observe(double fraction) {
+  if (g_observer) {
+    std::string task;
+    {
+      // The observer runs outside the display's lock, so a slow one (Python) holds up only
+      // the thread that called it, and only one call at a time per stage.
+      const std::unique_lock<std::mutex> lock(observe_mutex_, std::try_to_lock);
+      if (!lock.owns_lock()) return throw_if_stopped();
+      const auto now = Clock::now();
+      if (std::chrono::duration<double>(now - observed_).count() >= kObserveEvery) {
+        observed_ = now;
+        {
+          const std::lock_guard<std::mutex> task_lock(mutex_);
+          task = task_;
+        }
+        g_observer(stage_, task, std::clamp(fraction, 0.0, 1.0));
+      }
+    }
+  }
+  throw_if_stopped();
+}
 
 Progress::~Progress() {
   if (live_ && shown_) log::clear_live();
 }
 
 void Progress::start_task(std::string name) {
-  const std::lock_guard<std::mutex> lock(mutex_);
-  task_ = std::move(name);
-  task_start_ = Clock::now();
+  {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    task_ = std::move(name);
+    task_start_ = Clock::now();
+  }
+  throw_if_stopped();
 }
 
 void Progress::operator()(double fraction) {
-  if (!live_ && !lines_) return;
-  const std::lock_guard<std::mutex> lock(mutex_);
-  show_locked(fraction, "", task_start_);
+  if (live_ || lines_) {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    show_locked(fraction, "", task_start_);
+  }
+  observe(fraction);
 }
 
 void Progress::count(long done, long total) {
-  if (!live_ && !lines_) return;
-  const std::lock_guard<std::mutex> lock(mutex_);
-  // Counted work spans the stage's tasks (the probes of every state): paced from its start.
-  show_locked(total > 0 ? double(done) / double(total) : 1.0,
-              std::to_string(done) + "/" + std::to_string(total), start_);
+  const double fraction = total > 0 ? double(done) / double(total) : 1.0;
+  if (live_ || lines_) {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    // Counted work spans the stage's tasks (the probes of every state): paced from its start.
+    show_locked(fraction, std::to_string(done) + "/" + std::to_string(total), start_);
+  }
+  observe(fraction);
 }
 
 double Progress::elapsed() const {

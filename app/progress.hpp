@@ -4,9 +4,14 @@
 // every RunContext::progress_every seconds of work, with the same estimate. Every stage also
 // says when it starts and ends (pipeline.cpp), so a log shows each stage even when it is short.
 // `--quiet` silences both. Updates may come from several OpenMP threads at once.
+//
+// Besides the terminal, one observer may follow the progress (the Python module's progress
+// callback, docs/python.md), and the work may be asked to stop (its Ctrl-C): this class is
+// where every long loop reports, so it is where they learn that they should end.
 #pragma once
 
 #include <chrono>
+#include <functional>
 #include <mutex>
 #include <string>
 
@@ -14,6 +19,27 @@
 #include "rendulic/dem/protocols.hpp"
 
 namespace rendulic::app {
+
+// The observer: the stage, its current task and the fraction of that task done, at most every
+// kObserveEvery seconds per stage, from whichever thread reported (so it must be thread-safe).
+// One per process; set it only while no work runs. An empty function removes it.
+using ProgressObserver =
+    std::function<void(const std::string& stage, const std::string& task, double fraction)>;
+inline constexpr double kObserveEvery = 0.2;
+void set_progress_observer(ProgressObserver observer);
+
+// Asks the work in progress to stop (any thread, also a signal handler: it only sets a flag).
+// The long loops then throw rendulic::Cancelled at their next report made outside a parallel
+// region; a probe campaign skips its remaining probes first (ProbeOptions::stop, from
+// stop_checker()). clear_stop() before the next piece of work.
+void request_stop();
+void clear_stop();
+bool stop_requested();
+// Throws Cancelled if a stop was requested and no OpenMP parallel region (of any team size) is
+// open here.
+void throw_if_stopped();
+// The check a probe campaign takes (dem::ProbeOptions::stop).
+std::function<bool()> stop_checker();
 
 // "12 s", "3 min 05 s", "1 h 02 min": a duration for people.
 std::string human_seconds(double seconds);
@@ -40,6 +66,8 @@ class Progress {
  private:
   using Clock = std::chrono::steady_clock;
   void show_locked(double fraction, const std::string& detail, Clock::time_point from);
+  // The observer's share of one report (and the stop check after it).
+  void observe(double fraction);
 
   bool live_;     // a terminal: redraw one line
   bool lines_;    // a log: a plain line now and then
@@ -47,6 +75,8 @@ class Progress {
   std::string stage_, task_;
   Clock::time_point start_, task_start_, last_;
   bool shown_ = false;
+  Clock::time_point observed_{};
+  std::mutex observe_mutex_;
   std::mutex mutex_;
 };
 

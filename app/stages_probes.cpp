@@ -33,6 +33,7 @@ const std::vector<std::pair<std::string, dem::DemSystem>>& relaxed_states(
 // Counts the probes of a stage on its progress display: `total` probes over all states.
 void count_probes(dem::ProbeOptions& o, Progress& progress, std::atomic<long>& done, long total) {
   o.probe_done = [&progress, &done, total] { progress.count(++done, total); };
+  o.stop = stop_checker();
 }
 
 void campaign(const Scenario& sc, ResultsWriter& out, const RunContext& ctx,

@@ -806,6 +806,27 @@ std::vector<std::string> ResultsReader::children(const std::string& group) const
   });
 }
 
+std::vector<std::string> ResultsReader::attr_names(const std::string& object) const {
+  return impl_->guarded(object, [&] {
+    std::vector<std::string> out;
+    const auto collect = [&](const H5::H5Object& o) {
+      for (int i = 0; i < o.getNumAttrs(); ++i)
+        out.push_back(o.openAttribute(static_cast<unsigned>(i)).getName());
+    };
+    if (impl_->require(object) == H5O_TYPE_DATASET)
+      collect(impl_->holder->openDataSet(object));
+    else
+      collect(impl_->open_group(object));
+    return out;
+  });
+}
+
+bool ResultsReader::attr_is_text(const std::string& object, const std::string& name) const {
+  return impl_->guarded(object + " @" + name, [&] {
+    return impl_->open_attr(object, name).getTypeClass() == H5T_STRING;
+  });
+}
+
 double ResultsReader::attr_double(const std::string& object, const std::string& name) const {
   return impl_->numbers(object, name, 1)[0];
 }

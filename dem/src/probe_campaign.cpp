@@ -5,6 +5,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -232,9 +233,14 @@ bool compute_probes(detail::ProbeTaskScope& scope, const ProbeOptions& options,
     if (share.owns(p)) mine.push_back(p);
   const int n = static_cast<int>(mine.size());
   std::vector<std::string> errors(m);
+  std::atomic<bool> stopped{false};
 #pragma omp parallel for schedule(dynamic, 1) num_threads(team_size(options))
   for (int q = 0; q < n; ++q) {
     const int p = mine[q];
+    if (stopped.load(std::memory_order_relaxed) || (options.stop && options.stop())) {
+      stopped.store(true, std::memory_order_relaxed);
+      continue;
+    }
     try {
       records[p] = compute(p);
     } catch (const std::exception& e) {
@@ -258,6 +264,8 @@ bool compute_probes(detail::ProbeTaskScope& scope, const ProbeOptions& options,
       }
     }
   }
+  // After the exchange: the workers have finished their share and wait for the next task.
+  if (stopped) throw Cancelled(method + " probes: stopped on request");
   rethrow_first(errors, method);
   return true;
 }

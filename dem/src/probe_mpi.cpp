@@ -71,10 +71,12 @@ void io(A& a, LinearResponseOptions& o) {
 template <class A>
 void io(A& a, ProbeOptions& o) {
   auto& [directions, amplitudes, inertial_number, rate, dt_factor, relax, minimise, linear, threads,
-         probe_done] = o;
+         probe_done, stop] = o;
   a(directions), a(amplitudes), a(inertial_number), a(rate), a(dt_factor), a(relax), a(minimise);
   a(linear), a(threads);
-  (void)probe_done;  // rank 0's progress display: not sent, a worker counts nothing
+  // Rank 0's progress display and stop request: not sent, a worker counts nothing and is
+  // released by rank 0.
+  (void)probe_done, (void)stop;
 }
 
 namespace {

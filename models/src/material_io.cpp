@@ -10,9 +10,10 @@
 namespace rendulic::models {
 namespace {
 
-toml::table parse(const std::string& path) {
+// A file, or (text given) TOML text that `path` names in messages.
+toml::table parse(const std::string& path, const std::string* text = nullptr) {
   try {
-    return toml::parse_file(path);
+    return text ? toml::parse(*text, path) : toml::parse_file(path);
   } catch (const toml::parse_error& e) {
     const auto& where = e.source().begin;
     throw InputError(path + ":" + std::to_string(where.line) + ": " + std::string(e.description()));
@@ -49,7 +50,15 @@ Eigen::Matrix3d matrix3(const toml::node& node, const std::string& key, const st
 }  // namespace
 
 void load_parameters_toml(const std::string& path, Law* law) {
-  const toml::table tbl = parse(path);
+  parse_parameters_toml("", path, law, false);
+}
+MaterialState load_state_toml(const std::string& path, const Law& law) {
+  return parse_state_toml("", path, law, false);
+}
+
+void parse_parameters_toml(const std::string& text, const std::string& path, Law* law,
+                           bool from_text) {
+  const toml::table tbl = parse(path, from_text ? &text : nullptr);
   std::vector<double> values = law->parameters();
   for (const auto& [k, node] : tbl) {
     const std::string key(k.str());
@@ -72,8 +81,9 @@ void load_parameters_toml(const std::string& path, Law* law) {
   if (!law->set_parameters(values, &why)) throw InputError(path + ": " + why);
 }
 
-MaterialState load_state_toml(const std::string& path, const Law& law) {
-  const toml::table tbl = parse(path);
+MaterialState parse_state_toml(const std::string& text, const std::string& path, const Law& law,
+                               bool from_text) {
+  const toml::table tbl = parse(path, from_text ? &text : nullptr);
   Eigen::Matrix3d stress, fabric = Eigen::Matrix3d::Zero();
   double nu = 0.0;
   bool have_stress = false;

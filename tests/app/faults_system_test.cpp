@@ -512,7 +512,9 @@ TEST(FaultsSystem, AnInterruptedPlotLeavesNoFigureScriptRunningNorItsFile) {
       // Between fork and exec the child still shows rendulic's own command line: wait for
       // the interpreter's.
       const std::string cmd = read_file("/proc/" + std::to_string(c) + "/cmdline");
-      const std::string argv0 = cmd.substr(0, cmd.find('\0'));
+      // The name of the program, not its path: the build may sit under a folder whose name
+      // says python.
+      const std::string argv0 = fs::path(cmd.substr(0, cmd.find('\0'))).filename().string();
       if (argv0.find("python") != std::string::npos &&
           cmd.find((d / "results.h5").string()) != std::string::npos)
         script = c;

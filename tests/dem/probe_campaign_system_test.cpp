@@ -2,9 +2,11 @@
 // response equals the dynamic elastic probes (envelope axes within 1 %, inclination within
 // 0.5 deg, from the least-squares Rendulic map of the pairs and its SVD); minimisation and
 // dynamic probes agree on the elastic envelope; an elastic probe opens or closes no contact
-// while a 2e-3 probe does; the campaign is identical for 1 and 2 threads.
+// while a 2e-3 probe does; the campaign is identical for 1 and 2 threads; a stop request skips
+// the remaining probes.
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <cmath>
 #include <iostream>
 
@@ -201,6 +203,30 @@ TEST(ProbeCampaignThreads, IdenticalForAnyThreadCount) {
     EXPECT_EQ(a.d_stress[i], b.d_stress[i]) << "bitwise, direction " << theta[i];
     EXPECT_EQ(a.d_fabric[i], b.d_fabric[i]) << "bitwise, direction " << theta[i];
   }
+}
+
+}  // namespace
+}  // namespace rendulic::dem
+
+namespace rendulic::dem {
+namespace {
+
+// A stop request (the Python module's Ctrl-C, app/progress.hpp): the probes after it are
+// skipped, not computed, and the envelope ends with Cancelled; on one thread exactly the
+// probes started before the request are computed.
+TEST_F(ProbeCampaign, StopRequestSkipsTheRemainingProbes) {
+  ProbeOptions opt;
+  opt.threads = 1;
+  std::atomic<int> asked{0}, computed{0};
+  opt.stop = [&asked] { return ++asked > 3; };
+  opt.probe_done = [&computed] { ++computed; };
+  EXPECT_THROW(minimisation_envelope(*state_, 5e-5, probe_directions(12), opt), Cancelled);
+  EXPECT_EQ(computed.load(), 3);
+  EXPECT_EQ(asked.load(), 4);  // once stopped, the others are skipped without asking again
+  opt.stop = [] { return false; };
+  computed = 0;
+  EXPECT_EQ(minimisation_envelope(*state_, 5e-5, probe_directions(12), opt).size(), 12u);
+  EXPECT_EQ(computed.load(), 12);
 }
 
 }  // namespace

@@ -16,6 +16,14 @@ class InputError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// Work stopped on request before it finished (the Python module's Ctrl-C, or its progress
+// callback failing; app/progress.hpp): not an error of the input nor a bug. The long loops
+// throw it where no parallel region is open.
+class Cancelled : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
 // `text` fit for a one-line message: control characters (a newline, a NUL) shown as \xNN.
 std::string printable(const std::string& text);
 

@@ -101,6 +101,11 @@ class ResultsReader {
   bool is_group(const std::string& path) const;
   bool has_attr(const std::string& object, const std::string& name) const;
   std::vector<std::string> children(const std::string& group) const;
+  // The names of the attributes of a group or dataset, and whether one of them is text (else
+  // numbers): what a reader that does not know the names beforehand needs (the Python module's
+  // dictionaries of attributes).
+  std::vector<std::string> attr_names(const std::string& object) const;
+  bool attr_is_text(const std::string& object, const std::string& name) const;
 
   double attr_double(const std::string& object, const std::string& name) const;
   std::int64_t attr_int(const std::string& object, const std::string& name) const;

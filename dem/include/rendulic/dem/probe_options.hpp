@@ -35,6 +35,10 @@ struct ProbeOptions {
   // Called after each probe this process computes, from the thread that computed it (so it
   // must be thread-safe): the run's progress display counts probes with it.
   std::function<void()> probe_done;
+  // Asked before each probe this process computes (any thread): once it says true, the
+  // remaining probes are skipped and the envelope throws rendulic::Cancelled (the Python
+  // module's Ctrl-C, app/progress.hpp). Empty: never.
+  std::function<bool()> stop;
   bool IsValid(std::string* why) const;
 };
 

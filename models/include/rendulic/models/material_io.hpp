@@ -16,5 +16,11 @@ namespace rendulic::models {
 // Throws rendulic::InputError on any problem.
 void load_parameters_toml(const std::string& path, Law* law);
 MaterialState load_state_toml(const std::string& path, const Law& law);
+// The same from TOML text (from_text; else `path` is read), `path` naming it in the messages:
+// the Python module's dictionaries, checked exactly as a file is.
+void parse_parameters_toml(const std::string& text, const std::string& path, Law* law,
+                           bool from_text = true);
+MaterialState parse_state_toml(const std::string& text, const std::string& path, const Law& law,
+                               bool from_text = true);
 
 }  // namespace rendulic::models

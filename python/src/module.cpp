@@ -1,0 +1,637 @@
+// The extension module `rendulic._rendulic` (docs/python.md): results files read into numpy
+// without HDF5 paths, envelope fits, model envelopes and material-point paths, probing a packing
+// and running a scenario, each through the very functions the CLI calls (app/commands.hpp,
+// probes/, models/, core/results.hpp), so that its numbers are the CLI's. The package's
+// __init__.py wraps these dictionaries into small dataclasses.
+//
+// Long work releases the GIL. Its progress comes through app/progress.hpp's observer: on the
+// thread that called in, the GIL is taken again, Python's pending signals are run
+// (PyErr_CheckSignals: Ctrl-C becomes KeyboardInterrupt) and the user's callback is called;
+// either raising asks the work to stop (request_stop), the C++ side unwinds as it does for any
+// error (temporary files removed, completed stages kept), and the Python exception is raised.
+// rendulic::InputError arrives as rendulic.InputError (a ValueError) with the CLI's one-line
+// message.
+#include <pybind11/eigen.h>
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+#include <pybind11/stl/filesystem.h>
+#include <signal.h>
+
+#include <cmath>
+#include <cstdio>
+#include <optional>
+#include <sstream>
+#include <thread>
+
+#include "commands.hpp"
+#include "progress.hpp"
+#include "rendulic/core/cleanup.hpp"
+#include "rendulic/core/envelope_io.hpp"
+#include "rendulic/core/errors.hpp"
+#include "rendulic/core/log.hpp"
+#include "rendulic/core/result_paths.hpp"
+#include "rendulic/core/results.hpp"
+#include "rendulic/models/paths.hpp"
+#include "rendulic/probes/envelope.hpp"
+#include "rendulic/probes/envelope_fit.hpp"
+#include "rendulic/probes/fit_io.hpp"
+
+namespace py = pybind11;
+using namespace py::literals;
+
+namespace rendulic::python {
+namespace {
+
+// ---- numpy out ----------------------------------------------------------------------------
+
+py::array_t<double> array_of(const std::vector<double>& v) {
+  py::array_t<double> a(static_cast<py::ssize_t>(v.size()));
+  std::copy(v.begin(), v.end(), a.mutable_data());
+  return a;
+}
+py::array_t<double> pairs_of(const std::vector<Eigen::Vector2d>& v) {
+  py::array_t<double> a({static_cast<py::ssize_t>(v.size()), py::ssize_t{2}});
+  auto m = a.mutable_unchecked<2>();
+  for (std::size_t i = 0; i < v.size(); ++i)
+    for (int j = 0; j < 2; ++j) m(static_cast<py::ssize_t>(i), j) = v[i](j);
+  return a;
+}
+py::array_t<double> tensors_of(const std::vector<Eigen::Matrix3d>& v) {
+  py::array_t<double> a({static_cast<py::ssize_t>(v.size()), py::ssize_t{3}, py::ssize_t{3}});
+  auto m = a.mutable_unchecked<3>();
+  for (std::size_t i = 0; i < v.size(); ++i)
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) m(static_cast<py::ssize_t>(i), r, c) = v[i](r, c);
+  return a;
+}
+py::array_t<double> matrix_of(const Eigen::MatrixXd& x) {
+  py::array_t<double> a({static_cast<py::ssize_t>(x.rows()), static_cast<py::ssize_t>(x.cols())});
+  auto m = a.mutable_unchecked<2>();
+  for (Eigen::Index r = 0; r < x.rows(); ++r)
+    for (Eigen::Index c = 0; c < x.cols(); ++c) m(r, c) = x(r, c);
+  return a;
+}
+
+// ---- results files ------------------------------------------------------------------------
+
+// Every attribute of an object: numbers as a float (one) or an array, texts as str (a list of
+// texts as a list).
+py::dict attrs_of(const ResultsReader& in, const std::string& object) {
+  py::dict d;
+  for (const std::string& name : in.attr_names(object)) {
+    if (in.attr_is_text(object, name)) {
+      try {
+        d[py::str(name)] = in.attr_string(object, name);
+      } catch (const InputError&) {  // a list of texts
+        d[py::str(name)] = in.attr_strings(object, name);
+      }
+    } else {
+      const std::vector<double> v = in.attr_doubles(object, name);
+      if (v.size() == 1)
+        d[py::str(name)] = v[0];
+      else
+        d[py::str(name)] = array_of(v);
+    }
+  }
+  return d;
+}
+
+// A dataset as an array of its own shape.
+py::array_t<double> dataset(const ResultsReader& in, const std::string& path) {
+  const std::vector<std::uint64_t> shape = in.shape(path);
+  if (shape.size() == 3 && shape[1] == 3 && shape[2] == 3) return tensors_of(in.read_tensors(path));
+  if (shape.size() == 2 && shape[0] == 3 && shape[1] == 3) return matrix_of(in.read_tensor(path));
+  if (shape.size() == 2) return matrix_of(in.read_matrix(path));
+  if (shape.size() <= 1) return array_of(in.read_vector(path));
+  throw InputError(in.path().string() + ": " + path + ": a dataset of " +
+                   std::to_string(shape.size()) + " dimensions is not read here");
+}
+
+// Every dataset of a group, by name (child groups left out).
+py::dict datasets_of(const ResultsReader& in, const std::string& group) {
+  py::dict d;
+  for (const std::string& name : in.children(group)) {
+    const std::string path = group + "/" + name;
+    if (!in.is_group(path)) d[py::str(name)] = dataset(in, path);
+  }
+  return d;
+}
+
+py::dict fit_dict(const EnvelopeFit& f) {
+  py::dict d;
+  d["shape"] = to_string(f.shape);
+  d["center"] = py::make_tuple(f.center.x(), f.center.y());
+  d["semi_axes"] = py::make_tuple(f.a, f.b);
+  d["inclination_deg"] =
+      f.inclination_deg ? py::object(py::float_(*f.inclination_deg)) : py::none();
+  d["rms"] = f.rms;
+  py::dict se;
+  if (f.has_stderr) {
+    se["center"] = py::make_tuple(f.center_stderr.x(), f.center_stderr.y());
+    se["semi_axes"] = py::make_tuple(f.a_stderr, f.b_stderr);
+    if (f.inclination_stderr_deg) se["inclination_deg"] = *f.inclination_stderr_deg;
+  }
+  d["stderr"] = se;
+  d["covariance"] = matrix_of(f.covariance);
+  d["residuals"] = array_of(f.residuals);
+  d["n_points"] = f.n_points;
+  d["loss"] = to_string(f.loss);
+  d["loss_scale"] = f.loss_scale;
+  d["converged"] = f.converged;
+  d["used_theta"] = f.used_theta;
+  d["selection"] = f.selection_note;
+  d["line_p_value"] = f.line_p_value ? py::object(py::float_(*f.line_p_value)) : py::none();
+  return d;
+}
+
+py::dict envelope_dict(const ResultsReader& in, const std::string& group) {
+  const EnvelopeRecord e = read_envelope(in, group);
+  py::dict d;
+  d["method"] = e.method;
+  d["amplitude"] = e.amplitude;
+  d["k_star"] = e.k_star;
+  d["theta_deg"] = array_of(e.theta_deg);
+  d["strain"] = pairs_of(e.strain);
+  d["stress_star"] = pairs_of(e.stress_star);
+  d["fabric"] = pairs_of(e.fabric);
+  d["d_stress"] = tensors_of(e.d_stress);
+  d["d_fabric"] = tensors_of(e.d_fabric);
+  py::dict split;
+  if (!e.d_fabric_volume.empty()) {
+    split["volume"] = tensors_of(e.d_fabric_volume);
+    split["rotation"] = tensors_of(e.d_fabric_rotation);
+    split["contacts"] = tensors_of(e.d_fabric_contacts);
+  }
+  d["d_fabric_split"] = split;
+  py::dict diag;
+  for (const auto& [k, v] : e.diagnostics) diag[py::str(k)] = array_of(v);
+  d["diagnostics"] = diag;
+  d["attributes"] = attrs_of(in, group);
+  for (const char* m : {datasets::kStiffness, datasets::kFabricStiffness})
+    if (in.exists(group + m)) d[py::str(m + 1)] = matrix_of(in.read_matrix(group + m));
+  for (const auto& [key, sub] :
+       {std::pair{"fit_stress", paths::kFitStress}, std::pair{"fit_fabric", paths::kFitFabric}}) {
+    const std::string g = group + sub;
+    if (in.is_group(g) && in.has_attr(g, "semi_axes"))
+      d[key] = fit_dict(read_envelope_fit(in, g));
+    else if (in.is_group(g) && in.has_attr(g, "error"))
+      d[key] = py::dict("shape"_a = "none", "error"_a = in.attr_string(g, "error"));
+    else
+      d[key] = py::none();
+  }
+  return d;
+}
+
+class Reader {
+ public:
+  explicit Reader(const std::string& path) : in_(path) {}
+
+  std::string path() const { return in_.path().string(); }
+  std::vector<std::string> children(const std::string& group) const { return in_.children(group); }
+  py::dict attrs(const std::string& object) const { return attrs_of(in_, object); }
+  py::array_t<double> read(const std::string& path) const { return dataset(in_, path); }
+
+  std::vector<std::string> states(const std::string& root) const {
+    return in_.children(paths::states(root));
+  }
+  py::dict state(const std::string& label, const std::string& root) const {
+    const std::string g = paths::state(label, root);
+    if (!in_.is_group(g))
+      throw InputError(path() + ": no state '" + label + "'" +
+                       (root.empty() ? "" : " under " + root) +
+                       " (states: " + joined(states(root)) + ")");
+    py::dict d = datasets_of(in_, g);
+    d["label"] = label;
+    d["attributes"] = attrs_of(in_, g);
+    return d;
+  }
+  std::vector<std::string> envelopes(const std::string& label, const std::string& root) const {
+    return in_.children(paths::envelopes(paths::state(label, root)));
+  }
+  py::dict envelope(const std::string& label, const std::string& name,
+                    const std::string& root) const {
+    const std::string g = paths::envelope(paths::state(label, root), name);
+    if (!in_.is_group(g))
+      throw InputError(path() + ": state '" + label + "' has no envelope '" + name +
+                       "' (envelopes: " + joined(envelopes(label, root)) + ")");
+    py::dict d = envelope_dict(in_, g);
+    d["state"] = label;
+    d["name"] = name;
+    return d;
+  }
+  // A series (/isotropic, /path, a branch's path) as a dictionary of arrays and its attributes.
+  py::dict series(const std::string& group) const {
+    if (!in_.is_group(group)) throw InputError(path() + ": no series " + group);
+    py::dict d = datasets_of(in_, group);
+    d["attributes"] = attrs_of(in_, group);
+    return d;
+  }
+  std::vector<std::string> branches() const {
+    std::vector<std::string> out;
+    for (const auto& c : in_.children(paths::kPressure))
+      out.push_back(std::string(paths::kPressure) + "/" + c);
+    return out;
+  }
+  py::dict calibration() const {
+    py::dict d;
+    if (!in_.is_group(paths::kCalibration)) return d;
+    d["attributes"] = attrs_of(in_, paths::kCalibration);
+    py::dict models;
+    for (const std::string& model : in_.children(paths::kCalibration)) {
+      const std::string g = paths::calibration(model);
+      if (!in_.is_group(g)) continue;
+      py::dict m;
+      py::dict a = attrs_of(in_, g);
+      m["attributes"] = a;
+      const std::vector<std::string> names = in_.attr_strings(g, "param_names");
+      const std::vector<double> params = in_.read_vector(g + datasets::kParams);
+      py::dict p, se;
+      for (std::size_t i = 0; i < names.size() && i < params.size(); ++i)
+        p[py::str(names[i])] = params[i];
+      if (in_.exists(g + datasets::kStderr)) {
+        const std::vector<double> s = in_.read_vector(g + datasets::kStderr);
+        for (std::size_t i = 0; i < names.size() && i < s.size(); ++i) se[py::str(names[i])] = s[i];
+      }
+      m["params"] = p;
+      m["stderr"] = se;
+      if (in_.exists(g + datasets::kCorrelation))
+        m["correlation"] = matrix_of(in_.read_matrix(g + datasets::kCorrelation));
+      py::dict states;
+      const std::string sg = paths::states(g);
+      for (const std::string& label : in_.children(sg)) {
+        py::dict s;
+        s["attributes"] = attrs_of(in_, paths::state(label, g));
+        py::dict envs;
+        const std::string eg = paths::envelopes(paths::state(label, g));
+        for (const std::string& name : in_.children(eg))
+          envs[py::str(name)] = envelope_dict(in_, paths::envelope(paths::state(label, g), name));
+        s["envelopes"] = envs;
+        states[py::str(label)] = s;
+      }
+      m["states"] = states;
+      if (in_.is_group(g + paths::kPath)) m["path"] = series(g + paths::kPath);
+      models[py::str(model)] = m;
+    }
+    d["models"] = models;
+    return d;
+  }
+
+ private:
+  static std::string joined(const std::vector<std::string>& v) {
+    std::string s;
+    for (const auto& x : v) s += (s.empty() ? "" : ", ") + x;
+    return s.empty() ? "none" : s;
+  }
+  ResultsReader in_;
+};
+
+// ---- long work: GIL, progress, Ctrl-C -----------------------------------------------------
+
+// The Python exception that asked the work to stop (KeyboardInterrupt, or the callback's own).
+struct PendingError {
+  py::object type, value, trace;
+  bool set() const { return static_cast<bool>(type); }
+  void fetch() {
+    PyObject *t = nullptr, *v = nullptr, *tb = nullptr;
+    PyErr_Fetch(&t, &v, &tb);
+    PyErr_NormalizeException(&t, &v, &tb);
+    type = py::reinterpret_steal<py::object>(t);
+    value = py::reinterpret_steal<py::object>(v);
+    trace = py::reinterpret_steal<py::object>(tb);
+  }
+  [[noreturn]] void raise() {
+    PyErr_Restore(type.release().ptr(), value.release().ptr(), trace.release().ptr());
+    throw py::error_already_set();
+  }
+};
+
+// Runs `work` without the GIL, with progress reported to `callback(stage, task, fraction)` (or
+// None) and Ctrl-C honoured. `quiet` silences the info lines on stderr for this call only.
+template <class Work>
+auto long_work(const py::object& callback, bool quiet, Work&& work) {
+  PendingError pending;
+  const std::thread::id owner = std::this_thread::get_id();
+  app::clear_stop();
+  app::set_progress_observer(
+      [&](const std::string& stage, const std::string& task, double fraction) {
+        // Python's signals are run on its main thread only, and the callback is called from one
+        // thread: the one that called in (the master of every OpenMP team it opens).
+        if (std::this_thread::get_id() != owner) return;
+        py::gil_scoped_acquire gil;
+        if (pending.set()) return;
+        if (PyErr_CheckSignals() != 0) {
+          pending.fetch();
+          app::request_stop();
+          return;
+        }
+        if (callback.is_none()) return;
+        try {
+          callback(stage, task, fraction);
+        } catch (py::error_already_set& e) {
+          e.restore();
+          pending.fetch();
+          app::request_stop();
+        }
+      });
+  const log::Level level = log::level();
+  if (quiet) log::set_level(log::Level::kWarning);
+  const auto done = [&] {
+    app::set_progress_observer({});
+    app::clear_stop();
+    log::set_level(level);
+  };
+  std::string failure;
+  std::exception_ptr error;
+  using Result = decltype(work());
+  std::optional<Result> result;
+  {
+    py::gil_scoped_release release;
+    try {
+      result.emplace(work());
+    } catch (...) {
+      error = std::current_exception();
+      failure = describe_current_exception();
+    }
+  }
+  done();
+  if (pending.set()) {
+    // The stop the user asked for; what the C++ side said on the way out (the stages kept in
+    // results.h5.partial) travels as a note.
+    if (error && failure.find("stopped on request") == std::string::npos &&
+        py::hasattr(pending.value, "add_note"))
+      pending.value.attr("add_note")(failure);
+    pending.raise();
+  }
+  if (error) std::rethrow_exception(error);
+  return std::move(*result);
+}
+
+// ---- inputs -------------------------------------------------------------------------------
+
+// A number as TOML reads it back exactly (nan and inf included, which the readers refuse).
+std::string toml_number(double v) {
+  if (std::isnan(v)) return "nan";
+  if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.17g", v);
+  std::string s = buf;
+  if (s.find_first_of(".eE") == std::string::npos) s += ".0";
+  return s;
+}
+
+// A dictionary of numbers (law parameters) or of a state's stress, fabric (3x3) and
+// volume_fraction as TOML text, checked afterwards by the same readers as a file.
+std::string toml_of(const py::dict& d) {
+  std::ostringstream out;
+  for (const auto& [k, v] : d) {
+    const std::string key = py::str(k);
+    out << '"' << key << "\" = ";
+    const py::array_t<double, py::array::c_style | py::array::forcecast> a =
+        py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(v);
+    if (!a) throw InputError("'" + key + "' must be a number or an array of numbers");
+    if (a.ndim() == 0) {
+      out << toml_number(*a.data());
+    } else if (a.ndim() == 2) {
+      out << '[';
+      for (py::ssize_t i = 0; i < a.shape(0); ++i) {
+        out << (i ? ", [" : "[");
+        for (py::ssize_t j = 0; j < a.shape(1); ++j)
+          out << (j ? ", " : "") << toml_number(a.at(i, j));
+        out << ']';
+      }
+      out << ']';
+    } else {
+      throw InputError("'" + key + "' must be a number or a 3x3 array");
+    }
+    out << '\n';
+  }
+  return out.str();
+}
+
+// Parameters or a state given as a dictionary (TOML text) or as the path of a TOML file.
+std::pair<std::string, bool> toml_input(const py::object& x) {
+  if (x.is_none()) return {"", false};
+  if (py::isinstance<py::dict>(x)) return {toml_of(x.cast<py::dict>()), true};
+  if (py::isinstance<py::str>(x) || py::hasattr(x, "__fspath__"))
+    return {py::str(py::module_::import("os").attr("fspath")(x)), false};
+  throw InputError("expected a dictionary or the path of a TOML file");
+}
+
+std::vector<std::string> sets_of(const py::object& sets) {
+  std::vector<std::string> out;
+  if (sets.is_none()) return out;
+  if (py::isinstance<py::dict>(sets)) {
+    // A value as the scenario's TOML spells it: text quoted, lists bracketed, booleans lower.
+    const py::object json = py::module_::import("json");
+    for (const auto& [k, v] : sets.cast<py::dict>())
+      out.push_back(std::string(py::str(k)) + "=" + std::string(py::str(json.attr("dumps")(v))));
+    return out;
+  }
+  return sets.cast<std::vector<std::string>>();
+}
+
+std::vector<Eigen::Vector2d> points_of(const py::object& x, const char* what) {
+  const auto a = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(x);
+  if (!a || a.ndim() != 2 || a.shape(1) != 2)
+    throw InputError(std::string(what) + ": expected an array of shape [n, 2]");
+  std::vector<Eigen::Vector2d> out(static_cast<std::size_t>(a.shape(0)));
+  for (py::ssize_t i = 0; i < a.shape(0); ++i) out[i] = {a.at(i, 0), a.at(i, 1)};
+  return out;
+}
+
+py::dict model_envelope_dict(const models::ModelEnvelope& env, const std::string& law_name) {
+  py::dict d;
+  d["model"] = law_name;
+  d["theta_deg"] = py::array_t<double>(env.theta_deg.size(), env.theta_deg.data());
+  d["strain"] = matrix_of(env.strain);
+  d["stress"] = matrix_of(env.stress);
+  d["fabric"] = matrix_of(env.fabric);
+  d["d_stress"] = tensors_of(env.d_stress);
+  d["d_fabric"] = tensors_of(env.d_fabric);
+  d["max_error_estimate"] = env.max_error_estimate;
+  d["within_tolerance"] = env.within_tolerance;
+  d["total_substeps"] = env.total_substeps;
+  return d;
+}
+
+}  // namespace
+}  // namespace rendulic::python
+
+PYBIND11_MODULE(_rendulic, m) {
+  using namespace rendulic;
+  using namespace rendulic::python;
+  m.doc() = "rendulic's C++ core (docs/python.md); use the package `rendulic`";
+
+  // The library's tidying-up on fatal signals (temporary results files removed, completed
+  // stages kept) is wanted, but SIGINT stays Python's: it becomes KeyboardInterrupt, and the
+  // C++ side unwinds as for any error, which tidies up the same files.
+  {
+    struct sigaction python_int {};
+    ::sigaction(SIGINT, nullptr, &python_int);
+    cleanup::install_handlers();
+    ::sigaction(SIGINT, &python_int, nullptr);
+  }
+
+  // The message is the CLI's line after "rendulic: " (main.cpp prints it through printable()).
+  static py::exception<InputError> input_error(m, "InputError", PyExc_ValueError);
+  py::register_exception_translator([](std::exception_ptr p) {
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const InputError& e) {
+      input_error(printable(e.what()).c_str());
+    }
+  });
+
+  py::class_<Reader>(m, "_Reader")
+      .def(py::init<const std::string&>(), "path"_a)
+      .def_property_readonly("path", &Reader::path)
+      .def("children", &Reader::children, "group"_a)
+      .def("attrs", &Reader::attrs, "object"_a)
+      .def("read", &Reader::read, "path"_a)
+      .def("states", &Reader::states, "root"_a = "")
+      .def("state", &Reader::state, "label"_a, "root"_a = "")
+      .def("envelopes", &Reader::envelopes, "label"_a, "root"_a = "")
+      .def("envelope", &Reader::envelope, "label"_a, "name"_a, "root"_a = "")
+      .def("series", &Reader::series, "group"_a)
+      .def("branches", &Reader::branches)
+      .def("calibration", &Reader::calibration);
+
+  // The driver's default local error tolerance (models/driver.hpp), the Python defaults' too.
+  m.attr("DEFAULT_TOLERANCE") = models::StepOptions{}.tolerance;
+  m.def("fit_shape_choices", &fit_shape_choices);
+  m.def("fit_loss_choices", &fit_loss_choices);
+  m.def("law_names", &models::law_names);
+
+  m.def(
+      "fit_envelope",
+      [](const py::object& points, const py::object& theta_deg, const py::object& strain,
+         double amplitude, const std::string& shape, const std::string& loss, double loss_scale,
+         bool use_theta) {
+        Envelope env;
+        env.response = points_of(points, "points");
+        if (!theta_deg.is_none()) env.theta_deg = theta_deg.cast<std::vector<double>>();
+        if (!strain.is_none()) env.strain = points_of(strain, "strain");
+        env.amplitude = amplitude;
+        FitOptions o;
+        o.shape = fit_shape_from_string(shape);
+        o.loss = fit_loss_from_string(loss);
+        if (!(loss_scale >= 0)) throw InputError("loss_scale must be >= 0");
+        o.loss_scale = loss_scale;
+        o.use_theta = use_theta;
+        EnvelopeFit f;
+        {
+          py::gil_scoped_release release;
+          f = fit_envelope(env, o);
+        }
+        return fit_dict(f);
+      },
+      "points"_a, "theta_deg"_a = py::none(), "strain"_a = py::none(), "amplitude"_a = 0.0,
+      "shape"_a = "auto", "loss"_a = "none", "loss_scale"_a = 0.0, "use_theta"_a = true);
+
+  m.def(
+      "model_envelope",
+      [](const std::string& model, const py::object& state, const py::object& params,
+         double amplitude, int directions, const std::string& method, const std::string& scheme,
+         double tolerance, int substeps, const std::string& umat) {
+        app::EnvelopeRequest r;
+        r.model = model;
+        r.umat = umat;
+        std::tie(r.params, r.params_is_text) = toml_input(params);
+        std::tie(r.state, r.state_is_text) = toml_input(state);
+        if (r.state.empty() && !r.state_is_text) throw InputError("a state is required");
+        r.amplitude = amplitude;
+        r.directions = directions;
+        r.method = method;
+        r.scheme = scheme;
+        r.tolerance = tolerance;
+        r.substeps = substeps;
+        std::string name;
+        models::ModelEnvelope env;
+        {
+          py::gil_scoped_release release;
+          env = app::envelope_for(r, &name);
+        }
+        return model_envelope_dict(env, name);
+      },
+      "model"_a, "state"_a, "params"_a = py::none(), "amplitude"_a = 5e-5, "directions"_a = 36,
+      "method"_a = "integrated", "scheme"_a = "modified-euler",
+      "tolerance"_a = models::StepOptions{}.tolerance, "substeps"_a = 1, "umat"_a = "");
+
+  m.def(
+      "material_point_path",
+      [](const std::string& model, const py::object& state, const py::object& params,
+         const std::string& kind, double end, int steps, const std::string& scheme,
+         double tolerance, int substeps, const std::string& umat) {
+        const auto [p, p_text] = toml_input(params);
+        const auto [s, s_text] = toml_input(state);
+        if (kind != "undrained" && kind != "isotropic")
+          throw InputError("kind: unknown path '" + kind + "' (known: undrained, isotropic)");
+        models::PathOptions o;
+        o.steps = steps;
+        o.step = app::step_options_for(scheme, tolerance, substeps);
+        std::string why;
+        if (!o.IsValid(&why)) throw InputError("path options: " + why);
+        models::PathSeries series;
+        {
+          py::gil_scoped_release release;
+          const auto law = app::law_for(model, umat, p, p_text);
+          const models::MaterialState start = app::state_for(*law, s, s_text);
+          series = kind == "undrained" ? models::undrained_axisymmetric_path(*law, start, end, o)
+                                       : models::isotropic_compression_path(*law, start, end, o);
+        }
+        if (!series.success) throw InputError(kind + " path of " + model + ": " + series.reason);
+        py::dict d;
+        d["strain"] = tensors_of(series.strain);
+        d["stress"] = tensors_of(series.stress);
+        d["fabric"] = tensors_of(series.fabric);
+        d["eps_v"] = array_of(series.eps_v);
+        d["eps_dev"] = array_of(series.eps_dev);
+        d["volume_fraction"] = array_of(series.volume_fraction);
+        d["max_error_estimate"] = series.max_error_estimate;
+        d["total_substeps"] = series.total_substeps;
+        return d;
+      },
+      "model"_a, "state"_a, "params"_a = py::none(), "kind"_a = "undrained", "end"_a = -0.05,
+      "steps"_a = 200, "scheme"_a = "modified-euler",
+      "tolerance"_a = models::StepOptions{}.tolerance, "substeps"_a = 1, "umat"_a = "");
+
+  m.def(
+      "probe",
+      [](const std::string& packing, const std::string& out, const std::string& label,
+         const std::vector<std::string>& methods, const std::vector<double>& amplitudes,
+         int directions, const py::object& sets, int threads, bool quiet,
+         const py::object& progress) {
+        app::ProbeRequest r;
+        r.packing = packing;
+        r.out = out;
+        r.label = label;
+        r.methods = methods;
+        r.amplitudes = amplitudes;
+        r.directions = directions;
+        r.sets = sets_of(sets);
+        r.threads = threads;
+        r.quiet = quiet;
+        r.summary = false;  // the caller has the file
+        return long_work(progress, quiet, [&] { return app::probe_packing(r).string(); });
+      },
+      "packing"_a, "out"_a, "label"_a = "imported", "methods"_a = std::vector<std::string>{},
+      "amplitudes"_a = std::vector<double>{}, "directions"_a = 0, "sets"_a = py::none(),
+      "threads"_a = 0, "quiet"_a = false, "progress"_a = py::none());
+
+  m.def(
+      "run",
+      [](const std::string& scenario, const std::string& out, const py::object& sets, int threads,
+         bool quiet, bool resume, const py::object& progress) {
+        app::RunRequest r;
+        r.scenario = scenario;
+        r.out = out;
+        r.sets = sets_of(sets);
+        r.threads = threads;
+        r.quiet = quiet;
+        r.resume = resume;
+        return long_work(progress, quiet, [&] { return app::run_scenario(r).string(); });
+      },
+      "scenario"_a, "out"_a, "sets"_a = py::none(), "threads"_a = 0, "quiet"_a = false,
+      "resume"_a = false, "progress"_a = py::none());
+}

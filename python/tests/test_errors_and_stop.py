@@ -1,0 +1,125 @@
+"""Bad input arrives as rendulic.InputError with the CLI's one-line message; long work stops on
+Ctrl-C (KeyboardInterrupt) and when the progress callback raises, leaving no results file."""
+import os
+import signal
+import threading
+
+import numpy as np
+import pytest
+
+import rendulic
+from conftest import cli_error_line
+
+
+def message(excinfo):
+    return str(excinfo.value)
+
+
+def test_input_error_is_a_value_error():
+    assert issubclass(rendulic.InputError, ValueError)
+
+
+def test_missing_file_has_the_cli_message(tmp_path):
+    missing = tmp_path / "nope.h5"
+    with pytest.raises(rendulic.InputError) as e:
+        rendulic.Results(missing)
+    assert message(e) == cli_error_line("inspect", missing)
+    with pytest.raises(rendulic.InputError) as e:
+        rendulic.run(tmp_path / "nope.toml", tmp_path / "out")
+    assert message(e) == cli_error_line("run", tmp_path / "nope.toml", "--out", tmp_path / "o")
+
+
+def test_unknown_key_has_the_cli_message(tiny_toml, tmp_path):
+    with pytest.raises(rendulic.InputError) as e:
+        rendulic.run(tiny_toml, tmp_path / "out", sets={"dem.n_partcles": 100})
+    assert message(e) == cli_error_line("run", tiny_toml, "--set", "dem.n_partcles=100",
+                                        "--out", tmp_path / "out")
+    assert "n_partcles" in message(e)
+    assert not (tmp_path / "out" / "results.h5").exists()
+
+
+def test_out_of_range_value_has_the_cli_message(tiny_toml, tmp_path):
+    with pytest.raises(rendulic.InputError) as e:
+        rendulic.run(tiny_toml, tmp_path / "out", sets=["dem.n_particles=-5"])
+    assert message(e) == cli_error_line("run", tiny_toml, "--set", "dem.n_particles=-5",
+                                        "--out", tmp_path / "out")
+
+
+def test_model_input_errors_have_the_file_readers_messages():
+    state = {"stress": np.eye(3) * 1e6}
+    with pytest.raises(rendulic.InputError, match="unknown parameter 'Kx' for model "
+                                                  "isotropic_elastic"):
+        rendulic.model_envelope("isotropic_elastic", state, {"Kx": 1.0})
+    with pytest.raises(rendulic.InputError, match="parameter 'K' = -1 is outside its bounds"):
+        rendulic.model_envelope("isotropic_elastic", state, {"K": -1.0})
+    with pytest.raises(rendulic.InputError, match="unknown model 'elastc'"):
+        rendulic.model_envelope("elastc", state)
+    with pytest.raises(rendulic.InputError, match="must be a symmetric 3x3 tensor"):
+        rendulic.model_envelope("isotropic_elastic", {"stress": [[1, 2, 0], [0, 1, 0],
+                                                                  [0, 0, 1]]})
+    with pytest.raises(rendulic.InputError, match="unknown shape"):
+        rendulic.fit_envelope(np.ones((6, 2)), shape="ellipsoid")
+
+
+def test_progress_callback_raising_stops_the_run(tiny_toml, tmp_path):
+    calls = []
+
+    def progress(stage, task, fraction):
+        calls.append(stage)
+        raise RuntimeError("enough")
+
+    with pytest.raises(RuntimeError, match="enough"):
+        rendulic.run(tiny_toml, tmp_path / "out", threads=1, quiet=True, progress=progress)
+    assert calls == ["prepare"]  # the first report stopped it
+    assert not (tmp_path / "out" / "results.h5").exists()
+
+
+def test_ctrl_c_stops_the_run(tiny_toml, tmp_path):
+    calls = []
+
+    def progress(stage, task, fraction):
+        calls.append(stage)
+        if len(calls) == 1:
+            os.kill(os.getpid(), signal.SIGINT)
+
+    with pytest.raises(KeyboardInterrupt):
+        rendulic.run(tiny_toml, tmp_path / "out", threads=1, quiet=True, progress=progress)
+    assert calls == ["prepare"]
+    assert not (tmp_path / "out" / "results.h5").exists()
+
+
+def test_sigint_from_another_thread_stops_the_run(tiny_toml, tmp_path):
+    # SIGINT arrives while the C++ work runs with the GIL released: it is seen at the next
+    # progress report (PyErr_CheckSignals). The signal is sent once the run has started.
+    started = threading.Event()
+    seen = []
+
+    def progress(stage, task, fraction):
+        seen.append(stage)
+        if not started.is_set():
+            started.set()
+            threading.Thread(target=os.kill, args=(os.getpid(), signal.SIGINT)).start()
+
+    with pytest.raises(KeyboardInterrupt):
+        rendulic.run(tiny_toml, tmp_path / "out", threads=1, quiet=True, progress=progress)
+    assert not (tmp_path / "out" / "results.h5").exists()
+    # And the next call runs normally (the stop request does not linger).
+    env = rendulic.model_envelope("isotropic_elastic", {"stress": np.eye(3) * 1e6})
+    assert env["stress"].shape == (36, 2)
+
+
+def test_callback_raising_during_the_probes_stops_them(cli_run, tmp_path):
+    # Raised from a report made while the probes run (inside their parallel loop): the
+    # remaining probes are skipped (ProbeOptions::stop) and the exception comes back.
+    seen = []
+
+    def progress(stage, task, fraction):
+        seen.append((stage, task, fraction))
+        if stage == "probes" and task == "dynamic":
+            raise LookupError("stop the probes")
+
+    with pytest.raises(LookupError, match="stop the probes"):
+        rendulic.probe(f"{cli_run}:/states/a", tmp_path / "out", methods=["dynamic"],
+                       directions=16, threads=1, quiet=True, progress=progress)
+    assert seen[-1][:2] == ("probes", "dynamic") and seen[-1][2] < 1.0
+    assert not (tmp_path / "out" / "results.h5").exists()

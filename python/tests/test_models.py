@@ -1,0 +1,73 @@
+"""Model envelopes and material-point paths: the CLI's numbers, and closed forms of the linear
+isotropic law (docs/models.md section 1: D = diag(3K, 2G) in the (iso, dev) frame)."""
+import json
+
+import numpy as np
+import pytest
+
+import rendulic
+from conftest import cli
+
+STATE = {"stress": np.diag([1.2e6, 1.0e6, 1.0e6]), "fabric": np.diag([1.1, 1.0, 1.0]),
+         "volume_fraction": 0.8}
+PARAMS = {"K": 1.0e8, "G": 2.0e7}
+
+
+def toml(d):
+    lines = []
+    for k, v in d.items():
+        v = np.asarray(v, dtype=float)
+        if v.ndim == 0:
+            lines.append(f"{k} = {float(v)!r}")
+        else:
+            lines.append(f"{k} = [" + ", ".join("[" + ", ".join(repr(float(x)) for x in row)
+                                               + "]" for row in v) + "]")
+    return "\n".join(lines) + "\n"
+
+
+def test_model_envelope_equals_cli_envelope(tmp_path):
+    (tmp_path / "p.toml").write_text(toml(PARAMS))
+    (tmp_path / "s.toml").write_text(toml(STATE))
+    for model, params in (("isotropic_elastic", PARAMS), ("hypoplastic_wu", None)):
+        args = ["envelope", "--model", model, "--state", tmp_path / "s.toml", "--amplitude",
+                "1e-4", "--directions", "12", "--json"]
+        if params:
+            args += ["--params", tmp_path / "p.toml"]
+        ref = json.loads(cli(*args).stdout)
+        env = rendulic.model_envelope(model, STATE, params, amplitude=1e-4, directions=12)
+        assert env["model"] == ref["model"] == model
+        np.testing.assert_array_equal(env["theta_deg"], ref["theta_deg"])
+        for key in ("strain", "stress", "fabric"):
+            np.testing.assert_array_equal(env[key], np.array(ref[key]))
+        # A TOML file works as well as a dictionary.
+        again = rendulic.model_envelope(model, tmp_path / "s.toml",
+                                        tmp_path / "p.toml" if params else None,
+                                        amplitude=1e-4, directions=12)
+        np.testing.assert_array_equal(again["stress"], env["stress"])
+
+
+def test_linear_envelope_fit_has_the_closed_form_axes():
+    amp = 1e-4
+    env = rendulic.model_envelope("isotropic_elastic", STATE, PARAMS, amplitude=amp,
+                                  directions=36, method="rate")
+    fit = rendulic.fit_envelope(env["stress"], theta_deg=env["theta_deg"], shape="ellipse")
+    np.testing.assert_allclose(sorted(fit.semi_axes, reverse=True),
+                               (3 * PARAMS["K"] * amp, 2 * PARAMS["G"] * amp), rtol=1e-9)
+    # Major axis on the isotropic direction (sqrt2, 1) of the pairs: atan(1/sqrt2) = 35.26 deg.
+    assert abs(fit.inclination_deg - np.degrees(np.arctan(1 / np.sqrt(2)))) < 1e-6
+
+
+def test_paths_of_the_linear_law_have_the_closed_form():
+    iso = rendulic.material_point_path("isotropic_elastic", STATE, PARAMS, kind="isotropic",
+                                       end=1e-3, steps=10)
+    np.testing.assert_allclose(iso["stress"][-1] - iso["stress"][0],
+                               PARAMS["K"] * 1e-3 * np.eye(3), rtol=1e-9, atol=1e-6)
+    und = rendulic.material_point_path("isotropic_elastic", STATE, PARAMS, kind="undrained",
+                                       end=-0.01, steps=20)
+    d = und["stress"][-1] - und["stress"][0]
+    eps = und["strain"][-1] - und["strain"][0]
+    assert abs(np.trace(eps)) < 1e-12  # undrained: constant volume
+    np.testing.assert_allclose(d, 2 * PARAMS["G"] * eps, rtol=1e-9, atol=1e-6)
+    assert und["stress"].shape == (21, 3, 3)
+    assert und["eps_dev"][-1] == pytest.approx(-0.01, rel=1e-12)
+
