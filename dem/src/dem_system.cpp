@@ -449,7 +449,9 @@ void DemSystem::force_block_friction(std::size_t b) {
       const double rj = P[4 * j + 3];
       const double R = ri + rj;
       if (r2 >= R * R) {
-        if (advance) xi[0] = xi[1] = xi[2] = 0.0;  // contact lost: so is its history
+        // Contact lost: so is its history (stored only if there was one: most entries of the
+        // list never touch).
+        if (advance && (xi[0] != 0 || xi[1] != 0 || xi[2] != 0)) xi[0] = xi[1] = xi[2] = 0.0;
         continue;
       }
       const double d = std::sqrt(r2);
