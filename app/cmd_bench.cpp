@@ -13,6 +13,7 @@
 #include <signal.h>
 #include <sys/prctl.h>
 #include <sys/wait.h>
+#include <time.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -42,6 +43,7 @@ struct BenchOptions {
   std::vector<int> threads = {1, 2};
   std::vector<double> volume_fractions = {0.64, 0.82};
   double seconds = 1.0;  // timed wall time per figure and repetition (at least)
+  double friction = 0;   // > 0: also 1 thread with this mu on the same states
   int repetitions = 3;
   std::uint64_t seed = 1;
 };
@@ -109,10 +111,16 @@ dem::DemSystem prepared_state(const BenchOptions& o, double nu) {
 const Eigen::Vector3d kRate(400.0, -200.0, -200.0);  // the quick scenario's path rate
 
 // One figure: `threads` > 0 is a fixed team of that size, 0 the default (the team chosen while
-// running, up to all cores). Returns the best and the mean over the repetitions.
+// running, up to all cores). Returns the best and the mean over the repetitions, wall, and the
+// best in CPU time of the process (a shared machine's fair figure for one thread).
 struct Figure {
-  double best = 1e300, mean = 0;
+  double best = 1e300, mean = 0, best_cpu = 1e300;
 };
+double cpu_seconds() {
+  timespec t{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+}
 Figure time_steps(const dem::DemSystem& base, int threads, int all_cores, const BenchOptions& o) {
   omp_set_num_threads(threads > 0 ? threads : all_cores);
   Figure f;
@@ -127,6 +135,7 @@ Figure time_steps(const dem::DemSystem& base, int threads, int all_cores, const 
     while (threads == 0 &&
            std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count() < 0.2);
     std::int64_t steps = 0;
+    const double c0 = cpu_seconds();
     const auto t0 = std::chrono::steady_clock::now();
     double el = 0;
     while (el < o.seconds) {
@@ -135,6 +144,8 @@ Figure time_steps(const dem::DemSystem& base, int threads, int all_cores, const 
       el = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     }
     f.best = std::min(f.best, el * 1e9 / (static_cast<double>(steps) * n));
+    f.best_cpu =
+        std::min(f.best_cpu, (cpu_seconds() - c0) * 1e9 / (static_cast<double>(steps) * n));
     total_seconds += el;
     total_steps += static_cast<double>(steps);
   }
@@ -176,6 +187,10 @@ Subcommand add_bench(CLI::App& parent) {
   sub->add_option("--seconds", o->seconds, "timed wall time per figure and repetition")
       ->capture_default_str()
       ->check(CLI::Range(0.01, 600.0));
+  sub->add_option("--friction", o->friction,
+                  "also time 1 thread with Coulomb friction mu (dem.friction) on the same states, "
+                  "beside the frictionless engine, wall and CPU time")
+      ->check(CLI::Range(0.0, 10.0));
   sub->add_option("--repetitions", o->repetitions,
                   "repetitions (idle: the best is reported; loaded: the mean)")
       ->capture_default_str()
@@ -220,6 +235,32 @@ Subcommand add_bench(CLI::App& parent) {
                             << idle[k].best;
                   if (o->load) std::cout << std::setw(8) << std::setprecision(4) << loaded[k].mean;
                   std::cout << "\n";
+                }
+              }
+              if (o->friction > 0) {
+                // The same state and steps, frictionless and frictional (springs from zero).
+                dem::SystemOptions f;
+                f.material.mu = o->friction;
+                const dem::DemSystem rough = dem::DemSystem::restore(state.save(), f);
+                const Figure smooth_1 = time_steps(state, 1, all_cores, *o);
+                const Figure rough_1 = time_steps(rough, 1, all_cores, *o);
+                if (o->json) {
+                  for (const auto& [mu, fig] : {std::pair{0.0, smooth_1}, {o->friction, rough_1}}) {
+                    nlohmann::ordered_json row;
+                    row["volume_fraction"] = nu;
+                    row["threads"] = 1;
+                    row["n_particles"] = o->n_particles;
+                    row["friction"] = mu;
+                    row["ns_per_particle_step"] = fig.best;
+                    row["ns_per_particle_step_cpu"] = fig.best_cpu;
+                    json.push_back(row);
+                  }
+                } else {
+                  std::cout << "  1 thread, ns per particle-step (wall / CPU): frictionless "
+                            << std::setprecision(4) << smooth_1.best << " / " << smooth_1.best_cpu
+                            << ", friction " << o->friction << ": " << rough_1.best << " / "
+                            << rough_1.best_cpu << " (" << std::setprecision(3)
+                            << rough_1.best_cpu / smooth_1.best_cpu << "x CPU)\n";
                 }
               }
               if (o->load && !o->json && settings.front() == 1)

@@ -14,6 +14,7 @@
 #include "rendulic/core/packing_file.hpp"
 #include "rendulic/core/result_paths.hpp"
 #include "rendulic/core/results.hpp"
+#include "rendulic/dem/contact.hpp"
 
 namespace rendulic::app {
 namespace {
@@ -23,14 +24,6 @@ struct ExportOptions {
   std::string lammps;
 };
 
-// The pair settings of the contact law (contact.hpp) in LAMMPS: a Hookean normal spring with
-// a velocity dashpot, no tangential force (docs/interop.md).
-std::string lammps_pair_lines(double k, double gamma) {
-  std::ostringstream s;
-  s << std::setprecision(17) << "pair_style granular\npair_coeff * * hooke " << k << " " << gamma
-    << " damping velocity tangential linear_nohistory 0 0\n";
-  return s.str();
-}
 }  // namespace
 
 Subcommand add_export(CLI::App& parent) {
@@ -65,7 +58,16 @@ Subcommand add_export(CLI::App& parent) {
             log::info("wrote ", o->lammps, ": ", p.size(),
                       " spheres; the LAMMPS pair settings of its material follow (units si, "
                       "atom_style sphere; docs/interop.md)");
-            std::cout << lammps_pair_lines(k, gamma);
+            dem::Material m;
+            m.k = k;
+            m.gamma = gamma;
+            // Friction is stored only when it is on (stages_dem.cpp, write_material).
+            if (in.has_attr(paths::kMaterial, "friction")) {
+              m.mu = in.attr_double(paths::kMaterial, "friction");
+              m.k_t_ratio = in.attr_double(paths::kMaterial, "k_t_ratio");
+              m.gamma_t_ratio = in.attr_double(paths::kMaterial, "gamma_t_ratio");
+            }
+            std::cout << dem::lammps_pair_lines(m);
             return 0;
           }};
 }

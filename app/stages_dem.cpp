@@ -80,6 +80,11 @@ void write_material(ResultsWriter& out, const dem::SystemOptions& system,
   out.attr(paths::kMaterial, "dt", dem::time_step(m, system.dt_factor));
   out.attr(paths::kMaterial, "dt_factor", system.dt_factor);
   out.attr(paths::kMaterial, "n_particles", n_particles);
+  if (m.frictional()) {  // frictionless files keep their layout
+    out.attr(paths::kMaterial, "friction", m.mu);
+    out.attr(paths::kMaterial, "k_t_ratio", m.k_t_ratio);
+    out.attr(paths::kMaterial, "gamma_t_ratio", m.gamma_t_ratio);
+  }
 }
 
 void stage_prepare(const Scenario& sc, ResultsWriter& out, const RunContext& ctx,

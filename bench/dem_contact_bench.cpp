@@ -48,14 +48,20 @@ DemSystem packing(std::size_t n, double nu) {
   return DemSystem::restore(s.save(), SystemOptions{});
 }
 
+// Args: volume fraction (percent), threads, particles, friction mu in hundredths (0: the
+// frictionless engine; > 0: the same state restored with friction, its springs starting at
+// zero, docs/performance.md "Friction").
 void BM_Step(benchmark::State& state) {
   const double nu = state.range(0) / 100.0;
   const int threads = static_cast<int>(state.range(1));
   const std::size_t n = static_cast<std::size_t>(state.range(2));
+  const double mu = state.range(3) / 100.0;
   static std::map<std::pair<std::size_t, int>, DemSystem> cache;
   const auto key = std::pair{n, static_cast<int>(state.range(0))};
   if (!cache.count(key)) cache.emplace(key, packing(n, nu));
-  DemSystem s = cache.at(key);
+  SystemOptions options;
+  options.material.mu = mu;
+  DemSystem s = mu > 0 ? DemSystem::restore(cache.at(key).save(), options) : cache.at(key);
   omp_set_num_threads(threads);
   s.set_fixed_team(threads);  // this many threads, not the team the engine would choose
   const Eigen::Vector3d D(400.0, -200.0, -200.0);  // strain-controlled extension
@@ -63,12 +69,13 @@ void BM_Step(benchmark::State& state) {
   // items_per_second = particle-steps per second: ns per particle-step = 1e9 / items_per_second.
   state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(n));
 }
-// Args: volume fraction (percent), threads, particles.
 BENCHMARK(BM_Step)
-    ->Args({64, 1, 9261})
-    ->Args({82, 1, 9261})
-    ->Args({64, 2, 9261})
-    ->Args({82, 2, 9261})
+    ->Args({64, 1, 9261, 0})
+    ->Args({82, 1, 9261, 0})
+    ->Args({64, 2, 9261, 0})
+    ->Args({82, 2, 9261, 0})
+    ->Args({64, 1, 9261, 50})
+    ->Args({82, 1, 9261, 50})
     ->Unit(benchmark::kMicrosecond)
     ->UseRealTime();
 

@@ -3,6 +3,7 @@
 #include "rendulic/dem/contact.hpp"
 
 #include <algorithm>
+#include <iomanip>
 #include <limits>
 #include <sstream>
 
@@ -21,7 +22,22 @@ bool Material::IsValid(std::string* why) const {
   if (!(density > 0 && std::isfinite(density))) return fail("density must be positive");
   if (!(r_mean > 0 && std::isfinite(r_mean))) return fail("r_mean must be positive");
   if (!(w >= 1 && std::isfinite(w))) return fail("w must be >= 1");
+  if (!(mu >= 0 && std::isfinite(mu))) return fail("dem.friction (mu) must be >= 0");
+  if (!(k_t_ratio > 0 && std::isfinite(k_t_ratio))) return fail("dem.k_t_ratio must be positive");
+  if (!(gamma_t_ratio >= 0 && std::isfinite(gamma_t_ratio)))
+    return fail("dem.gamma_t_ratio must be >= 0");
   return true;
+}
+
+std::string lammps_pair_lines(const Material& m) {
+  std::ostringstream s;
+  s << std::setprecision(17) << "pair_style granular\npair_coeff * * hooke " << m.k << " "
+    << m.gamma << " damping velocity tangential ";
+  if (m.frictional())
+    s << "linear_history " << m.k_t_ratio * m.k << " " << m.gamma_t_ratio << " " << m.mu << "\n";
+  else
+    s << "linear_nohistory 0 0\n";
+  return s.str();
 }
 
 double contact_time(const NormalContact& c, double m_reduced) {
@@ -48,8 +64,13 @@ double time_step(const Material& m, double factor) {
 double stability_limit(const Material& m) {
   constexpr double kMaxContacts = 12.0;  // kissing number: most contacts a smallest sphere has
   const double m_min = m.sphere_mass(m.r_min());
-  const double omega_max = std::sqrt(2.0 * kMaxContacts * m.k / m_min);
-  const double damping_rate = (2.0 * kMaxContacts * m.gamma + m.gamma_b) / m_min;
+  // A tangential spring moves the translation and the rotation (1/m + r^2/I = 3.5/m).
+  constexpr double kTangentialLever = 3.5;
+  const double k = m.frictional() ? std::max(m.k, kTangentialLever * m.k_t_ratio * m.k) : m.k;
+  const double gamma =
+      m.frictional() ? std::max(m.gamma, kTangentialLever * m.gamma_t_ratio * m.gamma) : m.gamma;
+  const double omega_max = std::sqrt(2.0 * kMaxContacts * k / m_min);
+  const double damping_rate = (2.0 * kMaxContacts * gamma + m.gamma_b) / m_min;
   double limit = 2.0 / omega_max;
   if (damping_rate > 0) limit = std::min(limit, 2.0 / damping_rate);
   return limit;

@@ -32,6 +32,10 @@ namespace {
 typedef double V4 __attribute__((vector_size(32)));
 inline V4 load4(const double* p) { return *reinterpret_cast<const V4*>(p); }
 inline void store4(double* p, V4 v) { *reinterpret_cast<V4*>(p) = v; }
+inline double dot3(V4 a, V4 b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+inline V4 cross3(V4 a, V4 b) {
+  return V4{a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0], 0.0};
+}
 
 // e1 >= e2 stay the two largest values seen.
 inline void keep_two_largest(double e, double& e1, double& e2) {
@@ -66,8 +70,20 @@ DemSystem::DemSystem(Particles particles, const PeriodicCell& cell, const System
   dt_ = time_step(options_.material, options_.dt_factor);
   solid_volume_ = p_.total_volume();
   stress_scratch_.assign(3 * p_.size(), 0.0);
+  init_rotations();
   rebuild_list();
   refresh_forces();
+}
+
+void DemSystem::init_rotations() {
+  friction_ = options_.material.frictional();
+  const std::size_t n = p_.size();
+  for (auto* v : {&p_.wx, &p_.wy, &p_.wz, &p_.tx, &p_.ty, &p_.tz})
+    if (v->size() != n) v->assign(n, 0.0);
+  if (!friction_) return;
+  inv_inertia_.resize(n);
+  for (std::size_t i = 0; i < n; ++i)
+    inv_inertia_[i] = 2.5 * p_.inv_mass[i] / (p_.radius[i] * p_.radius[i]);
 }
 
 DemSystem DemSystem::restore(const State& s, const SystemOptions& options) {
@@ -85,6 +101,8 @@ DemSystem DemSystem::restore(const State& s, const SystemOptions& options) {
   d.dt_ = time_step(options.material, options.dt_factor);
   d.solid_volume_ = d.p_.total_volume();
   d.stress_scratch_.assign(3 * d.p_.size(), 0.0);
+  d.init_rotations();
+  d.sliding_dissipation_ = s.sliding_dissipation;
   // The list is a pure function of the reference state: rebuild it from there.
   Particles ref = s.particles;
   ref.x = s.ref_x;
@@ -95,6 +113,15 @@ DemSystem DemSystem::restore(const State& s, const SystemOptions& options) {
     d.list_.build(ref, s.ref_lengths, skin);
   else
     d.list_.build(ref, s.ref_lengths, skin, s.ref_half_skin);
+  if (d.friction_) {
+    const std::size_t entries = 3 * d.list_.index.size();
+    if (s.tangential_history.empty())
+      d.hist_.assign(entries, 0.0);
+    else if (s.tangential_history.size() == entries)
+      d.hist_ = s.tangential_history;
+    else
+      throw InputError("DEM state: its tangential history does not match its neighbour list");
+  }
   d.note_list_built();
   return d;
 }
@@ -112,6 +139,8 @@ State DemSystem::save() const {
   s.ref_z = list_.ref_z();
   s.ref_lengths = list_.ref_lengths();
   s.ref_half_skin = list_.half_skins();
+  if (friction_) s.tangential_history = hist_;
+  s.sliding_dissipation = sliding_dissipation_;
   return s;
 }
 
@@ -145,8 +174,54 @@ void DemSystem::rebuild_list() {
       if (q < 0) q = 0;
       pos[a][i] = q;
     }
-  list_.build(p_, L, skin, choose_half_skins(u, p_.radius, skin), team);
+  if (friction_) {
+    const std::vector<std::int64_t> old_offset = list_.offset;
+    const std::vector<std::int32_t> old_index = list_.index;
+    const std::vector<double> old = std::move(hist_);
+    list_.build(p_, L, skin, choose_half_skins(u, p_.radius, skin), team);
+    carry_history(old_offset, old_index, old);
+  } else {
+    list_.build(p_, L, skin, choose_half_skins(u, p_.radius, skin), team);
+  }
   note_list_built();
+}
+
+void DemSystem::carry_history(const std::vector<std::int64_t>& old_offset,
+                              const std::vector<std::int32_t>& old_index,
+                              const std::vector<double>& old) {
+  // The history belongs to the pair, not to the list entry: the pairs in contact (xi != 0; a
+  // pair that lost contact dropped its history in the force loop) keyed (min, max) with xi as
+  // the lower index sees it, then looked up for every entry of the new list. A pair may change
+  // its row between builds; xi then changes sign.
+  const std::size_t n = p_.size();
+  struct Kept {
+    std::uint64_t key;
+    double xi[3];
+  };
+  std::vector<Kept> kept;
+  if (old.size() == 3 * old_index.size() && old_offset.size() == n + 1)
+    for (std::size_t i = 0; i < n; ++i)
+      for (std::int64_t e = old_offset[i]; e < old_offset[i + 1]; ++e) {
+        const double* x = old.data() + 3 * e;
+        if (x[0] == 0 && x[1] == 0 && x[2] == 0) continue;
+        const std::size_t j = static_cast<std::size_t>(old_index[e]);
+        const double sign = i < j ? 1.0 : -1.0;
+        kept.push_back(
+            {std::min(i, j) * n + std::max(i, j), {sign * x[0], sign * x[1], sign * x[2]}});
+      }
+  std::sort(kept.begin(), kept.end(), [](const Kept& a, const Kept& b) { return a.key < b.key; });
+  hist_.assign(3 * list_.index.size(), 0.0);
+  if (kept.empty()) return;
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::int64_t e = list_.offset[i]; e < list_.offset[i + 1]; ++e) {
+      const std::size_t j = static_cast<std::size_t>(list_.index[e]);
+      const std::uint64_t key = std::min(i, j) * n + std::max(i, j);
+      const auto it = std::lower_bound(kept.begin(), kept.end(), key,
+                                       [](const Kept& a, std::uint64_t k) { return a.key < k; });
+      if (it == kept.end() || it->key != key) continue;
+      const double sign = i < j ? 1.0 : -1.0;
+      for (int a = 0; a < 3; ++a) hist_[3 * e + a] = sign * it->xi[a];
+    }
 }
 
 void DemSystem::note_list_built() {
@@ -236,6 +311,11 @@ void DemSystem::make_blocks() {
   const std::size_t rows = n + slot_particle_.size();
   if (pos4_.size() < 4 * rows) pos4_.resize(4 * rows, 0.0);
   if (va8_.size() < 8 * rows) va8_.resize(8 * rows, 0.0);
+  if (friction_) {
+    if (rot16_.size() < 16 * rows) rot16_.resize(16 * rows, 0.0);
+    block_dissipation_.assign(blocks, 0.0);
+    if (hist_.size() != 3 * list_.index.size()) hist_.assign(3 * list_.index.size(), 0.0);
+  }
   blocks_builds_ = list_.builds();
 }
 
@@ -312,6 +392,121 @@ void DemSystem::force_block(std::size_t b) {
   }
 }
 
+// force_block with friction (contact.hpp, TangentialContact; docs/physics.md section 1b). The
+// same records and order, plus rot16_ (mid-step velocity, mid-step and predicted angular
+// velocity, torque accumulator) and the history of each entry, which only this entry's row
+// touches: the result does not depend on the team either. The contact point lies at a_i =
+// r_i - delta / 2 from i's centre (a_i + a_j = |l|), for the torques and for the relative
+// velocity alike, so that the torques do the work the tangential springs store.
+template <bool kStress>
+void DemSystem::force_block_friction(std::size_t b) {
+  const std::size_t n = p_.size();
+  const Eigen::Vector3d L = cell_.lengths();
+  V4 shift[27];
+  for (int c = 0; c < 27; ++c) {
+    const Eigen::Vector3d s = NeighborList::shift(static_cast<std::uint8_t>(c));
+    shift[c] = V4{s[0] * L[0], s[1] * L[1], s[2] * L[2], 0.0};
+  }
+  const NormalContact law = options_.material.contact();
+  const TangentialContact tangential = options_.material.tangential();
+  const bool advance = advancing_;
+  const double dt = advance ? dt_ : 0.0;
+  const V4 D = {last_D_[0], last_D_[1], last_D_[2], 0.0};
+  double* __restrict P = pos4_.data();
+  double* __restrict W = va8_.data();
+  double* __restrict A = va8_.data() + 4;
+  double* __restrict Q = rot16_.data();
+  double* __restrict H = hist_.data();
+  const std::int64_t* __restrict off = list_.offset.data();
+  const std::int32_t* __restrict idx = partner_.data();
+  double* __restrict sd = stress_scratch_.data();
+  const std::size_t lo = block_lo_[b], hi = block_lo_[b + 1];
+  for (std::size_t i = lo; i < hi; ++i) {
+    store4(A + 8 * i, V4{});
+    store4(Q + 16 * i + 12, V4{});
+  }
+  for (std::size_t s = slot_lo_[b]; s < slot_lo_[b + 1]; ++s) {
+    const std::size_t r = n + s, j = static_cast<std::size_t>(slot_particle_[s]);
+    store4(P + 4 * r, load4(P + 4 * j) - shift[slot_code_[s]]);
+    store4(W + 8 * r, load4(W + 8 * j));
+    store4(A + 8 * r, V4{});
+    for (int q = 0; q < 12; q += 4) store4(Q + 16 * r + q, load4(Q + 16 * j + q));
+    store4(Q + 16 * r + 12, V4{});
+  }
+  double dissipated = 0;
+  for (std::size_t i = lo; i < hi; ++i) {
+    const V4 pi = load4(P + 4 * i), vi = load4(W + 8 * i);
+    const V4 vmi = load4(Q + 16 * i), wmi = load4(Q + 16 * i + 4), wei = load4(Q + 16 * i + 8);
+    const double ri = P[4 * i + 3];
+    const std::int64_t end = off[i + 1];
+    V4 fi = {}, ti = {}, si = {};
+    for (std::int64_t e = off[i]; e < end; ++e) {
+      const std::size_t j = static_cast<std::size_t>(idx[e]);
+      double* xi = H + 3 * e;
+      V4 l = pi - load4(P + 4 * j);
+      l[3] = 0.0;
+      const double r2 = dot3(l, l);
+      const double rj = P[4 * j + 3];
+      const double R = ri + rj;
+      if (r2 >= R * R) {
+        // Contact lost: so is its history (stored only if there was one: most entries of the
+        // list never touch).
+        if (advance && (xi[0] != 0 || xi[1] != 0 || xi[2] != 0)) xi[0] = xi[1] = xi[2] = 0.0;
+        continue;
+      }
+      const double d = std::sqrt(r2);
+      const double inv = 1.0 / d;
+      const double delta = R - d;
+      const V4 nv = l * inv;
+      double* wj = W + 8 * j;
+      double* qj = Q + 16 * j;
+      const V4 v_end = vi - load4(wj) + D * l;
+      const double f_n = law.k * delta - law.gamma * dot3(l, v_end) * inv;
+      // Contact-point velocities: v_rel - (a_i w_i + a_j w_j) x n, tangential part.
+      const double ai = ri - 0.5 * delta, aj = rj - 0.5 * delta;
+      V4 c_end = v_end - cross3(ai * wei + aj * load4(qj + 8), nv);
+      c_end -= dot3(c_end, nv) * nv;
+      V4 c_mid = vmi - load4(qj) + D * l - cross3(ai * wmi + aj * load4(qj + 4), nv);
+      c_mid -= dot3(c_mid, nv) * nv;
+      // The spring turned with the contact: back into the tangent plane, its length kept.
+      V4 x = {xi[0], xi[1], xi[2], 0.0};
+      TangentialContact::turn(x, nv);
+      const V4 ft = tangential.force(x, c_mid, c_end, dt, f_n, &dissipated);
+      if (advance) xi[0] = x[0], xi[1] = x[1], xi[2] = x[2];
+      const V4 f = f_n * nv + ft;
+      fi += f;
+      store4(wj + 4, load4(wj + 4) - f);
+      const V4 nxf = cross3(nv, ft);
+      ti -= ai * nxf;
+      store4(qj + 12, load4(qj + 12) - aj * nxf);
+      if constexpr (kStress) si += l * f;
+    }
+    store4(A + 8 * i, load4(A + 8 * i) + fi);
+    store4(Q + 16 * i + 12, load4(Q + 16 * i + 12) + ti);
+    if constexpr (kStress) {
+      sd[3 * i] = si[0];
+      sd[3 * i + 1] = si[1];
+      sd[3 * i + 2] = si[2];
+    }
+  }
+  if (advance) block_dissipation_[b] = dissipated;
+}
+
+void DemSystem::pack_rotations(std::size_t lo, std::size_t hi, double half_kick) {
+  // Mid-step velocities, and angular ones: mid-step, then predicted at the step's end as the
+  // translational ones are (w + dt/2 tau / I).
+  double* __restrict Q = rot16_.data();
+  for (std::size_t i = lo; i < hi; ++i) {
+    const double hi_ = half_kick * inv_inertia_[i];
+    double* q = Q + 16 * i;
+    q[0] = p_.vx[i], q[1] = p_.vy[i], q[2] = p_.vz[i];
+    q[4] = p_.wx[i], q[5] = p_.wy[i], q[6] = p_.wz[i];
+    q[8] = p_.wx[i] + hi_ * p_.tx[i];
+    q[9] = p_.wy[i] + hi_ * p_.ty[i];
+    q[10] = p_.wz[i] + hi_ * p_.tz[i];
+  }
+}
+
 // Thread t of T: the pair forces of its contiguous run of blocks, then, after one barrier, its
 // rows finished: to each row's own accumulator it adds the foreign slots that hold a share of
 // it, block by block (the same order for any team), then the background damping, and, if
@@ -322,7 +517,10 @@ void DemSystem::forces_of_thread(std::size_t t, std::size_t T, double half_kick)
   const std::size_t n = p_.size();
   const std::size_t blocks = block_lo_.size() - 1;
   const std::size_t b0 = blocks * t / T, b1 = blocks * (t + 1) / T;
-  for (std::size_t b = b0; b < b1; ++b) force_block<kStress>(b);
+  if (friction_)
+    for (std::size_t b = b0; b < b1; ++b) force_block_friction<kStress>(b);
+  else
+    for (std::size_t b = b0; b < b1; ++b) force_block<kStress>(b);
   if (T > 1) {
 #pragma omp barrier
   }
@@ -347,7 +545,25 @@ void DemSystem::forces_of_thread(std::size_t t, std::size_t T, double half_kick)
       double* a = A + 8 * static_cast<std::size_t>(*q);
       store4(a, load4(a) + load4(A + 8 * (n + static_cast<std::size_t>(q - sp))));
     }
+    if (friction_) {
+      double* Q = rot16_.data() + 12;
+      for (const std::int32_t* q = first; q != last && static_cast<std::size_t>(*q) < hi; ++q) {
+        double* a = Q + 16 * static_cast<std::size_t>(*q);
+        store4(a, load4(a) + load4(Q + 16 * (n + static_cast<std::size_t>(q - sp))));
+      }
+    }
   }
+  if (friction_)  // no background damping on the rotations
+    for (std::size_t i = lo; i < hi; ++i) {
+      const double* q = rot16_.data() + 16 * i + 12;
+      p_.tx[i] = q[0], p_.ty[i] = q[1], p_.tz[i] = q[2];
+      if (half_kick != 0) {
+        const double hi_ = half_kick * inv_inertia_[i];
+        p_.wx[i] += hi_ * q[0];
+        p_.wy[i] += hi_ * q[1];
+        p_.wz[i] += hi_ * q[2];
+      }
+    }
   if (half_kick != 0)
     for (std::size_t i = lo; i < hi; ++i) {
       const V4 f = load4(A + 8 * i) - gamma_b * load4(W + 8 * i);
@@ -391,6 +607,11 @@ void DemSystem::refresh_forces() {
     va8_[8 * i + 1] = p_.vy[i];
     va8_[8 * i + 2] = p_.vz[i];
   }
+  if (friction_) {
+    if (blocks_builds_ != list_.builds()) make_blocks();
+    pack_rotations(0, n, 0.0);
+  }
+  advancing_ = false;  // the forces of the current state: the history stays
   compute_forces<true>(0.0, 1);
 }
 
@@ -398,6 +619,7 @@ void DemSystem::zero_velocities() {
   std::fill(p_.vx.begin(), p_.vx.end(), 0.0);
   std::fill(p_.vy.begin(), p_.vy.end(), 0.0);
   std::fill(p_.vz.begin(), p_.vz.end(), 0.0);
+  for (auto* w : {&p_.wx, &p_.wy, &p_.wz}) std::fill(w->begin(), w->end(), 0.0);
   refresh_forces();
 }
 
@@ -436,6 +658,7 @@ void DemSystem::step_impl(const Eigen::Vector3d& D) {
   strain_E_ += D * dt;
   time_ += dt;
   last_D_ = D;
+  advancing_ = true;
   // One parallel region per step: the kick and drift of a thread's rows (those of the blocks it
   // computes forces for, still in its cache then) with the two largest excesses e_i = u_i -
   // s_min h_i of the rebuild rule (neighbor_list.hpp); one barrier; every thread merges the
@@ -473,6 +696,15 @@ void DemSystem::step_impl(const Eigen::Vector3d& D) {
       const double ux = xi - rx * a[0], uy = yi - ry * a[1], uz = zi - rz * a[2];
       keep_two_largest(std::sqrt(ux * ux + uy * uy + uz * uz) - s_min * a[3], e1, e2);
     }
+    if (friction_) {  // the rotations' half kick, then the rows' records for the force loop
+      for (std::size_t i = lo; i < hi; ++i) {
+        const double hi_ = h * inv_inertia_[i];
+        p_.wx[i] += hi_ * p_.tx[i];
+        p_.wy[i] += hi_ * p_.ty[i];
+        p_.wz[i] += hi_ * p_.tz[i];
+      }
+      pack_rotations(lo, hi, h);
+    }
     tops_[t] = {e1, e2};
     if (T > 1) {
 #pragma omp barrier
@@ -497,6 +729,8 @@ void DemSystem::step_impl(const Eigen::Vector3d& D) {
   } else if constexpr (kStress) {
     sum_stress();
   }
+  if (friction_)  // in block order: the same sum on any team
+    for (const double e : block_dissipation_) sliding_dissipation_ += e;
   ++steps_;
   if (timed)
     controller_.record(
@@ -545,6 +779,22 @@ std::vector<Contact> DemSystem::contacts() const {
       // argument lets the compiler fuse the other product of the sum (FMA), one ulp apart, and
       // the stress servo of the isotropic stage turns that into another trajectory.
       c.force = law.k * c.overlap + law.gamma * (-nrm.dot(vrel));
+      if (friction_) {
+        // The stored spring (already in this tangent plane) and the current velocities, held
+        // at the Coulomb limit as the force loop holds them; nothing advances here.
+        const TangentialContact tan = options_.material.tangential();
+        const double ai = p_.radius[i] - 0.5 * c.overlap, aj = p_.radius[j] - 0.5 * c.overlap;
+        const Eigen::Vector3d wi(p_.wx[i], p_.wy[i], p_.wz[i]), wj(p_.wx[j], p_.wy[j], p_.wz[j]);
+        Eigen::Vector3d vc = vrel - (ai * wi + aj * wj).cross(nrm);
+        vc -= vc.dot(nrm) * nrm;
+        Eigen::Vector3d xi(hist_[3 * e], hist_[3 * e + 1], hist_[3 * e + 2]);
+        double unused = 0;
+        const Eigen::Vector3d ft =
+            tan.force(xi, Eigen::Vector3d(Eigen::Vector3d::Zero()), vc, 0.0, c.force, &unused);
+        c.tangential = swap ? Eigen::Vector3d(-ft) : ft;
+        const Eigen::Vector3d spring(hist_[3 * e], hist_[3 * e + 1], hist_[3 * e + 2]);
+        c.spring = swap ? Eigen::Vector3d(-spring) : spring;
+      }
       out.push_back(c);
     }
   }
@@ -553,8 +803,10 @@ std::vector<Contact> DemSystem::contacts() const {
 
 Eigen::Matrix3d DemSystem::stress() const {
   Eigen::Matrix3d s = Eigen::Matrix3d::Zero();
-  for (const Contact& c : contacts())
+  for (const Contact& c : contacts()) {
     s += c.force / c.branch.norm() * c.branch * c.branch.transpose();
+    if (friction_) s += c.branch * c.tangential.transpose();
+  }
   return s / volume();
 }
 
@@ -579,7 +831,19 @@ double DemSystem::kinetic_energy() const {
 double DemSystem::elastic_energy() const {
   double e = 0;
   const NormalContact law = options_.material.contact();
-  for (const Contact& c : contacts()) e += law.energy(c.overlap);
+  const TangentialContact tan = options_.material.tangential();
+  for (const Contact& c : contacts()) {
+    e += law.energy(c.overlap);
+    if (friction_) e += tan.energy(c.spring.squaredNorm());
+  }
+  return e;
+}
+
+double DemSystem::rotational_energy() const {
+  double e = 0;
+  if (!friction_) return e;
+  for (std::size_t i = 0; i < p_.size(); ++i)
+    e += 0.5 / inv_inertia_[i] * (p_.wx[i] * p_.wx[i] + p_.wy[i] * p_.wy[i] + p_.wz[i] * p_.wz[i]);
   return e;
 }
 
@@ -620,6 +884,15 @@ Measures DemSystem::measure() const {
     const double ri = p_.radius[c.i], rj = p_.radius[c.j];
     m.fabric += c43 * (ri * ri * ri + rj * rj * rj) * nrm * nrm.transpose();
     m.elastic_energy += law.energy(c.overlap);
+    if (friction_) {
+      m.stress += c.branch * c.tangential.transpose();
+      m.tangential_energy += options_.material.tangential().energy(c.spring.squaredNorm());
+    }
+  }
+  if (friction_) {
+    m.elastic_energy += m.tangential_energy;
+    m.rotational_energy = rotational_energy();
+    m.sliding_dissipation = sliding_dissipation_;
   }
   m.stress /= V;
   m.fabric /= V;

@@ -7,7 +7,9 @@
 namespace rendulic::dem {
 
 void Particles::resize(std::size_t n) {
-  for (auto* v : {&x, &y, &z, &vx, &vy, &vz, &fx, &fy, &fz, &radius, &inv_mass}) v->assign(n, 0.0);
+  for (auto* v :
+       {&x, &y, &z, &vx, &vy, &vz, &fx, &fy, &fz, &radius, &inv_mass, &wx, &wy, &wz, &tx, &ty, &tz})
+    v->assign(n, 0.0);
 }
 
 double Particles::total_volume() const {

@@ -371,6 +371,15 @@ void compute_worker_share(const std::string& method, const DemSystem& state, dou
 }
 
 PackingData packing_of(const DemSystem& state) {
+  // Every static tool (energy minimisation, the force balance at rest, static probes, the
+  // linear response) takes its packing from here and models frictionless contacts only.
+  if (state.material().frictional()) {
+    std::ostringstream s;
+    s << "dem.friction = " << state.material().mu
+      << ": the energy minimisation, static probes and linear response model frictionless "
+         "contacts only; set dem.friction = 0 for them";
+    throw InputError(s.str());
+  }
   const Particles& p = state.particles();
   const int n = static_cast<int>(p.size());
   Eigen::MatrixX3d x(n, 3);

@@ -32,21 +32,23 @@ using detail::ByteWriter;
 // too (a forgotten option would otherwise silently take its default on the workers).
 template <class A>
 void io(A& a, Particles& p) {
-  auto& [x, y, z, vx, vy, vz, fx, fy, fz, radius, inv_mass] = p;
-  for (std::vector<double>* v : {&x, &y, &z, &vx, &vy, &vz, &fx, &fy, &fz, &radius, &inv_mass})
+  auto& [x, y, z, vx, vy, vz, fx, fy, fz, radius, inv_mass, wx, wy, wz, tx, ty, tz] = p;
+  for (std::vector<double>* v :
+       {&x, &y, &z, &vx, &vy, &vz, &fx, &fy, &fz, &radius, &inv_mass, &wx, &wy, &wz, &tx, &ty, &tz})
     a(*v);
 }
 template <class A>
 void io(A& a, State& s) {
   auto& [particles, lengths, strain_E, last_D, time, steps, ref_x, ref_y, ref_z, ref_lengths,
-         ref_half_skin] = s;
+         ref_half_skin, tangential_history, sliding_dissipation] = s;
   a(particles), a(lengths), a(strain_E), a(last_D), a(time), a(steps);
   a(ref_x), a(ref_y), a(ref_z), a(ref_lengths), a(ref_half_skin);
+  a(tangential_history), a(sliding_dissipation);
 }
 template <class A>
 void io(A& a, Material& m) {
-  auto& [k, gamma, gamma_b, density, r_mean, w] = m;
-  a(k), a(gamma), a(gamma_b), a(density), a(r_mean), a(w);
+  auto& [k, gamma, gamma_b, density, r_mean, w, mu, k_t_ratio, gamma_t_ratio] = m;
+  a(k), a(gamma), a(gamma_b), a(density), a(r_mean), a(w), a(mu), a(k_t_ratio), a(gamma_t_ratio);
 }
 template <class A>
 void io(A& a, SystemOptions& o) {

@@ -84,6 +84,31 @@ const OptionTable<DemRunOptions>& dem_run_option_table() {
            .max = 2,
            .min_open = true},
           [](O& o) -> double& { return o.system.skin; }},
+      Row{{.path = "dem.friction",
+           .unit = "-",
+           .help = "Coulomb friction coefficient mu of the tangential contact (|f_t| <= mu "
+                   "|f_n|, with rotations and a tangential spring per contact, docs/physics.md "
+                   "section 1b); 0 = frictionless (the seed study). The energy minimisation, "
+                   "static probes and linear response refuse mu > 0.",
+           .min = 0,
+           .max = 10},
+          [](O& o) -> double& { return o.system.material.mu; }},
+      Row{{.path = "dem.k_t_ratio",
+           .unit = "-",
+           .help = "Tangential stiffness k_t / k (used when dem.friction > 0); 2/7 gives a "
+                   "sticking pair of equal spheres the normal contact's frequency.",
+           .min = 0,
+           .max = 1,
+           .min_open = true},
+          [](O& o) -> double& { return o.system.material.k_t_ratio; }},
+      Row{{.path = "dem.gamma_t_ratio",
+           .unit = "-",
+           .help = "Tangential contact viscosity gamma_t / gamma (used when dem.friction > 0); "
+                   "2/7 gives a sticking pair of equal spheres the normal contact's damping "
+                   "rate.",
+           .min = 0,
+           .max = 1},
+          [](O& o) -> double& { return o.system.material.gamma_t_ratio; }},
       Row{{.path = "preparation.nu_gas",
            .unit = "-",
            .help = "Volume fraction of the initial random gas.",

@@ -24,9 +24,7 @@ namespace rendulic::dem {
 // vectorised force loop, where it costs nothing (docs/performance.md). The static tools work
 // at rest: they use the spring alone (elastic_force, energy, stiffness).
 //
-// Friction, when it comes, is added here: its parameters as members and one method giving the
-// tangential force from the contact's tangential displacement and relative velocity, which the
-// callers add to the normal force they take from this type now.
+// Friction is TangentialContact below: the engine adds its force to this normal force.
 struct NormalContact {
   double k = 1e8;     // kg/s^2
   double gamma = 1.;  // kg/s
@@ -45,6 +43,73 @@ struct NormalContact {
   double stiffness() const { return k; }
 };
 
+// Tangential contact with Coulomb friction (docs/physics.md section 1b; Luding 2008, Granular
+// Matter 10:235; Cundall & Strack 1979): a linear spring on the tangential displacement xi
+// that the contact has accumulated since it formed, a dashpot on the tangential relative
+// velocity, and the Coulomb limit |f_t| <= mu |f_n| (f_n the whole normal force, dashpot
+// included). The caller keeps xi per contact, turns it with the contact each step (it stays in
+// the tangent plane with its length kept) and passes the relative tangential velocity of the
+// contact point twice: at mid-step, the displacement's increment over the step (the positions
+// of velocity Verlet advance with it), and predicted at the step's end, the dashpot's (as the
+// normal dashpot, dem_system.hpp).
+struct TangentialContact {
+  double k_t = 0;      // kg/s^2
+  double gamma_t = 0;  // kg/s
+  double mu = 0;       // Coulomb coefficient
+  // Turns the spring with the contact: xi back into the plane normal to the unit vector n,
+  // its length kept (Luding 2008, eq. 17). Exact when the contact turned by a rotation.
+  template <class V>
+  static void turn(V& xi, const V& n) {
+    const double xn = xi[0] * n[0] + xi[1] * n[1] + xi[2] * n[2];
+    if (xn == 0) return;
+    const double len2 = xi[0] * xi[0] + xi[1] * xi[1] + xi[2] * xi[2];
+    for (int a = 0; a < 3; ++a) xi[a] -= xn * n[a];
+    // The projection shortened xi by the factor sqrt(1 - e), e = xn^2 / |xi|^2 (the contact's
+    // turn per step, squared: tiny). The inverse, (1 - e)^(-1/2) = 1 + e/2 + 3e^2/8 + ..., to
+    // round-off for e < 1e-5 (the next term is below 1e-15), saves the engine a square root.
+    const double e = xn * xn / len2;
+    double s = 0;
+    if (e < 1e-5) {
+      s = 1.0 + e * (0.5 + 0.375 * e);
+    } else {
+      const double p2 = xi[0] * xi[0] + xi[1] * xi[1] + xi[2] * xi[2];
+      if (!(p2 > 0)) return;  // xi was along n: nothing to turn
+      s = std::sqrt(len2 / p2);
+    }
+    for (int a = 0; a < 3; ++a) xi[a] *= s;
+  }
+  // Advances xi by v_mid dt and returns the tangential force on i, f_t = -k_t xi - gamma_t
+  // v_end, held at the Coulomb limit mu |f_n|: there the contact slides and xi is reset to
+  // the spring that gives the limit force. The spring's work over the slip, k_t xi . (xi_trial
+  // - xi) (the energy the slip takes from the spring; >= 0 unless the dashpot alone exceeds the
+  // limit), is added to *dissipated: with it, the work done on the contact equals the spring's
+  // energy plus the dashpot's and the slip's dissipation. Vectors are anything with three
+  // components indexed [0..2] (Eigen vectors, the engine's packed records).
+  template <class V>
+  V force(V& xi, const V& v_mid, const V& v_end, double dt, double f_n, double* dissipated) const {
+    for (int a = 0; a < 3; ++a) xi[a] += v_mid[a] * dt;
+    V f = xi;
+    for (int a = 0; a < 3; ++a) f[a] = -k_t * xi[a] - gamma_t * v_end[a];
+    const double limit = mu * std::abs(f_n);
+    const double f2 = f[0] * f[0] + f[1] * f[1] + f[2] * f[2];
+    if (f2 > limit * limit) {
+      const double s = limit / std::sqrt(f2);
+      double slip_work = 0;
+      for (int a = 0; a < 3; ++a) {
+        f[a] *= s;
+        const double spring = f[a] + gamma_t * v_end[a];  // -k_t xi after the slip
+        const double trial = xi[a];
+        xi[a] = -spring / k_t;
+        slip_work -= spring * (trial - xi[a]);
+      }
+      *dissipated += slip_work;
+    }
+    return f;
+  }
+  // The spring's energy k_t |xi|^2 / 2, from |xi|^2.
+  double energy(double xi2) const { return 0.5 * k_t * xi2; }
+};
+
 // Material of the seed study (docs/physics.md section 1), SI units.
 struct Material {
   double k = 1e8;         // normal stiffness, kg/s^2
@@ -53,6 +118,15 @@ struct Material {
   double density = 2000;  // kg/m^3
   double r_mean = 1e-3;   // m
   double w = 3.0;         // r_max / r_min
+  // Friction (TangentialContact; 0 = the seed's frictionless law, and the engine's
+  // frictionless path). k_t and gamma_t are given relative to k and gamma: 2/7 makes the
+  // tangential oscillation of a sticking pair of equal spheres (effective mass 2/7 of the
+  // normal one, rolling included) as fast and as damped as the normal one.
+  double mu = 0.0;
+  double k_t_ratio = 2.0 / 7.0;
+  double gamma_t_ratio = 2.0 / 7.0;
+  bool frictional() const { return mu > 0; }
+  TangentialContact tangential() const { return {k_t_ratio * k, gamma_t_ratio * gamma, mu}; }
   double r_min() const { return 2.0 * r_mean / (1.0 + w); }
   double r_max() const { return w * r_min(); }
   // k* = k / (2 <r>): the stress scale of sigma* (seed paper section 2.2).
@@ -68,13 +142,22 @@ double contact_time(const NormalContact& c, double m_reduced);
 // Coefficient of normal restitution, e = exp(-gamma t_c / (2 m_red)).
 double restitution(const NormalContact& c, double m_reduced);
 
+// The material's contact law as LAMMPS pair settings (pair_style granular, docs/interop.md): a
+// Hookean normal spring with a velocity dashpot (damping velocity: eta_n = gamma); without
+// friction no tangential force, with it linear_history k_t x_gamma_t mu, where LAMMPS's
+// tangential damping is x_gamma_t times the normal one, so x_gamma_t = gamma_t / gamma.
+std::string lammps_pair_lines(const Material& m);
+
 // Time step: dt = factor * t_c of the two smallest particles (docs/physics.md section 1).
 double time_step(const Material& m, double factor);
 // A sufficient bound for the stability of the explicit scheme on any packing of this
 // material. Springs: Gershgorin on the mass-weighted stiffness matrix bounds the highest
 // frequency by omega_max^2 <= 2 z k / m_min with z = 12 contacts at most on the smallest
 // particle; Verlet is stable for omega_max dt < 2. Dashpots, treated explicitly: the same
-// bound with the damping rate (2 z gamma + gamma_b) / m_min in place of omega_max.
+// bound with the damping rate (2 z gamma + gamma_b) / m_min in place of omega_max. With
+// friction a tangential spring acts on the translation and, through the lever r, on the
+// rotation (I = 2/5 m r^2): k_t (1/m + r^2/I) = 3.5 k_t / m, so max(k, 3.5 k_t) takes k's
+// place (and max(gamma, 3.5 gamma_t) gamma's).
 double stability_limit(const Material& m);
 // Throws InputError (naming `key`) if factor gives a dt at or beyond stability_limit().
 void check_time_step(const Material& m, double factor, const std::string& key);

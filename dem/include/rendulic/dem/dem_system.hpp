@@ -77,6 +77,11 @@ struct State {
   Eigen::Vector3d ref_lengths = Eigen::Vector3d::Ones();
   // Per-particle half skins of the list (neighbor_list.hpp); empty means skin / 2 for all.
   std::vector<double> ref_half_skin;
+  // Frictional contacts: the tangential spring xi of each entry of the list (3 per entry, in
+  // the list's order; empty without friction or when no contact has history) and the sliding
+  // dissipation so far, J.
+  std::vector<double> tangential_history;
+  double sliding_dissipation = 0;
 };
 
 class DemSystem {
@@ -95,10 +100,12 @@ class DemSystem {
 
   Measures measure() const;
   std::vector<Contact> contacts() const;
-  Eigen::Matrix3d stress() const;  // eq. 1, Pa
-  Eigen::Matrix3d fabric() const;  // eq. 2
-  double kinetic_energy() const;
-  double elastic_energy() const;
+  Eigen::Matrix3d stress() const;    // eq. 1, Pa
+  Eigen::Matrix3d fabric() const;    // eq. 2
+  double kinetic_energy() const;     // translation of the peculiar velocities
+  double elastic_energy() const;     // normal springs, plus the tangential ones with friction
+  double rotational_energy() const;  // sum I omega^2 / 2 (zero without friction)
+  double sliding_dissipation() const { return sliding_dissipation_; }
   double volume_fraction() const { return solid_volume_ / volume(); }
 
   const Particles& particles() const { return p_; }
@@ -151,6 +158,16 @@ class DemSystem {
   void forces_of_thread(std::size_t t, std::size_t T, double half_kick);
   template <bool kStress>
   void force_block(std::size_t b);
+  // The same with friction (docs/physics.md section 1b): normal and tangential forces, torques,
+  // the history of each entry advanced when advancing_.
+  template <bool kStress>
+  void force_block_friction(std::size_t b);
+  // Copies the rows' mid-step velocities and angular velocities into rot16_ (friction).
+  void pack_rotations(std::size_t lo, std::size_t hi, double half_kick);
+  // Before a rebuild: the history of the pairs in contact, keyed by pair, to carry over.
+  void carry_history(const std::vector<std::int64_t>& old_offset,
+                     const std::vector<std::int32_t>& old_index, const std::vector<double>& old);
+  void init_rotations();
   void sum_stress();  // last_stress_diag_ from the per-particle terms of the last evaluation
   template <bool kStress>
   void step_impl(const Eigen::Vector3d& D);
@@ -190,6 +207,16 @@ class DemSystem {
   TeamController controller_;
   int fixed_team_ = 0;
   int last_team_ = 1;
+  // Friction (material().mu > 0): the frictional force loop runs instead of the vectorised one.
+  bool friction_ = false;
+  bool advancing_ = false;    // a step (history advanced, slip counted) or a refresh (not)
+  std::vector<double> hist_;  // xi per list entry (3 doubles), as its row sees the pair
+  // Per row, then per slot: mid-step velocity, mid-step and predicted angular velocity, the
+  // torque accumulator (4 doubles each).
+  AlignedVector rot16_;
+  std::vector<double> inv_inertia_;        // 1 / (2/5 m r^2)
+  std::vector<double> block_dissipation_;  // per block, in the last evaluation
+  double sliding_dissipation_ = 0;
 };
 
 }  // namespace rendulic::dem

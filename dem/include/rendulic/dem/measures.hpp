@@ -26,10 +26,16 @@ struct Measures {
   double coordination_nonrattler = 0;  // C* over non-rattlers (0 when all are rattlers)
   double rattler_fraction = 0;
   double kinetic_energy = 0;      // J, of the peculiar velocities
-  double elastic_energy = 0;      // J, sum k delta^2 / 2
+  double elastic_energy = 0;      // J, sum k delta^2 / 2 (+ the tangential springs' energy)
   double kinetic_to_elastic = 0;  // +inf when there is kinetic but no elastic energy
   double inertial_number = 0;     // rate 2<r> sqrt(rho / P); +inf when P <= 0 and rate > 0
   double strain_rate = 0;         // max_a |D_aa| of the last step, 1/s
+  // Frictional contacts only (zero without friction): the rotations' kinetic energy (not in
+  // kinetic_energy), the tangential springs' energy sum k_t |xi|^2 / 2 (in elastic_energy
+  // too), and the work the Coulomb limit has dissipated by sliding since the system was made.
+  double rotational_energy = 0;    // J
+  double tangential_energy = 0;    // J
+  double sliding_dissipation = 0;  // J
 };
 
 // One contact of the current configuration (i < j).
@@ -38,6 +44,10 @@ struct Contact {
   Eigen::Vector3d branch = Eigen::Vector3d::Zero();  // l = x_i - x_j (minimum image), m
   double overlap = 0;                                // m
   double force = 0;                                  // normal force on i along l/|l|, N
+  // Frictional contacts: the tangential force on i and the tangential spring xi (the
+  // displacement of i's contact point relative to j's), both in the tangent plane.
+  Eigen::Vector3d tangential = Eigen::Vector3d::Zero();  // N
+  Eigen::Vector3d spring = Eigen::Vector3d::Zero();      // m
 };
 
 // Iterative rattler removal: true for particles that keep at least `min_contacts` contacts

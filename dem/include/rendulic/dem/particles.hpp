@@ -18,6 +18,10 @@ struct Particles {
   std::vector<double> fx, fy, fz;  // total force of the last step (contacts + background), N
   std::vector<double> radius;      // m
   std::vector<double> inv_mass;    // 1/kg
+  // Rotations (frictional contacts only; the frictionless engine leaves them zero): angular
+  // velocities, rad/s, and the torques of the last step, N m. Moment of inertia 2/5 m r^2.
+  std::vector<double> wx, wy, wz;
+  std::vector<double> tx, ty, tz;
 
   std::size_t size() const { return radius.size(); }
   void resize(std::size_t n);
