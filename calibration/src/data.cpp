@@ -7,6 +7,7 @@
 #include "rendulic/core/conventions.hpp"
 #include "rendulic/core/envelope_io.hpp"
 #include "rendulic/core/errors.hpp"
+#include "rendulic/core/log.hpp"
 #include "rendulic/core/result_paths.hpp"
 #include "rendulic/core/results.hpp"
 
@@ -182,7 +183,17 @@ CalibrationData load_calibration_data(const std::filesystem::path& file,
     data.states.push_back(std::move(s));
   }
   const std::string path = paths::kPath;
-  if (options.load_path && r.exists(path + datasets::kEpsDev) &&
+  // The path block drives the laws along the undrained axisymmetric strain of the seed's path
+  // (either sense); other paths (docs/dem.md "Paths") are left out of the fit, and said so.
+  bool undrained_path = true;
+  if (r.exists(path) && r.has_attr(path, "type")) {
+    const std::string type = r.attr_string(path, "type");
+    undrained_path = type.rfind("undrained_", 0) == 0;
+    if (!undrained_path && options.load_path)
+      log::warning(name, ": the path block fits undrained paths only; this file's ", type,
+                   " path is left out of the calibration");
+  }
+  if (options.load_path && undrained_path && r.exists(path + datasets::kEpsDev) &&
       r.exists(path + datasets::kStress) && r.exists(path + datasets::kFabric)) {
     const auto e = r.read_vector(path + datasets::kEpsDev);
     const auto st = r.read_tensors(path + datasets::kStress);
