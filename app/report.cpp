@@ -574,8 +574,12 @@ std::vector<Claim> evaluate_claims(const ResultsReader& r) {
             "", ""};
     bool measured = false, ok = false;
     const std::string p = paths::kPath;
-    if (r.exists(p + datasets::kStressStar) && r.exists(p + datasets::kFabric) &&
-        r.exists(p + datasets::kEpsDev)) {
+    const std::string type =
+        r.exists(p) && r.has_attr(p, "type") ? r.attr_string(p, "type") : "undrained_extension";
+    if (type != "undrained_extension")
+      c.measured = "the run's path is " + type + ", not the seed's undrained extension";
+    else if (r.exists(p + datasets::kStressStar) && r.exists(p + datasets::kFabric) &&
+             r.exists(p + datasets::kEpsDev)) {
       const auto s = r.read_tensors(p + datasets::kStressStar);
       const auto f = r.read_tensors(p + datasets::kFabric);
       const auto e = r.read_vector(p + datasets::kEpsDev);
@@ -635,6 +639,49 @@ std::vector<Claim> evaluate_claims(const ResultsReader& r) {
   return claims;
 }
 
+// The path (docs/dem.md "Paths"): its type and the stress ratio q/p = (sigma_xx - (sigma_yy +
+// sigma_zz) / 2) / p along it, at its steady state (the window of dem::kSteadyStateFrom of its
+// strain s to the end, batch-means standard error) and at a few points on the way.
+namespace {
+std::string path_section(const ResultsReader& r) {
+  const std::string p = paths::kPath;
+  if (!r.exists(p + datasets::kStress) || !r.exists(p + datasets::kStrain)) return "";
+  const std::string type = r.has_attr(p, "type") ? r.attr_string(p, "type") : "undrained_extension";
+  const auto stress = r.read_tensors(p + datasets::kStress);
+  const auto strain = r.read_tensors(p + datasets::kStrain);
+  if (stress.size() < 2 || strain.size() != stress.size()) return "";
+  const dem::PathType t = dem::path_type(type);
+  std::vector<double> s, q_over_p;
+  for (std::size_t i = 0; i < stress.size(); ++i) {
+    const Eigen::Matrix3d& g = stress[i];
+    const double pm = g.trace() / 3.0;
+    s.push_back(dem::path_strain(t, strain[i]));
+    q_over_p.push_back(pm > 0 ? (g(0, 0) - 0.5 * (g(1, 1) + g(2, 2))) / pm : kNaN);
+  }
+  std::ostringstream md;
+  md << "\n## Path (docs/dem.md \"Paths\")\n\n- type: `" << type << "`";
+  if (r.has_attr(p, "rate")) md << ", rate " << fmt(r.attr_double(p, "rate")) << " 1/s";
+  md << ", to s = " << fmt(s.back(), 3) << "\n";
+  const double end = s.back();
+  const dem::WindowMean w = dem::window_mean(s, q_over_p, dem::kSteadyStateFrom * end, end);
+  md << "- steady state (s in [" << fmt(dem::kSteadyStateFrom * end, 3) << ", " << fmt(end, 3)
+     << "]): q/p = "
+     << (w.ok ? fmt(w.mean, 4) + " +- " + fmt(w.standard_error, 2) : std::string("-")) << "\n";
+  md << "- p at the end / p at the start: "
+     << fmt(stress.back().trace() / std::max(stress.front().trace(), 1e-300), 4) << "\n";
+  if (r.has_attr(p, "servo_error"))
+    md << "- lateral servo: largest error " << fmt(r.attr_double(p, "servo_error"), 3)
+       << " of p0 (tolerance " << fmt(r.attr_double(p, "servo_tolerance"), 3) << ")\n";
+  md << "\n| s | q/p |\n|---|---|\n";
+  const std::size_t n = s.size();
+  for (std::size_t k = 0; k <= 8; ++k) {
+    const std::size_t i = std::min(n - 1, k * (n - 1) / 8);
+    md << "| " << fmt(s[i], 3) << " | " << fmt(q_over_p[i], 4) << " |\n";
+  }
+  return md.str();
+}
+}  // namespace
+
 std::string report_markdown(const ResultsReader& r, const std::vector<Claim>& claims,
                             const std::vector<std::string>& figures) {
   std::ostringstream md;
@@ -654,6 +701,7 @@ std::string report_markdown(const ResultsReader& r, const std::vector<Claim>& cl
       if (r.has_attr(paths::kTimings, st))
         md << "| " << st << " | " << fmt(r.attr_double(paths::kTimings, st), 4) << " |\n";
   }
+  md << path_section(r);
   md << "\n## The seed's claims (docs/claims.md)\n\n"
      << "| claim | statement | measured | verdict |\n|---|---|---|---|\n";
   for (const auto& c : claims)

@@ -177,11 +177,19 @@ void stage_path(const Scenario&, ResultsWriter& out, const RunContext& ctx,
   dem::DemSystem& sys = live_system(session, "path");
   const dem::DemRunOptions& o = *session.options;
   Progress progress(ctx, "path");
-  progress.start_task("undrained extension");
+  progress.start_task(o.path.type);
   const std::int64_t steps0 = sys.steps();
-  dem::PathSummary p =
-      dem::undrained_extension(sys, o.path, path_recorder(out, paths::kPath), progress.fn());
+  dem::PathSummary p = dem::run_path(sys, o.path, path_recorder(out, paths::kPath), progress.fn());
   out.attr(paths::kPath, "rate", o.path.rate);
+  out.attr(paths::kPath, "type", o.path.type);
+  if (dem::path_type(o.path.type).mixed()) {
+    out.attr(paths::kPath, "servo_error", p.servo_error);
+    out.attr(paths::kPath, "servo_tolerance", o.path.servo_tolerance);
+    if (!p.servo_held)
+      log::warning("path: the lateral servo left an error of ", p.servo_error,
+                   " p0, above path.servo_tolerance = ", o.path.servo_tolerance,
+                   " (raise path.servo_integral_gain or lower path.rate)");
+  }
   out.attr(paths::kPath, "max_inertial_number", p.max_inertial_number);
   out.attr(paths::kPath, "steps", sys.steps() - steps0);
   out.attr(paths::kPath, "wall_time_s", progress.elapsed());

@@ -47,7 +47,8 @@ void stage_pressure(const Scenario& sc, ResultsWriter& out, const RunContext& ct
     out.attr(G, "relax_converged", std::int64_t{r.converged});
     const std::string path_group = G + paths::kPath;
     out.attr(path_group, "rate", path.rate);
-    dem::PathSummary p = dem::undrained_extension(sys, path, path_recorder(out, path_group));
+    out.attr(path_group, "type", path.type);
+    dem::PathSummary p = dem::run_path(sys, path, path_recorder(out, path_group));
     out.attr(path_group, "max_inertial_number", p.max_inertial_number);
     auto rested = rest_states(p.snapshots, o.state_rest, o.state_labels, ctx);
     for (std::size_t k = 0; k < rested.size(); ++k) {

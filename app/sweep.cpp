@@ -70,7 +70,7 @@ dem::DemSystem prepare_state(const dem::DemSystem& isotropic, const dem::DemRunO
   path.eps_dev_max = first;
   path.snapshot_eps_dev = {first};
   path.samples = 2;
-  dem::DemSystem state = std::move(dem::undrained_extension(sys, path).snapshots.front());
+  dem::DemSystem state = std::move(dem::run_path(sys, path).snapshots.front());
   dem::bring_to_rest(state, o.state_rest);
   return state;
 }
@@ -340,13 +340,12 @@ class Sweeper {
         path.snapshot_eps_dev.clear();
         std::vector<double> x, ratio, inertial;
         Stopwatch w;
-        const dem::PathSummary run =
-            dem::undrained_extension(sys, path, [&](const dem::Measures& m) {
-              if (!(m.pressure > 0)) return;
-              x.push_back(-m.eps_dev);
-              ratio.push_back(std::abs(signed_deviator(m.stress)) / m.pressure);
-              inertial.push_back(m.inertial_number);
-            });
+        const dem::PathSummary run = dem::run_path(sys, path, [&](const dem::Measures& m) {
+          if (!(m.pressure > 0)) return;
+          x.push_back(std::abs(m.eps_dev));
+          ratio.push_back(std::abs(signed_deviator(m.stress)) / m.pressure);
+          inertial.push_back(m.inertial_number);
+        });
         p.wall_s += w.wall();
         p.cpu_s += w.cpu();
         p.steps += run.steps;

@@ -9,6 +9,7 @@
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/result_paths.hpp"
 #include "rendulic/core/results.hpp"
+#include "rendulic/models/paths.hpp"
 
 namespace rendulic::calibration {
 
@@ -182,27 +183,46 @@ CalibrationData load_calibration_data(const std::filesystem::path& file,
     data.states.push_back(std::move(s));
   }
   const std::string path = paths::kPath;
+  // The path block drives the laws along the path's strain (PathData::increment): the
+  // undrained axisymmetric one of eps_dev on the seed's paths, the DEM's stored strain on the
+  // others (docs/dem.md "Paths").
+  bool undrained_path = true;
+  if (r.exists(path) && r.has_attr(path, "type"))
+    undrained_path = r.attr_string(path, "type").rfind("undrained_", 0) == 0;
   if (options.load_path && r.exists(path + datasets::kEpsDev) &&
-      r.exists(path + datasets::kStress) && r.exists(path + datasets::kFabric)) {
+      r.exists(path + datasets::kStress) && r.exists(path + datasets::kFabric) &&
+      (undrained_path || r.exists(path + datasets::kStrain))) {
     const auto e = r.read_vector(path + datasets::kEpsDev);
     const auto st = r.read_tensors(path + datasets::kStress);
     const auto fb = r.read_tensors(path + datasets::kFabric);
-    if (e.size() != st.size() || e.size() != fb.size())
-      throw InputError(name + ": /path eps_dev, stress and fabric differ in length");
+    std::vector<Eigen::Matrix3d> eps;
+    if (!undrained_path) eps = r.read_tensors(path + datasets::kStrain);
+    if (e.size() != st.size() || e.size() != fb.size() ||
+        (!undrained_path && eps.size() != e.size()))
+      throw InputError(name + ": /path eps_dev, strain, stress and fabric differ in length");
     if (e.size() >= 2) {
-      // Even subsampling in eps_dev keeps the cost of the path block bounded while covering
-      // the whole curve; the start row is always kept (it seeds the model path).
-      const double e0 = e.front(), span = e.back() - e.front();
+      // Even subsampling along the path keeps the cost of the path block bounded while
+      // covering the whole curve; the start row is always kept (it seeds the model path). The
+      // path's progress: |eps_dev| on the undrained paths, the norm of the strain on the others
+      // (an isotropic path has no eps_dev).
+      std::vector<double> x(e.size());
+      for (std::size_t j = 0; j < e.size(); ++j)
+        x[j] = undrained_path ? std::abs(e[j] - e.front()) : (eps[j] - eps.front()).norm();
+      const double span = x.back();
       const int n = options.max_path_samples;
       std::size_t j = 0;
+      bool first = true;
+      double last = 0;
       for (int k = 0; k < n; ++k) {
-        const double target = e0 + span * k / (n - 1);
-        while (j + 1 < e.size() && std::abs(e[j + 1] - e0) <= std::abs(target - e0)) ++j;
-        if (!data.path.eps_dev.empty() && std::abs(e[j] - e0) <= std::abs(data.path.eps_dev.back()))
-          continue;
-        data.path.eps_dev.push_back(e[j] - e0);
+        const double target = span * k / (n - 1);
+        while (j + 1 < e.size() && x[j + 1] <= target) ++j;
+        if (!first && x[j] <= last) continue;
+        first = false;
+        last = x[j];
+        data.path.eps_dev.push_back(e[j] - e.front());
         data.path.stress.push_back(st[j]);
         data.path.fabric.push_back(fb[j]);
+        if (!undrained_path) data.path.strain.push_back(eps[j] - eps.front());
       }
       if (r.exists(path + datasets::kVolumeFraction)) {
         const auto nu = r.read_vector(path + datasets::kVolumeFraction);
@@ -211,11 +231,17 @@ CalibrationData load_calibration_data(const std::filesystem::path& file,
       }
       for (std::size_t k = 0; k < data.path.eps_dev.size(); ++k)
         if (!std::isfinite(data.path.eps_dev[k]) || !data.path.stress[k].allFinite() ||
-            !data.path.fabric[k].allFinite())
+            !data.path.fabric[k].allFinite() ||
+            (!data.path.strain.empty() && !data.path.strain[k].allFinite()))
           throw InputError(name + ": /path has non-finite values");
     }
   }
   return data;
+}
+
+Eigen::Matrix3d PathData::increment(std::size_t k) const {
+  if (strain.empty()) return models::undrained_axisymmetric_strain(eps_dev[k] - eps_dev[k - 1]);
+  return strain[k] - strain[k - 1];
 }
 
 }  // namespace rendulic::calibration

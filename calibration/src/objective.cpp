@@ -317,9 +317,9 @@ class Kernel final : public KernelBase {
     return true;
   }
 
-  // The law's undrained path from the first data row, integrated from each sample of the data
-  // to the next (the driver controls the error within each), so that the model is sampled
-  // exactly at the data's eps_dev; one state per data row.
+  // The law's path from the first data row, integrated from each sample of the data to the next
+  // (the driver controls the error within each) along the data's strain increments, so that
+  // the model is sampled exactly at the data's rows; one state per data row.
   template <typename T>
   bool run_path(const T* p, const double* pd, std::vector<models::StateT<T>>* states) const {
     const PathData& d = o_->path;
@@ -329,9 +329,7 @@ class Kernel final : public KernelBase {
     models::StateT<T> y = models::state_cast<T>(sd);
     states->assign(1, y);
     for (std::size_t k = 1; k < d.eps_dev.size(); ++k) {
-      const auto res = models::integrate_adaptive(
-          ops, y, models::undrained_axisymmetric_strain(d.eps_dev[k] - d.eps_dev[k - 1]),
-          o_->options.step);
+      const auto res = models::integrate_adaptive(ops, y, d.increment(k), o_->options.step);
       if (!res.success) return false;
       y = res.end;
       states->push_back(y);
@@ -339,7 +337,7 @@ class Kernel final : public KernelBase {
     return true;
   }
 
-  // Undrained path residuals: (iso, dev) pairs of stress and fabric at every data row after the
+  // Path residuals: (iso, dev) pairs of stress and fabric at every data row after the
   // first (which the model starts from).
   template <typename T>
   bool path_residuals(const T* p, const double* pd, T* r) const {
@@ -527,9 +525,7 @@ class UmatKernel final : public KernelBase {
     states->assign(1, y.point);
     for (std::size_t k = 1; k < d.eps_dev.size(); ++k) {
       models::UmatState next;
-      if (!integrate(law, y, models::undrained_axisymmetric_strain(d.eps_dev[k] - d.eps_dev[k - 1]),
-                     sc, &next))
-        return false;
+      if (!integrate(law, y, d.increment(k), sc, &next)) return false;
       y = std::move(next);
       states->push_back(y.point);
     }

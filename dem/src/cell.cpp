@@ -11,6 +11,10 @@ bool ServoOptions::IsValid(std::string* why) const {
     if (why) *why = "servo gain must be positive";
     return false;
   }
+  if (!(integral_gain >= 0 && std::isfinite(integral_gain))) {
+    if (why) *why = "servo integral gain must be >= 0";
+    return false;
+  }
   if (!(max_rate > 0 && std::isfinite(max_rate))) {
     if (why) *why = "servo max_rate must be positive";
     return false;
@@ -54,6 +58,24 @@ Eigen::Vector3d CellControl::velocity_gradient(const Eigen::Vector3d& stress_dia
       const double d = servo.gain * (stress_diag[a] - axis[a].target_stress) / k_star;
       D[a] = std::clamp(d, -servo.max_rate, servo.max_rate);
     }
+  }
+  return D;
+}
+
+Eigen::Vector3d CellControl::velocity_gradient(const Eigen::Vector3d& stress_diag, double k_star,
+                                               double dt, Eigen::Vector3d& integral) const {
+  Eigen::Vector3d D;
+  for (int a = 0; a < 3; ++a) {
+    if (axis[a].mode == AxisControl::Mode::kStrainRate) {
+      D[a] = axis[a].rate;
+      continue;
+    }
+    const double e = (stress_diag[a] - axis[a].target_stress) / k_star;
+    // The integral is held inside the rate bound (anti-windup): a term beyond it could not act
+    // and would only delay the recovery once the error changes sign.
+    integral[a] =
+        std::clamp(integral[a] + servo.integral_gain * e * dt, -servo.max_rate, servo.max_rate);
+    D[a] = std::clamp(integral[a] + servo.gain * e, -servo.max_rate, servo.max_rate);
   }
   return D;
 }

@@ -624,6 +624,7 @@ void DemSystem::zero_velocities() {
 }
 
 void DemSystem::step(const Eigen::Vector3d& D) { step_impl<false>(D); }
+void DemSystem::step_measuring_stress(const Eigen::Vector3d& D) { step_impl<true>(D); }
 
 template <bool kStress>
 void DemSystem::step_impl(const Eigen::Vector3d& D) {

@@ -39,6 +39,8 @@ bool CompressOptions::IsValid(std::string* why) const {
   if (samples < 0 || samples == 1) return fail(why, "samples must be 0 or >= 2");
   for (double nu : snapshot_nu)
     if (!(nu > 0 && nu < 1)) return fail(why, "snapshot volume fractions in (0, 1)");
+  if (!(target_pressure_star >= 0 && std::isfinite(target_pressure_star)))
+    return fail(why, "target pressure must be >= 0");
   return true;
 }
 bool PathOptions::IsValid(std::string* why) const {
@@ -48,7 +50,62 @@ bool PathOptions::IsValid(std::string* why) const {
   for (double e : snapshot_eps_dev)
     if (!(e > 0 && e <= eps_dev_max))
       return fail(why, "every snapshot -eps_dev must be in (0, eps_dev_max]");
+  if (std::find(path_type_choices().begin(), path_type_choices().end(), type) ==
+      path_type_choices().end()) {
+    std::string list;
+    for (const std::string& n : path_type_choices()) list += (list.empty() ? "" : ", ") + n;
+    return fail(why, "path type '" + type + "' is not one of " + list);
+  }
+  if (path_type(type).kind == PathKind::kProportional) {
+    if (direction.size() != 3) return fail(why, "the path direction needs 3 components");
+    double largest = 0;
+    for (double d : direction) {
+      if (!std::isfinite(d)) return fail(why, "the path direction must be finite");
+      largest = std::max(largest, std::abs(d));
+    }
+    if (!(largest > 0)) return fail(why, "the path direction must not be zero");
+  }
+  if (!servo.IsValid(why)) return false;
+  if (!(servo_max_rate_factor >= 1 && std::isfinite(servo_max_rate_factor)))
+    return fail(why, "the servo's rate factor must be >= 1");
+  if (!(servo_tolerance > 0)) return fail(why, "the servo tolerance must be > 0");
   return true;
+}
+
+namespace {
+const std::vector<std::pair<std::string, PathType>>& path_types() {
+  using K = PathKind;
+  static const std::vector<std::pair<std::string, PathType>> types = {
+      {"undrained_extension", {K::kUndrained, 1.0}},
+      {"undrained_compression", {K::kUndrained, -1.0}},
+      {"drained_extension", {K::kDrained, 1.0}},
+      {"drained_compression", {K::kDrained, -1.0}},
+      {"constant_p_extension", {K::kConstantMeanStress, 1.0}},
+      {"constant_p_compression", {K::kConstantMeanStress, -1.0}},
+      {"isotropic_loading", {K::kIsotropic, -1.0}},
+      {"isotropic_unloading", {K::kIsotropic, 1.0}},
+      {"proportional", {K::kProportional, 1.0}}};
+  return types;
+}
+}  // namespace
+
+const std::vector<std::string>& path_type_choices() {
+  static const std::vector<std::string> names = [] {
+    std::vector<std::string> n;
+    for (const auto& t : path_types()) n.push_back(t.first);
+    return n;
+  }();
+  return names;
+}
+
+PathType path_type(const std::string& name) {
+  for (const auto& [n, t] : path_types())
+    if (n == name) return t;
+  PathOptions o;
+  o.type = name;
+  std::string why;
+  o.IsValid(&why);
+  throw InputError(why);
 }
 
 DemSystem make_gas(const SystemOptions& options, const GasOptions& gas, std::uint64_t seed) {
@@ -195,6 +252,60 @@ RelaxSummary relax(DemSystem& sys, const RelaxOptions& options, const ProgressFn
   return s;
 }
 
+RelaxSummary relax_at_pressure(DemSystem& sys, double target, const RelaxOptions& options,
+                               const ServoOptions& servo, const ProgressFn& progress) {
+  std::string why;
+  if (!options.IsValid(&why)) throw InputError("relax at pressure: " + why);
+  if (!servo.IsValid(&why)) throw InputError("relax at pressure: " + why);
+  if (!(target > 0 && std::isfinite(target)))
+    throw InputError("relax at pressure: the pressure must be > 0");
+  CellControl control;
+  control.servo = servo;
+  for (AxisControl& a : control.axis) {
+    a.mode = AxisControl::Mode::kStress;
+    a.target_stress = target;
+  }
+  const double k_star = sys.material().k_star();
+  const double dt = sys.dt();
+  Eigen::Vector3d integral = Eigen::Vector3d::Zero();
+  Eigen::Vector3d stress_diag = sys.stress().diagonal();
+  RelaxSummary s;
+  const double t0 = sys.time();
+  s.ratio = relax_ratio(sys);
+  const double r0 = s.ratio;
+  double previous = std::numeric_limits<double>::infinity();
+  auto off = [&] { return std::abs(stress_diag.sum() / 3.0 - target) / target; };
+  // As relax(): converged only after one interval, with the kinetic energy below the threshold
+  // and decaying; here also with the pressure at its target.
+  auto done = [&] {
+    return s.ratio < options.kinetic_to_elastic && s.ratio <= previous && off() < kPressureHold;
+  };
+  bool first = true;
+  while (first || !done()) {
+    if (sys.time() - t0 >= options.time_cap) break;
+    first = false;
+    previous = s.ratio;
+    for (std::int64_t k = 0; k < options.check_every; ++k) {
+      sys.step_measuring_stress(control.velocity_gradient(stress_diag, k_star, dt, integral));
+      stress_diag = sys.last_stress_diag();
+    }
+    s.steps += options.check_every;
+    s.ratio = relax_ratio(sys);
+    if (!std::isfinite(s.ratio)) (void)sys.measure();  // throws with a clear message
+    if (progress)
+      progress(relax_fraction(r0, s.ratio, options.kinetic_to_elastic,
+                              (sys.time() - t0) / options.time_cap));
+  }
+  s.converged = done();
+  s.time = sys.time() - t0;
+  if (progress) progress(1.0);
+  return s;
+}
+
+double path_strain(const PathType& type, const Eigen::Matrix3d& strain) {
+  return type.mixed() ? std::abs(strain(0, 0)) : strain.norm();
+}
+
 CompressSummary compress_isotropic(DemSystem& sys, const CompressOptions& o, const SampleFn& sample,
                                    const ProgressFn& progress) {
   std::string why;
@@ -238,6 +349,8 @@ CompressSummary compress_isotropic(DemSystem& sys, const CompressOptions& o, con
           "isotropic compression: snapshot volume fractions must lie strictly "
           "between the start and the target");
   std::size_t next_snap = 0;
+  const bool to_pressure = o.target_pressure_star > 0;
+  bool reached = false;
   for (std::int64_t it = 0;; ++it) {
     const double done = std::log(sys.volume_fraction()) - ln_start;
     const double remaining = sign * (total - done);
@@ -266,25 +379,66 @@ CompressSummary compress_isotropic(DemSystem& sys, const CompressOptions& o, con
       record(sys.measure());
       ++next_sample;
     }
-    if (progress && it % 256 == 0) progress(std::abs(total) > 0 ? now / std::abs(total) : 1.0);
+    if (to_pressure && it % kRateUpdate == 0) {
+      const double p_star = pressure(sys.stress()) / mat.k_star();
+      if (progress) progress(std::clamp(p_star / o.target_pressure_star, 0.0, 1.0));
+      if (p_star >= o.target_pressure_star) {
+        if (o.samples >= 2) record(sys.measure());
+        reached = true;
+        break;
+      }
+    } else if (progress && it % 256 == 0) {
+      progress(std::abs(total) > 0 ? now / std::abs(total) : 1.0);
+    }
     if (last) break;
   }
+  if (to_pressure && !reached)
+    throw InputError("isotropic compression: P* = " + std::to_string(o.target_pressure_star) +
+                     " not reached by the volume fraction bound " + std::to_string(o.target_nu) +
+                     " (P* there " + std::to_string(pressure(sys.stress()) / mat.k_star()) +
+                     "); raise the bound");
+  if (next_snap < snap_at.size())
+    throw InputError("isotropic compression: a snapshot volume fraction lies beyond " +
+                     std::to_string(sys.volume_fraction()) + ", where P* reached its target");
   s.time = sys.time() - t0;
   if (progress) progress(1.0);
   return s;
 }
 
-PathSummary undrained_extension(DemSystem& sys, const PathOptions& o, const SampleFn& sample,
-                                const ProgressFn& progress) {
+PathSummary run_path(DemSystem& sys, const PathOptions& o, const SampleFn& sample,
+                     const ProgressFn& progress) {
   std::string why;
   if (!o.IsValid(&why)) throw InputError("path: " + why);
+  const PathType type = path_type(o.type);
   PathSummary s;
   const double t0 = sys.time();
   sys.reset_strain();
-  // -eps_dev = sqrt(3/2) E_xx on this path (the deviator of diag(1, -1/2, -1/2) E_xx).
-  const double kFactor = std::sqrt(1.5);
+  // shape: D of the strain-controlled axes at unit rate (its largest |component| is 1). The
+  // path's strain s is kFactor |E_a| on an axis a with |shape_a| = 1: the norm of E along a
+  // constant D (kFactor = |shape|) or the axial strain of a mixed path (kFactor = 1).
+  Eigen::Vector3d shape;
+  switch (type.kind) {
+    case PathKind::kUndrained:
+    case PathKind::kDrained:
+    case PathKind::kConstantMeanStress:
+      shape = type.sense * Eigen::Vector3d(1.0, -0.5, -0.5);
+      break;
+    case PathKind::kIsotropic:
+      shape = Eigen::Vector3d::Constant(type.sense);
+      break;
+    case PathKind::kProportional: {
+      shape = Eigen::Vector3d(o.direction[0], o.direction[1], o.direction[2]);
+      shape /= shape.cwiseAbs().maxCoeff();
+      break;
+    }
+  }
+  int axis = 0;  // the axis whose strain measures s: one with |shape_a| = 1
+  shape.cwiseAbs().maxCoeff(&axis);
+  const bool mixed = type.mixed();
+  const double kFactor = mixed ? 1.0 : std::sqrt(shape.squaredNorm());
   const double dt = sys.dt();
   const double inc = kFactor * o.rate * dt;
+  auto path_strain = [&] { return kFactor * std::abs(sys.strain_E()[axis]); };
   std::vector<std::size_t> snap_order(o.snapshot_eps_dev.size());
   std::iota(snap_order.begin(), snap_order.end(), 0);
   std::stable_sort(snap_order.begin(), snap_order.end(), [&](std::size_t a, std::size_t b) {
@@ -294,30 +448,73 @@ PathSummary undrained_extension(DemSystem& sys, const PathOptions& o, const Samp
   std::size_t next_snap = 0;
   int next_sample = 1;
   auto sample_at = [&](int k) { return o.eps_dev_max * k / (o.samples - 1); };
-  // Samples carry the path's rate (max |D_aa| = rate) and the inertial number it has at the
-  // sample's pressure; the first sample is the state at rest before the path.
+  // Mixed paths: the lateral axes follow the servo, which reads the stress of the last step
+  // (the first one: measured now) and holds the target from the start's mean stress p0.
+  CellControl control;
+  control.servo = o.servo;
+  control.servo.max_rate = o.servo_max_rate_factor * o.rate;
+  Eigen::Vector3d integral = Eigen::Vector3d::Zero();
+  Eigen::Vector3d stress_diag = Eigen::Vector3d::Zero();
+  double p0 = 0;
+  auto lateral_target = [&](const Eigen::Vector3d& sd) {
+    return type.kind == PathKind::kDrained ? p0 : 0.5 * (3.0 * p0 - sd[0]);
+  };
+  if (mixed) {
+    stress_diag = sys.stress().diagonal();
+    p0 = stress_diag.sum() / 3.0;
+    if (!(p0 > 0))
+      throw InputError(
+          "path: a " + o.type +
+          " path needs a packing under pressure at its start (p = " + std::to_string(p0) + " Pa)");
+    for (int a = 1; a < 3; ++a) control.axis[a].mode = AxisControl::Mode::kStress;
+  }
+  // Samples carry the path's rate (max |D_aa| of the imposed axes = rate) and the inertial
+  // number it has at the sample's pressure; the first sample is the state at rest before the
+  // path. On mixed paths they also measure how well the servo holds its target.
   const Material& mat = sys.material();
   auto record = [&](Measures m, bool moving) {
     m.strain_rate = moving ? o.rate : 0.0;
     m.inertial_number = inertial_number(mat, m.strain_rate, m.pressure);
     if (m.pressure > 0 && std::isfinite(m.inertial_number))
       s.max_inertial_number = std::max(s.max_inertial_number, m.inertial_number);
+    if (mixed && moving && path_strain() >= 0.1 * o.eps_dev_max) {
+      // What the path promises: the lateral stresses at p0 (drained), the mean stress at p0
+      // (constant p; its lateral target moves with the fluctuating axial stress).
+      const Eigen::Vector3d sd = m.stress.diagonal();
+      if (type.kind == PathKind::kDrained)
+        for (int a = 1; a < 3; ++a)
+          s.servo_error = std::max(s.servo_error, std::abs(sd[a] - p0) / p0);
+      else
+        s.servo_error = std::max(s.servo_error, std::abs(sd.sum() / 3.0 - p0) / p0);
+    }
     if (sample) sample(m);
   };
-  const Eigen::Vector3d shape(1.0, -0.5, -0.5);
   record(sys.measure(), false);
-  // Events (samples, snapshots, the end) are hit exactly by shortening the step's rate.
+  // Events (samples, snapshots, the end) are hit exactly by shortening the step's rate; a path
+  // whose strain stops growing (a servo that cannot hold its target) is stopped by the cap.
   constexpr double kHit = 1e-12;  // relative tolerance of landing on an event
+  const auto max_steps =
+      static_cast<std::int64_t>(10.0 * o.eps_dev_max / inc) + 10 * (o.samples + 10);
   for (std::int64_t it = 0;; ++it) {
-    const double now = kFactor * sys.strain_E()[0];
+    if (it > max_steps)
+      throw InputError("path: " + o.type + " did not reach s = " + std::to_string(o.eps_dev_max) +
+                       " in " + std::to_string(max_steps) + " steps (the strain stopped growing)");
+    const double now = path_strain();
     double event =
         std::min(o.eps_dev_max, next_sample < o.samples ? sample_at(next_sample) : 1e300);
     if (next_snap < snap_order.size())
       event = std::min(event, o.snapshot_eps_dev[snap_order[next_snap]]);
     const double f = std::min(1.0, (event - now) / inc);
-    sys.step(o.rate * std::max(f, 0.0) * shape);
+    if (mixed) {
+      control.axis[0].rate = o.rate * std::max(f, 0.0) * shape[0];
+      for (int a = 1; a < 3; ++a) control.axis[a].target_stress = lateral_target(stress_diag);
+      sys.step_measuring_stress(control.velocity_gradient(stress_diag, mat.k_star(), dt, integral));
+      stress_diag = sys.last_stress_diag();
+    } else {
+      sys.step(o.rate * std::max(f, 0.0) * shape);
+    }
     ++s.steps;
-    const double after = kFactor * sys.strain_E()[0];
+    const double after = path_strain();
     const double tol = kHit * std::max(1.0, o.eps_dev_max);
     while (next_snap < snap_order.size() &&
            after >= o.snapshot_eps_dev[snap_order[next_snap]] - tol) {
@@ -335,6 +532,7 @@ PathSummary undrained_extension(DemSystem& sys, const PathOptions& o, const Samp
       break;
   }
   s.snapshots = std::move(snaps);
+  s.servo_held = s.servo_error <= o.servo_tolerance;
   s.time = sys.time() - t0;
   if (progress) progress(1.0);
   return s;

@@ -34,12 +34,22 @@ PreparedPacking prepare_packing(const DemRunOptions& o, std::uint64_t seed, cons
 
 IsotropicLoading load_isotropic(DemSystem& sys, const CompressOptions& loading,
                                 const RelaxOptions& relax_options, const SampleFn& sample,
-                                const TaskFn& task, const ProgressFn& progress) {
+                                const TaskFn& task, const ProgressFn& progress,
+                                const ServoOptions& servo) {
   IsotropicLoading out;
-  if (task) task("loading to nu_max");
+  const bool to_pressure = loading.target_pressure_star > 0;
+  if (task) task(to_pressure ? "loading to P*" : "loading to nu_max");
   out.loading = compress_isotropic(sys, loading, sample, progress);
-  if (task) task("relax at nu_max");
-  out.relax = relax(sys, relax_options, progress);
+  if (to_pressure) {
+    if (task) task("relax at P*");
+    ServoOptions s = servo;
+    s.max_rate = loading.rate_max;
+    out.relax = relax_at_pressure(sys, loading.target_pressure_star * sys.material().k_star(),
+                                  relax_options, s, progress);
+  } else {
+    if (task) task("relax at nu_max");
+    out.relax = relax(sys, relax_options, progress);
+  }
   return out;
 }
 

@@ -174,12 +174,21 @@ const OptionTable<DemRunOptions>& dem_run_option_table() {
           [](O& o) -> double& { return o.relax.time_cap; }},
       Row{{.path = "isotropic.nu_max",
            .unit = "-",
-           .help = "Volume fraction nu_max of the isotropic loading.",
+           .help = "Volume fraction nu_max of the isotropic loading (its bound with "
+                   "isotropic.pressure_star).",
            .min = 0,
            .max = 1,
            .min_open = true,
            .max_open = true},
           [](O& o) -> double& { return o.loading.target_nu; }},
+      Row{{.path = "isotropic.pressure_star",
+           .unit = "-",
+           .help = "0: load to isotropic.nu_max. > 0: load to this P* = P / k* instead and relax "
+                   "holding it with a stress servo (isotropic.nu_max is then the bound the "
+                   "loading may not pass); frictional packings are prepared to a pressure.",
+           .min = 0,
+           .max = 1},
+          [](O& o) -> double& { return o.loading.target_pressure_star; }},
       Row{{.path = "isotropic.samples",
            .unit = "-",
            .help = "Samples of the isotropic branch (equally spaced in ln nu, ends included).",
@@ -219,30 +228,75 @@ const OptionTable<DemRunOptions>& dem_run_option_table() {
            .min_open = true,
            .max_open = true},
           [](O& o) -> std::vector<double>& { return o.branch_nu; }},
+      Row{{.path = "path.type",
+           .unit = "-",
+           .help = "The loading path from the isotropic state (docs/dem.md 'Paths'): undrained "
+                   "(constant volume) axisymmetric, drained triaxial (lateral stress held at the "
+                   "start's p), constant mean stress, isotropic, or proportional (path.direction); "
+                   "the seed study's is undrained_extension.",
+           .choices = path_type_choices()},
+          [](O& o) -> std::string& { return o.path.type; }},
       Row{{.path = "path.rate",
            .unit = "1/s",
-           .help = "Axial extension rate D_xx of the undrained path D = rate diag(1, -1/2, "
-                   "-1/2).",
+           .help = "Strain rate of the path: the largest |D_aa| of its strain-controlled axes "
+                   "(the axial one on the drained and constant-p paths).",
            .min = 0,
            .max = 1e6,
            .min_open = true},
           [](O& o) -> double& { return o.path.rate; }},
+      Row{{.path = "path.direction",
+           .unit = "-",
+           .help = "Principal strain-rate direction (D_xx, D_yy, D_zz up to a positive factor, "
+                   "extension positive) of a proportional path; other paths ignore it.",
+           .min = -1e6,
+           .max = 1e6,
+           .min_size = 3,
+           .max_size = 3},
+          [](O& o) -> std::vector<double>& { return o.path.direction; }},
       Row{{.path = "path.eps_dev_max",
            .unit = "-",
-           .help = "Final -eps_dev of the undrained path.",
+           .help = "End of the path in its strain s: -eps_dev on the seed's undrained "
+                   "extension, |E| on every strain-controlled path, the axial strain on the "
+                   "drained and constant-p paths.",
            .min = 0,
            .max = 2,
            .min_open = true},
           [](O& o) -> double& { return o.path.eps_dev_max; }},
+      Row{{.path = "path.servo_gain",
+           .unit = "1/s",
+           .help = "Proportional gain of the lateral stress servo of the drained and constant-p "
+                   "paths, D = I + gain (sigma - target) / k* (docs/dem.md 'Paths').",
+           .min = 0,
+           .max = 1e9,
+           .min_open = true},
+          [](O& o) -> double& { return o.path.servo.gain; }},
+      Row{{.path = "path.servo_integral_gain",
+           .unit = "1/s^2",
+           .help = "Integral gain of the lateral servo, dI/dt = gain_i (sigma - target) / k* "
+                   "(0: proportional only, which lags behind the path).",
+           .min = 0,
+           .max = 1e15},
+          [](O& o) -> double& { return o.path.servo.integral_gain; }},
+      Row{{.path = "path.servo_tolerance",
+           .unit = "-",
+           .help = "Largest relative error of the stress a drained (lateral stresses) or "
+                   "constant-p (mean stress) path holds at p0, at a sample after the first tenth "
+                   "of the path; beyond it the run warns and /path says so.",
+           .min = 0,
+           .max = 1,
+           .min_open = true},
+          [](O& o) -> double& { return o.path.servo_tolerance; }},
       Row{{.path = "path.samples",
            .unit = "-",
-           .help = "Samples along the path (equally spaced in -eps_dev).",
+           .help = "Samples along the path (equally spaced in its strain s, path.eps_dev_max).",
            .min = 2,
            .max = 1e7},
           [](O& o) -> int& { return o.path.samples; }},
       Row{{.path = "states.eps_dev",
            .unit = "-",
-           .help = "-eps_dev of the snapshots taken on the path and relaxed at fixed cell.",
+           .help =
+               "Path strain s (-eps_dev on the seed's path) of the snapshots taken on the path and "
+               "relaxed at fixed cell.",
            .min = 0,
            .max = 2,
            .min_open = true,
@@ -343,6 +397,7 @@ DemRunOptions dem_options_from_scenario(const Scenario& sc) {
     if (e > o.path.eps_dev_max)
       throw InputError(where("states.eps_dev") + ": every entry must be <= path.eps_dev_max");
   std::string why;
+  if (!o.path.IsValid(&why)) throw InputError(where("path.type") + ": " + why);
   if (!o.system.IsValid(&why)) throw InputError("material/dem keys: " + why);
   if (!o.gas.IsValid(&why)) throw InputError("preparation keys: " + why);
   return o;

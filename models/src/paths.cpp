@@ -57,6 +57,11 @@ bool PathOptions::IsValid(std::string* why) const {
   return step.IsValid(why);
 }
 
+PathSeries strain_path(const Law& law, const MaterialState& start,
+                       const Eigen::Matrix3d& strain_end, const PathOptions& options) {
+  return run_path(law, start, strain_end, options);
+}
+
 PathSeries isotropic_compression_path(const Law& law, const MaterialState& start, double eps_v_end,
                                       const PathOptions& options) {
   return run_path(law, start, (eps_v_end / 3.0) * Eigen::Matrix3d::Identity(), options);

@@ -126,6 +126,44 @@ TEST(Cli, EffectiveScenarioIsStoredAndInspectable) {
   EXPECT_NE(ins.out.find("@seed = 42"), std::string::npos) << ins.out;
 }
 
+// A path other than the seed's, from a packing loaded to a pressure (docs/dem.md "Paths",
+// "Loading to a pressure"): the run stores the path's type and the servo's measured error, the
+// isotropic state sits at its target pressure, the report shows the path's q/p and says the
+// seed's path claim is not judged; a mistyped path is refused in one line naming the key.
+TEST(Cli, ADrainedPathFromAPressureIsRunStoredAndReported) {
+  const fs::path d = fresh_dir("drained");
+  const fs::path scen = write_file(
+      d / "s.toml",
+      "[run]\nstages = [\"prepare\", \"isotropic\", \"path\"]\nseed = 3\n[dem]\nn_particles = "
+      "128\n[preparation]\nrate = 20000.0\ngamma_b = 5.0\n[relax]\ntime_cap = 2e-4\n"
+      "[isotropic]\npressure_star = 0.01\nrate_max = 2000.0\n"
+      "[path]\ntype = \"drained_compression\"\nrate = 400.0\neps_dev_max = 0.02\nsamples = 20\n"
+      "[states]\neps_dev = [0.01]\nlabels = [\"a\"]\n");
+  const fs::path out = d / "out";
+  CmdResult r = rendulic("run " + scen.string() + " --out " + out.string() + " --threads 1");
+  ASSERT_EQ(r.code, 0) << r.out;
+  {
+    rendulic::ResultsReader reader(out / "results.h5");
+    EXPECT_EQ(reader.attr_string("/path", "type"), "drained_compression");
+    EXPECT_TRUE(reader.has_attr("/path", "servo_error"));
+    EXPECT_NEAR(reader.attr_double("/isotropic", "relaxed_pressure_star"), 0.01, 1e-3 * 0.01);
+  }
+  r = rendulic("report --no-figures " + (out / "results.h5").string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  std::ifstream in(out / "report.md");
+  const std::string md((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(md.find("type: `drained_compression`"), std::string::npos) << md;
+  EXPECT_NE(md.find("steady state"), std::string::npos) << md;
+  EXPECT_NE(md.find("not the seed's undrained extension"), std::string::npos) << md;
+
+  r = rendulic("run " + scen.string() + " --out " + (d / "bad").string() +
+               " --set path.type=triaxial");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_EQ(lines(r.out), 1) << r.out;
+  EXPECT_NE(r.out.find("path.type"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("drained_compression"), std::string::npos) << r.out;
+}
+
 TEST(Cli, InspectRefusesFilesThatAreNotOurs) {
   const fs::path d = fresh_dir("inspect_bad");
   const fs::path txt = write_file(d / "notes.h5", "just text\n");

@@ -38,7 +38,7 @@ TEST(PathRecords, InertialNumberIsTheImposedRatesAtEverySample) {
   o.samples = 7;  // 1.67e-4 apart: not a whole number of steps, so steps are shortened
   o.snapshot_eps_dev = {3.3e-4};
   std::vector<Measures> rows;
-  undrained_extension(sys, o, [&](const Measures& m) { rows.push_back(m); });
+  run_path(sys, o, [&](const Measures& m) { rows.push_back(m); });
   ASSERT_EQ(rows.size(), 7u);
   EXPECT_EQ(rows[0].inertial_number, 0.0);  // the state at rest before the path
   for (std::size_t k = 1; k < rows.size(); ++k) {
@@ -77,6 +77,144 @@ TEST(PathRecords, LoadingSnapshotsLandOnTheirVolumeFractions) {
   EXPECT_EQ(plain.stress(), sys.stress());
   o.snapshot_nu = {0.71};  // beyond the target
   DemSystem again = jammed(0.70);
+  EXPECT_THROW(compress_isotropic(again, o), InputError);
+}
+
+// The named paths (docs/dem.md "Paths"): each imposes the D it names, exactly, and ends at its
+// strain s; the mixed ones hold their lateral stress target with the integral servo.
+PathOptions short_path(const std::string& type, double s_max) {
+  PathOptions o;
+  o.type = type;
+  o.rate = 2000.0;
+  o.eps_dev_max = s_max;
+  o.samples = 11;
+  o.snapshot_eps_dev = {0.5 * s_max};
+  return o;
+}
+
+TEST(Paths, UndrainedCompressionKeepsTheVolumeAndEndsAtItsDeviatoricStrain) {
+  DemSystem sys = jammed(0.72);
+  const double V0 = sys.volume();
+  std::vector<Measures> rows;
+  const PathSummary p = run_path(sys, short_path("undrained_compression", 2e-3),
+                                 [&](const Measures& m) { rows.push_back(m); });
+  EXPECT_NEAR(sys.volume(), V0, 1e-13 * V0);
+  const Eigen::Vector3d E = sys.strain_E();
+  // Axial compression: E = -e (1, -1/2, -1/2), |E| = s, signed eps_dev = +s.
+  EXPECT_LT(E[0], 0);
+  EXPECT_NEAR(E[1], -0.5 * E[0], 1e-15);
+  EXPECT_NEAR(E.norm(), 2e-3, 1e-14);
+  ASSERT_EQ(rows.size(), 11u);
+  EXPECT_NEAR(rows.back().eps_dev, 2e-3, 1e-12);
+  EXPECT_NEAR(p.snapshots[0].strain_E().norm(), 1e-3, 1e-14);
+  EXPECT_EQ(p.servo_error, 0.0);
+}
+
+TEST(Paths, IsotropicLoadingRaisesTheVolumeFractionByTheClosedForm) {
+  DemSystem sys = jammed(0.70);
+  const double nu0 = sys.volume_fraction();
+  run_path(sys, short_path("isotropic_loading", 3e-3));
+  // E = -e (1, 1, 1) with |E| = sqrt(3) e = s: V = V0 exp(-3e), nu = nu0 exp(sqrt(3) s).
+  EXPECT_NEAR(sys.volume_fraction(), nu0 * std::exp(std::sqrt(3.0) * 3e-3), 1e-12);
+  DemSystem back = jammed(0.70);
+  run_path(back, short_path("isotropic_unloading", 3e-3));
+  EXPECT_NEAR(back.volume_fraction(), nu0 * std::exp(-std::sqrt(3.0) * 3e-3), 1e-12);
+}
+
+TEST(Paths, ProportionalPathFollowsItsDirection) {
+  DemSystem sys = jammed(0.72);
+  PathOptions o = short_path("proportional", 2e-3);
+  o.direction = {2.0, 0.0, -1.0};  // plane strain in y, scaled by its largest component
+  run_path(sys, o);
+  const Eigen::Vector3d E = sys.strain_E();
+  EXPECT_EQ(E[1], 0.0);
+  EXPECT_NEAR(E[0], -2.0 * E[2], 1e-15);
+  EXPECT_NEAR(E.norm(), 2e-3, 1e-14);
+  o.direction = {0.0, 0.0, 0.0};
+  EXPECT_THROW(run_path(sys, o), InputError);
+  o.type = "triaxial";
+  try {
+    run_path(sys, o);
+    ADD_FAILURE() << "an unknown path type must be refused";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("drained_compression"), std::string::npos) << e.what();
+  }
+}
+
+TEST(Paths, DrainedCompressionHoldsTheLateralStress) {
+  DemSystem sys = jammed(0.72);
+  const double p0 = sys.stress().trace() / 3.0;
+  std::vector<Measures> rows;
+  // A quasi-static rate (the seed's 400 1/s) and 2 % of axial strain: the servo has its
+  // start-up transient in the first tenth of the path and then holds the target.
+  PathOptions o = short_path("drained_compression", 2e-2);
+  o.rate = 400.0;
+  const PathSummary p = run_path(sys, o, [&](const Measures& m) { rows.push_back(m); });
+  // The axial strain is imposed exactly; the lateral stress follows the servo.
+  EXPECT_NEAR(-sys.strain_E()[0], 2e-2, 1e-14);
+  EXPECT_TRUE(p.servo_held) << p.servo_error;
+  for (std::size_t k = 2; k < rows.size(); ++k) {
+    EXPECT_NEAR(rows[k].stress(1, 1), p0, 0.01 * p0) << k;
+    EXPECT_NEAR(rows[k].stress(2, 2), p0, 0.01 * p0) << k;
+  }
+  // Compression raises the axial stress (the packing starts slightly anisotropic).
+  EXPECT_GT(rows.back().stress(0, 0) - rows.front().stress(0, 0), 0.05 * p0);
+}
+
+TEST(Paths, ConstantMeanStressPathHoldsP) {
+  DemSystem sys = jammed(0.72);
+  const double p0 = sys.stress().trace() / 3.0;
+  std::vector<Measures> rows;
+  PathOptions o = short_path("constant_p_extension", 2e-2);
+  o.rate = 400.0;
+  const PathSummary p = run_path(sys, o, [&](const Measures& m) { rows.push_back(m); });
+  EXPECT_TRUE(p.servo_held) << p.servo_error;
+  for (std::size_t k = 2; k < rows.size(); ++k)
+    EXPECT_NEAR(rows[k].stress.trace() / 3.0, p0, 0.01 * p0) << k;
+  EXPECT_NEAR(sys.strain_E()[0], 2e-2, 1e-14);
+}
+
+TEST(Paths, AProportionalServoLagsAndTheRunSaysSo) {
+  // Without the integral term the servo trails the lateral rate the path demands by
+  // D_lat / gain: with a low gain that is far beyond the tolerance, and it is reported.
+  DemSystem sys = jammed(0.72);
+  PathOptions o = short_path("drained_compression", 2e-2);
+  o.rate = 400.0;
+  o.servo.integral_gain = 0.0;
+  o.servo.gain = 1e4;
+  const PathSummary p = run_path(sys, o);
+  EXPECT_FALSE(p.servo_held);
+  EXPECT_GT(p.servo_error, o.servo_tolerance);
+}
+
+TEST(Paths, LoadingToAPressureStopsThereAndTheRelaxationHoldsIt) {
+  DemSystem sys = jammed(0.70);
+  const double k_star = sys.material().k_star();
+  const double p_start = sys.stress().trace() / 3.0 / k_star;
+  CompressOptions o;
+  o.target_nu = 0.75;  // the bound
+  o.rate_max = o.rate_min = 400.0;
+  o.samples = 5;
+  o.target_pressure_star = 1.5 * p_start;
+  std::vector<Measures> rows;
+  compress_isotropic(sys, o, [&](const Measures& m) { rows.push_back(m); });
+  ASSERT_FALSE(rows.empty());
+  // Stopped within the few steps between pressure checks of the target, below the bound.
+  EXPECT_GE(rows.back().pressure_star, o.target_pressure_star);
+  EXPECT_LT(rows.back().pressure_star, 1.01 * o.target_pressure_star);
+  EXPECT_LT(sys.volume_fraction(), 0.75);
+  RelaxOptions r;
+  r.kinetic_to_elastic = 1e-5;
+  r.time_cap = 2e-3;
+  const RelaxSummary held =
+      relax_at_pressure(sys, o.target_pressure_star * k_star, r, PathOptions{}.servo);
+  EXPECT_TRUE(held.converged);
+  EXPECT_NEAR(sys.stress().trace() / 3.0 / k_star, o.target_pressure_star,
+              kPressureHold * o.target_pressure_star);
+  // A pressure beyond the bound is refused, naming it.
+  DemSystem again = jammed(0.70);
+  o.target_nu = 0.701;
+  o.target_pressure_star = 10 * p_start;
   EXPECT_THROW(compress_isotropic(again, o), InputError);
 }
 

@@ -53,9 +53,11 @@ TEST(RunScenario, EveryKeyReachesItsMember) {
       "gamma_b = 0.3\nnu0 = 0.6\n"
       "[relax]\nkinetic_to_elastic = 1e-4\ntime_cap = 1e-3\n"
       "[isotropic]\nnu_max = 0.8\nsamples = 70\ninertial_number = 1e-4\nrate_max = 500.0\n"
-      "rate_min = 60.0\n"
+      "rate_min = 60.0\npressure_star = 0.02\n"
       "[pressure]\nvolume_fractions = [0.7]\n"
-      "[path]\nrate = 300.0\neps_dev_max = 0.1\nsamples = 50\n"
+      "[path]\nrate = 300.0\neps_dev_max = 0.1\nsamples = 50\ntype = \"proportional\"\n"
+      "direction = [1.0, 0.0, -1.0]\nservo_gain = 1e5\nservo_integral_gain = 1e9\n"
+      "servo_tolerance = 0.05\n"
       "[states]\neps_dev = [0.01, 0.05]\nlabels = [\"p\", \"q\"]\nkinetic_to_elastic = 1e-7\n"
       "time_cap = 1e-3\nforce_tolerance = 1e-8\n",
       "run.toml", s);
@@ -94,13 +96,19 @@ TEST(RunScenario, EveryKeyReachesItsMember) {
   EXPECT_EQ(o.path.eps_dev_max, 0.1);
   EXPECT_EQ(o.path.samples, 50);
   EXPECT_EQ(o.path.snapshot_eps_dev, (std::vector<double>{0.01, 0.05}));
+  EXPECT_EQ(o.path.type, "proportional");
+  EXPECT_EQ(o.path.direction, (std::vector<double>{1.0, 0.0, -1.0}));
+  EXPECT_EQ(o.path.servo.gain, 1e5);
+  EXPECT_EQ(o.path.servo.integral_gain, 1e9);
+  EXPECT_EQ(o.path.servo_tolerance, 0.05);
+  EXPECT_EQ(o.loading.target_pressure_star, 0.02);
   EXPECT_EQ(o.state_labels, (std::vector<std::string>{"p", "q"}));
   EXPECT_EQ(o.state_rest.relax.kinetic_to_elastic, 1e-7);
   EXPECT_EQ(o.state_rest.relax.time_cap, 1e-3);
   EXPECT_EQ(o.state_rest.minimise.force_tolerance, 1e-8);
   EXPECT_EQ(o.state_rest.minimise.k, 2e8);
   // Every row of the table was set above: one key per row, none forgotten.
-  EXPECT_EQ(dem_run_option_table().rows().size(), 34u);
+  EXPECT_EQ(dem_run_option_table().rows().size(), 40u);
 }
 
 TEST(RunScenario, ACodeBuiltRunIsHeldToTheKeysRanges) {

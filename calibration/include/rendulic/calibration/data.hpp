@@ -53,8 +53,16 @@ struct PathData {
   std::vector<double> eps_dev;
   std::vector<Eigen::Matrix3d> stress;  // Pa
   std::vector<Eigen::Matrix3d> fabric;
+  // The DEM's strain epsilon (compression positive) relative to row 0, for paths other than
+  // the undrained ones (docs/dem.md "Paths"); empty for an undrained path, whose strain is
+  // the undrained axisymmetric one of eps_dev.
+  std::vector<Eigen::Matrix3d> strain;
   double volume_fraction = 0.0;  // at row 0
   bool empty() const { return eps_dev.size() < 2; }
+  // The strain from row k - 1 to row k that the laws are driven by: the DEM's own on any path
+  // (on the drained and constant-p paths the law then follows the DEM's measured volume
+  // change, a strain-driven replay of the mixed test).
+  Eigen::Matrix3d increment(std::size_t k) const;
 };
 
 struct CalibrationData {

@@ -52,15 +52,23 @@ struct AxisControl {
   double target_stress = 0;  // kStress: sigma_aa to hold, Pa (compression positive)
 };
 
-// Servo settings. For a stress-controlled axis: D_aa = gain * (sigma_aa - target) / k*,
-// clamped to |D_aa| <= max_rate (compressive stress above target makes the cell extend).
-// With a tangent bulk-like stiffness K of the packing, the stress error decays at the rate
-// gain * K / k*; K / k* is O(0.1 .. 1) on the states of this mission, so gain = 1e3 1/s gives
-// time constants of ~1e-2 .. 1e-3 s: orders of magnitude slower than the sound crossing of
-// the cell (~1e-5 s), hence stable and quasi-static. max_rate bounds the inertial number.
+// Servo settings. For a stress-controlled axis, with the error e = (sigma_aa - target) / k*
+// (compressive stress above target makes the cell extend):
+//   proportional (integral_gain = 0): D_aa = gain e;
+//   proportional-integral: D_aa = I_a + gain e, dI_a/dt = integral_gain e;
+// clamped to |D_aa| <= max_rate. With a tangent stiffness K of the packing along the axis, the
+// error obeys e'' + gain K* e' + integral_gain K* e = 0 (K* = K / k*, O(0.1 .. 1) on the states
+// of this mission). The proportional servo holds a target only when the cell does not move
+// otherwise (as in a hold at fixed stress: time constant 1 / (gain K*), ~1e-2 .. 1e-3 s for
+// gain = 1e3 1/s, orders of magnitude slower than the sound crossing of the cell, ~1e-5 s).
+// Under a path the lateral axes must follow a rate D_lat that the material sets (dilatancy):
+// a proportional servo then lags by e = D_lat / gain, which at the path's rates is per cent of
+// the stress, while the integral term learns D_lat and the lag decays (docs/dem.md "Paths").
+// max_rate bounds the inertial number.
 struct ServoOptions {
-  double gain = 1e3;        // 1/s
-  double max_rate = 500.0;  // 1/s
+  double gain = 1e3;           // 1/s
+  double integral_gain = 0.0;  // 1/s^2; 0: proportional only
+  double max_rate = 500.0;     // 1/s
   bool IsValid(std::string* why) const;
 };
 
@@ -77,8 +85,12 @@ struct CellControl {
   static CellControl drained_triaxial(double axial_rate, double lateral_stress);
 
   bool needs_stress() const;
-  // D for the current measured stress (used only on stress-controlled axes).
+  // D for the current measured stress (used only on stress-controlled axes): the proportional
+  // servo, and with `integral` (the servo's integral term I, one per axis, carried from step to
+  // step and advanced here by dt) the proportional-integral one of ServoOptions.
   Eigen::Vector3d velocity_gradient(const Eigen::Vector3d& stress_diag, double k_star) const;
+  Eigen::Vector3d velocity_gradient(const Eigen::Vector3d& stress_diag, double k_star, double dt,
+                                    Eigen::Vector3d& integral) const;
 };
 
 }  // namespace rendulic::dem

@@ -97,6 +97,9 @@ class DemSystem {
   void advance(std::int64_t n, const Eigen::Vector3d& D);
   // One step whose D comes from a cell control (servo axes use the stress of the last step).
   void step(const CellControl& control);
+  // One step with the imposed D that also sums the stress's diagonal (last_stress_diag()):
+  // for a servo kept outside the engine, e.g. the integral servo of the paths (protocols.hpp).
+  void step_measuring_stress(const Eigen::Vector3d& D);
 
   Measures measure() const;
   std::vector<Contact> contacts() const;

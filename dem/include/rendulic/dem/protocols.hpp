@@ -80,6 +80,11 @@ struct CompressOptions {
   // after the step that reaches it, taken back onto it exactly by a fraction of a step; the
   // loading itself goes on unchanged.
   std::vector<double> snapshot_nu;
+  // > 0: a loading to a pressure. It stops as soon as P* = P / k* reaches this (checked every
+  // few steps, so it overshoots by a few 1e-4 of P), and target_nu is then the bound it may
+  // not pass (an InputError if it does; so are snapshots beyond the stop). The samples keep
+  // their ln(nu) spacing up to the stop, where one more is taken.
+  double target_pressure_star = 0;
   bool IsValid(std::string* why) const;
 };
 // The inertial number I = rate 2<r> sqrt(rho / P) of a strain rate (1/s, the largest |D_aa|)
@@ -101,14 +106,66 @@ struct CompressSummary {
 CompressSummary compress_isotropic(DemSystem& sys, const CompressOptions& options,
                                    const SampleFn& sample = {}, const ProgressFn& progress = {});
 
-// Constant-volume axisymmetric extension along x, D = rate diag(1, -1/2, -1/2), from the
-// current state to -eps_dev = eps_dev_max (strain counted from the start of the path).
-// Snapshots (copies) are taken exactly at each requested -eps_dev.
+// Relaxation at a held pressure: every axis follows the proportional-integral stress servo
+// (cell.hpp) to sigma_aa = pressure, until the relax criterion holds and the pressure is within
+// kPressureHold of its target, or the time cap. For a packing prepared to a pressure rather
+// than a volume fraction (frictional packings reach different volume fractions at one P).
+inline constexpr double kPressureHold = 1e-3;
+RelaxSummary relax_at_pressure(DemSystem& sys, double pressure, const RelaxOptions& options,
+                               const ServoOptions& servo, const ProgressFn& progress = {});
+
+// The loading paths of the path stage (docs/dem.md "Paths"), each from the current state, with
+// x the axial direction and y, z lateral. Strain-controlled paths impose a constant D:
+//   undrained_extension / undrained_compression: D = +-rate diag(1, -1/2, -1/2) (constant
+//     volume; the seed study's path is undrained_extension);
+//   isotropic_unloading / isotropic_loading: D = +-rate diag(1, 1, 1);
+//   proportional: D = rate d / max|d_a| for a principal strain-rate direction d (extension
+//     positive, like D).
+// Mixed paths impose D_xx = +-rate and hold the lateral stresses with the servo of cell.hpp
+// (proportional-integral):
+//   drained_extension / drained_compression: sigma_yy = sigma_zz = p0, the mean stress at the
+//     start (the lateral stress of the triaxial test);
+//   constant_p_extension / constant_p_compression: sigma_yy = sigma_zz = (3 p0 - sigma_xx) / 2,
+//     so that the mean stress stays p0.
+// The path's progress is its strain s: the norm |E| of the log strain since the start on the
+// strain-controlled paths (= -eps_dev on the seed's path, sqrt(3) |E_xx| on the isotropic ones)
+// and the axial strain |E_xx| on the mixed ones, whose volume the material decides. Samples,
+// snapshots and the end are placed in s.
+enum class PathKind { kUndrained, kIsotropic, kProportional, kDrained, kConstantMeanStress };
+struct PathType {
+  PathKind kind = PathKind::kUndrained;
+  double sense = 1.0;  // +1: axial extension (isotropic: unloading); -1: compression
+  bool mixed() const { return kind == PathKind::kDrained || kind == PathKind::kConstantMeanStress; }
+};
+// The names of the paths (the path.type key's choices) and their meaning.
+const std::vector<std::string>& path_type_choices();
+// Throws InputError naming the choices for an unknown name.
+PathType path_type(const std::string& name);
+// The path strain s of a path of this type from its strain tensor (epsilon = -E or E: the
+// sign does not matter), for readers of a stored path; run_path measures the same s along
+// one axis, scaled, so that it lands exactly on its events.
+double path_strain(const PathType& type, const Eigen::Matrix3d& strain);
+
 struct PathOptions {
-  double rate = 500.0;  // D_xx, 1/s
-  double eps_dev_max = 0.32;
-  int samples = 200;  // equally spaced in -eps_dev, both ends included
-  std::vector<double> snapshot_eps_dev = {0.006, 0.021, 0.043, 0.068, 0.32};
+  std::string type = "undrained_extension";  // one of path_type_choices()
+  double rate = 500.0;                       // largest |D_aa| of the strain-controlled axes, 1/s
+  // The principal strain-rate direction of a proportional path (D's diagonal up to a positive
+  // factor, extension positive); not used by the other paths.
+  std::vector<double> direction = {1.0, -0.5, -0.5};
+  double eps_dev_max = 0.32;  // the path's strain s at its end
+  int samples = 200;          // equally spaced in s, both ends included
+  std::vector<double> snapshot_eps_dev = {0.006, 0.021, 0.043, 0.068, 0.32};  // in s
+  // The lateral servo of the mixed paths (its max_rate is max_rate_factor x rate) and the
+  // largest relative error of what the path holds (drained: |sigma_yy - p0| and |sigma_zz - p0|;
+  // constant p: |p - p0|; over p0) at a sample after the first tenth of the path; a larger one
+  // is reported (PathSummary::servo_error).
+  // The gains make the servo critically damped for K* ~ 0.45 (the affine stiffness of the
+  // states of this mission) with the closed-loop rate gain K* ~ 1.4e6 1/s: thousands of times
+  // the path's rate, yet gain K* dt ~ 1e-2 per step, far inside the explicit limit of 2 (the
+  // cell's strain reaches the stress at once, through the affine remap).
+  ServoOptions servo{.gain = 3e6, .integral_gain = 1e12};
+  double servo_max_rate_factor = 2.0;
+  double servo_tolerance = 0.02;
   bool IsValid(std::string* why) const;
 };
 struct PathSummary {
@@ -116,9 +173,16 @@ struct PathSummary {
   std::int64_t steps = 0;
   double max_inertial_number = 0;
   std::vector<DemSystem> snapshots;  // in the order of snapshot_eps_dev
+  // Mixed paths: the largest relative error of the held stress (PathOptions::servo_tolerance)
+  // at a sample after the first tenth of the path (0 on strain-controlled paths), and whether
+  // it is within servo_tolerance.
+  double servo_error = 0;
+  bool servo_held = true;
 };
-PathSummary undrained_extension(DemSystem& sys, const PathOptions& options,
-                                const SampleFn& sample = {}, const ProgressFn& progress = {});
+// The path of options.type from the current state to s = eps_dev_max. Snapshots (copies) are
+// taken exactly at each requested s (on mixed paths: at the step's axial strain, exactly too).
+PathSummary run_path(DemSystem& sys, const PathOptions& options, const SampleFn& sample = {},
+                     const ProgressFn& progress = {});
 
 // The mean of a path series over a window of the path and its standard error (docs/dem.md
 // "Steady state and plateau means"): the samples y with x in [x_lo, x_hi] (e.g. x = -eps_dev),

@@ -39,6 +39,10 @@ struct DemRunOptions {
   RestOptions state_rest{.relax = {.kinetic_to_elastic = 1e-6, .time_cap = 2e-3}};
 };
 
+// The servo that holds the pressure of a loading to a pressure: the paths' lateral servo
+// (PathOptions{}.servo, the same reasoning) with the loading's largest rate as its bound.
+inline const ServoOptions kPressureServo = PathOptions{}.servo;
+
 // Called with the name of each step as it starts ("gas", "compress to nu0", "relax at nu0").
 using TaskFn = std::function<void(const std::string&)>;
 
@@ -60,9 +64,11 @@ struct IsotropicLoading {
   RelaxSummary relax;       // at nu_max
 };
 // The isotropic loading of `sys` to loading.target_nu, then its relaxation ("loading to nu_max",
-// "relax at nu_max").
+// "relax at nu_max"); with loading.target_pressure_star > 0 the loading to that pressure and a
+// relaxation holding it (relax_at_pressure, with `servo`).
 IsotropicLoading load_isotropic(DemSystem& sys, const CompressOptions& loading,
                                 const RelaxOptions& relax, const SampleFn& sample = {},
-                                const TaskFn& task = {}, const ProgressFn& progress = {});
+                                const TaskFn& task = {}, const ProgressFn& progress = {},
+                                const ServoOptions& servo = kPressureServo);
 
 }  // namespace rendulic::dem

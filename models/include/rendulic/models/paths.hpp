@@ -28,6 +28,10 @@ struct PathSeries {
   int total_substeps = 0;
 };
 
+// Any proportional strain path from `start` to the strain `strain_end` (compression positive)
+// in equal steps; the two below are its special cases.
+PathSeries strain_path(const Law& law, const MaterialState& start,
+                       const Eigen::Matrix3d& strain_end, const PathOptions& options = {});
 // Isotropic compression from `start` to volumetric strain eps_v_end (> 0 compresses).
 PathSeries isotropic_compression_path(const Law& law, const MaterialState& start, double eps_v_end,
                                       const PathOptions& options = {});
