@@ -44,6 +44,14 @@ inline void keep_two_largest(double e, double& e1, double& e2) {
   else if (e > e2)
     e2 = e;
 }
+// The 27 periodic image shifts of the cell as 4-double records (fourth lane 0), by image code.
+void image_shifts(const Eigen::Vector3d& L, V4* shift) {
+  for (int c = 0; c < 27; ++c) {
+    const Eigen::Vector3d s = NeighborList::shift(static_cast<std::uint8_t>(c));
+    shift[c] = V4{s[0] * L[0], s[1] * L[1], s[2] * L[2], 0.0};
+  }
+}
+
 }  // namespace
 
 bool SystemOptions::IsValid(std::string* why) const {
@@ -339,10 +347,7 @@ void DemSystem::force_block(std::size_t b) {
   // shifts, D), so that of the branch vector l holds r_i - r_j: it never enters a sum (r2 and
   // l . v_rel add lanes 0-2 only) and leaves only an unused value in the accumulators' lane 3.
   V4 shift[27];
-  for (int c = 0; c < 27; ++c) {
-    const Eigen::Vector3d s = NeighborList::shift(static_cast<std::uint8_t>(c));
-    shift[c] = V4{s[0] * L[0], s[1] * L[1], s[2] * L[2], 0.0};
-  }
+  image_shifts(L, shift);
   const NormalContact law = options_.material.contact();
   const V4 D = {last_D_[0], last_D_[1], last_D_[2], 0.0};
   double* __restrict P = pos4_.data();
@@ -403,10 +408,7 @@ void DemSystem::force_block_friction(std::size_t b) {
   const std::size_t n = p_.size();
   const Eigen::Vector3d L = cell_.lengths();
   V4 shift[27];
-  for (int c = 0; c < 27; ++c) {
-    const Eigen::Vector3d s = NeighborList::shift(static_cast<std::uint8_t>(c));
-    shift[c] = V4{s[0] * L[0], s[1] * L[1], s[2] * L[2], 0.0};
-  }
+  image_shifts(L, shift);
   const NormalContact law = options_.material.contact();
   const TangentialContact tangential = options_.material.tangential();
   const bool advance = advancing_;

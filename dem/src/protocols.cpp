@@ -219,26 +219,29 @@ double relax_fraction(double start_ratio, double ratio, double target, double ti
   return std::clamp(std::max(towards, time_fraction), 0.0, 1.0);
 }
 
-RelaxSummary relax(DemSystem& sys, const RelaxOptions& options, const ProgressFn& progress) {
-  std::string why;
-  if (!options.IsValid(&why)) throw InputError("relax: " + why);
+namespace {
+// The loop of relax() and relax_at_pressure(): `advance(n)` moves the system by n steps, and
+// `held()` is a further condition of convergence. Converged only when the kinetic energy is
+// below the threshold AND decaying, after at least one check interval. Right after a slow
+// strain increment the kinetic energy is still tiny (the loading lasts a few hundred steps,
+// far less than the non-affine relaxation), so the ratio alone would stop at once and the
+// probe would record an almost affine, too stiff response; the relaxation peak that follows
+// must be waited out first.
+template <class Advance, class Held>
+RelaxSummary relax_loop(DemSystem& sys, const RelaxOptions& options, const ProgressFn& progress,
+                        Advance advance, Held held) {
   RelaxSummary s;
   const double t0 = sys.time();
-  const Eigen::Vector3d still = Eigen::Vector3d::Zero();
-  // Converged only when the kinetic energy is below the threshold AND decaying, after at
-  // least one check interval. Right after a slow strain increment the kinetic energy is still
-  // tiny (the loading lasts a few hundred steps, far less than the non-affine relaxation), so
-  // the ratio alone would stop at once and the probe would record an almost affine, too stiff
-  // response; the relaxation peak that follows must be waited out first.
   s.ratio = relax_ratio(sys);
   const double r0 = s.ratio;
   double previous = std::numeric_limits<double>::infinity();
+  auto done = [&] { return s.ratio < options.kinetic_to_elastic && s.ratio <= previous && held(); };
   bool first = true;
-  while (first || !(s.ratio < options.kinetic_to_elastic && s.ratio <= previous)) {
+  while (first || !done()) {
     if (sys.time() - t0 >= options.time_cap) break;
     first = false;
     previous = s.ratio;
-    sys.advance(options.check_every, still);
+    advance(options.check_every);
     s.steps += options.check_every;
     s.ratio = relax_ratio(sys);
     if (!std::isfinite(s.ratio)) (void)sys.measure();  // throws with a clear message
@@ -246,10 +249,19 @@ RelaxSummary relax(DemSystem& sys, const RelaxOptions& options, const ProgressFn
       progress(relax_fraction(r0, s.ratio, options.kinetic_to_elastic,
                               (sys.time() - t0) / options.time_cap));
   }
-  s.converged = s.ratio < options.kinetic_to_elastic && s.ratio <= previous;
+  s.converged = done();
   s.time = sys.time() - t0;
   if (progress) progress(1.0);
   return s;
+}
+}  // namespace
+
+RelaxSummary relax(DemSystem& sys, const RelaxOptions& options, const ProgressFn& progress) {
+  std::string why;
+  if (!options.IsValid(&why)) throw InputError("relax: " + why);
+  const Eigen::Vector3d still = Eigen::Vector3d::Zero();
+  return relax_loop(
+      sys, options, progress, [&](std::int64_t n) { sys.advance(n, still); }, [] { return true; });
 }
 
 RelaxSummary relax_at_pressure(DemSystem& sys, double target, const RelaxOptions& options,
@@ -269,37 +281,15 @@ RelaxSummary relax_at_pressure(DemSystem& sys, double target, const RelaxOptions
   const double dt = sys.dt();
   Eigen::Vector3d integral = Eigen::Vector3d::Zero();
   Eigen::Vector3d stress_diag = sys.stress().diagonal();
-  RelaxSummary s;
-  const double t0 = sys.time();
-  s.ratio = relax_ratio(sys);
-  const double r0 = s.ratio;
-  double previous = std::numeric_limits<double>::infinity();
-  auto off = [&] { return std::abs(stress_diag.sum() / 3.0 - target) / target; };
-  // As relax(): converged only after one interval, with the kinetic energy below the threshold
-  // and decaying; here also with the pressure at its target.
-  auto done = [&] {
-    return s.ratio < options.kinetic_to_elastic && s.ratio <= previous && off() < kPressureHold;
-  };
-  bool first = true;
-  while (first || !done()) {
-    if (sys.time() - t0 >= options.time_cap) break;
-    first = false;
-    previous = s.ratio;
-    for (std::int64_t k = 0; k < options.check_every; ++k) {
-      sys.step_measuring_stress(control.velocity_gradient(stress_diag, k_star, dt, integral));
-      stress_diag = sys.last_stress_diag();
-    }
-    s.steps += options.check_every;
-    s.ratio = relax_ratio(sys);
-    if (!std::isfinite(s.ratio)) (void)sys.measure();  // throws with a clear message
-    if (progress)
-      progress(relax_fraction(r0, s.ratio, options.kinetic_to_elastic,
-                              (sys.time() - t0) / options.time_cap));
-  }
-  s.converged = done();
-  s.time = sys.time() - t0;
-  if (progress) progress(1.0);
-  return s;
+  return relax_loop(
+      sys, options, progress,
+      [&](std::int64_t n) {
+        for (std::int64_t k = 0; k < n; ++k) {
+          sys.step_measuring_stress(control.velocity_gradient(stress_diag, k_star, dt, integral));
+          stress_diag = sys.last_stress_diag();
+        }
+      },
+      [&] { return std::abs(stress_diag.sum() / 3.0 - target) / target < kPressureHold; });
 }
 
 double path_strain(const PathType& type, const Eigen::Matrix3d& strain) {
