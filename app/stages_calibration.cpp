@@ -24,7 +24,12 @@ void run_calibration_stage(const Scenario& scenario, ResultsWriter& out, const R
   const CalibrationData data = load_calibration_data(out.temporary_path(), plan.load);
   const std::vector<std::string>& models = plan.models;
   std::vector<ModelScore> scores;
+  // One report per law: a stop asked for (Ctrl-C in Python) ends the stage between two laws,
+  // since a law's fit itself is not interruptible.
+  Progress progress(ctx, "calibration");
   for (const std::string& m : models) {
+    progress.start_task(m);
+    progress.count(&m - models.data(), static_cast<long>(models.size()));
     opt.model = m;
     // Said before and after: an integrated law's fit takes seconds to minutes (quick.toml's
     // elastoplastic_fabric ~20 s), and a silent run looks hung.
