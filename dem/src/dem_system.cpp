@@ -473,7 +473,8 @@ void DemSystem::force_block_friction(std::size_t b) {
       // The spring turned with the contact: back into the tangent plane, its length kept.
       V4 x = {xi[0], xi[1], xi[2], 0.0};
       TangentialContact::turn(x, nv);
-      const V4 ft = tangential.force(x, c_mid, c_end, dt, f_n, &dissipated);
+      V4 ft;
+      tangential.force(x, c_mid, c_end, dt, f_n, &dissipated, ft);
       if (advance) xi[0] = x[0], xi[1] = x[1], xi[2] = x[2];
       const V4 f = f_n * nv + ft;
       fi += f;
@@ -792,8 +793,8 @@ std::vector<Contact> DemSystem::contacts() const {
         vc -= vc.dot(nrm) * nrm;
         Eigen::Vector3d xi(hist_[3 * e], hist_[3 * e + 1], hist_[3 * e + 2]);
         double unused = 0;
-        const Eigen::Vector3d ft =
-            tan.force(xi, Eigen::Vector3d(Eigen::Vector3d::Zero()), vc, 0.0, c.force, &unused);
+        Eigen::Vector3d ft;
+        tan.force(xi, Eigen::Vector3d(Eigen::Vector3d::Zero()), vc, 0.0, c.force, &unused, ft);
         c.tangential = swap ? Eigen::Vector3d(-ft) : ft;
         const Eigen::Vector3d spring(hist_[3 * e], hist_[3 * e + 1], hist_[3 * e + 2]);
         c.spring = swap ? Eigen::Vector3d(-spring) : spring;

@@ -78,17 +78,20 @@ struct TangentialContact {
     }
     for (int a = 0; a < 3; ++a) xi[a] *= s;
   }
-  // Advances xi by v_mid dt and returns the tangential force on i, f_t = -k_t xi - gamma_t
+  // Advances xi by v_mid dt and sets f to the tangential force on i, f_t = -k_t xi - gamma_t
   // v_end, held at the Coulomb limit mu |f_n|: there the contact slides and xi is reset to
   // the spring that gives the limit force. The spring's work over the slip, k_t xi . (xi_trial
   // - xi) (the energy the slip takes from the spring; >= 0 unless the dashpot alone exceeds the
   // limit), is added to *dissipated: with it, the work done on the contact equals the spring's
   // energy plus the dashpot's and the slip's dissipation. Vectors are anything with three
-  // components indexed [0..2] (Eigen vectors, the engine's packed records).
+  // components indexed [0..2] (Eigen vectors, the engine's packed records); the force is an
+  // out parameter because a returned 32-byte vector record would change the ABI with the
+  // build's instruction set (GCC's -Wpsabi, an error where AVX is off).
   template <class V>
-  V force(V& xi, const V& v_mid, const V& v_end, double dt, double f_n, double* dissipated) const {
+  void force(V& xi, const V& v_mid, const V& v_end, double dt, double f_n, double* dissipated,
+             V& f) const {
     for (int a = 0; a < 3; ++a) xi[a] += v_mid[a] * dt;
-    V f = xi;
+    f = xi;
     for (int a = 0; a < 3; ++a) f[a] = -k_t * xi[a] - gamma_t * v_end[a];
     const double limit = mu * std::abs(f_n);
     const double f2 = f[0] * f[0] + f[1] * f[1] + f[2] * f[2];
@@ -104,7 +107,6 @@ struct TangentialContact {
       }
       *dissipated += slip_work;
     }
-    return f;
   }
   // The spring's energy k_t |xi|^2 / 2, from |xi|^2.
   double energy(double xi2) const { return 0.5 * k_t * xi2; }
