@@ -21,6 +21,8 @@
 namespace rendulic::app {
 namespace {
 namespace fs = std::filesystem;
+using rendulic::testing::CliResult;
+using rendulic::testing::run_rendulic;
 
 const fs::path kRoot = fs::path(RENDULIC_TEST_TMP) / "app_friction_state";
 
@@ -151,7 +153,9 @@ TEST(FrictionState, TheDynamicMethodsRunAndTheSeriesCarryTheSliding) {
       EXPECT_GE(f[k], 0.0);
       EXPECT_LE(f[k], 1.0);
       EXPECT_GE(e[k], 0.0);
-      if (k > 0) EXPECT_GE(w[k], w[k - 1]);  // dissipated work only grows
+      if (k > 0) {
+        EXPECT_GE(w[k], w[k - 1]);  // dissipated work only grows
+      }
     }
   }
   const std::string env = paths::envelope(paths::state("a"), paths::envelope_name("dynamic", 2e-3));
