@@ -77,6 +77,25 @@ std::optional<dem::DemSystem> restore_checkpoint(const ResultsReader& in, const 
   s.ref_half_skin = in.read_vector(cp + datasets::kReferenceHalfSkins);
   if (!s.ref_half_skin.empty() && s.ref_half_skin.size() != radii.size())
     throw InputError(where + ": reference_half_skins must hold one number per particle");
+  // A frictional state's rotations and tangential springs (absent from frictionless files and
+  // from files written before friction: such a state restarts its springs from zero).
+  if (in.exists(cp + datasets::kTangentialSprings)) {
+    const Eigen::MatrixXd w = in.read_matrix(cp + datasets::kAngularVelocities);
+    const Eigen::MatrixXd t = in.read_matrix(cp + datasets::kTorques);
+    const Eigen::MatrixXd xi = in.read_matrix(cp + datasets::kTangentialSprings);
+    for (const Eigen::MatrixXd* m : {&w, &t})
+      if (m->rows() != n || m->cols() != 3)
+        throw InputError(where + ": angular velocities and torques must be [N,3]");
+    if (xi.rows() > 0 && xi.cols() != 3)
+      throw InputError(where + ": tangential springs must be [entries,3]");
+    p.wx = column(w, 0), p.wy = column(w, 1), p.wz = column(w, 2);
+    p.tx = column(t, 0), p.ty = column(t, 1), p.tz = column(t, 2);
+    s.tangential_history.resize(static_cast<std::size_t>(xi.rows()) * 3);
+    for (Eigen::Index e = 0; e < xi.rows(); ++e)
+      for (int a = 0; a < 3; ++a)
+        s.tangential_history[static_cast<std::size_t>(3 * e + a)] = xi(e, a);
+    s.sliding_dissipation = in.attr_double(cp, "sliding_dissipation");
+  }
   return dem::DemSystem::restore(s, options);
 }
 

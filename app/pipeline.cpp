@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
 #include <functional>
 #include <string>
 #include <vector>
@@ -105,6 +106,36 @@ void register_run_keys(ScenarioSchema& schema) {
               .help = "Free text stored with the results."});
 }
 
+namespace {
+void check_friction(const Scenario& scenario) {
+  // The static tools model frictionless contacts only (packing_of, docs/dem.md "Friction"): a
+  // frictional run that asks for one would otherwise fail after its preparation and path.
+  const double mu = scenario.get_double("dem.friction");
+  if (!(mu > 0)) return;
+  std::vector<std::string> asked;
+  const bool probes = stage_requested(scenario, "probes");
+  const auto methods = scenario.get_strings("probes.methods");
+  if (probes && std::find(methods.begin(), methods.end(), "minimisation") != methods.end())
+    asked.push_back("probes.methods has minimisation (" + scenario.origin("probes.methods") + ")");
+  if (stage_requested(scenario, "linear_response"))
+    asked.push_back("run.stages has linear_response (" + scenario.origin("run.stages") + ")");
+  if (stage_requested(scenario, "elastic_range") &&
+      scenario.get_string("elastic_range.method") == "minimisation")
+    asked.push_back("elastic_range.method is minimisation (" +
+                    scenario.origin("elastic_range.method") + ")");
+  if (asked.empty()) return;
+  std::string list;
+  for (const std::string& a : asked) list += (list.empty() ? "" : "; ") + a;
+  char mu_text[32];
+  std::snprintf(mu_text, sizeof mu_text, "%g", mu);
+  throw InputError(std::string("dem.friction = ") + mu_text + " (" +
+                   scenario.origin("dem.friction") +
+                   "): the energy minimisation and the linear response model frictionless "
+                   "contacts only, but " +
+                   list + "; use the dynamic method or dem.friction = 0");
+}
+}  // namespace
+
 void check_stages_available(const Scenario& scenario) {
   // A run that computes nothing would replace an existing results.h5 with an empty file.
   bool computes = false;
@@ -116,6 +147,7 @@ void check_stages_available(const Scenario& scenario) {
                      "`rendulic report FILE.h5`");
   // Cross-key rules of the DEM and probe stages, before the first (possibly long) stage runs.
   dem::dem_options_from_scenario(scenario);
+  check_friction(scenario);
   if (stage_requested(scenario, "probes") || stage_requested(scenario, "linear_response") ||
       stage_requested(scenario, "elastic_range"))
     dem::probe_options_from(scenario);

@@ -667,16 +667,32 @@ std::string path_section(const ResultsReader& r) {
   md << "- steady state (s in [" << fmt(dem::kSteadyStateFrom * end, 3) << ", " << fmt(end, 3)
      << "]): q/p = "
      << (w.ok ? fmt(w.mean, 4) + " +- " + fmt(w.standard_error, 2) : std::string("-")) << "\n";
+  // Friction: the share of contacts at the Coulomb limit, the mechanism of the steady state.
+  std::vector<double> sliding;
+  if (r.exists(p + datasets::kSlidingFraction))
+    sliding = r.read_vector(p + datasets::kSlidingFraction);
+  if (sliding.size() != s.size()) sliding.clear();
+  {
+    if (!sliding.empty()) {
+      const dem::WindowMean f = dem::window_mean(s, sliding, dem::kSteadyStateFrom * end, end);
+      md << "- sliding contacts (at the Coulomb limit), steady state: "
+         << (f.ok ? fmt(f.mean, 3) + " +- " + fmt(f.standard_error, 2) : std::string("-"))
+         << " of the contacts\n";
+    }
+  }
   md << "- p at the end / p at the start: "
      << fmt(stress.back().trace() / std::max(stress.front().trace(), 1e-300), 4) << "\n";
   if (r.has_attr(p, "servo_error"))
     md << "- lateral servo: largest error " << fmt(r.attr_double(p, "servo_error"), 3)
        << " of p0 (tolerance " << fmt(r.attr_double(p, "servo_tolerance"), 3) << ")\n";
-  md << "\n| s | q/p |\n|---|---|\n";
+  md << (sliding.empty() ? "\n| s | q/p |\n|---|---|\n"
+                         : "\n| s | q/p | sliding contacts |\n|---|---|---|\n");
   const std::size_t n = s.size();
   for (std::size_t k = 0; k <= 8; ++k) {
     const std::size_t i = std::min(n - 1, k * (n - 1) / 8);
-    md << "| " << fmt(s[i], 3) << " | " << fmt(q_over_p[i], 4) << " |\n";
+    md << "| " << fmt(s[i], 3) << " | " << fmt(q_over_p[i], 4) << " |";
+    if (!sliding.empty()) md << " " << fmt(sliding[i], 3) << " |";
+    md << "\n";
   }
   return md.str();
 }

@@ -33,7 +33,8 @@ struct DemRunSession {
 // Pieces of the DEM stages that the pressure branches repeat (stages_dem.cpp).
 // Appends every path sample as a row of the datasets <group>/time, strain, ... (the /path
 // layout of docs/results.md).
-dem::SampleFn path_recorder(ResultsWriter& out, const std::string& group);
+dem::SampleFn path_recorder(ResultsWriter& out, const std::string& group,
+                            const dem::Material& material);
 // The snapshots brought to rest (rest.hpp) over one OpenMP team; throws naming the state if
 // one is not at rest afterwards.
 std::vector<std::pair<dem::DemSystem, dem::RestSummary>> rest_states(

@@ -48,7 +48,8 @@ void stage_pressure(const Scenario& sc, ResultsWriter& out, const RunContext& ct
     const std::string path_group = G + paths::kPath;
     out.attr(path_group, "rate", path.rate);
     out.attr(path_group, "type", path.type);
-    dem::PathSummary p = dem::run_path(sys, path, path_recorder(out, path_group));
+    dem::PathSummary p =
+        dem::run_path(sys, path, path_recorder(out, path_group, o.system.material));
     out.attr(path_group, "max_inertial_number", p.max_inertial_number);
     auto rested = rest_states(p.snapshots, o.state_rest, o.state_labels, ctx);
     for (std::size_t k = 0; k < rested.size(); ++k) {

@@ -796,6 +796,8 @@ std::vector<Contact> DemSystem::contacts() const {
         Eigen::Vector3d ft;
         tan.force(xi, Eigen::Vector3d(Eigen::Vector3d::Zero()), vc, 0.0, c.force, &unused, ft);
         c.tangential = swap ? Eigen::Vector3d(-ft) : ft;
+        const double limit = tan.mu * std::abs(c.force);
+        c.sliding = limit > 0 && ft.norm() >= (1.0 - kSlidingTolerance) * limit;
         const Eigen::Vector3d spring(hist_[3 * e], hist_[3 * e + 1], hist_[3 * e + 2]);
         c.spring = swap ? Eigen::Vector3d(-spring) : spring;
       }
@@ -891,12 +893,14 @@ Measures DemSystem::measure() const {
     if (friction_) {
       m.stress += c.branch * c.tangential.transpose();
       m.tangential_energy += options_.material.tangential().energy(c.spring.squaredNorm());
+      m.sliding_fraction += c.sliding ? 1.0 : 0.0;
     }
   }
   if (friction_) {
     m.elastic_energy += m.tangential_energy;
     m.rotational_energy = rotational_energy();
     m.sliding_dissipation = sliding_dissipation_;
+    if (!cs.empty()) m.sliding_fraction /= static_cast<double>(cs.size());
   }
   m.stress /= V;
   m.fabric /= V;

@@ -205,10 +205,14 @@ struct DynamicProbe {
   ProbeOutcome outcome;
   RelaxSummary relaxed;
   std::int64_t load_steps = 0;
+  // Friction: the work the contacts dissipated by sliding during the probe (J) and the
+  // fraction of contacts at the Coulomb limit once relaxed (zero without friction).
+  double sliding_dissipation = 0;
+  double sliding_fraction = 0;
 };
 template <class A>
 void io(A& a, DynamicProbe& r) {
-  a(r.outcome), a(r.relaxed), a(r.load_steps);
+  a(r.outcome), a(r.relaxed), a(r.load_steps), a(r.sliding_dissipation), a(r.sliding_fraction);
 }
 struct MinimisationProbe {
   ProbeOutcome outcome;
@@ -306,7 +310,7 @@ Envelope dynamic_envelope_of(const DemSystem& given, double amplitude,
   const std::vector<Contact> contacts_before = state.contacts();
   const std::vector<std::uint64_t> keys_before = contact_keys(contacts_before);
   const std::vector<bool> backbone = non_rattlers(state.particles().size(), contacts_before);
-  const PackingData packing_before = packing_of(state);
+  const PackingData packing_before = geometry_of(state);
   const std::vector<std::pair<int, int>> pairs_before = pairs_of(keys_before);
   const int m = static_cast<int>(theta_deg.size());
   std::vector<DynamicProbe> probes(m);
@@ -323,7 +327,9 @@ Envelope dynamic_envelope_of(const DemSystem& given, double amplitude,
     r.relaxed = relax(sys, options.relax);
     const Measures after = sys.measure();
     const std::vector<std::uint64_t> keys_after = contact_keys(sys.contacts());
-    const FabricSplit split = split_fabric_change(packing_before, packing_of(sys), pairs_before,
+    r.sliding_dissipation = after.sliding_dissipation - before.sliding_dissipation;
+    r.sliding_fraction = after.sliding_fraction;
+    const FabricSplit split = split_fabric_change(packing_before, geometry_of(sys), pairs_before,
                                                   before.fabric, after.fabric);
     r.outcome = outcome_of(after.stress - before.stress, after.fabric - before.fabric, keys_before,
                            keys_after, backbone, split);
@@ -339,6 +345,21 @@ Envelope dynamic_envelope_of(const DemSystem& given, double amplitude,
     diag["relax_time"].push_back(r.relaxed.time);
     diag["kinetic_to_elastic"].push_back(r.relaxed.ratio);
     diag["relax_converged"].push_back(r.relaxed.converged ? 1.0 : 0.0);
+  }
+  if (state.material().frictional()) {
+    // Sliding makes the response depend on the direction of loading: an envelope whose probes
+    // slid is not an elastic one, whatever its amplitude. The share of probes that slid, the
+    // largest fraction of sliding contacts after one, and the state's own fraction.
+    double slid = 0, most = 0;
+    for (const DynamicProbe& r : probes) {
+      diag["sliding_dissipation"].push_back(r.sliding_dissipation);
+      diag["sliding_fraction"].push_back(r.sliding_fraction);
+      slid += r.sliding_dissipation > 0 ? 1.0 : 0.0;
+      most = std::max(most, r.sliding_fraction);
+    }
+    env.attributes["sliding_probes_fraction"] = slid / static_cast<double>(probes.size());
+    env.attributes["sliding_fraction_max"] = most;
+    env.attributes["sliding_fraction_before"] = before.sliding_fraction;
   }
   const Material& mat = state.material();
   env.attributes["rate"] = rate;
@@ -370,6 +391,18 @@ void compute_worker_share(const std::string& method, const DemSystem& state, dou
   }
 }
 
+PackingData geometry_of(const DemSystem& state) {
+  const Particles& p = state.particles();
+  const int n = static_cast<int>(p.size());
+  Eigen::MatrixX3d x(n, 3);
+  Eigen::VectorXd r(n);
+  for (int i = 0; i < n; ++i) {
+    x.row(i) << p.x[i], p.y[i], p.z[i];
+    r(i) = p.radius[i];
+  }
+  return PackingData::orthorhombic(std::move(x), std::move(r), state.cell().lengths());
+}
+
 PackingData packing_of(const DemSystem& state) {
   // Every static tool (energy minimisation, the force balance at rest, static probes, the
   // linear response) takes its packing from here and models frictionless contacts only.
@@ -380,15 +413,7 @@ PackingData packing_of(const DemSystem& state) {
          "contacts only; set dem.friction = 0 for them";
     throw InputError(s.str());
   }
-  const Particles& p = state.particles();
-  const int n = static_cast<int>(p.size());
-  Eigen::MatrixX3d x(n, 3);
-  Eigen::VectorXd r(n);
-  for (int i = 0; i < n; ++i) {
-    x.row(i) << p.x[i], p.y[i], p.z[i];
-    r(i) = p.radius[i];
-  }
-  return PackingData::orthorhombic(std::move(x), std::move(r), state.cell().lengths());
+  return geometry_of(state);
 }
 
 Envelope minimisation_envelope(const DemSystem& state, double amplitude,

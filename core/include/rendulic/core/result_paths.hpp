@@ -106,6 +106,12 @@ inline constexpr char kReferenceCellLengths[] = "/reference_cell_lengths";
 inline constexpr char kReferenceHalfSkins[] = "/reference_half_skins";
 inline constexpr char kStrainE[] = "/strain_E";
 inline constexpr char kLastD[] = "/last_D";
+// ... of a frictional state only: angular velocities and torques [N,3], the tangential spring
+// of each entry of the neighbour list [entries,3] in the list's order (the list is rebuilt
+// identically from the reference state) and the sliding dissipation so far (attribute).
+inline constexpr char kAngularVelocities[] = "/angular_velocities";
+inline constexpr char kTorques[] = "/torques";
+inline constexpr char kTangentialSprings[] = "/tangential_springs";
 // The remaining series of /isotropic and /path, one row per sample.
 inline constexpr char kPressure[] = "/pressure";  // Pa
 inline constexpr char kPressureStar[] = "/pressure_star";
@@ -115,6 +121,11 @@ inline constexpr char kRattlerFraction[] = "/rattler_fraction";
 inline constexpr char kKineticEnergy[] = "/kinetic_energy";
 inline constexpr char kElasticEnergy[] = "/elastic_energy";
 inline constexpr char kInertialNumber[] = "/inertial_number";
+// ... with friction only: the rotations' kinetic energy, the work dissipated by sliding since
+// the system was made, and the fraction of contacts at the Coulomb limit.
+inline constexpr char kRotationalEnergy[] = "/rotational_energy";
+inline constexpr char kSlidingDissipation[] = "/sliding_dissipation";
+inline constexpr char kSlidingFraction[] = "/sliding_fraction";
 // An envelope (per probe) and the elastic-range ladder.
 inline constexpr char kThetaDeg[] = "/theta_deg";
 inline constexpr char kDStress[] = "/d_stress";
@@ -191,6 +202,12 @@ inline constexpr Entry kDatasets[] = {
     {"max_force", "N"},
     {"strain_E", "1"},
     {"last_D", "1/s"},
+    {"angular_velocities", "1/s"},
+    {"torques", "N m"},
+    {"tangential_springs", "m"},
+    {"rotational_energy", "J"},
+    {"sliding_dissipation", "J"},
+    {"sliding_fraction", "1"},
     {"theta_deg", "deg"},
     {"stiffness", "Pa"},
     {"fabric_stiffness", "1"},
@@ -228,6 +245,7 @@ inline constexpr Entry kAttributes[] = {
     {"elastic_major", "Pa"},
     {"elastic_minor", "Pa"},
     {"minimise_max_displacement", "m"},
+    {"sliding_dissipation", "J"},
     {"B", "Pa"},
     {"G", "Pa"},
     {"A", "Pa"},

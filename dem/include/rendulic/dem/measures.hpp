@@ -36,6 +36,9 @@ struct Measures {
   double rotational_energy = 0;    // J
   double tangential_energy = 0;    // J
   double sliding_dissipation = 0;  // J
+  // Fraction of the contacts whose tangential force is at the Coulomb limit mu |f_n| (within
+  // kSlidingTolerance): the contacts that slide.
+  double sliding_fraction = 0;
 };
 
 // One contact of the current configuration (i < j).
@@ -48,7 +51,13 @@ struct Contact {
   // displacement of i's contact point relative to j's), both in the tangent plane.
   Eigen::Vector3d tangential = Eigen::Vector3d::Zero();  // N
   Eigen::Vector3d spring = Eigen::Vector3d::Zero();      // m
+  bool sliding = false;  // |tangential| at the Coulomb limit (kSlidingTolerance)
 };
+
+// A contact slides when |f_t| >= (1 - kSlidingTolerance) mu |f_n| > 0: the limit is applied by
+// rescaling, so a contact that slid in the last step sits on it up to its dashpot's share of
+// the difference between the predicted and the final velocity (tiny at quasi-static rates).
+inline constexpr double kSlidingTolerance = 1e-6;
 
 // Iterative rattler removal: true for particles that keep at least `min_contacts` contacts
 // among non-rattlers. Pure function of the contact list, so it is unit-testable.

@@ -50,6 +50,9 @@ Envelope minimisation_envelope(const DemSystem& state, double amplitude,
                                const std::vector<double>& theta_deg, const ProbeOptions& options);
 // The linear response of the state (its positions, radii and cell) and its envelope.
 PackingData packing_of(const DemSystem& state);
+// Positions, radii and cell alone, with or without friction: for the geometry of contacts
+// (the fabric split of a dynamic probe), never for a contact law.
+PackingData geometry_of(const DemSystem& state);
 Envelope linear_response_envelope(const DemSystem& state, double amplitude,
                                   const std::vector<double>& theta_deg, const ProbeOptions& options,
                                   LinearResponse* response = nullptr);

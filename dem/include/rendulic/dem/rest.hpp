@@ -7,7 +7,9 @@
 //  - bring_to_rest(): a snapshot relaxed dynamically (the seed's relaxation, relax()) and then
 //    brought to its nearest energy minimum at the fixed cell by FIRE (probe_minimise.hpp), so
 //    that its stress, fabric, contacts, linear response and every envelope refer to one
-//    configuration at rest.
+//    configuration at rest. A frictional packing has no energy to minimise (its tangential
+//    springs depend on the history), so it is relaxed dynamically alone, on until the force
+//    balance of its contact forces, tangential ones included, holds (or the time cap).
 #pragma once
 
 #include "rendulic/dem/dem_system.hpp"
@@ -26,11 +28,21 @@ struct ForceBalance {
   double ratio = 0.0;               // max_net_force / mean_contact_force; 0 without contacts
   int non_rattlers = 0;             // particles with >= 4 contacts among non-rattlers
   int contacts = 0;                 // contacts between non-rattlers
+  // Frictional packings: the largest |net torque| on a non-rattler (N m) and it over the mean
+  // contact force times <r>; zero without friction.
+  double max_net_torque = 0.0;
+  double torque_ratio = 0.0;
 };
 // Contacts are pairs with overlap > 0 under the linear law f = k delta (the static force of a
 // state at rest); rattlers are removed iteratively (fewer than 4 contacts, measures.hpp). The
 // net force on a non-rattler sums all its contacts, those with rattlers included.
 ForceBalance force_balance(const PackingData& packing, double k);
+// Fewer contacts than this make a rattler of a frictional packing in force_balance(DemSystem).
+inline constexpr int kFrictionalMinContacts = 2;
+// The same criterion on the engine's own contact forces (normal, with the dashpot of the
+// current velocities, and tangential) and torques: the balance of a frictional packing, whose
+// rattlers have fewer than kFrictionalMinContacts contacts (4 without friction).
+ForceBalance force_balance(const DemSystem& sys);
 
 struct RestOptions {
   RelaxOptions relax;  // the dynamic relaxation first
@@ -50,7 +62,10 @@ struct RestSummary {
 // Relaxes `sys` dynamically, then minimises its energy at the fixed cell and puts the state
 // at the minimum: positions there (wrapped into the cell), velocities zero, forces and the
 // neighbour list recomputed from there; clock, strain and step count are kept. Throws
-// std::runtime_error if FIRE does not converge.
+// std::runtime_error if FIRE does not converge. With friction (no energy to minimise): the
+// dynamic relaxation, continued until force_balance(sys) is below kEquilibrium or the
+// relaxation's time cap is spent, then velocities zero; `minimised` stays empty and
+// `at_rest` is the balance of the forces and torques there (the caller judges it).
 RestSummary bring_to_rest(DemSystem& sys, const RestOptions& options);
 
 }  // namespace rendulic::dem
