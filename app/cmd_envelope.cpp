@@ -19,9 +19,9 @@
 namespace rendulic::app {
 namespace {
 
-nlohmann::ordered_json pairs(const Eigen::Matrix<double, Eigen::Dynamic, 2>& m) {
+nlohmann::ordered_json pairs(const std::vector<Eigen::Vector2d>& v) {
   nlohmann::ordered_json a = nlohmann::ordered_json::array();
-  for (int i = 0; i < m.rows(); ++i) a.push_back({m(i, 0), m(i, 1)});
+  for (const auto& p : v) a.push_back({p(0), p(1)});
   return a;
 }
 
@@ -66,7 +66,7 @@ models::StepOptions step_options_for(const std::string& scheme, double tolerance
   return step;
 }
 
-models::ModelEnvelope envelope_for(const EnvelopeRequest& o, std::string* law_name) {
+EnvelopeRecord envelope_for(const EnvelopeRequest& o, std::string* law_name) {
   const std::unique_ptr<models::Law> law = law_for(o.model, o.umat, o.params, o.params_is_text);
   const models::MaterialState state = state_for(*law, o.state, o.state_is_text);
   if (o.method != "integrated" && o.method != "rate")
@@ -79,22 +79,26 @@ models::ModelEnvelope envelope_for(const EnvelopeRequest& o, std::string* law_na
   opt.step = step_options_for(o.scheme, o.tolerance, o.substeps);
   std::string why;
   if (!opt.IsValid(&why)) throw InputError("envelope options: " + why);
-  models::ModelEnvelope env = models::model_envelope(*law, state, opt);
-  if (!env.success)
+  try {
+    EnvelopeRecord env = models::model_envelope(*law, state, opt);
+    if (law_name) *law_name = std::string(law->name());
+    return env;
+  } catch (const InputError& e) {
     throw InputError("envelope of " + o.model + " at " + (o.state_is_text ? "the state" : o.state) +
-                     ": " + env.reason);
-  if (law_name) *law_name = std::string(law->name());
-  return env;
+                     ": " + e.what());
+  }
 }
 
 namespace {
 
 int run_envelope(const EnvelopeRequest& o, bool json) {
   std::string law_name;
-  const models::ModelEnvelope env = envelope_for(o, &law_name);
-  if (!env.within_tolerance)
+  const EnvelopeRecord env = envelope_for(o, &law_name);
+  const double max_error_estimate = env.attributes.at("max_error_estimate");
+  const bool within_tolerance = env.attributes.at("within_tolerance") != 0.0;
+  if (!within_tolerance)
     std::cerr << "rendulic: warning: explicit probes exceeded the tolerance " << o.tolerance
-              << " (largest local error estimate " << env.max_error_estimate
+              << " (largest local error estimate " << max_error_estimate
               << "); use --scheme modified-euler\n";
 
   if (json) {
@@ -105,10 +109,9 @@ int run_envelope(const EnvelopeRequest& o, bool json) {
     j["method"] = o.method;
     j["scheme"] = o.scheme;
     j["tolerance"] = o.tolerance;
-    j["max_error_estimate"] = env.max_error_estimate;
-    j["within_tolerance"] = env.within_tolerance;
-    j["theta_deg"] =
-        std::vector<double>(env.theta_deg.data(), env.theta_deg.data() + env.theta_deg.size());
+    j["max_error_estimate"] = max_error_estimate;
+    j["within_tolerance"] = within_tolerance;
+    j["theta_deg"] = env.theta_deg;
     j["strain"] = pairs(env.strain);
     j["stress"] = pairs(env.stress);
     j["fabric"] = pairs(env.fabric);
@@ -121,10 +124,10 @@ int run_envelope(const EnvelopeRequest& o, bool json) {
   std::printf("# Rendulic pairs (sqrt2 lateral, axial); stress in Pa\n");
   std::printf("%10s %14s %14s %16s %16s %14s %14s\n", "theta_deg", "strain_x", "strain_y",
               "stress_x", "stress_y", "fabric_x", "fabric_y");
-  for (int i = 0; i < env.theta_deg.size(); ++i)
-    std::printf("%10.4f %14.6e %14.6e %16.8e %16.8e %14.6e %14.6e\n", env.theta_deg(i),
-                env.strain(i, 0), env.strain(i, 1), env.stress(i, 0), env.stress(i, 1),
-                env.fabric(i, 0), env.fabric(i, 1));
+  for (std::size_t i = 0; i < env.size(); ++i)
+    std::printf("%10.4f %14.6e %14.6e %16.8e %16.8e %14.6e %14.6e\n", env.theta_deg[i],
+                env.strain[i](0), env.strain[i](1), env.stress[i](0), env.stress[i](1),
+                env.fabric[i](0), env.fabric[i](1));
   return 0;
 }
 

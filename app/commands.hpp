@@ -81,7 +81,7 @@ struct EnvelopeRequest {
   double tolerance = models::StepOptions{}.tolerance;
   int substeps = 1;
 };
-models::ModelEnvelope envelope_for(const EnvelopeRequest& request, std::string* law_name = nullptr);
+EnvelopeRecord envelope_for(const EnvelopeRequest& request, std::string* law_name = nullptr);
 // Its pieces: the law with its parameters (params empty: the defaults), the state, the driver's
 // step options.
 std::unique_ptr<models::Law> law_for(const std::string& model, const std::string& umat,

@@ -41,11 +41,11 @@ StateSummary analyse_state(const StateData& s) {
   out.f_dev = signed_deviator(s.fabric);
   out.eps_dev = s.eps_dev;
   out.volume_fraction = s.volume_fraction;
-  if (const EnvelopeData* e = s.elastic_envelope()) {
+  if (const EnvelopeRecord* e = s.elastic_envelope()) {
     out.elastic = fit_rendulic_stiffness(*e);
     out.has_elastic = out.elastic.ok;
   }
-  if (const EnvelopeData* e = s.plastic_envelope()) {
+  if (const EnvelopeRecord* e = s.plastic_envelope()) {
     out.plastic = plastic_features(*e);
     out.has_plastic = out.plastic.ok;
   }
@@ -187,12 +187,12 @@ CalibrationSummary calibrate(const CalibrationData& data, const CalibrationOptio
     }
     for (const auto& s : data.states) {
       if (hold.count(s.label)) continue;
-      const EnvelopeData* e = s.elastic_envelope();
+      const EnvelopeRecord* e = s.elastic_envelope();
       const double trf = s.fabric.trace();
       if (!e || !e->has_fabric() || !(trf > 0.0)) continue;
       // Elastic fabric response c_F tr(d_eps) F / tr(F): regression of the measured pairs.
-      for (int i = 0; i < e->size(); ++i) {
-        const Eigen::Vector2d unit = rendulic_pair(e->d_eps[i].trace() * s.fabric / trf);
+      for (std::size_t i = 0; i < e->size(); ++i) {
+        const Eigen::Vector2d unit = rendulic_pair(e->strain_tensor(i).trace() * s.fabric / trf);
         cf_num += unit.dot(e->fabric[i]);
         cf_den += unit.squaredNorm();
       }
@@ -372,7 +372,7 @@ CalibrationSummary calibrate(const CalibrationData& data, const CalibrationOptio
     bool all_ok = true;
     for (const auto& e : s.envelopes) {
       bool pok = false;
-      EnvelopeData pe = objective.predict_envelope(out.fit.params, s, e, &pok);
+      EnvelopeRecord pe = objective.predict_envelope(out.fit.params, s, e, &pok);
       all_ok = all_ok && pok;
       if (pok) st.predicted.push_back(std::move(pe));
     }

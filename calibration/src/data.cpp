@@ -13,34 +13,34 @@
 
 namespace rendulic::calibration {
 
-bool EnvelopeData::IsValid(std::string* why) const {
+bool is_valid_envelope(const EnvelopeRecord& e, std::string* why) {
   auto fail = [&](const std::string& m) {
-    if (why) *why = "envelope '" + name + "': " + m;
+    if (why) *why = "envelope '" + e.name + "': " + m;
     return false;
   };
-  const std::size_t m = stress.size();
+  const std::size_t m = e.stress.size();
   if (m < 3) return fail("fewer than 3 probe directions");
-  if (strain.size() != m || d_eps.size() != m || theta_deg.size() != m)
+  if (e.strain.size() != m || e.theta_deg.size() != m)
     return fail("strain, directions and stress have different lengths");
-  if (!fabric.empty() && fabric.size() != m) return fail("fabric and stress differ in length");
-  if (!(amplitude > 0.0) || !std::isfinite(amplitude)) return fail("amplitude must be > 0");
+  if (!e.fabric.empty() && e.fabric.size() != m) return fail("fabric and stress differ in length");
+  if (!(e.amplitude > 0.0) || !std::isfinite(e.amplitude)) return fail("amplitude must be > 0");
   for (std::size_t i = 0; i < m; ++i) {
-    if (!stress[i].allFinite() || !strain[i].allFinite() || !std::isfinite(theta_deg[i]) ||
-        (!fabric.empty() && !fabric[i].allFinite()))
+    if (!e.stress[i].allFinite() || !e.strain[i].allFinite() || !std::isfinite(e.theta_deg[i]) ||
+        (!e.fabric.empty() && !e.fabric[i].allFinite()))
       return fail(std::string("non-finite value in probe ") + std::to_string(i));
   }
   return true;
 }
 
-const EnvelopeData* StateData::elastic_envelope() const {
-  const EnvelopeData* best = nullptr;
+const EnvelopeRecord* StateData::elastic_envelope() const {
+  const EnvelopeRecord* best = nullptr;
   for (const auto& e : envelopes)
     if (e.elastic() && (!best || e.amplitude < best->amplitude)) best = &e;
   return best;
 }
 
-const EnvelopeData* StateData::plastic_envelope() const {
-  const EnvelopeData* best = nullptr;
+const EnvelopeRecord* StateData::plastic_envelope() const {
+  const EnvelopeRecord* best = nullptr;
   for (const auto& e : envelopes)
     if (!e.elastic() && (!best || e.amplitude > best->amplitude)) best = &e;
   return best;
@@ -66,16 +66,15 @@ bool LoadOptions::IsValid(std::string* why) const {
   return true;
 }
 
-EnvelopeData probe_set(const std::string& name, double amplitude, int directions) {
-  EnvelopeData e;
+EnvelopeRecord probe_set(const std::string& name, double amplitude, int directions) {
+  EnvelopeRecord e;
   e.name = name;
   e.method = "model";
   e.amplitude = amplitude;
   const Eigen::VectorXd th = probe_directions_deg(directions);
   for (int i = 0; i < directions; ++i) {
     e.theta_deg.push_back(th(i));
-    e.d_eps.push_back(probe_strain(th(i), amplitude));
-    e.strain.push_back(rendulic_pair(e.d_eps.back()));
+    e.strain.push_back(rendulic_pair(probe_strain(th(i), amplitude)));
   }
   return e;
 }
@@ -88,48 +87,36 @@ std::string join(const std::vector<std::string>& v) {
   return s.empty() ? "(none)" : s;
 }
 
-// The calibration's view of a stored envelope (core/envelope_record.hpp): stress pairs in Pa
-// (stress_star times /material k_star, or from the d_stress tensors of a file without pairs),
-// fabric pairs, strain pairs (or from the directions) and the directions (or from the strain).
-EnvelopeData envelope_data_of(const ResultsReader& r, const std::string& group,
-                              const std::string& name, double k_star) {
+// A stored envelope (core/envelope_record.hpp) with what the calibration works with filled
+// in: stress pairs in Pa (stress_star times /material k_star, or from the d_stress tensors of a
+// file without pairs), fabric pairs (or from d_fabric), strain pairs (or from the directions)
+// and the directions (or from the strain).
+EnvelopeRecord calibration_envelope(const ResultsReader& r, const std::string& group,
+                                    double k_star) {
   const std::string file = r.path().string();
   const double amplitude = r.attr_double(group, "amplitude");  // required here
-  const EnvelopeRecord record = read_envelope(r, group);
-  EnvelopeData e;
-  e.name = name;
+  EnvelopeRecord e = read_envelope(r, group);
   e.amplitude = amplitude;
-  e.method = record.method.empty() ? "unknown" : record.method;
-  if (!record.stress_star.empty()) {
-    for (const auto& p : record.stress_star) e.stress.push_back(p * k_star);
-  } else if (!record.d_stress.empty()) {
-    for (const auto& t : record.d_stress) e.stress.push_back(rendulic_pair(t));
+  if (e.method.empty()) e.method = "unknown";
+  e.stress.clear();
+  if (!e.stress_star.empty()) {
+    for (const auto& p : e.stress_star) e.stress.push_back(p * k_star);
+  } else if (!e.d_stress.empty()) {
+    for (const auto& t : e.d_stress) e.stress.push_back(rendulic_pair(t));
   } else {
     throw InputError(file + ": envelope " + group + " has neither stress_star nor d_stress");
   }
-  if (!record.fabric.empty()) {
-    e.fabric = record.fabric;
-  } else {
-    for (const auto& t : record.d_fabric) e.fabric.push_back(rendulic_pair(t));
+  if (e.fabric.empty())
+    for (const auto& t : e.d_fabric) e.fabric.push_back(rendulic_pair(t));
+  if (e.strain.empty()) {
+    if (e.theta_deg.empty())
+      throw InputError(file + ": envelope " + group + " has neither strain nor theta_deg");
+    for (double t : e.theta_deg) e.strain.push_back(rendulic_pair(probe_strain(t, e.amplitude)));
   }
-  if (!record.strain.empty()) {
-    e.strain = record.strain;
-  } else if (!record.theta_deg.empty()) {
-    for (double t : record.theta_deg)
-      e.strain.push_back(rendulic_pair(probe_strain(t, e.amplitude)));
-  } else {
-    throw InputError(file + ": envelope " + group + " has neither strain nor theta_deg");
-  }
-  if (!record.theta_deg.empty()) {
-    e.theta_deg = record.theta_deg;
-  } else {
+  if (e.theta_deg.empty())
     for (const auto& s : e.strain) e.theta_deg.push_back(probe_direction_deg(s));
-  }
-  // The probe is axisymmetric (docs/physics.md section 5), so its tensor is fixed by its Rendulic
-  // pair.
-  for (const auto& s : e.strain) e.d_eps.push_back(from_rendulic_pair(s));
   std::string why;
-  if (!e.IsValid(&why)) throw InputError(file + ": " + group + ": " + why);
+  if (!is_valid_envelope(e, &why)) throw InputError(file + ": " + group + ": " + why);
   return e;
 }
 
@@ -178,7 +165,7 @@ CalibrationData load_calibration_data(const std::filesystem::path& file,
       // An envelope that could not be measured (e.g. no linear response of an unstable
       // network) carries only an `error` attribute: there is nothing to fit.
       if (r.has_attr(paths::envelope(g, e), "error")) continue;
-      s.envelopes.push_back(envelope_data_of(r, paths::envelope(g, e), e, data.k_star));
+      s.envelopes.push_back(calibration_envelope(r, paths::envelope(g, e), data.k_star));
     }
     data.states.push_back(std::move(s));
   }

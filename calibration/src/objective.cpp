@@ -112,7 +112,7 @@ Eigen::Matrix<T, 2, 1> pair_of(const models::Mat3<T>& q) {
 
 struct EnvTask {
   int state = 0;  // index into Impl::states
-  EnvelopeData env;
+  EnvelopeRecord env;
   bool integrated = false;
   int stress_offset = -1, fabric_offset = -1, features_offset = -1, fabric_features_offset = -1;
   double stress_scale = 1.0, fabric_scale = 1.0;
@@ -132,11 +132,27 @@ struct KernelBase {
   virtual ~KernelBase() = default;
   virtual bool residuals(const double* z, double* r) const = 0;
   virtual ceres::CostFunction* cost_function() const = 0;
-  virtual bool envelope(const double* p, const StateData& s, const EnvelopeData& probes,
-                        bool integrated, EnvelopeData* out) const = 0;
+  virtual bool envelope(const double* p, const StateData& s, const EnvelopeRecord& probes,
+                        bool integrated, EnvelopeRecord* out) const = 0;
   virtual bool path(const double* p, PathData* out) const = 0;
 
  protected:
+  // A law's envelope over the data's probe set: the probes' name, amplitude, directions and
+  // strain with the law's pairs (stored as "model", docs/results.md "/calibration").
+  static EnvelopeRecord model_record(const EnvelopeRecord& probes,
+                                     std::vector<Eigen::Vector2d> stress,
+                                     std::vector<Eigen::Vector2d> fabric) {
+    EnvelopeRecord out;
+    out.name = probes.name;
+    out.method = "model";
+    out.amplitude = probes.amplitude;
+    out.theta_deg = probes.theta_deg;
+    out.strain = probes.strain;
+    out.stress = std::move(stress);
+    out.fabric = std::move(fabric);
+    return out;
+  }
+
   // The law's path states as PathData at the calibration's path samples.
   static void fill_path(const std::vector<models::MaterialState>& states, const PathData& data,
                         PathData* out) {
@@ -260,14 +276,11 @@ class Kernel final : public KernelBase {
     return f;
   }
 
-  bool envelope(const double* p, const StateData& s, const EnvelopeData& probes, bool integrated,
-                EnvelopeData* out) const override {
+  bool envelope(const double* p, const StateData& s, const EnvelopeRecord& probes, bool integrated,
+                EnvelopeRecord* out) const override {
     std::vector<Eigen::Vector2d> ps, pf;
-    *out = probes;
-    out->method = "model";
     if (!predict<double>(p, p, s, probes, integrated, &ps, &pf)) return false;
-    out->stress = ps;
-    out->fabric = pf;
+    *out = model_record(probes, std::move(ps), std::move(pf));
     return true;
   }
 
@@ -290,7 +303,7 @@ class Kernel final : public KernelBase {
   }
 
   template <typename T>
-  bool predict(const T* p, const double* pd, const StateData& s, const EnvelopeData& env,
+  bool predict(const T* p, const double* pd, const StateData& s, const EnvelopeRecord& env,
                bool integrated, std::vector<Eigen::Matrix<T, 2, 1>>* ps,
                std::vector<Eigen::Matrix<T, 2, 1>>* pf) const {
     const int m = env.size();
@@ -302,7 +315,8 @@ class Kernel final : public KernelBase {
     if (integrated) {
       const models::StaticLawOps<M, T> ops{p, pd};
       for (int i = 0; i < m; ++i) {
-        const auto res = models::integrate_adaptive(ops, st, env.d_eps[i], o_->options.step);
+        const auto res =
+            models::integrate_adaptive(ops, st, env.strain_tensor(i), o_->options.step);
         if (!res.success) return false;
         (*ps)[i] = pair_of<T>(models::Mat3<T>(res.end.stress - st.stress));
         (*pf)[i] = pair_of<T>(models::Mat3<T>(res.end.fabric - st.fabric));
@@ -310,7 +324,8 @@ class Kernel final : public KernelBase {
       return true;
     }
     for (int i = 0; i < m; ++i) {
-      const models::RateT<T> rt = M::template rate<T>(p, st, env.d_eps[i].template cast<T>());
+      const models::RateT<T> rt =
+          M::template rate<T>(p, st, env.strain_tensor(i).template cast<T>());
       (*ps)[i] = pair_of<T>(rt.d_stress);
       (*pf)[i] = pair_of<T>(rt.d_fabric);
     }
@@ -441,15 +456,12 @@ class UmatKernel final : public KernelBase {
 
   ceres::CostFunction* cost_function() const override { return new Cost(this); }
 
-  bool envelope(const double* p, const StateData& s, const EnvelopeData& probes, bool integrated,
-                EnvelopeData* out) const override {
+  bool envelope(const double* p, const StateData& s, const EnvelopeRecord& probes, bool integrated,
+                EnvelopeRecord* out) const override {
     std::vector<Eigen::Vector2d> ps, pf;
-    *out = probes;
-    out->method = "model";
     std::size_t next = 0;
     if (!predict(with(p), s, probes, integrated, {nullptr, false, &next}, &ps, &pf)) return false;
-    out->stress = ps;
-    out->fabric = pf;
+    *out = model_record(probes, std::move(ps), std::move(pf));
     return true;
   }
 
@@ -493,7 +505,7 @@ class UmatKernel final : public KernelBase {
     return law.integrate(y, de, o_->options.step, end, s).success;
   }
 
-  bool predict(const models::UmatLaw& law, const StateData& s, const EnvelopeData& env,
+  bool predict(const models::UmatLaw& law, const StateData& s, const EnvelopeRecord& env,
                bool integrated, const Schedules& sc, std::vector<Eigen::Vector2d>* ps,
                std::vector<Eigen::Vector2d>* pf) const {
     const int m = env.size();
@@ -505,11 +517,11 @@ class UmatKernel final : public KernelBase {
       Eigen::Matrix3d ds;
       if (integrated) {
         models::UmatState end;
-        if (!integrate(law, us, env.d_eps[i], sc, &end)) return false;
+        if (!integrate(law, us, env.strain_tensor(i), sc, &end)) return false;
         ds = end.point.stress - st.stress;
       } else {
         models::LawRate r;
-        if (!law.rate_checked(st, env.d_eps[i], &r, nullptr)) return false;
+        if (!law.rate_checked(st, env.strain_tensor(i), &r, nullptr)) return false;
         ds = r.d_stress;
       }
       (*ps)[i] = rendulic_pair(ds);
@@ -649,7 +661,7 @@ Objective::Objective(std::string law_name, const CalibrationData& data,
     o.states.push_back(*s);
     const int si = static_cast<int>(o.states.size()) - 1;
     for (const auto& env : s->envelopes) {
-      if (!env.IsValid(&why)) throw InputError("state '" + label + "': " + why);
+      if (!is_valid_envelope(env, &why)) throw InputError("state '" + label + "': " + why);
       if (env.elastic() ? !options.elastic_envelopes : !options.plastic_envelopes) continue;
       // The linear response at a larger amplitude is the elastic one scaled: it repeats the
       // elastic block and carries no elasto-plastic information.
@@ -798,9 +810,9 @@ bool Objective::jacobian(const double* z, Eigen::VectorXd* r, Eigen::MatrixXd* J
   return J->allFinite();
 }
 
-EnvelopeData Objective::predict_envelope(const std::vector<double>& p, const StateData& state,
-                                         const EnvelopeData& probes, bool* ok) const {
-  EnvelopeData out;
+EnvelopeRecord Objective::predict_envelope(const std::vector<double>& p, const StateData& state,
+                                           const EnvelopeRecord& probes, bool* ok) const {
+  EnvelopeRecord out;
   const bool integrated = impl_->options.prediction == Prediction::kIntegrated ||
                           (impl_->options.prediction == Prediction::kAuto && !probes.elastic());
   *ok = impl_->kernel->envelope(p.data(), state, probes, integrated, &out);

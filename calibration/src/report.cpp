@@ -233,14 +233,9 @@ void write_calibration(ResultsWriter& out, const CalibrationSummary& s) {
       // The law's envelope is stored as the DEM's beside it, by the one writer: starred with the
       // file's k* (docs/results.md "Units"), or with k* = 1 Pa (stress_star in Pa) for data
       // that came without one.
-      EnvelopeRecord record;
-      record.method = "model";
-      record.amplitude = pe.amplitude;
+      EnvelopeRecord record = pe;
       record.k_star = s.k_star > 0 ? s.k_star : 1.0;
-      record.theta_deg = pe.theta_deg;
-      record.strain = pe.strain;
       for (const auto& p : pe.stress) record.stress_star.push_back(p / record.k_star);
-      record.fabric = pe.fabric;
       write_envelope(out, paths::envelope(sg, pe.name), record);
     }
   }

@@ -34,10 +34,11 @@ void set_ellipse(const Eigen::Matrix2d& M, double* a, double* b, double* inclina
 
 }  // namespace
 
-RendulicStiffness fit_rendulic_stiffness(const EnvelopeData& env, const StiffnessOptions& options) {
+RendulicStiffness fit_rendulic_stiffness(const EnvelopeRecord& env,
+                                         const StiffnessOptions& options) {
   RendulicStiffness out;
   std::string why;
-  if (!env.IsValid(&why)) {
+  if (!is_valid_envelope(env, &why)) {
     out.note = why;
     return out;
   }
@@ -94,11 +95,11 @@ RendulicStiffness fit_rendulic_stiffness(const EnvelopeData& env, const Stiffnes
   return out;
 }
 
-PlasticFeatures plastic_features(const EnvelopeData& env) {
+PlasticFeatures plastic_features(const EnvelopeRecord& env) {
   PlasticFeatures out;
   out.amplitude = env.amplitude;
   std::string why;
-  if (!env.IsValid(&why)) {
+  if (!is_valid_envelope(env, &why)) {
     out.note = why;
     return out;
   }

@@ -60,6 +60,7 @@ EnvelopeRecord read_envelope(const ResultsReader& in, const std::string& group) 
   const std::string where = in.path().string() + ": envelope " + group;
   if (!in.exists(group)) throw InputError(in.path().string() + ": no envelope at " + group);
   EnvelopeRecord env;
+  env.name = group.substr(group.find_last_of('/') + 1);
   env.amplitude = in.has_attr(group, "amplitude") ? in.attr_double(group, "amplitude")
                                                   : std::numeric_limits<double>::quiet_NaN();
   if (in.has_attr(group, "method")) env.method = in.attr_string(group, "method");

@@ -9,7 +9,8 @@ void EnvelopeRecord::add(double theta, const Eigen::Matrix3d& d_eps, const Eigen
                          const Eigen::Matrix3d& d_f) {
   theta_deg.push_back(theta);
   strain.push_back(rendulic_pair(d_eps));
-  stress_star.push_back(rendulic_pair(d_sigma) / k_star);
+  stress.push_back(rendulic_pair(d_sigma));
+  stress_star.push_back(stress.back() / k_star);
   fabric.push_back(rendulic_pair(d_f));
   d_stress.push_back(d_sigma);
   d_fabric.push_back(d_f);

@@ -1,8 +1,10 @@
 // Model envelopes over the DEM probe set (envelope.hpp; docs/physics.md section 5).
 #include "rendulic/models/envelope.hpp"
 
+#include <algorithm>
 #include <cmath>
 
+#include "rendulic/core/errors.hpp"
 #include "rendulic/models/umat.hpp"
 
 namespace rendulic::models {
@@ -17,60 +19,53 @@ bool EnvelopeOptions::IsValid(std::string* why) const {
   return step.IsValid(why);
 }
 
-ModelEnvelope model_envelope(const Law& law, const MaterialState& state,
-                             const EnvelopeOptions& options) {
-  ModelEnvelope env;
+EnvelopeRecord model_envelope(const Law& law, const MaterialState& state,
+                              const EnvelopeOptions& options) {
   std::string why;
-  if (!options.IsValid(&why)) {
-    env.reason = "invalid envelope options: " + why;
-    return env;
-  }
-  if (!law.admissible(state, &why)) {
-    env.reason = "start state: " + why;
-    return env;
-  }
+  if (!options.IsValid(&why)) throw InputError("invalid envelope options: " + why);
+  if (!law.admissible(state, &why)) throw InputError("start state: " + why);
   // A UMAT's rate is DDSDDE : d_eps; its failures name the UMAT's increment (umat.hpp).
   const auto* umat = dynamic_cast<const UmatLaw*>(&law);
   const int m = options.directions;
-  env.theta_deg = probe_directions_deg(m);
-  env.strain.resize(m, 2);
-  env.stress.resize(m, 2);
-  env.fabric.resize(m, 2);
-  env.d_stress.resize(m);
-  env.d_fabric.resize(m);
+  const Eigen::VectorXd theta = probe_directions_deg(m);
+  EnvelopeRecord env;
+  env.method = "model";
+  env.amplitude = options.amplitude;
+  double max_error_estimate = 0.0;
+  bool within_tolerance = true;
+  int total_substeps = 0;
   for (int i = 0; i < m; ++i) {
-    const Eigen::Matrix3d de = probe_strain(env.theta_deg(i), options.amplitude);
+    const std::string probe = "probe theta = " + format_g(theta(i)) + " deg: ";
+    const Eigen::Matrix3d de = probe_strain(theta(i), options.amplitude);
+    Eigen::Matrix3d d_stress, d_fabric;
     if (options.method == EnvelopeMethod::kRate) {
       LawRate r;
-      if (umat && !umat->rate_checked(state, de, &r, &why)) {
-        env.reason = "probe theta = " + format_g(env.theta_deg(i)) + " deg: " + why;
-        return env;
-      }
+      if (umat && !umat->rate_checked(state, de, &r, &why)) throw InputError(probe + why);
       if (!umat) r = law.rate(state, de);
-      env.d_stress[i] = r.d_stress;
-      env.d_fabric[i] = r.d_fabric;
-      ++env.total_substeps;
+      d_stress = r.d_stress;
+      d_fabric = r.d_fabric;
+      ++total_substeps;
     } else {
       const StepResult res = integrate(law, state, de, options.step);
-      if (!res.success) {
-        env.reason = "probe theta = " + format_g(env.theta_deg(i)) + " deg: " + res.reason;
-        return env;
-      }
-      env.d_stress[i] = res.end.stress - state.stress;
-      env.d_fabric[i] = res.end.fabric - state.fabric;
-      env.max_error_estimate = std::max(env.max_error_estimate, res.error_estimate);
-      env.within_tolerance = env.within_tolerance && res.within_tolerance;
-      env.total_substeps += res.substeps;
+      if (!res.success) throw InputError(probe + res.reason);
+      d_stress = res.end.stress - state.stress;
+      d_fabric = res.end.fabric - state.fabric;
+      max_error_estimate = std::max(max_error_estimate, res.error_estimate);
+      within_tolerance = within_tolerance && res.within_tolerance;
+      total_substeps += res.substeps;
     }
-    if (!env.d_stress[i].allFinite() || !env.d_fabric[i].allFinite()) {
-      env.reason = "probe theta = " + format_g(env.theta_deg(i)) + " deg: non-finite response";
-      return env;
-    }
-    env.strain.row(i) = rendulic_pair(de).transpose();
-    env.stress.row(i) = rendulic_pair(env.d_stress[i]).transpose();
-    env.fabric.row(i) = rendulic_pair(env.d_fabric[i]).transpose();
+    if (!d_stress.allFinite() || !d_fabric.allFinite())
+      throw InputError(probe + "non-finite response");
+    env.theta_deg.push_back(theta(i));
+    env.strain.push_back(rendulic_pair(de));
+    env.stress.push_back(rendulic_pair(d_stress));
+    env.fabric.push_back(rendulic_pair(d_fabric));
+    env.d_stress.push_back(d_stress);
+    env.d_fabric.push_back(d_fabric);
   }
-  env.success = true;
+  env.attributes["max_error_estimate"] = max_error_estimate;
+  env.attributes["within_tolerance"] = within_tolerance ? 1.0 : 0.0;
+  env.attributes["total_substeps"] = total_substeps;
   return env;
 }
 

@@ -440,18 +440,18 @@ std::vector<Eigen::Vector2d> points_of(const py::object& x, const char* what) {
   return out;
 }
 
-py::dict model_envelope_dict(const models::ModelEnvelope& env, const std::string& law_name) {
+py::dict model_envelope_dict(const EnvelopeRecord& env, const std::string& law_name) {
   py::dict d;
   d["model"] = law_name;
-  d["theta_deg"] = py::array_t<double>(env.theta_deg.size(), env.theta_deg.data());
-  d["strain"] = matrix_of(env.strain);
-  d["stress"] = matrix_of(env.stress);
-  d["fabric"] = matrix_of(env.fabric);
+  d["theta_deg"] = array_of(env.theta_deg);
+  d["strain"] = pairs_of(env.strain);
+  d["stress"] = pairs_of(env.stress);
+  d["fabric"] = pairs_of(env.fabric);
   d["d_stress"] = tensors_of(env.d_stress);
   d["d_fabric"] = tensors_of(env.d_fabric);
-  d["max_error_estimate"] = env.max_error_estimate;
-  d["within_tolerance"] = env.within_tolerance;
-  d["total_substeps"] = env.total_substeps;
+  d["max_error_estimate"] = env.attributes.at("max_error_estimate");
+  d["within_tolerance"] = env.attributes.at("within_tolerance") != 0.0;
+  d["total_substeps"] = static_cast<int>(env.attributes.at("total_substeps"));
   return d;
 }
 
@@ -547,7 +547,7 @@ PYBIND11_MODULE(_rendulic, m) {
         r.tolerance = tolerance;
         r.substeps = substeps;
         std::string name;
-        models::ModelEnvelope env;
+        EnvelopeRecord env;
         {
           py::gil_scoped_release release;
           env = app::envelope_for(r, &name);

@@ -136,6 +136,8 @@ TEST(CalibrateCli, LoaderReadsAFileStillBeingWritten) {
   }
   const CalibrationData d = load_calibration_data(w.temporary_path());
   EXPECT_EQ(d.states.size(), 4u);
+  EXPECT_EQ(d.states[0].envelopes[0].name, "elastic");
+  EXPECT_EQ(d.states[0].envelopes[0].method, "unknown");  // the file names none
   EXPECT_NEAR(d.states[0].envelopes[0].stress[3].norm() /
                   (r.read_pairs("/states/s0/envelopes/elastic/stress_star")[3].norm() * kKStar),
               1.0, 1e-12);

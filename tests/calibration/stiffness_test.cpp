@@ -33,8 +33,8 @@ models::MaterialState state_of(const models::Law& law, double p_ax, double p_lat
 TEST(Stiffness, IsotropicLawGivesTheClosedFormEllipse) {
   const auto law = law_with("isotropic_elastic", {{"K", 2e10}, {"G", 3e9}});
   std::mt19937 rng(1);
-  const EnvelopeData e = testing::envelope_of(*law, state_of(*law, 1e9, 1e9, 1.8, 1.8), "el", 5e-5,
-                                              36, models::EnvelopeMethod::kRate, {}, &rng);
+  const EnvelopeRecord e = testing::envelope_of(*law, state_of(*law, 1e9, 1e9, 1.8, 1.8), "el",
+                                                5e-5, 36, models::EnvelopeMethod::kRate, {}, &rng);
   const RendulicStiffness s = fit_rendulic_stiffness(e);
   ASSERT_TRUE(s.ok) << s.note;
   EXPECT_NEAR(s.B / 2e10, 1.0, kExact);
@@ -52,7 +52,7 @@ TEST(Stiffness, AnisotropicLawGivesAAndTheTilt) {
   const auto law = law_with("anisotropic_elastic", {{"B", B}, {"G", G}, {"beta_A", beta_a}});
   const models::MaterialState st = state_of(*law, 1.3e9, 1.9e9, 1.4, 2.0);
   std::mt19937 rng(1);
-  const EnvelopeData e =
+  const EnvelopeRecord e =
       testing::envelope_of(*law, st, "el", 5e-5, 36, models::EnvelopeMethod::kRate, {}, &rng);
   const RendulicStiffness s = fit_rendulic_stiffness(e);
   ASSERT_TRUE(s.ok);
@@ -90,8 +90,8 @@ TEST(Stiffness, StandardErrorsMatchTheScatterOfNoisyFits) {
   const int trials = 200;
   double sum = 0, sum2 = 0, reported = 0;
   for (int t = 0; t < trials; ++t) {
-    const EnvelopeData e = testing::envelope_of(*law, st, "el", 5e-5, 36,
-                                                models::EnvelopeMethod::kRate, {0.02, 0}, &rng);
+    const EnvelopeRecord e = testing::envelope_of(*law, st, "el", 5e-5, 36,
+                                                  models::EnvelopeMethod::kRate, {0.02, 0}, &rng);
     const RendulicStiffness s = fit_rendulic_stiffness(e);
     sum += s.G;
     sum2 += s.G * s.G;
@@ -107,7 +107,7 @@ TEST(Stiffness, HypoplasticCentreShiftIsNTimesTheAmplitude) {
   const models::MaterialState st = state_of(*law, 1.2e6, 2e6, 0, 0);
   std::mt19937 rng(1);
   const double amp = 2e-3;
-  const EnvelopeData e =
+  const EnvelopeRecord e =
       testing::envelope_of(*law, st, "pl", amp, 36, models::EnvelopeMethod::kRate, {}, &rng);
   const PlasticFeatures f = plastic_features(e);
   ASSERT_TRUE(f.ok) << f.note;
@@ -121,7 +121,7 @@ TEST(Stiffness, HypoplasticCentreShiftIsNTimesTheAmplitude) {
 }
 
 TEST(Stiffness, TooFewDirectionsIsReportedNotGuessed) {
-  EnvelopeData e = probe_set("two", 5e-5, 2);
+  EnvelopeRecord e = probe_set("two", 5e-5, 2);
   e.stress = {Eigen::Vector2d(1, 2), Eigen::Vector2d(3, 4)};
   const RendulicStiffness s = fit_rendulic_stiffness(e);
   EXPECT_FALSE(s.ok);

@@ -35,22 +35,21 @@ struct NoiseSpec {
   unsigned seed = 7;
 };
 
-inline EnvelopeData envelope_of(const models::Law& law, const models::MaterialState& st,
-                                const std::string& name, double amplitude, int directions,
-                                models::EnvelopeMethod method, const NoiseSpec& noise,
-                                std::mt19937* rng) {
+inline EnvelopeRecord envelope_of(const models::Law& law, const models::MaterialState& st,
+                                  const std::string& name, double amplitude, int directions,
+                                  models::EnvelopeMethod method, const NoiseSpec& noise,
+                                  std::mt19937* rng) {
   models::EnvelopeOptions eo;
   eo.amplitude = amplitude;
   eo.directions = directions;
   eo.method = method;
   eo.step.tolerance = 1e-12;
-  const models::ModelEnvelope me = models::model_envelope(law, st, eo);
-  if (!me.success) throw std::runtime_error("synthetic envelope: " + me.reason);
-  EnvelopeData e = probe_set(name, amplitude, directions);
+  const EnvelopeRecord me = models::model_envelope(law, st, eo);
+  EnvelopeRecord e = probe_set(name, amplitude, directions);
   double s2 = 0.0, f2 = 0.0;
   for (int i = 0; i < directions; ++i) {
-    e.stress.push_back(me.stress.row(i).transpose());
-    e.fabric.push_back(me.fabric.row(i).transpose());
+    e.stress.push_back(me.stress[i]);
+    e.fabric.push_back(me.fabric[i]);
     s2 += e.stress.back().squaredNorm();
     f2 += e.fabric.back().squaredNorm();
   }

@@ -30,12 +30,12 @@ inline void write_results(ResultsWriter& w, const CalibrationData& data, double 
       const std::string eg = g + "/envelopes/" + e.name;
       w.attr(eg, "amplitude", e.amplitude);
       w.attr(eg, "method", "linear_response");
-      w.attr(eg, "directions", std::int64_t{e.size()});
+      w.attr(eg, "directions", static_cast<std::int64_t>(e.size()));
       w.write(eg + "/theta_deg", e.theta_deg);
       w.write(eg + "/strain", e.strain);
       std::vector<Eigen::Vector2d> star;
       std::vector<Eigen::Matrix3d> ds, df;
-      for (int i = 0; i < e.size(); ++i) {
+      for (std::size_t i = 0; i < e.size(); ++i) {
         star.push_back(e.stress[i] / k_star);
         ds.push_back(from_rendulic_pair(e.stress[i]));
         df.push_back(from_rendulic_pair(e.fabric[i]));

@@ -48,15 +48,15 @@ TEST(Yardstick, BlockMisfitIsTheRelativeRmsOfTheStoredPrediction) {
   int checked = 0;
   for (const auto& b : s.score.blocks) {
     const StateData& st = *d.find(b.state);
-    const EnvelopeData& data = st.envelopes[0];
+    const EnvelopeRecord& data = st.envelopes[0];
     const StateSummary* ss = nullptr;
     for (const auto& x : s.states)
       if (x.label == b.state) ss = &x;
     ASSERT_TRUE(ss && !ss->predicted.empty());
-    const EnvelopeData& pred = ss->predicted[0];
+    const EnvelopeRecord& pred = ss->predicted[0];
     const bool stress = b.kind == "stress_elastic";
     double diff2 = 0.0, data2 = 0.0;
-    for (int i = 0; i < data.size(); ++i) {
+    for (std::size_t i = 0; i < data.size(); ++i) {
       const Eigen::Vector2d dv = stress ? data.stress[i] : data.fabric[i];
       const Eigen::Vector2d pv = stress ? pred.stress[i] : pred.fabric[i];
       diff2 += (pv - dv).squaredNorm();

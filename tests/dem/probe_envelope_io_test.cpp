@@ -52,9 +52,13 @@ TEST(EnvelopeIo, RoundTripWithTheContractNames) {
   EXPECT_EQ(in.shape(group + "/d_stress"), (std::vector<std::uint64_t>{5, 3, 3}));
   EXPECT_EQ(in.shape(group + "/strain"), (std::vector<std::uint64_t>{5, 2}));
   const Envelope back = read_envelope(in, group);
+  EXPECT_EQ(back.name, "elastic_dynamic");  // the group's last part
   EXPECT_EQ(back.method, env.method);
   EXPECT_EQ(back.theta_deg, env.theta_deg);
   for (std::size_t i = 0; i < env.size(); ++i) {
+    // The pairs in Pa are in memory only: the starred ones are they divided by k*.
+    EXPECT_EQ(env.stress[i], rendulic_pair(env.d_stress[i]));
+    EXPECT_EQ(env.stress_star[i], env.stress[i] / env.k_star);
     EXPECT_EQ(back.strain[i], env.strain[i]);
     EXPECT_EQ(back.stress_star[i], env.stress_star[i]);
     EXPECT_EQ(back.fabric[i], env.fabric[i]);

@@ -7,6 +7,7 @@
 
 #include <Eigen/Dense>
 #include <cmath>
+#include <vector>
 
 namespace rendulic::models::testing {
 
@@ -40,6 +41,18 @@ inline AffineEllipse ellipse_of(const Eigen::Matrix<double, Eigen::Dynamic, 2>& 
   while (deg >= 180.0) deg -= 180.0;
   e.inclination_deg = deg;
   return e;
+}
+
+// The pairs of an envelope record (core/envelope_record.hpp) as the rows of a matrix.
+inline Eigen::Matrix<double, Eigen::Dynamic, 2> rows_of(const std::vector<Eigen::Vector2d>& v) {
+  Eigen::Matrix<double, Eigen::Dynamic, 2> m(static_cast<Eigen::Index>(v.size()), 2);
+  for (std::size_t i = 0; i < v.size(); ++i) m.row(static_cast<Eigen::Index>(i)) = v[i];
+  return m;
+}
+
+inline AffineEllipse ellipse_of(const std::vector<Eigen::Vector2d>& strain,
+                                const std::vector<Eigen::Vector2d>& response) {
+  return ellipse_of(rows_of(strain), rows_of(response));
 }
 
 }  // namespace rendulic::models::testing

@@ -10,6 +10,7 @@
 #include <cmath>
 
 #include "ellipse_of.hpp"
+#include "rendulic/core/errors.hpp"
 #include "rendulic/models/hypoplastic_wu.hpp"
 #include "rendulic/models/paths.hpp"
 
@@ -17,34 +18,71 @@ namespace rendulic::models {
 namespace {
 
 using testing::ellipse_of;
+using testing::rows_of;
 
 // Linear laws give affine responses up to rounding: 1e-9 relative leaves six orders of margin
 // over double rounding through a few hundred flops, and angles to 1e-7 deg.
 constexpr double kExact = 1e-9;
 constexpr double kAngleTol = 1e-7;
 
-ModelEnvelope run(const Law& law, const MaterialState& s, double amplitude,
-                  EnvelopeMethod method = EnvelopeMethod::kIntegrated) {
+EnvelopeRecord run(const Law& law, const MaterialState& s, double amplitude,
+                   EnvelopeMethod method = EnvelopeMethod::kIntegrated) {
   EnvelopeOptions o;
   o.amplitude = amplitude;
   o.method = method;
-  ModelEnvelope env = model_envelope(law, s, o);
-  EXPECT_TRUE(env.success) << env.reason;
-  return env;
+  return model_envelope(law, s, o);
 }
 
 TEST(Envelope, UsesTheDemProbeSet) {
   auto law = make_law("isotropic_elastic");
   const MaterialState s =
       law->make_state(Eigen::Matrix3d::Identity() * 1e9, Eigen::Matrix3d::Zero(), 0.82);
-  const ModelEnvelope env = run(*law, s, 5e-5);
-  ASSERT_EQ(env.theta_deg.size(), 36);
+  const EnvelopeRecord env = run(*law, s, 5e-5);
+  ASSERT_EQ(env.size(), 36u);
   const Eigen::VectorXd dirs = probe_directions_deg(36);
   for (int i = 0; i < 36; ++i) {
-    EXPECT_EQ(env.theta_deg(i), dirs(i));
-    EXPECT_NEAR(env.strain(i, 0), 5e-5 * std::cos(deg_to_rad(dirs(i))), 1e-20);
-    EXPECT_NEAR(env.strain(i, 1), 5e-5 * std::sin(deg_to_rad(dirs(i))), 1e-20);
+    EXPECT_EQ(env.theta_deg[i], dirs(i));
+    EXPECT_NEAR(env.strain[i](0), 5e-5 * std::cos(deg_to_rad(dirs(i))), 1e-20);
+    EXPECT_NEAR(env.strain[i](1), 5e-5 * std::sin(deg_to_rad(dirs(i))), 1e-20);
   }
+}
+
+// The record carries the tensors behind its pairs and the driver's report; a probe that cannot
+// be followed is an InputError naming its cause, not a record with holes.
+TEST(Envelope, IsARecordWithItsTensorsAndTheDriversReport) {
+  auto law = make_law("isotropic_elastic");
+  const MaterialState s =
+      law->make_state(Eigen::Matrix3d::Identity() * 1e9, Eigen::Matrix3d::Zero(), 0.82);
+  const EnvelopeRecord rate = run(*law, s, 5e-5, EnvelopeMethod::kRate);
+  EXPECT_EQ(rate.method, "model");
+  EXPECT_EQ(rate.amplitude, 5e-5);
+  EXPECT_TRUE(rate.stress_star.empty());  // no k*: the pairs are in Pa in `stress`
+  ASSERT_EQ(rate.d_stress.size(), rate.size());
+  ASSERT_EQ(rate.d_fabric.size(), rate.size());
+  for (std::size_t i = 0; i < rate.size(); ++i) {
+    EXPECT_EQ(rate.stress[i], rendulic_pair(rate.d_stress[i]));
+    EXPECT_EQ(rate.fabric[i], rendulic_pair(rate.d_fabric[i]));
+    // The tensor of an axisymmetric probe follows from its pair (the calibration's probes).
+    EXPECT_LE((rate.strain_tensor(i) - probe_strain(rate.theta_deg[i], 5e-5)).norm(), 1e-20);
+  }
+  EXPECT_EQ(rate.attributes.at("total_substeps"), 36.0);  // one rate evaluation per probe
+  EXPECT_EQ(rate.attributes.at("within_tolerance"), 1.0);
+  const EnvelopeRecord integrated = run(*law, s, 5e-5);
+  EXPECT_GE(integrated.attributes.at("total_substeps"), 36.0);
+  EXPECT_GE(integrated.attributes.at("max_error_estimate"), 0.0);
+
+  auto hypo = make_law("hypoplastic_wu");
+  const MaterialState t =
+      hypo->make_state(Eigen::Matrix3d::Identity() * -1e5, Eigen::Matrix3d::Zero(), 0.6);
+  try {
+    run(*hypo, t, 5e-5);
+    ADD_FAILURE() << "a start state in tension was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("start state"), std::string::npos) << e.what();
+  }
+  EnvelopeOptions bad;
+  bad.directions = 2;
+  EXPECT_THROW(model_envelope(*law, s, bad), InputError);
 }
 
 TEST(Envelope, IsotropicElasticIsTheClosedFormEllipse) {
@@ -52,7 +90,7 @@ TEST(Envelope, IsotropicElasticIsTheClosedFormEllipse) {
   const MaterialState s =
       law->make_state(Eigen::Matrix3d::Identity() * 1e9, Eigen::Matrix3d::Identity() * 2.0, 0.82);
   const double amp = 5e-5, k = law->parameter("K"), g = law->parameter("G");
-  const ModelEnvelope env = run(*law, s, amp);
+  const EnvelopeRecord env = run(*law, s, amp);
   const auto e = ellipse_of(env.strain, env.stress);
   EXPECT_NEAR(e.a, 3 * k * amp, kExact * 3 * k * amp);
   EXPECT_NEAR(e.b, 2 * g * amp, kExact * 3 * k * amp);
@@ -117,11 +155,10 @@ TEST(Envelope, RendulicTangentOfAnisotropicLawIsThePinnedStiffness) {
   const Eigen::Matrix2d d_isodev = r * rendulic_tangent(*law, s, 0.0) * r.transpose();
   EXPECT_LE((d_isodev - pinned_d(b, g, a)).norm(), kExact * 3 * b);
   // And it maps each probe onto its rate-envelope point.
-  const ModelEnvelope env = run(*law, s, 1e-4, EnvelopeMethod::kRate);
-  for (int i = 0; i < env.theta_deg.size(); ++i) {
-    const Eigen::Vector2d pred =
-        rendulic_tangent(*law, s, env.theta_deg(i)) * env.strain.row(i).transpose();
-    EXPECT_LE((pred - env.stress.row(i).transpose()).norm(), kExact * 3 * b * 1e-4);
+  const EnvelopeRecord env = run(*law, s, 1e-4, EnvelopeMethod::kRate);
+  for (std::size_t i = 0; i < env.size(); ++i) {
+    const Eigen::Vector2d pred = rendulic_tangent(*law, s, env.theta_deg[i]) * env.strain[i];
+    EXPECT_LE((pred - env.stress[i]).norm(), kExact * 3 * b * 1e-4);
   }
 }
 
@@ -132,7 +169,7 @@ TEST(Envelope, HypoplasticIsTheShiftedClosedFormEllipseScalingWithAmplitude) {
   const MaterialState s =
       law->make_state(Eigen::Matrix3d::Identity() * p, Eigen::Matrix3d::Zero(), 0.6);
   for (double amp : {1e-5, 3e-5}) {
-    const ModelEnvelope env = run(*law, s, amp, EnvelopeMethod::kRate);
+    const EnvelopeRecord env = run(*law, s, amp, EnvelopeMethod::kRate);
     const auto e = ellipse_of(env.strain, env.stress);
     // Isotropic sigma = p I (compression positive form, hypoplastic_wu.hpp):
     // L = diag(-(3 c1 + c2) p, -3 c1 p) in the (iso, dev) frame; N = (c3 p / 3) I.
@@ -161,9 +198,9 @@ TEST(Envelope, HypoplasticIsTheShiftedClosedFormEllipseScalingWithAmplitude) {
   // Integrated probes converge to the rate envelope linearly in the amplitude (the stiffness
   // changes by O(c |d_eps|) along a probe): halving the amplitude halves the gap.
   auto gap = [&](double amp) {
-    const ModelEnvelope ri = run(*law, t, amp, EnvelopeMethod::kRate);
-    const ModelEnvelope in = run(*law, t, amp);
-    return (in.stress - ri.stress).norm() / ri.stress.norm();
+    const EnvelopeRecord ri = run(*law, t, amp, EnvelopeMethod::kRate);
+    const EnvelopeRecord in = run(*law, t, amp);
+    return (rows_of(in.stress) - rows_of(ri.stress)).norm() / rows_of(ri.stress).norm();
   };
   const double g1 = gap(2e-6), g2 = gap(1e-6);
   EXPECT_LT(g1, 1e-2);
@@ -183,11 +220,13 @@ TEST(Envelope, ElastoplasticSmallProbesElasticLargeProbesShiftedAndThinner) {
   double prev_ratio = 1e9, prev_shift = -1.0;
   for (int idx : {6, 21, 68, 320}) {  // -eps_dev = 0.006, 0.021, 0.068, 0.32
     const MaterialState s = ep->make_state(path.stress[idx], path.fabric[idx], 0.82);
-    const ModelEnvelope small = run(*ep, s, 5e-5);
-    const ModelEnvelope small_el = run(*el, s, 5e-5);
+    const EnvelopeRecord small = run(*ep, s, 5e-5);
+    const EnvelopeRecord small_el = run(*el, s, 5e-5);
     // Elastic probes: exactly the anisotropic elastic envelope, no deviatoric fabric change.
-    EXPECT_LE((small.stress - small_el.stress).norm(), kExact * small.stress.norm()) << idx;
-    const ModelEnvelope large = run(*ep, s, 2e-3);
+    EXPECT_LE((rows_of(small.stress) - rows_of(small_el.stress)).norm(),
+              kExact * rows_of(small.stress).norm())
+        << idx;
+    const EnvelopeRecord large = run(*ep, s, 2e-3);
     const auto es = ellipse_of(small.strain, small.stress);
     const auto el_ = ellipse_of(large.strain, large.stress);
     // Large probes: thinner than elastic, and a centre shift (incremental non-linearity,
@@ -227,11 +266,12 @@ TEST(Envelope, ElastoplasticSmoothTransitionChangesEnvelopesLittle) {
   ASSERT_TRUE(path.success) << path.reason;
   for (int idx : {6, 21, 68}) {
     const MaterialState s = smooth->make_state(path.stress[idx], path.fabric[idx], 0.82);
-    const ModelEnvelope e1 = run(*smooth, s, 5e-5), e0 = run(*sharp, s, 5e-5);
-    EXPECT_LE((e1.stress - e0.stress).norm(), kExact * e0.stress.norm()) << idx;
-    const ModelEnvelope p1 = run(*smooth, s, 2e-3), p0 = run(*sharp, s, 2e-3);
-    const double ds = (p1.stress - p0.stress).norm() / p0.stress.norm();
-    const double df = (p1.fabric - p0.fabric).norm() / p0.fabric.norm();
+    const EnvelopeRecord e1 = run(*smooth, s, 5e-5), e0 = run(*sharp, s, 5e-5);
+    EXPECT_LE((rows_of(e1.stress) - rows_of(e0.stress)).norm(), kExact * rows_of(e0.stress).norm())
+        << idx;
+    const EnvelopeRecord p1 = run(*smooth, s, 2e-3), p0 = run(*sharp, s, 2e-3);
+    const double ds = (rows_of(p1.stress) - rows_of(p0.stress)).norm() / rows_of(p0.stress).norm();
+    const double df = (rows_of(p1.fabric) - rows_of(p0.fabric)).norm() / rows_of(p0.fabric).norm();
     EXPECT_GT(ds, 0.0) << idx;   // the transition is there
     EXPECT_LT(ds, 1e-4) << idx;  // measured 0.7-1.6e-5
     EXPECT_LT(df, 1e-3) << idx;  // measured 1.2-1.7e-4

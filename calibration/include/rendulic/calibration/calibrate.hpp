@@ -73,7 +73,7 @@ struct StateSummary {
   // Relative rms misfit of this state's blocks at the fitted parameters:
   // sqrt(sum r^2 / sum w) = rms of (prediction - data) / data scale.
   double misfit = 0.0;
-  std::vector<EnvelopeData> predicted;  // model envelopes for the data's probe sets
+  std::vector<EnvelopeRecord> predicted;  // model envelopes for the data's probe sets
 };
 
 struct CalibrationSummary {

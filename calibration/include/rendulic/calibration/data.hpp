@@ -13,25 +13,15 @@
 #include <vector>
 
 #include "rendulic/core/conventions.hpp"
+#include "rendulic/core/envelope_record.hpp"
 
 namespace rendulic::calibration {
 
-struct EnvelopeData {
-  std::string name;
-  std::string method;  // "dynamic", "linear_response", "model", ... (informational)
-  double amplitude = 0.0;
-  std::vector<double> theta_deg;
-  std::vector<Eigen::Matrix3d> d_eps;   // probe strain tensors, compression positive
-  std::vector<Eigen::Vector2d> strain;  // Rendulic pairs of d_eps
-  std::vector<Eigen::Vector2d> stress;  // Rendulic pairs of d_sigma, Pa
-  std::vector<Eigen::Vector2d> fabric;  // Rendulic pairs of d_F
-
-  int size() const { return static_cast<int>(stress.size()); }
-  bool elastic() const { return is_elastic_amplitude(amplitude); }
-  bool has_fabric() const { return fabric.size() == stress.size() && !fabric.empty(); }
-  // Sizes agree, everything finite, at least 3 directions.
-  bool IsValid(std::string* why) const;
-};
+// The calibration's envelopes are stored records (core/envelope_record.hpp) with `name`, the
+// directions, the strain pairs, `stress` (Rendulic pairs of d_sigma in Pa) and, when known,
+// the fabric pairs filled in. Sizes agree, everything finite, at least 3 directions and a
+// positive amplitude; `why` names the envelope and the culprit.
+bool is_valid_envelope(const EnvelopeRecord& e, std::string* why);
 
 struct StateData {
   std::string label;
@@ -39,12 +29,12 @@ struct StateData {
   Eigen::Matrix3d fabric = Eigen::Matrix3d::Zero();
   double volume_fraction = 0.0;
   double eps_dev = 0.0;
-  std::vector<EnvelopeData> envelopes;
+  std::vector<EnvelopeRecord> envelopes;
 
   // The elastic envelope with the smallest amplitude, or nullptr.
-  const EnvelopeData* elastic_envelope() const;
+  const EnvelopeRecord* elastic_envelope() const;
   // The non-elastic envelope with the largest amplitude, or nullptr.
-  const EnvelopeData* plastic_envelope() const;
+  const EnvelopeRecord* plastic_envelope() const;
 };
 
 // The main path, subsampled; row 0 is the start state of the model path.
@@ -88,8 +78,8 @@ struct LoadOptions {
 CalibrationData load_calibration_data(const std::filesystem::path& file,
                                       const LoadOptions& options = {});
 
-// Envelope from probe directions and amplitude with strain pairs and tensors filled in
-// (core's probe_strain); stress and fabric left empty for the caller.
-EnvelopeData probe_set(const std::string& name, double amplitude, int directions);
+// Envelope from probe directions and amplitude with the strain pairs filled in (core's
+// probe_strain); stress and fabric left empty for the caller.
+EnvelopeRecord probe_set(const std::string& name, double amplitude, int directions);
 
 }  // namespace rendulic::calibration

@@ -168,8 +168,8 @@ class Objective {
 
   // Model envelope at the state of `state` for the probe set of `probes`, with full parameter
   // vector p. The returned data has stress and fabric filled in; ok=false on a model failure.
-  EnvelopeData predict_envelope(const std::vector<double>& p, const StateData& state,
-                                const EnvelopeData& probes, bool* ok) const;
+  EnvelopeRecord predict_envelope(const std::vector<double>& p, const StateData& state,
+                                  const EnvelopeRecord& probes, bool* ok) const;
   // The law's undrained path from the data's first path row, at the data's eps_dev (signed);
   // false without a path or on a model failure.
   bool predict_path(const std::vector<double>& p, PathData* out) const;

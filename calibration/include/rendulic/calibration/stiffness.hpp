@@ -39,7 +39,7 @@ struct StiffnessOptions {
   bool IsValid(std::string* why) const;
 };
 
-RendulicStiffness fit_rendulic_stiffness(const EnvelopeData& envelope,
+RendulicStiffness fit_rendulic_stiffness(const EnvelopeRecord& envelope,
                                          const StiffnessOptions& options = {});
 
 // Features of an elasto-plastic envelope (stress and fabric), from the affine fit.
@@ -56,6 +56,6 @@ struct PlasticFeatures {
   double fabric_a = 0.0, fabric_b = 0.0, fabric_inclination_deg = 0.0;
 };
 
-PlasticFeatures plastic_features(const EnvelopeData& envelope);
+PlasticFeatures plastic_features(const EnvelopeRecord& envelope);
 
 }  // namespace rendulic::calibration

@@ -15,13 +15,20 @@
 #pragma once
 
 #include <Eigen/Dense>
+#include <cstddef>
 #include <map>
 #include <string>
 #include <vector>
 
+#include "rendulic/core/conventions.hpp"
+
 namespace rendulic {
 
 struct EnvelopeRecord {
+  // The envelope's name, the last part of its group (e.g. dynamic_5e-05): read_envelope fills
+  // it from the group, write_envelope writes to the group it is given (the file has no other
+  // place for it).
+  std::string name;
   std::string method;      // "dynamic" | "minimisation" | "linear_response" | ...
   double amplitude = 0.0;  // |d_eps| (Frobenius)
   double k_star = 0.0;     // Pa, the stress scale of stress_star
@@ -29,7 +36,13 @@ struct EnvelopeRecord {
   std::vector<Eigen::Vector2d> strain;       // Rendulic pairs of d_eps
   std::vector<Eigen::Vector2d> stress_star;  // Rendulic pairs of d_sigma / k*
   std::vector<Eigen::Vector2d> fabric;       // Rendulic pairs of d_F
-  std::vector<Eigen::Matrix3d> d_stress;     // Pa, compression positive
+  // Rendulic pairs of d_sigma in Pa, for those who work in Pa (a model's envelope, the
+  // calibration's residuals). Held in memory, not stored (stress_star is): add() and
+  // model_envelope() fill it; the calibration's loader fills a record read from a file with
+  // stress_star times the file's k* (docs/calibration.md), once, so that its residuals subtract
+  // stored numbers and not a product the compiler might fuse into them.
+  std::vector<Eigen::Vector2d> stress;
+  std::vector<Eigen::Matrix3d> d_stress;  // Pa, compression positive
   std::vector<Eigen::Matrix3d> d_fabric;
   // d_fabric split with the contact set of the starting state held fixed (docs/probes.md
   // "Fabric split"): volume change, rotation of the normals, contacts made and lost. Empty
@@ -42,6 +55,12 @@ struct EnvelopeRecord {
   std::map<std::string, double> attributes;
 
   std::size_t size() const { return theta_deg.size(); }
+  // Elastic probes by the one threshold (core/conventions.hpp).
+  bool elastic() const { return is_elastic_amplitude(amplitude); }
+  bool has_fabric() const { return !fabric.empty() && fabric.size() == size(); }
+  // The strain tensor of probe i: the probe is axisymmetric (docs/physics.md section 5), so its
+  // Rendulic pair fixes it.
+  Eigen::Matrix3d strain_tensor(std::size_t i) const { return from_rendulic_pair(strain[i]); }
   // Appends one probe; the pairs follow from the tensors (core/conventions.hpp).
   void add(double theta, const Eigen::Matrix3d& d_eps, const Eigen::Matrix3d& d_sigma,
            const Eigen::Matrix3d& d_f);

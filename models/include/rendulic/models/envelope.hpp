@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "rendulic/core/envelope_record.hpp"
 #include "rendulic/models/driver.hpp"
 
 namespace rendulic::models {
@@ -25,21 +26,14 @@ struct EnvelopeOptions {
   bool IsValid(std::string* why) const;
 };
 
-struct ModelEnvelope {
-  bool success = false;
-  std::string reason;
-  Eigen::VectorXd theta_deg;
-  Eigen::Matrix<double, Eigen::Dynamic, 2> strain;  // (sqrt2 lat, ax) of d_eps
-  Eigen::Matrix<double, Eigen::Dynamic, 2> stress;  // of d_sigma, Pa
-  Eigen::Matrix<double, Eigen::Dynamic, 2> fabric;  // of d_F
-  std::vector<Eigen::Matrix3d> d_stress, d_fabric;
-  double max_error_estimate = 0.0;
-  bool within_tolerance = true;
-  int total_substeps = 0;
-};
-
-ModelEnvelope model_envelope(const Law& law, const MaterialState& state,
-                             const EnvelopeOptions& options = {});
+// The law's envelope as a record (core/envelope_record.hpp) with method "model": directions,
+// strain pairs, `stress` pairs in Pa (no k*: stress_star is left empty), fabric pairs and the
+// d_stress and d_fabric tensors, and the driver's error report as attributes:
+// max_error_estimate, within_tolerance (1 or 0) and total_substeps. A probe the law cannot
+// follow (inadmissible start state, a failed integration, a UMAT's refusal, a non-finite
+// response) throws InputError naming the probe.
+EnvelopeRecord model_envelope(const Law& law, const MaterialState& state,
+                              const EnvelopeOptions& options = {});
 
 // The 2x2 map from Rendulic strain pairs to Rendulic stress pairs given by the law's tangent at
 // `state` for probes near the direction theta_deg (axisymmetric probes; the tangent of a
