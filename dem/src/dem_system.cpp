@@ -914,8 +914,9 @@ Measures DemSystem::measure() const {
   const std::size_t n = p_.size();
   m.contacts = static_cast<std::int64_t>(cs.size());
   m.coordination = 2.0 * static_cast<double>(cs.size()) / static_cast<double>(n);
-  // C* counts contacts among non-rattlers only (rattlers removed iteratively).
-  const std::vector<bool> keep = non_rattlers(n, cs);
+  // C* counts contacts among non-rattlers only (rattlers removed iteratively, by the rule of
+  // the packing: frictionless or frictional).
+  const std::vector<bool> keep = non_rattlers(n, cs, rattler_min_contacts(friction_));
   std::size_t n_keep = 0, m_keep = 0;
   for (std::size_t i = 0; i < n; ++i) n_keep += keep[i];
   for (const Contact& c : cs) m_keep += keep[c.i] && keep[c.j];

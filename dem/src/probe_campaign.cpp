@@ -309,7 +309,9 @@ Envelope dynamic_envelope_of(const DemSystem& given, double amplitude,
   const Measures before = state.measure();
   const std::vector<Contact> contacts_before = state.contacts();
   const std::vector<std::uint64_t> keys_before = contact_keys(contacts_before);
-  const std::vector<bool> backbone = non_rattlers(state.particles().size(), contacts_before);
+  const std::vector<bool> backbone =
+      non_rattlers(state.particles().size(), contacts_before,
+                   rattler_min_contacts(state.material().frictional()));
   const PackingData packing_before = geometry_of(state);
   const std::vector<std::pair<int, int>> pairs_before = pairs_of(keys_before);
   const int m = static_cast<int>(theta_deg.size());

@@ -47,10 +47,7 @@ ForceBalance force_balance(const DemSystem& sys) {
   const std::vector<Contact> contacts = sys.contacts();
   const Particles& p = sys.particles();
   const int n = static_cast<int>(p.size());
-  // With friction a sphere can hold balanced forces on two contacts, so a rattler is one with
-  // fewer than 2; the frictionless d + 1 = 4 removes a frictional packing near its jamming
-  // point almost whole (C = 3.66 at P* = 1e-3, mu = 0.5: no particle kept, an empty criterion).
-  const int min_contacts = sys.material().frictional() ? kFrictionalMinContacts : 4;
+  const int min_contacts = rattler_min_contacts(sys.material().frictional());
   const std::vector<bool> keep = non_rattlers(static_cast<std::size_t>(n), contacts, min_contacts);
   Eigen::MatrixX3d net = Eigen::MatrixX3d::Zero(n, 3), torque = Eigen::MatrixX3d::Zero(n, 3);
   ForceBalance b;

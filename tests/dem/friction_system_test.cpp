@@ -155,6 +155,36 @@ TEST(FrictionSystem, StressIsSymmetricAtRest) {
   EXPECT_LT(asym, 0.1 * (sigma - sigma.transpose()).norm() / p);
 }
 
+// C* of a frictional packing removes the rattlers by the frictional rule (fewer than two
+// contacts), as the force balance does; recomputed here from the contact list by a plain
+// fixed-point sweep (a second implementation of the removal). The frictionless rule of four
+// would give another, smaller count on this loose packing.
+TEST(FrictionSystem, CoordinationOfNonRattlersUsesTheFrictionalRule) {
+  const DemSystem s = packed();
+  const std::vector<Contact> cs = s.contacts();
+  const std::size_t n = s.particles().size();
+  const auto c_star = [&](int min_contacts) {
+    std::vector<bool> keep(n, true);
+    for (bool changed = true; changed;) {
+      changed = false;
+      std::vector<int> z(n, 0);
+      for (const Contact& c : cs)
+        if (keep[c.i] && keep[c.j]) ++z[c.i], ++z[c.j];
+      for (std::size_t i = 0; i < n; ++i)
+        if (keep[i] && z[i] < min_contacts) keep[i] = false, changed = true;
+    }
+    double kept = 0, contacts = 0;
+    for (std::size_t i = 0; i < n; ++i) kept += keep[i];
+    for (const Contact& c : cs) contacts += keep[c.i] && keep[c.j];
+    return kept > 0 ? 2.0 * contacts / kept : 0.0;
+  };
+  const Measures m = s.measure();
+  ASSERT_GT(m.coordination, 0.0);
+  EXPECT_DOUBLE_EQ(m.coordination_nonrattler, c_star(2));
+  EXPECT_NE(c_star(2), c_star(4));
+  EXPECT_GE(m.coordination_nonrattler, m.coordination);
+}
+
 TEST(FrictionSystem, FrictionlessStatesCarryNoHistory) {
   DemSystem s = gas(SystemOptions{});
   drive(s, 0, 50);

@@ -59,9 +59,20 @@ struct Contact {
 // the difference between the predicted and the final velocity (tiny at quasi-static rates).
 inline constexpr double kSlidingTolerance = 1e-6;
 
+// The fewest contacts a particle keeps to bear load (docs/dem.md "States at rest"): d + 1 = 4
+// for frictionless spheres, whose contacts carry normal forces only; 2 with friction, where a
+// sphere can hold balanced forces on two contacts. The frictionless count applied to a
+// frictional packing near its jamming point removes it almost whole (C = 3.66 at P* = 1e-3,
+// mu = 0.5: no particle kept).
+inline constexpr int kFrictionlessMinContacts = 4;
+inline constexpr int kFrictionalMinContacts = 2;
+inline int rattler_min_contacts(bool frictional) {
+  return frictional ? kFrictionalMinContacts : kFrictionlessMinContacts;
+}
+
 // Iterative rattler removal: true for particles that keep at least `min_contacts` contacts
 // among non-rattlers. Pure function of the contact list, so it is unit-testable.
 std::vector<bool> non_rattlers(std::size_t n, const std::vector<Contact>& contacts,
-                               int min_contacts = 4);
+                               int min_contacts = kFrictionlessMinContacts);
 
 }  // namespace rendulic::dem

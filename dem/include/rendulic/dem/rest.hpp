@@ -37,11 +37,9 @@ struct ForceBalance {
 // state at rest); rattlers are removed iteratively (fewer than 4 contacts, measures.hpp). The
 // net force on a non-rattler sums all its contacts, those with rattlers included.
 ForceBalance force_balance(const PackingData& packing, double k);
-// Fewer contacts than this make a rattler of a frictional packing in force_balance(DemSystem).
-inline constexpr int kFrictionalMinContacts = 2;
 // The same criterion on the engine's own contact forces (normal, with the dashpot of the
 // current velocities, and tangential) and torques: the balance of a frictional packing, whose
-// rattlers have fewer than kFrictionalMinContacts contacts (4 without friction).
+// rattlers have fewer than rattler_min_contacts(true) contacts (measures.hpp).
 ForceBalance force_balance(const DemSystem& sys);
 
 struct RestOptions {
