@@ -26,8 +26,11 @@ struct CliRun {
   std::string out, err;
 };
 
+// One directory per test: ctest runs the tests of this file side by side (-j 2), and a shared
+// `out` file let one test read another's output.
 fs::path scratch() {
-  const fs::path d = fs::path(RENDULIC_TEST_TMP) / "models_envelope_cli";
+  const fs::path d = fs::path(RENDULIC_TEST_TMP) / "models_envelope_cli" /
+                     ::testing::UnitTest::GetInstance()->current_test_info()->name();
   fs::create_directories(d);
   return d;
 }
