@@ -398,7 +398,8 @@ CeresRun run_ceres(const Objective& obj, std::vector<double> z, const SolverOpti
     return out;
   };
   CeresRun best, second;
-  if (obj.exact_derivatives()) {
+  // With `progress` each Ceres run prints its iterations: one after the other, to be read.
+  if (obj.exact_derivatives() && !o.progress) {
     std::exception_ptr failure;
     std::thread other([&] {
       try {
