@@ -44,6 +44,19 @@ double seconds_since(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
 }
 
+constexpr const char* kNoBackbone =
+    "no rigid backbone: every particle is a rattler (the packing is not jammed)";
+
+// Largest net load (a row of `net`) on a kept particle over the mean contact force.
+template <class Net>
+double residual_ratio(const Net& net, const std::vector<char>& keep, double mean_f) {
+  double max_net = 0.0;
+  for (Eigen::Index p = 0; p < net.rows(); ++p) {
+    if (keep[p]) max_net = std::max(max_net, net.row(p).norm());
+  }
+  return max_net / mean_f;
+}
+
 struct BackboneContact {
   int i, j;
   Eigen::Vector3d n;  // unit normal, from j to i
@@ -206,16 +219,12 @@ LinearResponse linear_response(const PackingData& packing, const LinearResponseO
     n_dof += 3;
   }
   if (contacts.empty() || n_dof == 0) {
-    out.message = "no rigid backbone: every particle is a rattler (the packing is not jammed)";
+    out.message = kNoBackbone;
     out.seconds_total = seconds_since(t_start);
     return out;
   }
   const double mean_f = sum_f / static_cast<double>(contacts.size());
-  double max_net = 0.0;
-  for (int p = 0; p < n; ++p) {
-    if (keep[p]) max_net = std::max(max_net, net.row(p).norm());
-  }
-  out.residual_force_ratio = max_net / mean_f;
+  out.residual_force_ratio = residual_ratio(net, keep, mean_f);
 
   // Hessian (lower triangle is what the factorisation reads; both are filled for clarity of
   // the block structure) and the six right-hand sides b_a = Xi E_a.
@@ -482,7 +491,6 @@ LinearResponse linear_response(const PackingData& packing, const LinearResponseO
   std::vector<int> count(n);
   using Matrix6 = Eigen::Matrix<double, 6, 6>;
   std::vector<Matrix6> local(n);
-  std::vector<Eigen::Matrix3d> spin(n, Eigen::Matrix3d::Zero());  // projector on a free spin
   std::vector<Matrix12d> blocks(all.size());
   for (std::size_t q = 0; q < all.size(); ++q) blocks[q] = contact_matrix(all[q]);
   for (bool changed = true; changed;) {
@@ -505,25 +513,14 @@ LinearResponse linear_response(const PackingData& packing, const LinearResponseO
         ++out.n_rattlers;
         continue;
       }
-      // The symmetric part: a particle whose contacts cannot hold some motion is floppy. A
-      // free spin alone (two contacts on one line: the spin about it moves no contact point
-      // tangentially, so no force or torque depends on it) is not removed: the particle
-      // carries force along its chain, and the spin is held by pinning that mode (exact: it
-      // enters no equation). Any other zero mode removes the particle like a rattler.
+      // The symmetric part: a particle whose contacts cannot hold some motion is floppy and
+      // removed like a rattler (a particle with two contacts turning about the line through
+      // its contact points is held by the geometric terms alone). It may carry force along a
+      // chain: residual_force_ratio then shows the imbalance its removal leaves on its
+      // neighbours (docs/probes.md).
       const Matrix6 sym = 0.5 * (local[p] + local[p].transpose());
-      const Eigen::SelfAdjointEigenSolver<Matrix6> eig(sym);
-      spin[p].setZero();
-      bool floppy = false;
-      for (int e = 0; e < 6; ++e) {
-        if (eig.eigenvalues()(e) >= options.floppy_tolerance * k) break;
-        const Vector6d v = eig.eigenvectors().col(e);
-        if (v.head<3>().norm() > 1e-6) {
-          floppy = true;
-          break;
-        }
-        spin[p] += v.tail<3>() * v.tail<3>().transpose();
-      }
-      if (floppy) {
+      if (Eigen::SelfAdjointEigenSolver<Matrix6>(sym, Eigen::EigenvaluesOnly).eigenvalues()(0) <
+          options.floppy_tolerance * k) {
         keep[p] = 0;
         changed = true;
         ++out.n_rattlers;
@@ -579,16 +576,12 @@ LinearResponse linear_response(const PackingData& packing, const LinearResponseO
     n_dof += 3;
   }
   if (backbone.empty() || pinned < 0) {
-    out.message = "no rigid backbone: every particle is a rattler (the packing is not jammed)";
+    out.message = kNoBackbone;
     out.seconds_total = seconds_since(t_start);
     return out;
   }
   const double mean_f = sum_f / static_cast<double>(backbone.size());
-  double max_net = 0.0;
-  for (int p = 0; p < n; ++p) {
-    if (keep[p]) max_net = std::max(max_net, net.row(p).norm());
-  }
-  out.residual_force_ratio = max_net / mean_f;
+  out.residual_force_ratio = residual_ratio(net, keep, mean_f);
 
   std::array<Eigen::Matrix3d, 6> basis;
   for (int a = 0; a < 6; ++a) basis[a] = mandel_basis(a);
@@ -614,13 +607,6 @@ LinearResponse linear_response(const PackingData& packing, const LinearResponseO
       for (int b = 0; b < 4; ++b)
         if (d[b] >= 0) rhs.block<3, 1>(d[b], a) += g[b];
     }
-  }
-  for (int p = 0; p < n; ++p) {
-    if (!keep[p] || spin[p].isZero()) continue;
-    ++out.n_free_spins;
-    for (int r = 0; r < 3; ++r)
-      for (int s = 0; s < 3; ++s)
-        triplets.emplace_back(dof_w[p] + r, dof_w[p] + s, k * spin[p](r, s));
   }
   SparseMatrix jacobian(n_dof, n_dof);
   jacobian.setFromTriplets(triplets.begin(), triplets.end());

@@ -111,7 +111,6 @@ struct LinearResponse {
   // sticking. Where there is one, the true response depends on the loading direction and
   // `stiffness` is that of the directions in which they all stick (an upper bound).
   bool frictional = false;
-  int n_free_spins = 0;  // backbone particles whose spin about their contact line is free
   int n_coulomb_limit = 0;
   double coulomb_limit_fraction = 0.0;  // of the backbone contacts
   bool direction_dependent() const { return n_coulomb_limit > 0; }
