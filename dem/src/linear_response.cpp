@@ -1,6 +1,9 @@
 // Linear response of the contact network: rattler removal, sparse Hessian
 // with the geometric term, one LDL^T factorisation for the six strain components, stiffness
-// and fabric rates. The derivation is in linear_response.hpp.
+// and fabric rates. The derivation is in linear_response.hpp. Frictional packings (the
+// LinearFriction overload, docs/probes.md "Linear response of a frictional packing") have
+// their own path: rotations, tangential springs, a non-symmetric Jacobian and sparse LU; the
+// frictionless path does not share its code, so its results are unchanged.
 #include "rendulic/dem/linear_response.hpp"
 
 #include <Eigen/Sparse>
