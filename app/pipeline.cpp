@@ -108,7 +108,8 @@ void register_run_keys(ScenarioSchema& schema) {
 
 namespace {
 void check_friction(const Scenario& scenario) {
-  // The static tools model frictionless contacts only (packing_of, docs/dem.md "Friction"): a
+  // The energy minimisation models frictionless contacts only (packing_of, docs/dem.md
+  // "Friction"; the linear response has a frictional path, docs/probes.md): a
   // frictional run that asks for one would otherwise fail after its preparation and path.
   const double mu = scenario.get_double("dem.friction");
   if (!(mu > 0)) return;
@@ -117,8 +118,6 @@ void check_friction(const Scenario& scenario) {
   const auto methods = scenario.get_strings("probes.methods");
   if (probes && std::find(methods.begin(), methods.end(), "minimisation") != methods.end())
     asked.push_back("probes.methods has minimisation (" + scenario.origin("probes.methods") + ")");
-  if (stage_requested(scenario, "linear_response"))
-    asked.push_back("run.stages has linear_response (" + scenario.origin("run.stages") + ")");
   if (stage_requested(scenario, "elastic_range") &&
       scenario.get_string("elastic_range.method") == "minimisation")
     asked.push_back("elastic_range.method is minimisation (" +
@@ -130,9 +129,8 @@ void check_friction(const Scenario& scenario) {
   std::snprintf(mu_text, sizeof mu_text, "%g", mu);
   throw InputError(std::string("dem.friction = ") + mu_text + " (" +
                    scenario.origin("dem.friction") +
-                   "): the energy minimisation and the linear response model frictionless "
-                   "contacts only, but " +
-                   list + "; use the dynamic method or dem.friction = 0");
+                   "): the energy minimisation models frictionless contacts only, but " + list +
+                   "; use the dynamic method or dem.friction = 0");
 }
 }  // namespace
 

@@ -130,6 +130,11 @@ std::vector<dem::Envelope> write_probe_campaign(const dem::DemSystem& state,
             paths::envelope(state_group, paths::envelope_name(method, amplitude));
         write_envelope(out, group, env);
         if (lr) {
+          if (lr->direction_dependent() && amplitude == options.amplitudes.front())
+            log::warning(state_group, ": ", lr->n_coulomb_limit, " of ", lr->n_backbone_contacts,
+                         " contacts at the Coulomb limit: the frictional linear response "
+                         "depends on the loading direction (treated as sticking: an upper "
+                         "bound), not an elastic envelope");
           out.write(group + datasets::kStiffness, Eigen::MatrixXd(lr->stiffness));
           out.write(group + datasets::kFabricStiffness, Eigen::MatrixXd(lr->fabric_stiffness));
         }

@@ -1,13 +1,18 @@
 // Linear response of the contact network: rattler removal, sparse Hessian
 // with the geometric term, one LDL^T factorisation for the six strain components, stiffness
-// and fabric rates. The derivation is in linear_response.hpp.
+// and fabric rates. The derivation is in linear_response.hpp. Frictional packings (the
+// LinearFriction overload, docs/probes.md "Linear response of a frictional packing") have
+// their own path: rotations, tangential springs, a non-symmetric Jacobian and sparse LU; the
+// frictionless path does not share its code, so its results are unchanged.
 #include "rendulic/dem/linear_response.hpp"
 
 #include <Eigen/Sparse>
 #include <Eigen/SparseCholesky>
+#include <Eigen/SparseLU>
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <map>
 #include <memory>
 #include <numbers>
 #include <sstream>
@@ -40,6 +45,19 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+constexpr const char* kNoBackbone =
+    "no rigid backbone: every particle is a rattler (the packing is not jammed)";
+
+// Largest net load (a row of `net`) on a kept particle over the mean contact force.
+template <class Net>
+double residual_ratio(const Net& net, const std::vector<char>& keep, double mean_f) {
+  double max_net = 0.0;
+  for (Eigen::Index p = 0; p < net.rows(); ++p) {
+    if (keep[p]) max_net = std::max(max_net, net.row(p).norm());
+  }
+  return max_net / mean_f;
 }
 
 struct BackboneContact {
@@ -204,16 +222,12 @@ LinearResponse linear_response(const PackingData& packing, const LinearResponseO
     n_dof += 3;
   }
   if (contacts.empty() || n_dof == 0) {
-    out.message = "no rigid backbone: every particle is a rattler (the packing is not jammed)";
+    out.message = kNoBackbone;
     out.seconds_total = seconds_since(t_start);
     return out;
   }
   const double mean_f = sum_f / static_cast<double>(contacts.size());
-  double max_net = 0.0;
-  for (int p = 0; p < n; ++p) {
-    if (keep[p]) max_net = std::max(max_net, net.row(p).norm());
-  }
-  out.residual_force_ratio = max_net / mean_f;
+  out.residual_force_ratio = residual_ratio(net, keep, mean_f);
 
   // Hessian (lower triangle is what the factorisation reads; both are filled for clarity of
   // the block structure) and the six right-hand sides b_a = Xi E_a.
@@ -354,6 +368,326 @@ LinearResponse linear_response(const PackingData& packing, const LinearResponseO
   os << "linear response: " << n << " particles, " << out.n_rattlers << " rattlers, "
      << out.n_backbone_contacts << " backbone contacts, residual force ratio "
      << out.residual_force_ratio;
+  out.message = os.str();
+  out.seconds_total = seconds_since(t_start);
+  return out;
+}
+
+bool LinearFriction::IsValid(std::string* why) const {
+  auto fail = [&](const char* m) {
+    if (why) *why = m;
+    return false;
+  };
+  if (!(k_t > 0.0) || !std::isfinite(k_t)) return fail("linear response: k_t must be positive");
+  if (!(mu > 0.0) || !std::isfinite(mu)) return fail("linear response: mu must be positive");
+  if (!(coulomb_tolerance >= 0.0) || !(coulomb_tolerance < 1.0))
+    return fail("linear response: coulomb_tolerance must be in [0, 1)");
+  return true;
+}
+
+namespace {
+
+// A frictional contact at rest: its geometry, forces (on i) and levers a = r - delta / 2 (the
+// engine's contact point), and the blocks of its linearised forces (docs/probes.md "Linear
+// response of a frictional packing"), with theta the rotations and dl = dE l + du_i - du_j:
+//   dF_i   = A dl + B_i theta_i + B_j theta_j,       dF_j = -dF_i,
+//   dtau_p = C_p dl - k_t a_p P (a_i theta_i + a_j theta_j)   (p = i, j).
+struct FrictionalContact {
+  int i = 0, j = 0;
+  Eigen::Vector3d n = Eigen::Vector3d::Zero();
+  double r = 0, a_i = 0, a_j = 0, f_n = 0;
+  Eigen::Vector3d f_t = Eigen::Vector3d::Zero();
+  bool at_limit = false;
+  Eigen::Matrix3d A, B_i, B_j, C_i, C_j, P;
+};
+
+Eigen::Matrix3d cross_matrix(const Eigen::Vector3d& v) {
+  Eigen::Matrix3d m;
+  m << 0, -v(2), v(1), v(2), 0, -v(0), -v(1), v(0), 0;
+  return m;
+}
+
+// The engine's step, linearised (TangentialContact::turn and force, at rest): the spring turns
+// with the normal, xi -> xi - (xi . dn) n, and grows by the tangential displacement of the
+// contact point, s = P dl - (a_i theta_i + a_j theta_j) x n; f_t = -k_t xi; the normal force
+// k delta along the turned normal; the torques -a_p n x f_t with a_p = r_p - delta / 2.
+void linearise(FrictionalContact& c, double k, double k_t) {
+  const Eigen::Matrix3d nn = c.n * c.n.transpose();
+  c.P = Eigen::Matrix3d::Identity() - nn;
+  const Eigen::Matrix3d nx = cross_matrix(c.n);
+  c.A = -k * nn + (c.f_n / c.r) * c.P - (c.n * c.f_t.transpose()) / c.r - k_t * c.P;
+  c.B_i = -k_t * c.a_i * nx;
+  c.B_j = -k_t * c.a_j * nx;
+  const Eigen::Matrix3d lever = -0.5 * c.n.cross(c.f_t) * c.n.transpose();  // d a_p = n.dl / 2
+  const Eigen::Matrix3d turn = cross_matrix(c.f_t) * c.P / c.r;             // -a_p dn x f_t
+  c.C_i = lever + c.a_i * turn + c.a_i * k_t * nx;
+  c.C_j = lever + c.a_j * turn + c.a_j * k_t * nx;
+}
+
+}  // namespace
+
+LinearResponse linear_response(const PackingData& packing, const LinearResponseOptions& options,
+                               const LinearFriction& friction) {
+  std::string why;
+  if (!options.IsValid(&why) || !friction.IsValid(&why)) throw InputError(why);
+  const auto t_start = Clock::now();
+  LinearResponse out;
+  out.frictional = true;
+  out.n_negative_pivots = out.n_zero_pivots = -1;
+  out.solver = "sparse_lu";
+  const int n = packing.size();
+  const double k = options.k, k_t = friction.k_t;
+  out.n_particles = n;
+  out.volume = packing.volume();
+
+  std::map<std::pair<int, int>, Eigen::Vector3d> spring;
+  for (const LinearFriction::Spring& s : friction.springs) {
+    if (s.i < 0 || s.j < 0 || s.i >= n || s.j >= n || s.i == s.j || !s.xi.allFinite())
+      throw InputError("linear response: a tangential spring names an invalid pair");
+    spring[{std::min(s.i, s.j), std::max(s.i, s.j)}] = s.i < s.j ? s.xi : Eigen::Vector3d(-s.xi);
+  }
+  std::vector<FrictionalContact> all;
+  for (const PairGeometry& p : find_pairs(packing, 0.0)) {
+    if (!(p.overlap > 0.0)) continue;
+    FrictionalContact c;
+    c.i = p.i;
+    c.j = p.j;
+    c.n = p.l / p.distance;
+    c.r = p.distance;
+    c.a_i = packing.radii(p.i) - 0.5 * p.overlap;
+    c.a_j = packing.radii(p.j) - 0.5 * p.overlap;
+    c.f_n = k * p.overlap;
+    const auto it = spring.find({p.i, p.j});
+    if (it != spring.end()) {
+      // The stored spring lies in the tangent plane of its last step: the engine turns it into
+      // this one, then holds its force at the Coulomb limit.
+      Eigen::Vector3d xi = it->second;
+      TangentialContact::turn(xi, c.n);
+      c.f_t = -k_t * xi;
+      const double limit = friction.mu * c.f_n, ft = c.f_t.norm();
+      if (ft > limit) c.f_t *= limit / ft;
+      c.at_limit = ft >= (1.0 - friction.coulomb_tolerance) * limit;
+    }
+    linearise(c, k, k_t);
+    all.push_back(c);
+  }
+  out.n_contacts = static_cast<int>(all.size());
+
+  // Unknowns in length units: translations u and rho = r theta (so that the blocks, and the
+  // floppy test against k, have one scale); the torque rows are divided by r alike.
+  auto radius = [&](int p) { return packing.radii(p); };
+  using Matrix12d = Eigen::Matrix<double, 12, 12>;
+  // The contact's -dG/dq, q = (u_i, rho_i, u_j, rho_j), G = (dF_i, dtau_i/r_i, dF_j, dtau_j/r_j).
+  auto contact_matrix = [&](const FrictionalContact& c) {
+    Matrix12d J;
+    const double si = 1.0 / radius(c.i), sj = 1.0 / radius(c.j);
+    const Eigen::Matrix3d D_ii = -k_t * c.a_i * c.a_i * c.P, D_ij = -k_t * c.a_i * c.a_j * c.P,
+                          D_jj = -k_t * c.a_j * c.a_j * c.P;
+    J << c.A, si * c.B_i, -c.A, sj * c.B_j,                       //
+        si * c.C_i, si * si * D_ii, -si * c.C_i, si * sj * D_ij,  //
+        -c.A, -si * c.B_i, c.A, -sj * c.B_j,                      //
+        sj * c.C_j, sj * si * D_ij, -sj * c.C_j, sj * sj * D_jj;
+    return Matrix12d(-J);
+  };
+  std::vector<char>& keep = out.backbone;
+  keep.assign(n, 1);
+  std::vector<int> count(n);
+  using Matrix6 = Eigen::Matrix<double, 6, 6>;
+  std::vector<Matrix6> local(n);
+  std::vector<Matrix12d> blocks(all.size());
+  for (std::size_t q = 0; q < all.size(); ++q) blocks[q] = contact_matrix(all[q]);
+  for (bool changed = true; changed;) {
+    changed = false;
+    std::fill(count.begin(), count.end(), 0);
+    for (auto& b : local) b.setZero();
+    for (std::size_t q = 0; q < all.size(); ++q) {
+      const FrictionalContact& c = all[q];
+      if (!keep[c.i] || !keep[c.j]) continue;
+      ++count[c.i];
+      ++count[c.j];
+      local[c.i] += blocks[q].topLeftCorner<6, 6>();
+      local[c.j] += blocks[q].bottomRightCorner<6, 6>();
+    }
+    for (int p = 0; p < n; ++p) {
+      if (!keep[p]) continue;
+      if (count[p] < options.min_contacts) {
+        keep[p] = 0;
+        changed = true;
+        ++out.n_rattlers;
+        continue;
+      }
+      // The symmetric part: a particle whose contacts cannot hold some motion is floppy and
+      // removed like a rattler (a particle with two contacts turning about the line through
+      // its contact points is held by the geometric terms alone). It may carry force along a
+      // chain: residual_force_ratio then shows the imbalance its removal leaves on its
+      // neighbours (docs/probes.md).
+      const Matrix6 sym = 0.5 * (local[p] + local[p].transpose());
+      if (Eigen::SelfAdjointEigenSolver<Matrix6>(sym, Eigen::EigenvaluesOnly).eigenvalues()(0) <
+          options.floppy_tolerance * k) {
+        keep[p] = 0;
+        changed = true;
+        ++out.n_rattlers;
+        ++out.n_floppy;
+      }
+    }
+  }
+  std::vector<int> backbone;  // indices into all
+  for (std::size_t q = 0; q < all.size(); ++q) {
+    if (keep[all[q].i] && keep[all[q].j]) backbone.push_back(static_cast<int>(q));
+  }
+  out.n_backbone_contacts = static_cast<int>(backbone.size());
+
+  // Reference stress (eq. 1 with the tangential force, symmetrised: at rest its antisymmetric
+  // part is the residual torque), fabric and residual forces and torques.
+  Eigen::MatrixXd net = Eigen::MatrixXd::Zero(n, 6);
+  double sum_f = 0.0;
+  auto particle_volume = [&](int p) {
+    return 4.0 / 3.0 * std::numbers::pi * std::pow(packing.radii(p), 3);
+  };
+  Eigen::Matrix3d stress = Eigen::Matrix3d::Zero();
+  for (int q : backbone) {
+    const FrictionalContact& c = all[q];
+    const Eigen::Vector3d f = c.f_n * c.n + c.f_t;
+    stress += (c.r * c.n) * f.transpose();
+    out.fabric += (particle_volume(c.i) + particle_volume(c.j)) * c.n * c.n.transpose();
+    net.block<1, 3>(c.i, 0) += f.transpose();
+    net.block<1, 3>(c.j, 0) -= f.transpose();
+    const Eigen::Vector3d nxf = c.n.cross(c.f_t);
+    net.block<1, 3>(c.i, 3) -= c.a_i / radius(c.i) * nxf.transpose();
+    net.block<1, 3>(c.j, 3) -= c.a_j / radius(c.j) * nxf.transpose();
+    sum_f += f.norm();
+    out.n_coulomb_limit += c.at_limit ? 1 : 0;
+  }
+  out.stress = 0.5 * (stress + stress.transpose()) / out.volume;
+  out.fabric /= out.volume;
+  if (!backbone.empty())
+    out.coulomb_limit_fraction = out.n_coulomb_limit / static_cast<double>(backbone.size());
+
+  // Degrees of freedom: 6 per backbone particle; the first one's translation is held (gauge).
+  // Its rotation stays free: a periodic packing has no zero mode of a common rotation.
+  std::vector<int> dof_u(n, -1), dof_w(n, -1);
+  int n_dof = 0, pinned = -1;
+  for (int p = 0; p < n; ++p) {
+    if (!keep[p]) continue;
+    if (pinned < 0) {
+      pinned = p;
+    } else {
+      dof_u[p] = n_dof;
+      n_dof += 3;
+    }
+    dof_w[p] = n_dof;
+    n_dof += 3;
+  }
+  if (backbone.empty() || pinned < 0) {
+    out.message = kNoBackbone;
+    out.seconds_total = seconds_since(t_start);
+    return out;
+  }
+  const double mean_f = sum_f / static_cast<double>(backbone.size());
+  out.residual_force_ratio = residual_ratio(net, keep, mean_f);
+
+  std::array<Eigen::Matrix3d, 6> basis;
+  for (int a = 0; a < 6; ++a) basis[a] = mandel_basis(a);
+  std::vector<Eigen::Triplet<double>> triplets;
+  triplets.reserve(backbone.size() * 144);
+  Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(n_dof, 6);
+  for (int q : backbone) {
+    const FrictionalContact& c = all[q];
+    const std::array<int, 4> d = {dof_u[c.i], dof_w[c.i], dof_u[c.j], dof_w[c.j]};
+    for (int bi = 0; bi < 4; ++bi)
+      for (int bj = 0; bj < 4; ++bj) {
+        if (d[bi] < 0 || d[bj] < 0) continue;
+        for (int r = 0; r < 3; ++r)
+          for (int s = 0; s < 3; ++s)
+            triplets.emplace_back(d[bi] + r, d[bj] + s, blocks[q](3 * bi + r, 3 * bj + s));
+      }
+    // The affine part of dl moves the forces and torques by the dl-columns: b = sum G_affine.
+    const Eigen::Vector3d l = c.r * c.n;
+    for (int a = 0; a < 6; ++a) {
+      const Eigen::Vector3d dl = basis[a] * l;
+      const Eigen::Vector3d g[4] = {c.A * dl, c.C_i * dl / radius(c.i), -c.A * dl,
+                                    c.C_j * dl / radius(c.j)};
+      for (int b = 0; b < 4; ++b)
+        if (d[b] >= 0) rhs.block<3, 1>(d[b], a) += g[b];
+    }
+  }
+  SparseMatrix jacobian(n_dof, n_dof);
+  jacobian.setFromTriplets(triplets.begin(), triplets.end());
+  triplets.clear();
+  triplets.shrink_to_fit();
+  out.seconds_assembly = seconds_since(t_start);
+
+  const auto t_factor = Clock::now();
+  auto fail = [&](const std::string& reason) {
+    out.message = reason;
+    out.seconds_total = seconds_since(t_start);
+    return out;
+  };
+  jacobian.makeCompressed();
+  Eigen::SparseLU<SparseMatrix, Eigen::COLAMDOrdering<int>> lu;
+  lu.compute(jacobian);
+  out.seconds_factorisation = seconds_since(t_factor);
+  if (lu.info() != Eigen::Success)
+    return fail("linear response: the sparse LU factorisation of the frictional Jacobian failed (" +
+                lu.lastErrorMessage() +
+                "): the contact network is floppy, no elastic response exists");
+  const Eigen::MatrixXd u = lu.solve(rhs);
+  for (int a = 0; a < 6; ++a) {
+    const double b = rhs.col(a).norm();
+    if (b > 0.0)
+      out.solve_residual =
+          std::max(out.solve_residual, (jacobian * u.col(a) - rhs.col(a)).norm() / b);
+  }
+  if (!u.allFinite() || !(out.solve_residual < 1e-6)) {
+    std::ostringstream os;
+    os << "linear response: the sparse solve is inaccurate (relative residual "
+       << out.solve_residual << "): the frictional Jacobian is nearly singular";
+    return fail(os.str());
+  }
+
+  // dsigma (compression positive) = (1/V) sum [dl (x) F_i + l (x) dF_i] - sigma tr dE, the
+  // rate of eq. 1 as the engine measures it, symmetrised; d_eps = -dE gives C = -dsigma/dE.
+  Matrix6d c_full, c_affine, g_full, g_volume, g_rotation;
+  for (int a = 0; a < 6; ++a) {
+    const Eigen::Matrix3d& de = basis[a];
+    Eigen::Matrix3d ds_full = Eigen::Matrix3d::Zero(), ds_affine = Eigen::Matrix3d::Zero();
+    Eigen::Matrix3d df = Eigen::Matrix3d::Zero();
+    for (int q : backbone) {
+      const FrictionalContact& c = all[q];
+      const Eigen::Vector3d l = c.r * c.n, f = c.f_n * c.n + c.f_t;
+      const Eigen::Vector3d dl_affine = de * l;
+      Eigen::Vector3d dl = dl_affine, th_i = Eigen::Vector3d::Zero(), th_j = th_i;
+      if (dof_u[c.i] >= 0) dl += u.block<3, 1>(dof_u[c.i], a);
+      if (dof_u[c.j] >= 0) dl -= u.block<3, 1>(dof_u[c.j], a);
+      th_i = u.block<3, 1>(dof_w[c.i], a) / radius(c.i);
+      th_j = u.block<3, 1>(dof_w[c.j], a) / radius(c.j);
+      const Eigen::Vector3d dF = c.A * dl + c.B_i * th_i + c.B_j * th_j;
+      ds_full += dl * f.transpose() + l * dF.transpose();
+      ds_affine += dl_affine * f.transpose() + l * (c.A * dl_affine).transpose();
+      const Eigen::Vector3d dn = (dl - c.n * c.n.dot(dl)) / c.r;
+      const Eigen::Matrix3d dnn = dn * c.n.transpose();
+      df += (particle_volume(c.i) + particle_volume(c.j)) * (dnn + dnn.transpose());
+    }
+    const double tr = de.trace();
+    // (eval: a matrix plus its own transpose must not be written into itself.)
+    ds_full = (0.5 * (ds_full + ds_full.transpose()) / out.volume - out.stress * tr).eval();
+    ds_affine = (0.5 * (ds_affine + ds_affine.transpose()) / out.volume - out.stress * tr).eval();
+    c_full.col(a) = -to_mandel(Eigen::Matrix3d(ds_full));
+    c_affine.col(a) = -to_mandel(Eigen::Matrix3d(ds_affine));
+    g_rotation.col(a) = -to_mandel(Eigen::Matrix3d(df / out.volume));
+    g_volume.col(a) = to_mandel(Eigen::Matrix3d(out.fabric * tr));
+    g_full.col(a) = g_rotation.col(a) + g_volume.col(a);
+  }
+  out.stiffness = c_full;
+  out.affine_stiffness = c_affine;
+  out.fabric_stiffness = g_full;
+  out.fabric_volume_stiffness = g_volume;
+  out.fabric_rotation_stiffness = g_rotation;
+  out.ok = true;
+  std::ostringstream os;
+  os << "linear response (frictional): " << n << " particles, " << out.n_rattlers << " rattlers, "
+     << out.n_backbone_contacts << " backbone contacts, " << out.n_coulomb_limit
+     << " at the Coulomb limit, residual force ratio " << out.residual_force_ratio;
   out.message = os.str();
   out.seconds_total = seconds_since(t_start);
   return out;

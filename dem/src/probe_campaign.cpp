@@ -406,13 +406,16 @@ PackingData geometry_of(const DemSystem& state) {
 }
 
 PackingData packing_of(const DemSystem& state) {
-  // Every static tool (energy minimisation, the force balance at rest, static probes, the
-  // linear response) takes its packing from here and models frictionless contacts only.
+  // The energy-based static tools (energy minimisation, minimisation probes, the force balance
+  // at rest) take their packing from here: an energy minimum has no meaning for a
+  // path-dependent frictional contact. The linear response has its frictional path
+  // (frictional_linear_response below).
   if (state.material().frictional()) {
     std::ostringstream s;
     s << "dem.friction = " << state.material().mu
-      << ": the energy minimisation, static probes and linear response model frictionless "
-         "contacts only; set dem.friction = 0 for them";
+      << ": the energy minimisation and minimisation probes model frictionless contacts only "
+         "(an energy minimum has no meaning for a frictional contact); set dem.friction = 0 "
+         "for them";
     throw InputError(s.str());
   }
   return geometry_of(state);
@@ -489,6 +492,24 @@ Envelope linear_response_envelope(const DemSystem& state, double amplitude,
   check(options, amplitude, theta_deg);
   LinearResponseOptions lo = options.linear;
   lo.k = state.material().k;
+  if (state.material().frictional()) {
+    // At rest, with the engine's springs (docs/probes.md "Linear response of a frictional
+    // packing"); no minimisation to fall back on.
+    const Material& m = state.material();
+    lo.min_contacts = rattler_min_contacts(true);
+    LinearFriction friction;
+    friction.k_t = m.tangential().k_t;
+    friction.mu = m.mu;
+    for (const Contact& c : state.contacts()) {
+      if (c.spring != Eigen::Vector3d::Zero()) friction.springs.push_back({c.i, c.j, c.spring});
+    }
+    LinearResponse lr = linear_response(geometry_of(state), lo, friction);
+    if (response) *response = lr;
+    if (!lr.ok) throw std::runtime_error(lr.message);
+    Envelope env = linear_response_envelope(lr, theta_deg, amplitude, m.k_star());
+    env.attributes["minimised_first"] = 0.0;
+    return env;
+  }
   PackingData packing = packing_of(state);
   LinearResponse lr = linear_response(packing, lo);
   bool minimised_first = false;

@@ -35,6 +35,14 @@ Envelope linear_response_envelope(const LinearResponse& response,
   env.attributes["n_backbone_contacts"] = response.n_backbone_contacts;
   env.attributes["residual_force_ratio"] = response.residual_force_ratio;
   env.attributes["seconds"] = response.seconds_total;
+  if (response.frictional) {
+    // docs/probes.md "Linear response of a frictional packing": with contacts at the Coulomb
+    // limit the response depends on the direction and this envelope is not elastic.
+    env.attributes["frictional"] = 1.0;
+    env.attributes["n_coulomb_limit"] = response.n_coulomb_limit;
+    env.attributes["coulomb_limit_fraction"] = response.coulomb_limit_fraction;
+    env.attributes["direction_dependent"] = response.direction_dependent() ? 1.0 : 0.0;
+  }
   return env;
 }
 

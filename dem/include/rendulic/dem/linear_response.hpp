@@ -28,6 +28,13 @@
 // particle fixed (the right-hand sides sum to zero, so this only fixes the gauge). A
 // remaining zero or negative pivot (a floppy or unstable network) is reported as a failure
 // with its reason, never as numbers.
+//
+// Frictional packings (the overload with LinearFriction; docs/probes.md "Linear response of a
+// frictional packing"): the small-strain limit of the engine's tangential spring
+// (contact.hpp, TangentialContact): translations and rotations of the backbone particles,
+// a tangential spring k_t on every contact (treated as sticking), the terms of the existing
+// tangential force as the contact turns, and a non-symmetric Jacobian solved by sparse LU.
+// Contacts at the Coulomb limit are counted: the response is then direction-dependent.
 #pragma once
 
 #include <Eigen/Dense>
@@ -99,6 +106,14 @@ struct LinearResponse {
   double seconds_assembly = 0.0;
   double seconds_factorisation = 0.0;
   double seconds_total = 0.0;
+  // Frictional response only (LinearFriction given): contacts of the backbone whose tangential
+  // force is at the Coulomb limit (|f_t| >= (1 - coulomb_tolerance) mu f_n), treated as
+  // sticking. Where there is one, the true response depends on the loading direction and
+  // `stiffness` is that of the directions in which they all stick (an upper bound).
+  bool frictional = false;
+  int n_coulomb_limit = 0;
+  double coulomb_limit_fraction = 0.0;  // of the backbone contacts
+  bool direction_dependent() const { return n_coulomb_limit > 0; }
 
   // d_sigma (Pa) and d_F for a strain increment (compression positive).
   Eigen::Matrix3d stress_increment(const Eigen::Matrix3d& d_eps) const {
@@ -112,5 +127,28 @@ struct LinearResponse {
 // Throws InputError on inconsistent data or invalid options; an unjammed, floppy or unstable
 // network gives ok == false with the reason.
 LinearResponse linear_response(const PackingData& packing, const LinearResponseOptions& options);
+
+// The tangential state of a frictional packing at rest: the engine's material (k_t, mu) and the
+// tangential spring xi of each contact in contact with history (pair i < j, xi the
+// displacement of i's contact point relative to j's: the engine's Contact::spring). Contacts
+// without an entry have xi = 0 (formed, not yet sheared).
+struct LinearFriction {
+  double k_t = 0.0;  // tangential stiffness, kg/s^2
+  double mu = 0.0;   // Coulomb coefficient (> 0)
+  // A contact with |f_t| >= (1 - coulomb_tolerance) mu f_n is at the Coulomb limit.
+  double coulomb_tolerance = 1e-3;
+  struct Spring {
+    int i = 0, j = 0;
+    Eigen::Vector3d xi = Eigen::Vector3d::Zero();
+  };
+  std::vector<Spring> springs;
+  bool IsValid(std::string* why) const;
+};
+// The linear response of a frictional packing at rest (options.min_contacts is the caller's:
+// rattler_min_contacts(true) for a frictional packing, dem/measures.hpp). The Jacobian is not
+// symmetric (the engine's turned spring is not conservative): solved by sparse LU, so
+// n_negative_pivots and n_zero_pivots are -1 (not counted) and options.solver is not used.
+LinearResponse linear_response(const PackingData& packing, const LinearResponseOptions& options,
+                               const LinearFriction& friction);
 
 }  // namespace rendulic::dem

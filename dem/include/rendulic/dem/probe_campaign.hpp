@@ -48,11 +48,14 @@ Envelope dynamic_envelope(const DemSystem& state, double amplitude,
                           const std::vector<double>& theta_deg, const ProbeOptions& options);
 Envelope minimisation_envelope(const DemSystem& state, double amplitude,
                                const std::vector<double>& theta_deg, const ProbeOptions& options);
-// The linear response of the state (its positions, radii and cell) and its envelope.
+// The packing of a frictionless state for the energy-based static tools (minimisation, force
+// balance at rest); InputError naming dem.friction for a frictional one.
 PackingData packing_of(const DemSystem& state);
 // Positions, radii and cell alone, with or without friction: for the geometry of contacts
 // (the fabric split of a dynamic probe), never for a contact law.
 PackingData geometry_of(const DemSystem& state);
+// The linear response of the state and its envelope; a frictional state's takes its
+// tangential springs too (sticking contacts, docs/probes.md).
 Envelope linear_response_envelope(const DemSystem& state, double amplitude,
                                   const std::vector<double>& theta_deg, const ProbeOptions& options,
                                   LinearResponse* response = nullptr);
