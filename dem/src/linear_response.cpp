@@ -47,6 +47,14 @@ double seconds_since(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
 }
 
+// The weight of a contact in the fabric (eq. 2): the volumes of its two spheres.
+double pair_volume(const PackingData& packing, int i, int j) {
+  const auto volume = [&](int p) {
+    return 4.0 / 3.0 * std::numbers::pi * std::pow(packing.radii(p), 3);
+  };
+  return volume(i) + volume(j);
+}
+
 constexpr const char* kNoBackbone =
     "no rigid backbone: every particle is a rattler (the packing is not jammed)";
 
@@ -195,13 +203,10 @@ LinearResponse linear_response(const PackingData& packing, const LinearResponseO
   // Reference stress and fabric of the backbone (compression positive), residual forces.
   Eigen::MatrixX3d net = Eigen::MatrixX3d::Zero(n, 3);
   double sum_f = 0.0;
-  auto particle_volume = [&](int p) {
-    return 4.0 / 3.0 * std::numbers::pi * std::pow(packing.radii(p), 3);
-  };
   for (const BackboneContact& c : contacts) {
     const Eigen::Matrix3d nn = c.n * c.n.transpose();
     out.stress += (c.f * c.r) * nn;
-    out.fabric += (particle_volume(c.i) + particle_volume(c.j)) * nn;
+    out.fabric += pair_volume(packing, c.i, c.j) * nn;
     net.row(c.i) += c.f * c.n.transpose();
     net.row(c.j) -= c.f * c.n.transpose();
     sum_f += c.f;
@@ -344,7 +349,7 @@ LinearResponse linear_response(const PackingData& packing, const LinearResponseO
       ds_affine += rate(dl_affine);
       const Eigen::Vector3d dn = (dl - c.n * c.n.dot(dl)) / c.r;
       const Eigen::Matrix3d dnn = dn * c.n.transpose();
-      df += (particle_volume(c.i) + particle_volume(c.j)) * (dnn + dnn.transpose());
+      df += pair_volume(packing, c.i, c.j) * (dnn + dnn.transpose());
     }
     const double tr = de.trace();
     ds_full = ds_full / out.volume - sigma_t * tr;
@@ -541,15 +546,12 @@ LinearResponse linear_response(const PackingData& packing, const LinearResponseO
   // part is the residual torque), fabric and residual forces and torques.
   Eigen::MatrixXd net = Eigen::MatrixXd::Zero(n, 6);
   double sum_f = 0.0;
-  auto particle_volume = [&](int p) {
-    return 4.0 / 3.0 * std::numbers::pi * std::pow(packing.radii(p), 3);
-  };
   Eigen::Matrix3d stress = Eigen::Matrix3d::Zero();
   for (int q : backbone) {
     const FrictionalContact& c = all[q];
     const Eigen::Vector3d f = c.f_n * c.n + c.f_t;
     stress += (c.r * c.n) * f.transpose();
-    out.fabric += (particle_volume(c.i) + particle_volume(c.j)) * c.n * c.n.transpose();
+    out.fabric += pair_volume(packing, c.i, c.j) * c.n * c.n.transpose();
     net.block<1, 3>(c.i, 0) += f.transpose();
     net.block<1, 3>(c.j, 0) -= f.transpose();
     const Eigen::Vector3d nxf = c.n.cross(c.f_t);
@@ -647,7 +649,6 @@ LinearResponse linear_response(const PackingData& packing, const LinearResponseO
 
   // dsigma (compression positive) = (1/V) sum [dl (x) F_i + l (x) dF_i] - sigma tr dE, the
   // rate of eq. 1 as the engine measures it, symmetrised; d_eps = -dE gives C = -dsigma/dE.
-  Matrix6d c_full, c_affine, g_full, g_volume, g_rotation;
   for (int a = 0; a < 6; ++a) {
     const Eigen::Matrix3d& de = basis[a];
     Eigen::Matrix3d ds_full = Eigen::Matrix3d::Zero(), ds_affine = Eigen::Matrix3d::Zero();
@@ -656,33 +657,29 @@ LinearResponse linear_response(const PackingData& packing, const LinearResponseO
       const FrictionalContact& c = all[q];
       const Eigen::Vector3d l = c.r * c.n, f = c.f_n * c.n + c.f_t;
       const Eigen::Vector3d dl_affine = de * l;
-      Eigen::Vector3d dl = dl_affine, th_i = Eigen::Vector3d::Zero(), th_j = th_i;
+      Eigen::Vector3d dl = dl_affine;
       if (dof_u[c.i] >= 0) dl += u.block<3, 1>(dof_u[c.i], a);
       if (dof_u[c.j] >= 0) dl -= u.block<3, 1>(dof_u[c.j], a);
-      th_i = u.block<3, 1>(dof_w[c.i], a) / radius(c.i);
-      th_j = u.block<3, 1>(dof_w[c.j], a) / radius(c.j);
+      const Eigen::Vector3d th_i = u.block<3, 1>(dof_w[c.i], a) / radius(c.i);
+      const Eigen::Vector3d th_j = u.block<3, 1>(dof_w[c.j], a) / radius(c.j);
       const Eigen::Vector3d dF = c.A * dl + c.B_i * th_i + c.B_j * th_j;
       ds_full += dl * f.transpose() + l * dF.transpose();
       ds_affine += dl_affine * f.transpose() + l * (c.A * dl_affine).transpose();
       const Eigen::Vector3d dn = (dl - c.n * c.n.dot(dl)) / c.r;
       const Eigen::Matrix3d dnn = dn * c.n.transpose();
-      df += (particle_volume(c.i) + particle_volume(c.j)) * (dnn + dnn.transpose());
+      df += pair_volume(packing, c.i, c.j) * (dnn + dnn.transpose());
     }
     const double tr = de.trace();
     // (eval: a matrix plus its own transpose must not be written into itself.)
     ds_full = (0.5 * (ds_full + ds_full.transpose()) / out.volume - out.stress * tr).eval();
     ds_affine = (0.5 * (ds_affine + ds_affine.transpose()) / out.volume - out.stress * tr).eval();
-    c_full.col(a) = -to_mandel(Eigen::Matrix3d(ds_full));
-    c_affine.col(a) = -to_mandel(Eigen::Matrix3d(ds_affine));
-    g_rotation.col(a) = -to_mandel(Eigen::Matrix3d(df / out.volume));
-    g_volume.col(a) = to_mandel(Eigen::Matrix3d(out.fabric * tr));
-    g_full.col(a) = g_rotation.col(a) + g_volume.col(a);
+    out.stiffness.col(a) = -to_mandel(Eigen::Matrix3d(ds_full));
+    out.affine_stiffness.col(a) = -to_mandel(Eigen::Matrix3d(ds_affine));
+    out.fabric_rotation_stiffness.col(a) = -to_mandel(Eigen::Matrix3d(df / out.volume));
+    out.fabric_volume_stiffness.col(a) = to_mandel(Eigen::Matrix3d(out.fabric * tr));
+    out.fabric_stiffness.col(a) =
+        out.fabric_rotation_stiffness.col(a) + out.fabric_volume_stiffness.col(a);
   }
-  out.stiffness = c_full;
-  out.affine_stiffness = c_affine;
-  out.fabric_stiffness = g_full;
-  out.fabric_volume_stiffness = g_volume;
-  out.fabric_rotation_stiffness = g_rotation;
   out.ok = true;
   std::ostringstream os;
   os << "linear response (frictional): " << n << " particles, " << out.n_rattlers << " rattlers, "
