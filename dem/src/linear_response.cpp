@@ -89,6 +89,27 @@ Eigen::Matrix3d mandel_basis(int a) {
 }
 
 using SparseMatrix = Eigen::SparseMatrix<double>;
+
+// The six solves m u = rhs are accepted when the largest relative residual is below this; above
+// it the matrix is nearly singular and no response is given.
+constexpr double kMaxSolveResidual = 1e-6;
+
+double largest_relative_residual(const SparseMatrix& m, const Eigen::MatrixXd& u,
+                                 const Eigen::MatrixXd& rhs) {
+  double largest = 0.0;
+  for (Eigen::Index a = 0; a < rhs.cols(); ++a) {
+    const double b = rhs.col(a).norm();
+    if (b > 0.0) largest = std::max(largest, (m * u.col(a) - rhs.col(a)).norm() / b);
+  }
+  return largest;
+}
+
+std::string inaccurate_solve(double residual, const char* matrix) {
+  std::ostringstream os;
+  os << "linear response: the sparse solve is inaccurate (relative residual " << residual
+     << "): " << matrix << " is nearly singular";
+  return os.str();
+}
 using Ldlt = Eigen::SimplicialLDLT<SparseMatrix, Eigen::Lower, Eigen::AMDOrdering<int>>;
 
 // LDL^T with the count of negative and (relatively) zero pivots; nullptr if it failed.
@@ -313,19 +334,9 @@ LinearResponse linear_response(const PackingData& packing, const LinearResponseO
     if (out.n_zero_pivots > 0 || out.n_negative_pivots > 0) return pivot_failure();
     u = ldlt->solve(rhs);
   }
-  for (int a = 0; a < 6; ++a) {
-    const double b = rhs.col(a).norm();
-    if (b > 0.0) {
-      out.solve_residual =
-          std::max(out.solve_residual, (hessian * u.col(a) - rhs.col(a)).norm() / b);
-    }
-  }
-  if (!u.allFinite() || !(out.solve_residual < 1e-6)) {
-    std::ostringstream os;
-    os << "linear response: the sparse solve is inaccurate (relative residual "
-       << out.solve_residual << "): the Hessian is nearly singular";
-    return fail(os.str());
-  }
+  out.solve_residual = largest_relative_residual(hessian, u, rhs);
+  if (!u.allFinite() || !(out.solve_residual < kMaxSolveResidual))
+    return fail(inaccurate_solve(out.solve_residual, "the Hessian"));
 
   // Stress and fabric rates in the tension frame (dE), column by column.
   const Eigen::Matrix3d sigma_t = -out.stress;
@@ -634,18 +645,9 @@ LinearResponse linear_response(const PackingData& packing, const LinearResponseO
                 lu.lastErrorMessage() +
                 "): the contact network is floppy, no elastic response exists");
   const Eigen::MatrixXd u = lu.solve(rhs);
-  for (int a = 0; a < 6; ++a) {
-    const double b = rhs.col(a).norm();
-    if (b > 0.0)
-      out.solve_residual =
-          std::max(out.solve_residual, (jacobian * u.col(a) - rhs.col(a)).norm() / b);
-  }
-  if (!u.allFinite() || !(out.solve_residual < 1e-6)) {
-    std::ostringstream os;
-    os << "linear response: the sparse solve is inaccurate (relative residual "
-       << out.solve_residual << "): the frictional Jacobian is nearly singular";
-    return fail(os.str());
-  }
+  out.solve_residual = largest_relative_residual(jacobian, u, rhs);
+  if (!u.allFinite() || !(out.solve_residual < kMaxSolveResidual))
+    return fail(inaccurate_solve(out.solve_residual, "the frictional Jacobian"));
 
   // dsigma (compression positive) = (1/V) sum [dl (x) F_i + l (x) dF_i] - sigma tr dE, the
   // rate of eq. 1 as the engine measures it, symmetrised; d_eps = -dE gives C = -dsigma/dE.
