@@ -282,8 +282,8 @@ CeresRun run_ceres_once(const Objective& obj, std::vector<double> z, const Solve
   // search along it, each trial point a full evaluation with derivatives. For the integrated
   // laws such a step lands where the law is stiff (hundreds of substeps a probe), and the
   // default 20 trials were half of elastoplastic_fabric's fit; after 3 the step is given up and
-  // the trust region shrinks instead (docs/calibration.md "When to stop": 14.0 -> 9.1 s on
-  // quick, the same fit within 0.3 standard errors; 2 trials lose the basin).
+  // the trust region shrinks instead (docs/calibration.md "When to stop": 7.0 -> 4.7 s idle
+  // wall on quick, the same fit within 0.3 standard errors; 2 trials lose the basin).
   so.max_num_line_search_step_size_iterations = kLineSearchTrials;
   so.function_tolerance = o.function_tolerance;
   // Relative to the cost at the start, so that the criterion does not depend on the units
