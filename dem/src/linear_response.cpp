@@ -525,27 +525,32 @@ LinearResponse linear_response(const PackingData& packing, const LinearResponseO
       local[c.j] += blocks[q].bottomRightCorner<6, 6>();
     }
     for (int p = 0; p < n; ++p) {
-      if (!keep[p]) continue;
-      if (count[p] < options.min_contacts) {
+      if (keep[p] && count[p] < options.min_contacts) {
         keep[p] = 0;
         changed = true;
         ++out.n_rattlers;
-        continue;
-      }
-      // The symmetric part: a particle whose contacts cannot hold some motion is floppy and
-      // removed like a rattler (a particle with two contacts turning about the line through
-      // its contact points is held by the geometric terms alone). It may carry force along a
-      // chain: residual_force_ratio then shows the imbalance its removal leaves on its
-      // neighbours (docs/probes.md).
-      const Matrix6 sym = 0.5 * (local[p] + local[p].transpose());
-      if (Eigen::SelfAdjointEigenSolver<Matrix6>(sym, Eigen::EigenvaluesOnly).eigenvalues()(0) <
-          options.floppy_tolerance * k) {
-        keep[p] = 0;
-        changed = true;
-        ++out.n_rattlers;
-        ++out.n_floppy;
       }
     }
+  }
+  // Local zero modes: a particle whose contacts cannot hold some motion of it alone (the
+  // symmetric part of its 6x6 block has an eigenvalue below floppy_tolerance * k). With
+  // sticking contacts that is a two-contact particle spinning about the line through its
+  // contact points; the motion moves no contact point, so no contact does work on it. Such a
+  // particle is a strut: it carries force along a chain and the chain's stiffness, so removing
+  // it (as a frictionless floppy particle is) leaves its neighbours unbalanced and the network
+  // too soft (docs/probes.md: 8-11 % softer than the dynamic probes on frictional.toml's
+  // state a). It is kept, and each such mode v is held by a spring k v v^T: a mode that no
+  // contact loads takes no part in the response of the others, so the spring only removes
+  // the singularity (the particles' spin is then zero, which the response does not need).
+  std::vector<Matrix6> hold(n, Matrix6::Zero());
+  for (int p = 0; p < n; ++p) {
+    if (!keep[p]) continue;
+    const Eigen::SelfAdjointEigenSolver<Matrix6> eig(0.5 * (local[p] + local[p].transpose()));
+    for (int e = 0; e < 6; ++e) {
+      if (eig.eigenvalues()(e) >= options.floppy_tolerance * k) break;
+      hold[p] += k * eig.eigenvectors().col(e) * eig.eigenvectors().col(e).transpose();
+    }
+    if (!hold[p].isZero(0.0)) ++out.n_floppy;
   }
   std::vector<int> backbone;  // indices into all
   for (std::size_t q = 0; q < all.size(); ++q) {
@@ -580,11 +585,15 @@ LinearResponse linear_response(const PackingData& packing, const LinearResponseO
   // Its rotation stays free: a periodic packing has no zero mode of a common rotation.
   std::vector<int> dof_u(n, -1), dof_w(n, -1);
   int n_dof = 0, pinned = -1;
+  // The gauge is a particle without a held mode, so that the spring of a held mode acts on
+  // all six of its components.
+  for (int p = 0; p < n && pinned < 0; ++p)
+    if (keep[p] && hold[p].isZero(0.0)) pinned = p;
+  for (int p = 0; p < n && pinned < 0; ++p)
+    if (keep[p]) pinned = p;
   for (int p = 0; p < n; ++p) {
     if (!keep[p]) continue;
-    if (pinned < 0) {
-      pinned = p;
-    } else {
+    if (p != pinned) {
       dof_u[p] = n_dof;
       n_dof += 3;
     }
@@ -623,6 +632,16 @@ LinearResponse linear_response(const PackingData& packing, const LinearResponseO
       for (int b = 0; b < 4; ++b)
         if (d[b] >= 0) rhs.block<3, 1>(d[b], a) += g[b];
     }
+  }
+  for (int p = 0; p < n; ++p) {
+    if (!keep[p] || hold[p].isZero(0.0)) continue;
+    const std::array<int, 2> d = {dof_u[p], dof_w[p]};
+    for (int bi = 0; bi < 2; ++bi)
+      for (int bj = 0; bj < 2; ++bj)
+        if (d[bi] >= 0 && d[bj] >= 0)
+          for (int r = 0; r < 3; ++r)
+            for (int s = 0; s < 3; ++s)
+              triplets.emplace_back(d[bi] + r, d[bj] + s, hold[p](3 * bi + r, 3 * bj + s));
   }
   SparseMatrix jacobian(n_dof, n_dof);
   jacobian.setFromTriplets(triplets.begin(), triplets.end());
@@ -686,7 +705,8 @@ LinearResponse linear_response(const PackingData& packing, const LinearResponseO
   std::ostringstream os;
   os << "linear response (frictional): " << n << " particles, " << out.n_rattlers << " rattlers, "
      << out.n_backbone_contacts << " backbone contacts, " << out.n_coulomb_limit
-     << " at the Coulomb limit, residual force ratio " << out.residual_force_ratio;
+     << " at the Coulomb limit, " << out.n_floppy
+     << " struts with their spin held, residual force ratio " << out.residual_force_ratio;
   out.message = os.str();
   out.seconds_total = seconds_since(t_start);
   return out;

@@ -6,7 +6,8 @@
 //    pre-stress terms);
 //  - independent method: on a frictional packing of 250 particles at rest, the stress
 //    increment of the engine's own dynamic probes (affine loading, relaxation) in four
-//    directions equals the linear response's, and the frictionless response of the same
+//    directions equals the linear response's (its two-contact struts kept, their spin held),
+//    and the frictionless response of the same
 //    geometry is nowhere near it (it has no tangential springs: floppy, or far off);
 //  - the stage's path: the campaign gives a frictional envelope with its Coulomb attributes,
 //    and the minimisation probes still refuse the packing with one line.
@@ -114,9 +115,14 @@ TEST(LinearResponseFriction, MatchesTheEnginesDynamicProbes) {
   // directions come in opposite pairs): the even part holds the second-order terms and the
   // reference's own slow creep, the same in every direction (a centre shift of the envelope,
   // ~2000 Pa here against a response of ~20000 Pa), which the linear response has not.
-  // Stated tolerance: 5 % of the response's size (measured 3.2 %: the contacts at the Coulomb
-  // limit, treated as sticking, slide in some of these directions).
-  constexpr double kTol = 0.05;
+  // Stated tolerance: 1.5 % of the response's size (measured 0.57 % and 0.35 %; the contacts
+  // at the Coulomb limit, treated as sticking, may slide in some of these directions). Removing
+  // the four two-contact struts instead of holding their spin (docs/probes.md) gave 1.8 % and
+  // 3.0 %, with a residual force ratio of 2.7.
+  constexpr double kTol = 0.015;
+  // The struts kept, the reference is in equilibrium: no particle was removed with its load.
+  EXPECT_GT(lr.n_floppy, 0);
+  EXPECT_LT(lr.residual_force_ratio, 1e-3);
   const std::size_t half = theta.size() / 2;
   for (std::size_t p = 0; p < half; ++p) {
     const Eigen::Matrix3d d_eps = probe_strain(theta[p], amplitude);
@@ -135,8 +141,7 @@ TEST(LinearResponseFriction, MatchesTheEnginesDynamicProbes) {
       EXPECT_GT((frictionless.stress_increment(d_eps) - expected).norm(), 4 * kTol * size);
     }
   }
-  std::cout << lr.message << " (" << lr.n_floppy
-            << " floppy); frictionless: " << frictionless.message << "\n";
+  std::cout << lr.message << "; frictionless: " << frictionless.message << "\n";
 }
 
 TEST(LinearResponseFriction, MinimisationStillRefusesAFrictionalPacking) {

@@ -61,7 +61,8 @@ struct LinearResponseOptions {
   int min_contacts = 4;
   // A particle whose local block sum_c K_c has its smallest eigenvalue below
   // floppy_tolerance * k cannot be held by its contacts (e.g. 4 coplanar contacts) and is
-  // removed like a rattler.
+  // removed like a rattler. Frictional packings: such a particle is kept and only its local
+  // zero modes are held (docs/probes.md "Linear response of a frictional packing").
   double floppy_tolerance = 1e-6;
   // Pivots (D of LDL^T, squared diagonal of the Cholesky factor) below pivot_tolerance
   // times the largest pivot mean a global zero mode.
@@ -91,7 +92,9 @@ struct LinearResponse {
   double volume = 0.0;
   int n_particles = 0;
   int n_rattlers = 0;  // rattlers and locally floppy particles together
-  int n_floppy = 0;    // of which locally floppy
+  // Frictionless: of the rattlers, those removed as locally floppy. Frictional: backbone
+  // particles whose local zero modes are held (none of them is removed).
+  int n_floppy = 0;
   int n_contacts = 0;  // all contacts with overlap > 0
   int n_backbone_contacts = 0;
   std::vector<char> backbone;  // [N], 1 for the particles kept
