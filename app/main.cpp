@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "commands.hpp"
+#include "rendulic/calibration/solver.hpp"
 #include "rendulic/core/cleanup.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/version.hpp"
@@ -29,6 +30,7 @@ namespace {
 int main(int argc, char** argv) {
   using namespace rendulic;
   cleanup::install_handlers();
+  calibration::quiet_solver_logging();
   CLI::App cli{"rendulic: calibrate constitutive models of granular soils from DEM envelopes"};
   cli.set_version_flag("--version", std::string("rendulic ") + kVersion + " (" + kGitSha + ")");
   cli.require_subcommand(1);

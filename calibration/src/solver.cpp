@@ -1,6 +1,8 @@
 // Ceres and NLopt back ends (solver.hpp; docs/calibration.md "Back ends").
 #include "rendulic/calibration/solver.hpp"
 
+#include <glog/logging.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -676,6 +678,10 @@ FitResult solve(const Objective& obj, const std::vector<double>& z0, const Solve
   }
   out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return out;
+}
+
+void quiet_solver_logging() {
+  if (FLAGS_minloglevel < google::GLOG_FATAL) FLAGS_minloglevel = google::GLOG_FATAL;
 }
 
 }  // namespace rendulic::calibration

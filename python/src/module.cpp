@@ -26,6 +26,7 @@
 
 #include "commands.hpp"
 #include "progress.hpp"
+#include "rendulic/calibration/solver.hpp"
 #include "rendulic/core/cleanup.hpp"
 #include "rendulic/core/envelope_io.hpp"
 #include "rendulic/core/errors.hpp"
@@ -472,6 +473,7 @@ PYBIND11_MODULE(_rendulic, m) {
     cleanup::install_handlers();
     ::sigaction(SIGINT, &python_int, nullptr);
   }
+  calibration::quiet_solver_logging();  // before any thread of ours (solver.hpp)
 
   // The message is the CLI's line after "rendulic: " (main.cpp prints it through printable()).
   static py::exception<InputError> input_error(m, "InputError", PyExc_ValueError);

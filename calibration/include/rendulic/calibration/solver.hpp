@@ -96,4 +96,11 @@ FitResult solve(const Objective& objective, const std::vector<double>& z0,
 // 0.5 |r|^2 at z (+inf where the model fails).
 double objective_cost(const Objective& objective, const std::vector<double>& z);
 
+// Ceres reports a failed evaluation (a law that cannot integrate a trial point) through glog
+// at ERROR level whatever its logging_type says: a raw line on stderr that reads like a
+// failure of the run while the fit goes on and reports its own termination. Call once at
+// start-up, before any thread (the executable's main, the Python module's import): glog then
+// prints fatal messages only. Ceres's progress (--progress) goes to stdout and still shows.
+void quiet_solver_logging();
+
 }  // namespace rendulic::calibration
