@@ -412,10 +412,10 @@ void DemSystem::force_block(std::size_t b) {
 // frictionless step, docs/performance.md "Friction"). So it runs in three passes over chunks
 // of up to FrictionLanes::kLanes touching entries: (1) per row, the touching test and a copy
 // of each touching entry's inputs into one array per component; (2) the law across the chunk,
-// a loop without branches that the compiler vectorises (AVX-512 / AVX2 lanes); (3) the sums in
-// the list's order, exactly as a per-entry loop would add them (the row's own sum kept across
-// chunks, the partners' shares added at once), so that the result is still a function of the
-// list alone.
+// four contacts at a time in the lanes of a V4, without branches (GCC does not vectorise a
+// loop with std::sqrt, which may set errno); (3) the sums in the list's order, exactly as a
+// per-entry loop would add them (the row's own sum kept across chunks, the partners' shares
+// added at once), so that the result is still a function of the list alone.
 namespace {
 struct FrictionLanes {
   static constexpr std::size_t kLanes = 64;
