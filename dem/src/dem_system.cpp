@@ -4,7 +4,9 @@
 // cache lines per partner), with the periodic image taken from a 27-entry shift table rather
 // than a rounding per pair. Measured alternatives that lost (docs/performance.md): a
 // branch-free first pass that compacts the touching pairs, and an AVX-512 gather version of
-// the pair loop; rows are ~9 entries long, too short for either to pay.
+// the pair loop; rows are ~9 entries long, too short for either to pay. With friction a
+// contact costs ~7x more, and there the touching entries are compacted and the tangential law
+// runs on four contacts at once (force_block_friction, docs/performance.md "Friction").
 #include "rendulic/dem/dem_system.hpp"
 
 #include <omp.h>
@@ -13,6 +15,7 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <numbers>
 #include <stdexcept>
@@ -403,8 +406,142 @@ void DemSystem::force_block(std::size_t b) {
 // touches: the result does not depend on the team either. The contact point lies at a_i =
 // r_i - delta / 2 from i's centre (a_i + a_j = |l|), for the torques and for the relative
 // velocity alike, so that the torques do the work the tangential springs store.
+//
+// A contact's law costs ~150 flops, two square roots and three divisions, the frictionless
+// one ~20: written per entry, the loop was bound by its scalar instruction count (3-4x the
+// frictionless step, docs/performance.md "Friction"). So it runs in three passes over chunks
+// of up to FrictionLanes::kLanes touching entries: (1) per row, the touching test and a copy
+// of each touching entry's inputs into one array per component; (2) the law across the chunk,
+// four contacts at a time in the lanes of a V4, without branches (GCC does not vectorise a
+// loop with std::sqrt, which may set errno); (3) the sums in the list's order, exactly as a
+// per-entry loop would add them (the row's own sum kept across chunks, the partners' shares
+// added at once), so that the result is still a function of the list alone.
+namespace {
+struct FrictionLanes {
+  static constexpr std::size_t kLanes = 64;
+  // Inputs: branch vector l, |l|^2, radii, the relative velocity at the step's end (v_end) and
+  // at mid-step (v_mid), both with the affine part D l; the angular velocities of i and j,
+  // predicted (we) and mid-step (wm); the stored spring xi. Outputs: the pair force f on i, n x
+  // f_t (the torques' direction), the lever arms a_i and a_j, the slip work; xi in place.
+  enum Field {
+    kLx,
+    kLy,
+    kLz,
+    kR2,
+    kRi,
+    kRj,
+    kVex,
+    kVey,
+    kVez,
+    kVmx,
+    kVmy,
+    kVmz,
+    kWeix,
+    kWeiy,
+    kWeiz,
+    kWejx,
+    kWejy,
+    kWejz,
+    kWmix,
+    kWmiy,
+    kWmiz,
+    kWmjx,
+    kWmjy,
+    kWmjz,
+    kXix,
+    kXiy,
+    kXiz,
+    kFx,
+    kFy,
+    kFz,
+    kNxfx,
+    kNxfy,
+    kNxfz,
+    kAi,
+    kAj,
+    kWork,
+    kFields
+  };
+  alignas(64) double v[kFields][kLanes];
+  std::int64_t entry[kLanes];
+  std::int32_t row[kLanes], partner[kLanes];
+};
+
+// TangentialContact's arithmetic on four contacts at once (contact.hpp, ScalarMath): a value
+// is a V4 of four lanes, a condition a mask of lanes, and select a blend.
+struct LaneMath {
+  static V4 lanes(V4 a) { return a; }
+  static V4 lanes(double a) { return V4{a, a, a, a}; }
+  static V4 sqrt(V4 x) {
+#if defined(__AVX__)
+    return __builtin_ia32_sqrtpd256(x);
+#else
+    return V4{std::sqrt(x[0]), std::sqrt(x[1]), std::sqrt(x[2]), std::sqrt(x[3])};
+#endif
+  }
+  static V4 abs(V4 x) { return x < 0.0 ? -x : x; }
+  template <class Mask, class A, class B>
+  static V4 select(Mask c, A a, B b) {
+    return c ? lanes(a) : lanes(b);
+  }
+};
+
+// Pass (2): the contact law of the chunk, four lanes (contacts) at a time; the lanes past
+// `count` compute on stale inputs and are never read.
+void friction_law(FrictionLanes& c, std::size_t count, const NormalContact& law,
+                  const TangentialContact& tangential, double dt) {
+  using F = FrictionLanes;
+  using A3 = std::array<V4, 3>;
+  auto in = [&](int field, std::size_t k) { return load4(&c.v[field][k]); };
+  auto out = [&](int field, std::size_t k, V4 x) { store4(&c.v[field][k], x); };
+  auto in3 = [&](int field, std::size_t k) {
+    return A3{in(field, k), in(field + 1, k), in(field + 2, k)};
+  };
+  for (std::size_t k = 0; k < count; k += 4) {
+    const A3 l = in3(F::kLx, k);
+    const V4 ri = in(F::kRi, k), rj = in(F::kRj, k);
+    const V4 d = LaneMath::sqrt(in(F::kR2, k));
+    const V4 inv = 1.0 / d;
+    const V4 delta = (ri + rj) - d;
+    const A3 n = {l[0] * inv, l[1] * inv, l[2] * inv};
+    const A3 ve = in3(F::kVex, k);
+    const V4 f_n = law.k * delta - law.gamma * (l[0] * ve[0] + l[1] * ve[1] + l[2] * ve[2]) * inv;
+    // Contact-point velocities: v_rel - (a_i w_i + a_j w_j) x n, tangential part.
+    const V4 ai = ri - 0.5 * delta, aj = rj - 0.5 * delta;
+    auto contact_point = [&](const A3& u, int wi, int wj) {
+      const A3 w = {ai * in(wi, k) + aj * in(wj, k), ai * in(wi + 1, k) + aj * in(wj + 1, k),
+                    ai * in(wi + 2, k) + aj * in(wj + 2, k)};
+      A3 p = {u[0] - (w[1] * n[2] - w[2] * n[1]), u[1] - (w[2] * n[0] - w[0] * n[2]),
+              u[2] - (w[0] * n[1] - w[1] * n[0])};
+      const V4 pn = p[0] * n[0] + p[1] * n[1] + p[2] * n[2];
+      for (int a = 0; a < 3; ++a) p[a] -= pn * n[a];
+      return p;
+    };
+    const A3 c_end = contact_point(ve, F::kWeix, F::kWejx);
+    const A3 c_mid = contact_point(in3(F::kVmx, k), F::kWmix, F::kWmjx);
+    // The spring turned with the contact: back into the tangent plane, its length kept.
+    A3 x = in3(F::kXix, k);
+    TangentialContact::turn<A3, LaneMath>(x, n);
+    A3 ft;
+    V4 work{};
+    tangential.force<A3, V4, LaneMath>(x, c_mid, c_end, dt, f_n, &work, ft);
+    for (int a = 0; a < 3; ++a) {
+      out(F::kXix + a, k, x[a]);
+      out(F::kFx + a, k, f_n * n[a] + ft[a]);
+    }
+    out(F::kNxfx, k, n[1] * ft[2] - n[2] * ft[1]);
+    out(F::kNxfy, k, n[2] * ft[0] - n[0] * ft[2]);
+    out(F::kNxfz, k, n[0] * ft[1] - n[1] * ft[0]);
+    out(F::kAi, k, ai);
+    out(F::kAj, k, aj);
+    out(F::kWork, k, work);
+  }
+}
+}  // namespace
+
 template <bool kStress>
 void DemSystem::force_block_friction(std::size_t b) {
+  using F = FrictionLanes;
   const std::size_t n = p_.size();
   const Eigen::Vector3d L = cell_.lengths();
   V4 shift[27];
@@ -426,6 +563,7 @@ void DemSystem::force_block_friction(std::size_t b) {
   for (std::size_t i = lo; i < hi; ++i) {
     store4(A + 8 * i, V4{});
     store4(Q + 16 * i + 12, V4{});
+    if constexpr (kStress) sd[3 * i] = sd[3 * i + 1] = sd[3 * i + 2] = 0.0;
   }
   for (std::size_t s = slot_lo_[b]; s < slot_lo_[b + 1]; ++s) {
     const std::size_t r = n + s, j = static_cast<std::size_t>(slot_particle_[s]);
@@ -435,63 +573,104 @@ void DemSystem::force_block_friction(std::size_t b) {
     for (int q = 0; q < 12; q += 4) store4(Q + 16 * r + q, load4(Q + 16 * j + q));
     store4(Q + 16 * r + 12, V4{});
   }
+  F lanes{};
+  auto& v = lanes.v;
+  std::size_t count = 0;
   double dissipated = 0;
+  // Pass (3)'s running sums of the current row, kept across chunks (a row may span two).
+  std::size_t row = n;
+  V4 fi = {}, ti = {}, si = {};
+  auto finish_row = [&] {
+    if (row == n) return;
+    store4(A + 8 * row, load4(A + 8 * row) + fi);
+    store4(Q + 16 * row + 12, load4(Q + 16 * row + 12) + ti);
+    if constexpr (kStress) {
+      sd[3 * row] = si[0];
+      sd[3 * row + 1] = si[1];
+      sd[3 * row + 2] = si[2];
+    }
+    fi = ti = si = V4{};
+  };
+  auto run_chunk = [&] {
+    friction_law(lanes, count, law, tangential, dt);
+    for (std::size_t k = 0; k < count; ++k) {
+      const std::size_t i = static_cast<std::size_t>(lanes.row[k]);
+      if (i != row) {
+        finish_row();
+        row = i;
+      }
+      const std::size_t j = static_cast<std::size_t>(lanes.partner[k]);
+      const V4 f = {v[F::kFx][k], v[F::kFy][k], v[F::kFz][k], 0.0};
+      const V4 nxf = {v[F::kNxfx][k], v[F::kNxfy][k], v[F::kNxfz][k], 0.0};
+      fi += f;
+      store4(A + 8 * j, load4(A + 8 * j) - f);
+      ti -= v[F::kAi][k] * nxf;
+      store4(Q + 16 * j + 12, load4(Q + 16 * j + 12) - v[F::kAj][k] * nxf);
+      if constexpr (kStress) si += V4{v[F::kLx][k], v[F::kLy][k], v[F::kLz][k], 0.0} * f;
+      if (advance) {
+        double* xi = H + 3 * lanes.entry[k];
+        xi[0] = v[F::kXix][k], xi[1] = v[F::kXiy][k], xi[2] = v[F::kXiz][k];
+        dissipated += v[F::kWork][k];
+      }
+    }
+    count = 0;
+  };
+  // Pass (1). It waits on memory: a touching partner is four cache lines (position, velocity
+  // with accumulator, rot16_), not two as in the frictionless loop, so the records of the entry
+  // kAhead places on are requested while this one is handled.
+  constexpr std::int64_t kAhead = 6;
+  const std::int64_t last_entry = off[hi] - 1;
   for (std::size_t i = lo; i < hi; ++i) {
     const V4 pi = load4(P + 4 * i), vi = load4(W + 8 * i);
     const V4 vmi = load4(Q + 16 * i), wmi = load4(Q + 16 * i + 4), wei = load4(Q + 16 * i + 8);
     const double ri = P[4 * i + 3];
     const std::int64_t end = off[i + 1];
-    V4 fi = {}, ti = {}, si = {};
     for (std::int64_t e = off[i]; e < end; ++e) {
       const std::size_t j = static_cast<std::size_t>(idx[e]);
+      const std::size_t ahead = static_cast<std::size_t>(idx[std::min(e + kAhead, last_entry)]);
+      __builtin_prefetch(P + 4 * ahead);
+      __builtin_prefetch(W + 8 * ahead);
+      __builtin_prefetch(Q + 16 * ahead);
+      __builtin_prefetch(Q + 16 * ahead + 8);
       double* xi = H + 3 * e;
       V4 l = pi - load4(P + 4 * j);
       l[3] = 0.0;
       const double r2 = dot3(l, l);
       const double rj = P[4 * j + 3];
-      const double R = ri + rj;
-      if (r2 >= R * R) {
+      if (r2 >= (ri + rj) * (ri + rj)) {
         // Contact lost: so is its history (stored only if there was one: most entries of the
-        // list never touch).
-        if (advance && (xi[0] != 0 || xi[1] != 0 || xi[2] != 0)) xi[0] = xi[1] = xi[2] = 0.0;
+        // list never touch). One test of the three components' bits.
+        std::uint64_t bits[3];
+        std::memcpy(bits, xi, sizeof bits);
+        if (advance && (bits[0] | bits[1] | bits[2]) != 0) xi[0] = xi[1] = xi[2] = 0.0;
         continue;
       }
-      const double d = std::sqrt(r2);
-      const double inv = 1.0 / d;
-      const double delta = R - d;
-      const V4 nv = l * inv;
-      double* wj = W + 8 * j;
-      double* qj = Q + 16 * j;
-      const V4 v_end = vi - load4(wj) + D * l;
-      const double f_n = law.k * delta - law.gamma * dot3(l, v_end) * inv;
-      // Contact-point velocities: v_rel - (a_i w_i + a_j w_j) x n, tangential part.
-      const double ai = ri - 0.5 * delta, aj = rj - 0.5 * delta;
-      V4 c_end = v_end - cross3(ai * wei + aj * load4(qj + 8), nv);
-      c_end -= dot3(c_end, nv) * nv;
-      V4 c_mid = vmi - load4(qj) + D * l - cross3(ai * wmi + aj * load4(qj + 4), nv);
-      c_mid -= dot3(c_mid, nv) * nv;
-      // The spring turned with the contact: back into the tangent plane, its length kept.
-      V4 x = {xi[0], xi[1], xi[2], 0.0};
-      TangentialContact::turn(x, nv);
-      V4 ft;
-      tangential.force(x, c_mid, c_end, dt, f_n, &dissipated, ft);
-      if (advance) xi[0] = x[0], xi[1] = x[1], xi[2] = x[2];
-      const V4 f = f_n * nv + ft;
-      fi += f;
-      store4(wj + 4, load4(wj + 4) - f);
-      const V4 nxf = cross3(nv, ft);
-      ti -= ai * nxf;
-      store4(qj + 12, load4(qj + 12) - aj * nxf);
-      if constexpr (kStress) si += l * f;
-    }
-    store4(A + 8 * i, load4(A + 8 * i) + fi);
-    store4(Q + 16 * i + 12, load4(Q + 16 * i + 12) + ti);
-    if constexpr (kStress) {
-      sd[3 * i] = si[0];
-      sd[3 * i + 1] = si[1];
-      sd[3 * i + 2] = si[2];
+      const double* qj = Q + 16 * j;
+      const V4 ve = vi - load4(W + 8 * j) + D * l;
+      const V4 vm = vmi - load4(qj) + D * l;
+      const V4 wej = load4(qj + 8), wmj = load4(qj + 4);
+      const std::size_t k = count++;
+      for (int a = 0; a < 3; ++a) {
+        v[F::kLx + a][k] = l[a];
+        v[F::kVex + a][k] = ve[a];
+        v[F::kVmx + a][k] = vm[a];
+        v[F::kWeix + a][k] = wei[a];
+        v[F::kWejx + a][k] = wej[a];
+        v[F::kWmix + a][k] = wmi[a];
+        v[F::kWmjx + a][k] = wmj[a];
+        v[F::kXix + a][k] = xi[a];
+      }
+      v[F::kR2][k] = r2;
+      v[F::kRi][k] = ri;
+      v[F::kRj][k] = rj;
+      lanes.entry[k] = e;
+      lanes.row[k] = static_cast<std::int32_t>(i);
+      lanes.partner[k] = static_cast<std::int32_t>(j);
+      if (count == F::kLanes) run_chunk();
     }
   }
+  run_chunk();
+  finish_row();
   if (advance) block_dissipation_[b] = dissipated;
 }
 

@@ -52,30 +52,35 @@ struct NormalContact {
 // contact point twice: at mid-step, the displacement's increment over the step (the positions
 // of velocity Verlet advance with it), and predicted at the step's end, the dashpot's (as the
 // normal dashpot, dem_system.hpp).
+// The arithmetic TangentialContact is written in: plain doubles for its scalar callers. The
+// engine's force loop passes its own, whose values are vectors of contacts (one per lane) and
+// whose select is a blend (dem_system.cpp), so that the same law runs across contacts.
+struct ScalarMath {
+  static double sqrt(double x) { return std::sqrt(x); }
+  static double abs(double x) { return std::abs(x); }
+  static double select(bool c, double a, double b) { return c ? a : b; }
+};
+
 struct TangentialContact {
   double k_t = 0;      // kg/s^2
   double gamma_t = 0;  // kg/s
   double mu = 0;       // Coulomb coefficient
   // Turns the spring with the contact: xi back into the plane normal to the unit vector n,
   // its length kept (Luding 2008, eq. 17). Exact when the contact turned by a rotation.
-  template <class V>
+  // Without branches (selects only, M above), so that it runs across contacts: a spring
+  // without history (xi = 0), already in the plane (xi . n = 0) or along n is only projected.
+  template <class V, class M = ScalarMath>
   static void turn(V& xi, const V& n) {
-    const double xn = xi[0] * n[0] + xi[1] * n[1] + xi[2] * n[2];
-    if (xn == 0) return;
-    const double len2 = xi[0] * xi[0] + xi[1] * xi[1] + xi[2] * xi[2];
+    const auto xn = xi[0] * n[0] + xi[1] * n[1] + xi[2] * n[2];
+    const auto len2 = xi[0] * xi[0] + xi[1] * xi[1] + xi[2] * xi[2];
     for (int a = 0; a < 3; ++a) xi[a] -= xn * n[a];
     // The projection shortened xi by the factor sqrt(1 - e), e = xn^2 / |xi|^2 (the contact's
     // turn per step, squared: tiny). The inverse, (1 - e)^(-1/2) = 1 + e/2 + 3e^2/8 + ..., to
-    // round-off for e < 1e-5 (the next term is below 1e-15), saves the engine a square root.
-    const double e = xn * xn / len2;
-    double s = 0;
-    if (e < 1e-5) {
-      s = 1.0 + e * (0.5 + 0.375 * e);
-    } else {
-      const double p2 = xi[0] * xi[0] + xi[1] * xi[1] + xi[2] * xi[2];
-      if (!(p2 > 0)) return;  // xi was along n: nothing to turn
-      s = std::sqrt(len2 / p2);
-    }
+    // round-off for e < 1e-5 (the next term is below 1e-15), saves a square root.
+    const auto e = M::select(len2 > 0.0, xn * xn / len2, 0.0);
+    const auto p2 = xi[0] * xi[0] + xi[1] * xi[1] + xi[2] * xi[2];
+    const auto exact = M::select(p2 > 0.0, M::sqrt(len2 / p2), 1.0);
+    const auto s = M::select(e < 1e-5, 1.0 + e * (0.5 + 0.375 * e), exact);
     for (int a = 0; a < 3; ++a) xi[a] *= s;
   }
   // Advances xi by v_mid dt and sets f to the tangential force on i, f_t = -k_t xi - gamma_t
@@ -84,29 +89,32 @@ struct TangentialContact {
   // - xi) (the energy the slip takes from the spring; >= 0 unless the dashpot alone exceeds the
   // limit), is added to *dissipated: with it, the work done on the contact equals the spring's
   // energy plus the dashpot's and the slip's dissipation. Vectors are anything with three
-  // components indexed [0..2] (Eigen vectors, the engine's packed records); the force is an
-  // out parameter because a returned 32-byte vector record would change the ABI with the
-  // build's instruction set (GCC's -Wpsabi, an error where AVX is off).
-  template <class V>
-  void force(V& xi, const V& v_mid, const V& v_end, double dt, double f_n, double* dissipated,
-             V& f) const {
+  // components indexed [0..2] (Eigen vectors, the engine's packed records, arrays of lanes);
+  // the force is an out parameter because a returned 32-byte vector record would change the
+  // ABI with the build's instruction set (GCC's -Wpsabi, an error where AVX is off).
+  template <class V, class S, class M = ScalarMath>
+  void force(V& xi, const V& v_mid, const V& v_end, double dt, S f_n, S* dissipated, V& f) const {
     for (int a = 0; a < 3; ++a) xi[a] += v_mid[a] * dt;
-    f = xi;
     for (int a = 0; a < 3; ++a) f[a] = -k_t * xi[a] - gamma_t * v_end[a];
-    const double limit = mu * std::abs(f_n);
-    const double f2 = f[0] * f[0] + f[1] * f[1] + f[2] * f[2];
-    if (f2 > limit * limit) {
-      const double s = limit / std::sqrt(f2);
-      double slip_work = 0;
-      for (int a = 0; a < 3; ++a) {
-        f[a] *= s;
-        const double spring = f[a] + gamma_t * v_end[a];  // -k_t xi after the slip
-        const double trial = xi[a];
-        xi[a] = -spring / k_t;
-        slip_work -= spring * (trial - xi[a]);
-      }
-      *dissipated += slip_work;
+    const auto limit = mu * M::abs(f_n);
+    const auto f2 = f[0] * f[0] + f[1] * f[1] + f[2] * f[2];
+    // Selects instead of a branch, as in turn(): a sticking contact keeps f and xi (s = 1, no
+    // slip work). The reset spring is multiplied by 1 / k_t, not divided by k_t: three
+    // divisions fewer per contact, a change in the last bit.
+    const auto slides = f2 > limit * limit;
+    const auto s = M::select(slides, limit / M::sqrt(f2), 1.0);
+    const double inv_k_t = 1.0 / k_t;
+    S slip_work{};
+    for (int a = 0; a < 3; ++a) {
+      const auto held = f[a] * s;
+      const auto spring = held + gamma_t * v_end[a];  // -k_t xi after the slip
+      const auto trial = xi[a];
+      const auto reset = M::select(slides, -spring * inv_k_t, trial);
+      slip_work -= spring * (trial - reset);
+      f[a] = M::select(slides, held, f[a]);
+      xi[a] = reset;
     }
+    *dissipated += slip_work;
   }
   // The spring's energy k_t |xi|^2 / 2, from |xi|^2.
   double energy(double xi2) const { return 0.5 * k_t * xi2; }
