@@ -210,7 +210,8 @@ class DemSystem {
   TeamController controller_;
   int fixed_team_ = 0;
   int last_team_ = 1;
-  // Friction (material().mu > 0): the frictional force loop runs instead of the vectorised one.
+  // Friction (material().mu > 0): force_block_friction runs instead of force_block (its own
+  // compaction and four-lane tangential law, dem_system.cpp).
   bool friction_ = false;
   bool advancing_ = false;    // a step (history advanced, slip counted) or a refresh (not)
   std::vector<double> hist_;  // xi per list entry (3 doubles), as its row sees the pair
