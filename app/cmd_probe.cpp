@@ -71,6 +71,7 @@ Scenario probe_scenario(const PackingSource& src, const ProbeRequest& o) {
   for (const auto& s : o.sets) sc.apply_override(s);
   if (!o.amplitudes.empty()) sc.set("probes.amplitudes", o.amplitudes);
   if (o.directions > 0) sc.set("probes.directions", std::int64_t{o.directions});
+  if (!o.planes.empty()) sc.set("probes.planes", o.planes);
   return sc;
 }
 
@@ -112,15 +113,20 @@ Moved what_moved(const Packing& before, const dem::DemSystem& after, double r_me
 
 // One line per envelope: the stress fit's semi-axes per unit strain (in k*) and inclination.
 void print_summary(const ResultsReader& in, const std::string& group) {
-  std::cout << std::left << std::setw(26) << "envelope" << std::setw(9) << "shape" << std::right
+  const std::string envs = paths::envelopes(group);
+  // Wide enough for the longest name (e.g. linear_response_meridian_22.5_5e-05).
+  int width = 26;
+  if (in.is_group(envs))
+    for (const std::string& name : in.children(envs))
+      width = std::max(width, static_cast<int>(name.size()) + 2);
+  std::cout << std::left << std::setw(width) << "envelope" << std::setw(9) << "shape" << std::right
             << std::setw(14) << "a/strain[k*]" << std::setw(14) << "b/strain[k*]" << std::setw(18)
             << "inclination[deg]"
             << "\n";
-  const std::string envs = paths::envelopes(group);
   if (!in.is_group(envs)) return;
   for (const std::string& name : in.children(envs)) {
     const std::string g = paths::envelope(group, name), f = g + paths::kFitStress;
-    std::cout << std::left << std::setw(26) << name;
+    std::cout << std::left << std::setw(width) << name;
     if (!in.is_group(f) || !in.has_attr(f, "semi_axes")) {
       std::cout << (in.has_attr(g, "error") ? in.attr_string(g, "error") : "no fit") << "\n";
       continue;
@@ -247,7 +253,9 @@ std::filesystem::path probe_packing(const ProbeRequest& r) {
     std::atomic<long> done{0};
     long total = 0;
     for (const auto& m : methods)
-      total += m == kLinear ? 0 : static_cast<long>(po.amplitudes.size()) * po.directions;
+      total += m == kLinear
+                   ? 0
+                   : static_cast<long>(po.planes.size() * po.amplitudes.size()) * po.directions;
     po.probe_done = [&progress, &done, total] { progress.count(++done, total); };
     po.stop = stop_checker();
     for (const auto& m : methods) {
@@ -257,12 +265,14 @@ std::filesystem::path probe_packing(const ProbeRequest& r) {
       } catch (const std::runtime_error& e) {
         if (m != kLinear || dynamic_cast<const InputError*>(&e)) throw;
         // As in the run: a network with no elastic response is a finding, recorded.
-        for (double a : po.amplitudes) {
-          const std::string g = paths::envelope(group, paths::envelope_name(m, a));
-          out.attr(g, "method", m);
-          out.attr(g, "amplitude", a);
-          out.attr(g, "error", std::string(e.what()));
-        }
+        for (const std::string& plane : po.planes)
+          for (double a : po.amplitudes) {
+            const std::string g = paths::envelope(group, paths::envelope_name(m, a, plane));
+            out.attr(g, "method", m);
+            out.attr(g, "amplitude", a);
+            out.attr(g, "plane", plane);
+            out.attr(g, "error", std::string(e.what()));
+          }
         log::warning("no linear response: ", e.what());
       }
     }
@@ -303,6 +313,8 @@ Subcommand add_probe(CLI::App& parent) {
   sub->add_option("--amplitudes", o->amplitudes, "probe strain amplitudes (probes.amplitudes)");
   sub->add_option("--directions", o->directions, "probe directions M (probes.directions)")
       ->check(CLI::PositiveNumber);
+  sub->add_option("--planes", o->planes,
+                  "probe planes: rendulic, deviatoric, meridian_<Lode deg> (probes.planes)");
   sub->add_option("--set", o->sets, "override a scenario key by its dotted path: a.b=value")
       ->take_all();
   sub->add_option("--threads", o->threads, "OpenMP threads over the probes (0: all cores)")

@@ -59,6 +59,7 @@ struct ProbeRequest {
   std::vector<std::string> methods;
   std::vector<double> amplitudes;
   int directions = 0;
+  std::vector<std::string> planes;  // probes.planes when not empty
   std::vector<std::string> sets;
   int threads = 0;
   bool quiet = false;

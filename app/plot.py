@@ -106,12 +106,21 @@ def states(f):
     return sorted(out, key=lambda t: -t[0])  # -eps_dev increasing (extension: eps_dev < 0)
 
 
+def rendulic_plane(g):
+    """Whether an envelope's pairs are Rendulic pairs: the figures draw Rendulic planes, an
+    envelope of another probe plane (docs/probes.md "Probe planes") is listed by the report."""
+    return str(attr(g, "plane", "rendulic")) == "rendulic"
+
+
 def envelopes(state_group, kind):
-    """Envelopes of a state that are elastic (amplitude < 1e-4) or plastic (> 1e-3)."""
+    """Rendulic-plane envelopes of a state that are elastic (amplitude < 1e-4) or plastic
+    (> 1e-3)."""
     if "envelopes" not in state_group:
         return []
     out = []
     for name, g in state_group["envelopes"].items():
+        if not rendulic_plane(g):
+            continue
         a = float(attr(g, "amplitude", 0.0))
         if (kind == "elastic" and a < ELASTIC_MAX) or (kind == "plastic" and a > PLASTIC_MIN):
             out.append((name, g))
@@ -307,7 +316,7 @@ def fig2_strain_circle(f, out, ctx):
         if "envelopes" not in g:
             continue
         for name, e in g["envelopes"].items():
-            if "strain" not in e:
+            if "strain" not in e or not rendulic_plane(e):
                 continue
             s = np.asarray(e["strain"][:], dtype=float)
             n = np.linalg.norm(s, axis=1)

@@ -53,6 +53,9 @@ struct StateInfo {
   std::string label;
   double eps_dev = kNaN, volume_fraction = kNaN;
   std::vector<EnvInfo> envs;
+  // Envelopes of other probe planes than the Rendulic one (docs/probes.md "Probe planes"): the
+  // claims read Rendulic pairs, so these are only listed with their fits.
+  std::vector<EnvInfo> other_planes;
   bool has_range = false;
   double yield_strain = kNaN;
   bool yielded = false;
@@ -108,7 +111,7 @@ std::vector<StateInfo> read_states(const ResultsReader& r) {
       }
       env.stress = read_fit(r, e + paths::kFitStress);
       env.fabric = read_fit(r, e + paths::kFitFabric);
-      s.envs.push_back(std::move(env));
+      (env.data.plane.rendulic() ? s.envs : s.other_planes).push_back(std::move(env));
     }
     out.push_back(std::move(s));
   }
@@ -698,6 +701,30 @@ std::string path_section(const ResultsReader& r) {
 }
 }  // namespace
 
+// The envelopes of other probe planes than the Rendulic one, with their stress fits per unit
+// strain (semi-axes in k*, inclination from the plane's first axis).
+std::string other_planes_section(const ResultsReader& r) {
+  std::ostringstream rows;
+  for (const StateInfo& s : read_states(r))
+    for (const EnvInfo& e : s.other_planes) {
+      rows << "| " << s.label << " | " << e.name << " | " << e.data.plane.name << " | " << e.method
+           << " | " << fmt(e.amplitude) << " | ";
+      if (!e.stress.present || e.stress.shape.empty()) {
+        rows << "- | - | - | - |\n";
+        continue;
+      }
+      rows << e.stress.shape << " | " << fmt(e.stress.a / e.amplitude, 4) << " | "
+           << fmt(e.stress.b / e.amplitude, 4) << " | " << fmt(e.stress.incl, 4) << " |\n";
+    }
+  if (rows.str().empty()) return "";
+  return "\n## Envelopes in other probe planes (docs/probes.md \"Probe planes\")\n\nNot used "
+         "by the claims, which read Rendulic pairs. Pairs are the coordinates in the plane; the "
+         "stress fit's semi-axes per unit strain in k*, inclination from the plane's first "
+         "axis.\n\n| state | envelope | plane | method | amplitude | shape | a/A [k*] | b/A [k*] "
+         "| inclination [deg] |\n|---|---|---|---|---|---|---|---|---|\n" +
+         rows.str();
+}
+
 std::string report_markdown(const ResultsReader& r, const std::vector<Claim>& claims,
                             const std::vector<std::string>& figures) {
   std::ostringstream md;
@@ -725,6 +752,7 @@ std::string report_markdown(const ResultsReader& r, const std::vector<Claim>& cl
        << " | **" << c.verdict << "** |\n";
   md << "\nVerdicts use the dynamic-probe envelopes where present (the seed's method), else "
         "minimisation, else linear response (elastic only).\n";
+  md << other_planes_section(r);
   // The elastic range of every state, at nu_max and at the pressure branches.
   std::vector<std::string> roots = {""};
   if (r.exists(paths::kPressure))

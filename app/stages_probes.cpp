@@ -46,7 +46,8 @@ void campaign(const Scenario& sc, ResultsWriter& out, const RunContext& ctx,
   std::atomic<long> done{0};
   count_probes(
       o, progress, done,
-      static_cast<long>(states.size() * methods.size() * o.amplitudes.size()) * o.directions);
+      static_cast<long>(states.size() * methods.size() * o.planes.size() * o.amplitudes.size()) *
+          o.directions);
   for (const auto& [label, state] : states) {
     progress.start_task("state " + label + ", probe");
     write_probe_campaign(state, paths::state(label), methods, o, out);
@@ -85,13 +86,15 @@ void stage_linear_response(const Scenario& sc, ResultsWriter& out, const RunCont
     } catch (const std::runtime_error& e) {
       // A network with no elastic response (unstable even at its energy minimum) is a
       // finding about that state, not a failure of the run: record it, say it, go on.
-      for (double a : o.amplitudes) {
-        const std::string g =
-            paths::envelope(paths::state(label), paths::envelope_name("linear_response", a));
-        out.attr(g, "method", "linear_response");
-        out.attr(g, "amplitude", a);
-        out.attr(g, "error", std::string(e.what()));
-      }
+      for (const std::string& plane : o.planes)
+        for (double a : o.amplitudes) {
+          const std::string g = paths::envelope(paths::state(label),
+                                                paths::envelope_name("linear_response", a, plane));
+          out.attr(g, "method", "linear_response");
+          out.attr(g, "amplitude", a);
+          out.attr(g, "plane", plane);
+          out.attr(g, "error", std::string(e.what()));
+        }
       log::warning("no linear response for state ", label, ": ", e.what());
     }
   }
@@ -127,7 +130,7 @@ std::vector<dem::Envelope> write_probe_campaign(const dem::DemSystem& state,
       [&](const std::string& method, double amplitude, const dem::Envelope& env,
           const dem::LinearResponse* lr) {
         const std::string group =
-            paths::envelope(state_group, paths::envelope_name(method, amplitude));
+            paths::envelope(state_group, paths::envelope_name(method, amplitude, env.plane.name));
         write_envelope(out, group, env);
         if (lr) {
           if (lr->direction_dependent() && amplitude == options.amplitudes.front())

@@ -7,6 +7,7 @@
 #include "rendulic/core/conventions.hpp"
 #include "rendulic/core/envelope_io.hpp"
 #include "rendulic/core/errors.hpp"
+#include "rendulic/core/log.hpp"
 #include "rendulic/core/result_paths.hpp"
 #include "rendulic/core/results.hpp"
 #include "rendulic/models/paths.hpp"
@@ -165,7 +166,15 @@ CalibrationData load_calibration_data(const std::filesystem::path& file,
       // An envelope that could not be measured (e.g. no linear response of an unstable
       // network) carries only an `error` attribute: there is nothing to fit.
       if (r.has_attr(paths::envelope(g, e), "error")) continue;
-      s.envelopes.push_back(calibration_envelope(r, paths::envelope(g, e), data.k_star));
+      EnvelopeRecord env = calibration_envelope(r, paths::envelope(g, e), data.k_star);
+      // The models' envelopes are Rendulic pairs (objective.cpp): an envelope of another probe
+      // plane (docs/probes.md "Probe planes") is not calibration data.
+      if (!env.plane.rendulic()) {
+        log::info(name, ": envelope ", l, "/", e, " is in the ", env.plane.name,
+                  " probe plane: not used by the calibration");
+        continue;
+      }
+      s.envelopes.push_back(std::move(env));
     }
     data.states.push_back(std::move(s));
   }

@@ -3,6 +3,7 @@
 #include "rendulic/core/envelope_io.hpp"
 
 #include <limits>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 
@@ -25,6 +26,9 @@ void write_envelope(ResultsWriter& out, const std::string& group, const Envelope
   out.attr(group, "method", envelope.method);
   out.attr(group, "directions", static_cast<std::int64_t>(m));
   out.attr(group, "k_star", envelope.k_star);
+  out.attr(group, "plane", envelope.plane.name);
+  const Eigen::Vector3d &u = envelope.plane.u, &v = envelope.plane.v;
+  out.attr(group, "plane_basis", std::vector<double>{u.x(), u.y(), u.z(), v.x(), v.y(), v.z()});
   out.write(group + datasets::kThetaDeg, envelope.theta_deg);
   out.write(group + datasets::kStrain, envelope.strain);
   out.write(group + datasets::kStressStar, envelope.stress_star);
@@ -65,6 +69,14 @@ EnvelopeRecord read_envelope(const ResultsReader& in, const std::string& group) 
                                                   : std::numeric_limits<double>::quiet_NaN();
   if (in.has_attr(group, "method")) env.method = in.attr_string(group, "method");
   if (in.has_attr(group, "k_star")) env.k_star = in.attr_double(group, "k_star");
+  if (in.has_attr(group, "plane")) {
+    // The name fixes the basis (core/conventions.hpp); plane_basis is for other readers.
+    const std::string plane = in.attr_string(group, "plane");
+    const std::optional<ProbePlane> known = probe_plane_named(plane);
+    if (!known)
+      throw InputError(where + ": unknown probe plane '" + plane + "' (" + kProbePlaneNames + ")");
+    env.plane = *known;
+  }
   auto vector = [&](const char* name, std::vector<double>& v) {
     if (in.exists(group + name)) v = in.read_vector(group + name);
   };

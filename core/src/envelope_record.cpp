@@ -8,10 +8,10 @@ namespace rendulic {
 void EnvelopeRecord::add(double theta, const Eigen::Matrix3d& d_eps, const Eigen::Matrix3d& d_sigma,
                          const Eigen::Matrix3d& d_f) {
   theta_deg.push_back(theta);
-  strain.push_back(rendulic_pair(d_eps));
-  stress.push_back(rendulic_pair(d_sigma));
+  strain.push_back(plane_pair(plane, d_eps));
+  stress.push_back(plane_pair(plane, d_sigma));
   stress_star.push_back(stress.back() / k_star);
-  fabric.push_back(rendulic_pair(d_f));
+  fabric.push_back(plane_pair(plane, d_f));
   d_stress.push_back(d_sigma);
   d_fabric.push_back(d_f);
 }

@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <iterator>
 #include <limits>
+#include <optional>
 #include <sstream>
 
 #include "rendulic/core/conventions.hpp"
@@ -28,14 +29,21 @@ bool ProbeOptions::IsValid(std::string* why) const {
     return false;
   };
   if (!probe_option_table().check(*this, why)) return false;
+  for (std::size_t i = 0; i < planes.size(); ++i) {
+    if (!probe_plane_named(planes[i]))
+      return fail("probes.planes: unknown plane '" + planes[i] + "' (" + kProbePlaneNames + ")");
+    if (std::find(planes.begin(), planes.begin() + static_cast<std::ptrdiff_t>(i), planes[i]) !=
+        planes.begin() + static_cast<std::ptrdiff_t>(i))
+      return fail("probes.planes: plane '" + planes[i] + "' given twice");
+  }
   if (threads < 0) return fail("probes: threads must be >= 0");
   if (!relax.IsValid(why)) return false;
   if (!minimise.IsValid(why)) return false;
   return linear.IsValid(why);
 }
 
-std::vector<double> probe_directions(int m) {
-  const Eigen::VectorXd d = probe_directions_deg(m);
+std::vector<double> probe_directions(int m, const ProbePlane& plane) {
+  const Eigen::VectorXd d = plane_directions_deg(plane, m);
   return {d.data(), d.data() + d.size()};
 }
 
@@ -152,17 +160,18 @@ std::vector<std::pair<int, int>> pairs_of(const std::vector<std::uint64_t>& keys
 // the per-probe records (each with its ProbeOutcome `outcome`); the caller adds its own
 // diagnostics and attributes.
 template <class Record>
-Envelope assemble_envelope(const std::string& method, double amplitude, double k_star,
-                           const std::vector<double>& theta_deg,
+Envelope assemble_envelope(const std::string& method, const ProbePlane& plane, double amplitude,
+                           double k_star, const std::vector<double>& theta_deg,
                            const std::vector<Record>& records) {
   Envelope env;
   env.method = method;
+  env.plane = plane;
   env.amplitude = amplitude;
   env.k_star = k_star;
   auto& diag = env.diagnostics;
   for (std::size_t p = 0; p < records.size(); ++p) {
     const ProbeOutcome& o = records[p].outcome;
-    env.add(theta_deg[p], probe_strain(theta_deg[p], amplitude), o.d_stress, o.d_fabric,
+    env.add(theta_deg[p], plane_strain(plane, theta_deg[p], amplitude), o.d_stress, o.d_fabric,
             o.split.volume, o.split.rotation, o.split.contacts);
     diag["contacts_opened"].push_back(o.changes.first);
     diag["contacts_closed"].push_back(o.changes.second);
@@ -282,7 +291,7 @@ namespace {
 // gets it relaxed from rank 0, so the ranks do not each relax it again).
 Envelope dynamic_envelope_of(const DemSystem& given, double amplitude,
                              const std::vector<double>& theta_deg, const ProbeOptions& options,
-                             bool given_is_reference) {
+                             const ProbePlane& plane, bool given_is_reference) {
   check(options, amplitude, theta_deg);
   // The common reference is the given state relaxed to the probes' own criterion: otherwise
   // every probe also records the reference's continuing relaxation (from the states' looser
@@ -304,7 +313,7 @@ Envelope dynamic_envelope_of(const DemSystem& given, double amplitude,
     reference = relax(state, options.relax);
     omp_set_num_threads(saved_threads);
   }
-  detail::ProbeTaskScope scope("dynamic", state, amplitude, theta_deg, options);
+  detail::ProbeTaskScope scope("dynamic", plane.name, state, amplitude, theta_deg, options);
   const double rate = probe_rate(state, options);
   const Measures before = state.measure();
   const std::vector<Contact> contacts_before = state.contacts();
@@ -324,7 +333,7 @@ Envelope dynamic_envelope_of(const DemSystem& given, double amplitude,
     omp_set_num_threads(1);
     DynamicProbe r;
     DemSystem sys = state;
-    const Eigen::Matrix3d d_eps = probe_strain(theta_deg[p], amplitude);
+    const Eigen::Matrix3d d_eps = plane_strain(plane, theta_deg[p], amplitude);
     r.load_steps = impose_strain_increment(sys, d_eps.diagonal(), rate);
     r.relaxed = relax(sys, options.relax);
     const Measures after = sys.measure();
@@ -339,7 +348,7 @@ Envelope dynamic_envelope_of(const DemSystem& given, double amplitude,
   });
   if (!assemble) return {};
   Envelope env =
-      assemble_envelope("dynamic", amplitude, state.material().k_star(), theta_deg, probes);
+      assemble_envelope("dynamic", plane, amplitude, state.material().k_star(), theta_deg, probes);
   auto& diag = env.diagnostics;
   for (const DynamicProbe& r : probes) {
     diag["load_steps"].push_back(static_cast<double>(r.load_steps));
@@ -378,16 +387,20 @@ Envelope dynamic_envelope_of(const DemSystem& given, double amplitude,
 }  // namespace
 
 Envelope dynamic_envelope(const DemSystem& given, double amplitude,
-                          const std::vector<double>& theta_deg, const ProbeOptions& options) {
-  return dynamic_envelope_of(given, amplitude, theta_deg, options, false);
+                          const std::vector<double>& theta_deg, const ProbeOptions& options,
+                          const ProbePlane& plane) {
+  return dynamic_envelope_of(given, amplitude, theta_deg, options, plane, false);
 }
 
-void compute_worker_share(const std::string& method, const DemSystem& state, double amplitude,
+void compute_worker_share(const std::string& method, const std::string& plane_name,
+                          const DemSystem& state, double amplitude,
                           const std::vector<double>& theta_deg, const ProbeOptions& options) {
+  const std::optional<ProbePlane> plane = probe_plane_named(plane_name);
+  if (!plane) throw std::runtime_error("unknown probe plane '" + plane_name + "' sent to a worker");
   if (method == "dynamic") {
-    dynamic_envelope_of(state, amplitude, theta_deg, options, true);
+    dynamic_envelope_of(state, amplitude, theta_deg, options, *plane, true);
   } else if (method == "minimisation") {
-    minimisation_envelope(state, amplitude, theta_deg, options);
+    minimisation_envelope(state, amplitude, theta_deg, options, *plane);
   } else {
     throw std::runtime_error("unknown probe method '" + method + "' sent to an MPI worker");
   }
@@ -422,9 +435,10 @@ PackingData packing_of(const DemSystem& state) {
 }
 
 Envelope minimisation_envelope(const DemSystem& state, double amplitude,
-                               const std::vector<double>& theta_deg, const ProbeOptions& options) {
+                               const std::vector<double>& theta_deg, const ProbeOptions& options,
+                               const ProbePlane& plane) {
   check(options, amplitude, theta_deg);
-  detail::ProbeTaskScope scope("minimisation", state, amplitude, theta_deg, options);
+  detail::ProbeTaskScope scope("minimisation", plane.name, state, amplitude, theta_deg, options);
   MinimiseOptions mo = options.minimise;
   mo.k = state.material().k;
   PackingData ref = packing_of(state);
@@ -461,7 +475,7 @@ Envelope minimisation_envelope(const DemSystem& state, double amplitude,
   const bool assemble = compute_probes(scope, options, "minimisation", probes, [&](int p) {
     MinimisationProbe r;
     PackingData probe = ref;
-    probe.deform(exp_sym(-probe_strain(theta_deg[p], amplitude)));
+    probe.deform(exp_sym(-plane_strain(plane, theta_deg[p], amplitude)));
     r.summary = minimise_energy(probe, mo);
     const StressFabric after = measure_stress_fabric(probe, mo.k, nullptr, min_overlap);
     const std::vector<std::uint64_t> keys_after = contact_keys(find_pairs(probe, 0.0), min_overlap);
@@ -472,8 +486,8 @@ Envelope minimisation_envelope(const DemSystem& state, double amplitude,
     return r;
   });
   if (!assemble) return {};
-  Envelope env =
-      assemble_envelope("minimisation", amplitude, state.material().k_star(), theta_deg, probes);
+  Envelope env = assemble_envelope("minimisation", plane, amplitude, state.material().k_star(),
+                                   theta_deg, probes);
   auto& diag = env.diagnostics;
   for (const MinimisationProbe& r : probes) {
     diag["iterations"].push_back(static_cast<double>(r.summary.iterations));
@@ -488,7 +502,7 @@ Envelope minimisation_envelope(const DemSystem& state, double amplitude,
 
 Envelope linear_response_envelope(const DemSystem& state, double amplitude,
                                   const std::vector<double>& theta_deg, const ProbeOptions& options,
-                                  LinearResponse* response) {
+                                  LinearResponse* response, const ProbePlane& plane) {
   check(options, amplitude, theta_deg);
   LinearResponseOptions lo = options.linear;
   lo.k = state.material().k;
@@ -506,7 +520,7 @@ Envelope linear_response_envelope(const DemSystem& state, double amplitude,
     LinearResponse lr = linear_response(geometry_of(state), lo, friction);
     if (response) *response = lr;
     if (!lr.ok) throw std::runtime_error(lr.message);
-    Envelope env = linear_response_envelope(lr, theta_deg, amplitude, m.k_star());
+    Envelope env = linear_response_envelope(lr, theta_deg, amplitude, m.k_star(), plane);
     env.attributes["minimised_first"] = 0.0;
     return env;
   }
@@ -529,7 +543,8 @@ Envelope linear_response_envelope(const DemSystem& state, double amplitude,
   }
   if (response) *response = lr;
   if (!lr.ok) throw std::runtime_error(lr.message);
-  Envelope env = linear_response_envelope(lr, theta_deg, amplitude, state.material().k_star());
+  Envelope env =
+      linear_response_envelope(lr, theta_deg, amplitude, state.material().k_star(), plane);
   env.attributes["minimised_first"] = minimised_first ? 1.0 : 0.0;
   return env;
 }
@@ -539,26 +554,29 @@ std::vector<Envelope> probe_campaign(const DemSystem& state,
                                      const ProbeOptions& options, const EnvelopeSink& sink) {
   std::string why;
   if (!options.IsValid(&why)) throw InputError(why);
-  const std::vector<double> theta = probe_directions(options.directions);
   std::vector<Envelope> envelopes;
   for (const std::string& method : methods) {
     if (method != "dynamic" && method != "minimisation" && method != "linear_response") {
       throw InputError("probes.methods: unknown method '" + method + "'");
     }
     LinearResponse lr;
-    for (double amplitude : options.amplitudes) {
-      Envelope env;
-      if (method == "dynamic") {
-        env = dynamic_envelope(state, amplitude, theta, options);
-      } else if (method == "minimisation") {
-        env = minimisation_envelope(state, amplitude, theta, options);
-      } else if (!lr.ok) {
-        env = linear_response_envelope(state, amplitude, theta, options, &lr);
-      } else {  // one factorisation serves every amplitude
-        env = linear_response_envelope(lr, theta, amplitude, state.material().k_star());
+    for (const std::string& name : options.planes) {
+      const ProbePlane plane = *probe_plane_named(name);  // IsValid checked the names
+      const std::vector<double> theta = probe_directions(options.directions, plane);
+      for (double amplitude : options.amplitudes) {
+        Envelope env;
+        if (method == "dynamic") {
+          env = dynamic_envelope(state, amplitude, theta, options, plane);
+        } else if (method == "minimisation") {
+          env = minimisation_envelope(state, amplitude, theta, options, plane);
+        } else if (!lr.ok) {
+          env = linear_response_envelope(state, amplitude, theta, options, &lr, plane);
+        } else {  // one factorisation serves every plane and amplitude
+          env = linear_response_envelope(lr, theta, amplitude, state.material().k_star(), plane);
+        }
+        if (sink) sink(method, amplitude, env, method == "linear_response" ? &lr : nullptr);
+        envelopes.push_back(std::move(env));
       }
-      if (sink) sink(method, amplitude, env, method == "linear_response" ? &lr : nullptr);
-      envelopes.push_back(std::move(env));
     }
   }
   return envelopes;
@@ -572,9 +590,9 @@ const OptionTable<ProbeOptions>& probe_option_table() {
   static const OptionTable<ProbeOptions> table({
       Row{{.path = "probes.directions",
            .unit = "-",
-           .help = "Number of probe directions, equally spaced in the Rendulic plane from 35.26 "
-                   "deg (isotropic compression); a multiple of 4 includes the isotropic and "
-                   "deviatoric directions.",
+           .help = "Number of probe directions, equally spaced in each probe plane from its "
+                   "start: in the Rendulic plane from 35.26 deg (isotropic compression), where a "
+                   "multiple of 4 includes the isotropic and deviatoric directions.",
            .min = 3,
            .max = 3600},
           [](ProbeOptions& o) -> int& { return o.directions; }},
@@ -587,6 +605,15 @@ const OptionTable<ProbeOptions>& probe_option_table() {
            .min_open = true,
            .min_size = 1},
           [](ProbeOptions& o) -> std::vector<double>& { return o.amplitudes; }},
+      Row{{.path = "probes.planes",
+           .unit = "-",
+           .help = "Probe planes (docs/probes.md \"Probe planes\"): rendulic (axisymmetric, "
+                   "the seed's), deviatoric (constant volume, from axial compression), "
+                   "meridian_PHI (the isotropic axis and the deviatoric direction at Lode angle "
+                   "PHI in [0, 180) deg, e.g. meridian_30); other planes' envelopes are named "
+                   "method_plane_amplitude (dynamic_deviatoric_5e-05).",
+           .min_size = 1},
+          [](ProbeOptions& o) -> std::vector<std::string>& { return o.planes; }},
       Row{{.path = "probes.inertial_number",
            .unit = "-",
            .help = "Inertial number that sets the dynamic probes' loading rate at the state's "

@@ -12,7 +12,7 @@ namespace rendulic::dem {
 
 Envelope linear_response_envelope(const LinearResponse& response,
                                   const std::vector<double>& theta_deg, double amplitude,
-                                  double k_star) {
+                                  double k_star, const ProbePlane& plane) {
   if (!response.ok) {
     throw std::invalid_argument("linear_response_envelope: no stiffness (" + response.message +
                                 ")");
@@ -21,8 +21,9 @@ Envelope linear_response_envelope(const LinearResponse& response,
   env.method = "linear_response";
   env.amplitude = amplitude;
   env.k_star = k_star;
+  env.plane = plane;
   for (double theta : theta_deg) {
-    const Eigen::Matrix3d d_eps = probe_strain(theta, amplitude);
+    const Eigen::Matrix3d d_eps = plane_strain(plane, theta, amplitude);
     // No contact opens or closes in the linear response: its fabric rate is the volume and
     // rotation parts alone.
     const FabricSplit split{from_mandel(response.fabric_volume_stiffness * to_mandel(d_eps)),
@@ -74,11 +75,15 @@ RendulicMap fit_rendulic_map(const std::vector<Eigen::Vector2d>& strain,
 }
 
 Eigen::Matrix2d rendulic_map_of(const Matrix6d& stiffness) {
+  return plane_map_of(stiffness, rendulic_plane());
+}
+
+Eigen::Matrix2d plane_map_of(const Matrix6d& stiffness, const ProbePlane& plane) {
   Eigen::Matrix2d map;
   for (int c = 0; c < 2; ++c) {
     Eigen::Vector2d s = Eigen::Vector2d::Zero();
     s(c) = 1.0;
-    map.col(c) = rendulic_pair(from_mandel(stiffness * to_mandel(from_rendulic_pair(s))));
+    map.col(c) = plane_pair(plane, from_mandel(stiffness * to_mandel(from_plane_pair(plane, s))));
   }
   return map;
 }

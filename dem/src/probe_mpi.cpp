@@ -72,9 +72,14 @@ void io(A& a, LinearResponseOptions& o) {
 }
 template <class A>
 void io(A& a, ProbeOptions& o) {
-  auto& [directions, amplitudes, inertial_number, rate, dt_factor, relax, minimise, linear, threads,
-         probe_done, stop] = o;
-  a(directions), a(amplitudes), a(inertial_number), a(rate), a(dt_factor), a(relax), a(minimise);
+  auto& [directions, amplitudes, planes, inertial_number, rate, dt_factor, relax, minimise, linear,
+         threads, probe_done, stop] = o;
+  a(directions), a(amplitudes);
+  std::uint64_t n_planes = planes.size();
+  a(n_planes);
+  planes.resize(n_planes);  // a reader's; the writer's keeps its size
+  for (std::string& plane : planes) a(plane);
+  a(inertial_number), a(rate), a(dt_factor), a(relax), a(minimise);
   a(linear), a(threads);
   // Rank 0's progress display and stop request: not sent, a worker counts nothing and is
   // released by rank 0.
@@ -86,6 +91,7 @@ namespace {
 // One envelope's task, as sent to the workers.
 struct Task {
   std::string method;
+  std::string plane;  // the probe plane's name (core/conventions.hpp)
   State state;
   SystemOptions system;
   double amplitude = 0;
@@ -94,7 +100,7 @@ struct Task {
 };
 template <class A>
 void io(A& a, Task& t) {
-  a(t.method), a(t.state), a(t.system), a(t.amplitude), a(t.theta_deg), a(t.options);
+  a(t.method), a(t.plane), a(t.state), a(t.system), a(t.amplitude), a(t.theta_deg), a(t.options);
 }
 
 // Inside a worker's serve(): the share of the task being computed, and whether its reply has
@@ -211,7 +217,7 @@ void MpiSession::serve(const ShareFn& compute) {
       ByteReader in(bytes);
       in(task);
       const DemSystem state = DemSystem::restore(task.state, task.system);
-      compute(task.method, state, task.amplitude, task.theta_deg, task.options);
+      compute(task.method, task.plane, state, task.amplitude, task.theta_deg, task.options);
       if (!g_serving.replied) throw std::runtime_error("a worker computed no probes");
     } catch (const std::exception& e) {
       if (!g_serving.replied) {
@@ -228,7 +234,8 @@ void MpiSession::serve(const ShareFn& compute) {
 
 namespace detail {
 
-ProbeTaskScope::ProbeTaskScope(const std::string& method, const DemSystem& state, double amplitude,
+ProbeTaskScope::ProbeTaskScope(const std::string& method, const std::string& plane,
+                               const DemSystem& state, double amplitude,
                                const std::vector<double>& theta_deg, const ProbeOptions& options) {
   if (g_serving.active) {
     share_ = g_serving.share;
@@ -236,7 +243,7 @@ ProbeTaskScope::ProbeTaskScope(const std::string& method, const DemSystem& state
   }
 #ifdef RENDULIC_WITH_MPI
   if (g_size > 1 && g_rank == 0) {
-    Task task{method, state.save(), state.options(), amplitude, theta_deg, options};
+    Task task{method, plane, state.save(), state.options(), amplitude, theta_deg, options};
     ByteWriter w;
     w(task);
     for (int r = 1; r < g_size; ++r) send(w.bytes(), r, kTagTask);
@@ -244,7 +251,7 @@ ProbeTaskScope::ProbeTaskScope(const std::string& method, const DemSystem& state
     next_reply_ = 1;
   }
 #else
-  (void)method, (void)state, (void)amplitude, (void)theta_deg, (void)options;
+  (void)method, (void)plane, (void)state, (void)amplitude, (void)theta_deg, (void)options;
 #endif
 }
 

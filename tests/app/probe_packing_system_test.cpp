@@ -6,7 +6,9 @@
 //    is installed, and by this test in another column layout) and the results file's state give
 //    the same linear-response envelopes;
 //  - a packing away from equilibrium is brought to rest, and the report says what moved;
-//  - bad packing files exit 2 with one line and write nothing.
+//  - bad packing files exit 2 with one line and write nothing;
+//  - probe planes: a deviatoric envelope beside the unchanged Rendulic one, an unknown plane
+//    refused.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -163,6 +165,70 @@ TEST(Probe, APackingAwayFromEquilibriumIsBroughtToRestAndSaysWhatMoved) {
 }
 
 // Exit 2, one line that names `what`, no results file.
+// Probe planes (docs/probes.md "Probe planes: true-triaxial probes"): `--planes rendulic
+// deviatoric` writes the Rendulic envelope under today's name, bit for bit the plain command's,
+// and the deviatoric one under its own with the `plane` attribute; the report lists it apart
+// from the claims. An unknown plane (on `probe`, and as the key of `run`) exits 2 with one
+// line naming it and writes nothing.
+TEST(Probe, DeviatoricEnvelopesBesideTheRendulicOnesUnderTheirOwnNames) {
+  const fs::path base = tiny();
+  const fs::path both = rendulic::testing::fresh_dir("app_probe/plane_both");
+  const fs::path plain = rendulic::testing::fresh_dir("app_probe/plane_plain");
+  const std::string state = base.string() + ":/states/b --label b --methods linear_response";
+  CliResult r = probe(state + " --planes rendulic deviatoric --out " + both.string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  r = probe(state + " --out " + plain.string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  const ResultsReader a(both / "results.h5"), b(plain / "results.h5");
+  const std::string g = paths::state("b");
+  const std::string rendulic = paths::envelope(g, "linear_response_5e-05");
+  const std::string deviatoric = paths::envelope(g, "linear_response_deviatoric_5e-05");
+  ASSERT_TRUE(a.exists(rendulic));
+  ASSERT_TRUE(a.exists(deviatoric));
+  EXPECT_FALSE(b.exists(deviatoric));
+  EXPECT_EQ(a.attr_string(rendulic, "plane"), "rendulic");
+  EXPECT_EQ(a.attr_string(deviatoric, "plane"), "deviatoric");
+  EXPECT_EQ(a.read_tensors(rendulic + ds::kDStress), b.read_tensors(rendulic + ds::kDStress));
+  EXPECT_EQ(a.read_pairs(rendulic + ds::kStressStar), b.read_pairs(rendulic + ds::kStressStar));
+  // The deviatoric plane's directions start at axial compression (0 deg), the Rendulic
+  // plane's at isotropic compression (35.26 deg).
+  EXPECT_EQ(a.read_vector(deviatoric + ds::kThetaDeg).front(), 0.0);
+  EXPECT_NEAR(a.read_vector(rendulic + ds::kThetaDeg).front(), 35.26, 0.01);
+  EXPECT_TRUE(a.exists(deviatoric + paths::kFitStress));
+
+  r = run_rendulic("report " + (both / "results.h5").string() + " --no-figures", false);
+  ASSERT_EQ(r.code, 0) << r.err;
+  std::ifstream in(both / "report.md");
+  const std::string md{std::istreambuf_iterator<char>(in), {}};
+  const std::size_t section = md.find("## Envelopes in other probe planes");
+  ASSERT_NE(section, std::string::npos) << md;
+  EXPECT_NE(
+      md.find("| b | linear_response_deviatoric_5e-05 | deviatoric | linear_response", section),
+      std::string::npos)
+      << md;
+}
+
+TEST(Probe, UnknownPlaneExitsTwoWithOneLineAndWritesNothing) {
+  const fs::path base = tiny();
+  const fs::path out = rendulic::testing::fresh_dir("app_probe/plane_bad");
+  const CliResult r = probe(
+      base.string() + ":/states/b --label b --planes rendulic octahedral --out " + out.string());
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_EQ(rendulic::testing::error_lines(r.err), 1) << r.err;
+  EXPECT_NE(r.err.find("octahedral"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("probes.planes"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(out / "results.h5"));
+  const fs::path run_out = rendulic::testing::fresh_dir("app_probe/plane_bad_run");
+  const CliResult run =
+      run_rendulic("run " + rendulic::testing::tiny_scenario(kRoot).string() + " --out " +
+                       run_out.string() + " --set 'probes.planes=[\"meridian_200\"]'",
+                   false);
+  EXPECT_EQ(run.code, 2) << run.err;
+  EXPECT_EQ(rendulic::testing::error_lines(run.err), 1) << run.err;
+  EXPECT_NE(run.err.find("meridian_200"), std::string::npos) << run.err;
+  EXPECT_FALSE(fs::exists(run_out / "results.h5"));
+}
+
 void expect_refused(const std::string& name, const std::string& text, const std::string& what) {
   SCOPED_TRACE(name);
   const fs::path dir = rendulic::testing::fresh_dir("app_probe/bad_" + name);

@@ -70,10 +70,8 @@ TEST(RendulicMap, FitRecoversAnAffineMapAndItsEllipse) {
   EXPECT_THROW(fit_rendulic_map({s[0], s[4]}, {r[0], r[4]}), std::invalid_argument);
 }
 
-// FCC lattice (closed form in linear_response_test.cpp): cubic symmetry maps isotropic strain
-// onto isotropic stress, so the isotropic probe lies on an axis of the elastic ellipse, and
-// the semi-axes are (C11 + 2 C12) |d_eps| (isotropic) and (C11 - C12) |d_eps| (deviatoric).
-TEST(LinearResponseEnvelope, FccEllipseFromClosedForm) {
+// The linear response of an FCC lattice (closed form in linear_response_test.cpp).
+LinearResponse fcc_linear_response() {
   const double radius = 1e-3, r0 = 1.98e-3, a = r0 * std::numbers::sqrt2;
   const int cells = 3;
   const std::vector<Eigen::Vector3d> basis = {
@@ -86,7 +84,14 @@ TEST(LinearResponseEnvelope, FccEllipseFromClosedForm) {
         for (const auto& b : basis) x.row(p++) = (a * (Eigen::Vector3d(i, j, k) + b)).transpose();
   const PackingData fcc = PackingData::orthorhombic(x, Eigen::VectorXd::Constant(p, radius),
                                                     Eigen::Vector3d::Constant(cells * a));
-  const LinearResponse lr = linear_response(fcc, LinearResponseOptions{});
+  return linear_response(fcc, LinearResponseOptions{});
+}
+
+// FCC lattice: cubic symmetry maps isotropic strain onto isotropic stress, so the isotropic
+// probe lies on an axis of the elastic ellipse, and the semi-axes are (C11 + 2 C12) |d_eps|
+// (isotropic) and (C11 - C12) |d_eps| (deviatoric).
+TEST(LinearResponseEnvelope, FccEllipseFromClosedForm) {
+  const LinearResponse lr = fcc_linear_response();
   ASSERT_TRUE(lr.ok) << lr.message;
   const double k_star = 1e8 / 2e-3, amp = 5e-5;
   const Envelope env = linear_response_envelope(lr, probe_directions(36), amp, k_star);
@@ -108,6 +113,22 @@ TEST(LinearResponseEnvelope, FccEllipseFromClosedForm) {
   EXPECT_LT(fit.center.norm(), kTol * bulk_axis);
   const RendulicMap exact = ellipse_of(rendulic_map_of(lr.stiffness) / k_star, amp);
   EXPECT_NEAR(exact.semi_major, fit.semi_major, kTol * bulk_axis);
+}
+
+// The same lattice in the deviatoric probe plane (docs/probes.md "Probe planes"): every
+// diagonal constant-volume strain sees C11 - C12 alone, so the envelope is a circle of radius
+// (C11 - C12) |d_eps|, the Rendulic envelope's deviatoric semi-axis.
+TEST(LinearResponseEnvelope, FccDeviatoricPlaneEnvelopeIsACircle) {
+  const LinearResponse lr = fcc_linear_response();
+  ASSERT_TRUE(lr.ok) << lr.message;
+  const double k_star = 1e8 / 2e-3, amp = 5e-5;
+  const ProbePlane plane = deviatoric_plane();
+  const Envelope env =
+      linear_response_envelope(lr, probe_directions(36, plane), amp, k_star, plane);
+  const double r = amp * (lr.stiffness(0, 0) - lr.stiffness(0, 1)) / k_star;
+  ASSERT_GT(r, 0.0);
+  for (std::size_t i = 0; i < env.size(); ++i)
+    EXPECT_NEAR(env.stress_star[i].norm(), r, 1e-9 * r) << env.theta_deg[i];
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
-// Sign conventions, tensor invariants and Rendulic coordinates: the one place that defines them
-// (docs/physics.md sections 2, 3 and 5; docs/models.md "Coordinates"). Everything else calls these
-// functions instead of re-deriving a sign or a sqrt(2).
+// Sign conventions, tensor invariants, Rendulic coordinates and probe planes: the one place that
+// defines them
+// (docs/physics.md sections 2, 3 and 5; docs/models.md "Coordinates"; docs/probes.md "Probe
+// planes"). Everything else calls these functions instead of re-deriving a sign or a sqrt(2).
 //
 // - Strain epsilon = -E: compression positive. Stress: compression positive.
 // - Q_dev = +-sqrt(2 J2), the sign of J3 (+ for axial compression, - for axial extension).
@@ -12,7 +13,11 @@
 
 #include <Eigen/Dense>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <numbers>
+#include <optional>
+#include <string>
 
 namespace rendulic {
 
@@ -94,6 +99,76 @@ inline Eigen::Matrix3d probe_strain(double theta_deg, double amplitude) {
   const double lat = amplitude * std::cos(t) / kSqrt2;
   return Eigen::Vector3d(amplitude * std::sin(t), lat, lat).asDiagonal();
 }
+// Probe planes (docs/probes.md "Probe planes: true-triaxial probes"): a probe of direction
+// theta in a plane with orthonormal principal-strain directions u, v (components along x, y, z)
+// has d_eps = amplitude diag(cos theta u + sin theta v), and a tensor's pair in the plane is
+// its projection (Q : diag(u), Q : diag(v)). The Rendulic plane is today's axisymmetric one
+// (u = (0, 1, 1)/sqrt2, v = (1, 0, 0)); its functions below are exactly probe_strain,
+// rendulic_pair and from_rendulic_pair, so that Rendulic envelopes stay bitwise what they were.
+// "deviatoric" is the pi-plane of constant volume, theta the Lode-type angle from axial (x)
+// compression; "meridian_<deg>" holds the isotropic axis (theta = 0) and the deviatoric
+// direction at that Lode angle (theta = 90), so that every principal direction is reachable.
+struct ProbePlane {
+  std::string name = "rendulic";
+  Eigen::Vector3d u{0.0, 1.0 / kSqrt2, 1.0 / kSqrt2};
+  Eigen::Vector3d v{1.0, 0.0, 0.0};
+  double start_deg = kIsoCompressionDeg;  // the first of M equally spaced probe directions
+  bool rendulic() const { return name == "rendulic"; }
+};
+inline constexpr char kProbePlaneNames[] =
+    "rendulic, deviatoric, meridian_<Lode angle in [0, 180) deg>";
+inline ProbePlane rendulic_plane() { return {}; }
+// The deviatoric direction at Lode angle `lode_deg` from axial (x) compression.
+inline Eigen::Vector3d deviatoric_direction(double lode_deg) {
+  const double t = deg_to_rad(lode_deg);
+  return std::cos(t) * Eigen::Vector3d(2.0, -1.0, -1.0) / std::sqrt(6.0) +
+         std::sin(t) * Eigen::Vector3d(0.0, 1.0, -1.0) / kSqrt2;
+}
+// Axisymmetric compression and extension along x, y, z are probes whenever M is a multiple of 6.
+inline ProbePlane deviatoric_plane() {
+  return {"deviatoric", deviatoric_direction(0.0), deviatoric_direction(90.0), 0.0};
+}
+// Isotropic compression at 0 deg, the deviatoric direction at 90 deg (M a multiple of 4).
+inline ProbePlane meridian_plane(double lode_deg) {
+  char name[48];
+  std::snprintf(name, sizeof name, "meridian_%g", lode_deg);
+  return {name, Eigen::Vector3d::Constant(1.0 / kSqrt3), deviatoric_direction(lode_deg), 0.0};
+}
+// The plane of a name of kProbePlaneNames (a meridian's angle as written, e.g. meridian_30);
+// nullopt for any other name.
+inline std::optional<ProbePlane> probe_plane_named(const std::string& name) {
+  if (name == "rendulic") return rendulic_plane();
+  if (name == "deviatoric") return deviatoric_plane();
+  const std::string prefix = "meridian_";
+  if (name.size() <= prefix.size() || name.compare(0, prefix.size(), prefix) != 0)
+    return std::nullopt;
+  const char* begin = name.c_str() + prefix.size();
+  char* end = nullptr;
+  const double lode = std::strtod(begin, &end);
+  if (end == begin || *end != '\0' || !(lode >= 0.0 && lode < 180.0)) return std::nullopt;
+  ProbePlane plane = meridian_plane(lode);
+  if (plane.name != name) return std::nullopt;  // one spelling per plane, so one envelope name
+  return plane;
+}
+// Probe strain (compression positive) of direction theta in the plane, Frobenius norm amplitude.
+inline Eigen::Matrix3d plane_strain(const ProbePlane& plane, double theta_deg, double amplitude) {
+  if (plane.rendulic()) return probe_strain(theta_deg, amplitude);
+  const double t = deg_to_rad(theta_deg);
+  const Eigen::Vector3d d = amplitude * (std::cos(t) * plane.u + std::sin(t) * plane.v);
+  return d.asDiagonal();
+}
+// The pair of a tensor in the plane (its projection on the plane's two directions).
+inline Eigen::Vector2d plane_pair(const ProbePlane& plane, const Eigen::Matrix3d& Q) {
+  if (plane.rendulic()) return rendulic_pair(Q);
+  const Eigen::Vector3d d = Q.diagonal();
+  return {d.dot(plane.u), d.dot(plane.v)};
+}
+// The diagonal tensor of the plane whose pair is r.
+inline Eigen::Matrix3d from_plane_pair(const ProbePlane& plane, const Eigen::Vector2d& r) {
+  if (plane.rendulic()) return from_rendulic_pair(r);
+  const Eigen::Vector3d d = r.x() * plane.u + r.y() * plane.v;
+  return d.asDiagonal();
+}
 // Elastic and elasto-plastic probes (docs/physics.md section 5): an envelope whose probes have
 // |d_eps| below kElasticAmplitudeMax is elastic; one above kPlasticAmplitudeMin is
 // elasto-plastic (between the two a probe is neither, and no claim or objective uses it).
@@ -117,6 +192,15 @@ inline double probe_direction_deg(const Eigen::Vector2d& strain_pair) {
 inline Eigen::VectorXd probe_directions_deg(int m) {
   Eigen::VectorXd d(m);
   for (int i = 0; i < m; ++i) d(i) = std::fmod(kIsoCompressionDeg + 360.0 * i / m, 360.0);
+  return d;
+}
+
+// M equally spaced directions of a plane from its start: probe_directions_deg for the Rendulic
+// plane, so that its directions are bitwise what they were.
+inline Eigen::VectorXd plane_directions_deg(const ProbePlane& plane, int m) {
+  if (plane.rendulic()) return probe_directions_deg(m);
+  Eigen::VectorXd d(m);
+  for (int i = 0; i < m; ++i) d(i) = std::fmod(plane.start_deg + 360.0 * i / m, 360.0);
   return d;
 }
 

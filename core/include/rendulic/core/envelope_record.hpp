@@ -6,8 +6,10 @@
 // calibration and the report read it; each takes the view it needs from this record
 // (docs/architecture.md "Where each concept lives").
 //
-// Stored: attributes amplitude, method, directions, k_star and the envelope's own scalar
-// attributes; datasets theta_deg[m], strain[m,2], stress_star[m,2], fabric[m,2],
+// Stored: attributes amplitude, method, directions, k_star, plane and plane_basis (the probe
+// plane, core/conventions.hpp; a file without them reads as the Rendulic plane) and the
+// envelope's own scalar attributes; datasets theta_deg[m], strain[m,2], stress_star[m,2],
+// fabric[m,2],
 // d_stress[m,3,3] (Pa), d_fabric[m,3,3], the fabric split d_fabric_volume, d_fabric_rotation,
 // d_fabric_contacts [m,3,3] when made, and one [m] dataset per probe diagnostic. The names of
 // the diagnostics and extra attributes are listed in the string attributes `diagnostics` and
@@ -32,11 +34,16 @@ struct EnvelopeRecord {
   std::string method;      // "dynamic" | "minimisation" | "linear_response" | ...
   double amplitude = 0.0;  // |d_eps| (Frobenius)
   double k_star = 0.0;     // Pa, the stress scale of stress_star
+  // The plane of the probes (docs/probes.md "Probe planes"): the pairs below are coordinates
+  // in it, which for the Rendulic plane (the default) are the Rendulic pairs. Set it before
+  // add(). Whoever reads the pairs as Rendulic pairs (a model's Rendulic envelope, the claims)
+  // checks plane.rendulic() first.
+  ProbePlane plane;
   std::vector<double> theta_deg;
-  std::vector<Eigen::Vector2d> strain;       // Rendulic pairs of d_eps
-  std::vector<Eigen::Vector2d> stress_star;  // Rendulic pairs of d_sigma / k*
-  std::vector<Eigen::Vector2d> fabric;       // Rendulic pairs of d_F
-  // Rendulic pairs of d_sigma in Pa, for those who work in Pa (a model's envelope, the
+  std::vector<Eigen::Vector2d> strain;       // pairs of d_eps in the plane
+  std::vector<Eigen::Vector2d> stress_star;  // pairs of d_sigma / k*
+  std::vector<Eigen::Vector2d> fabric;       // pairs of d_F
+  // Pairs of d_sigma in Pa, for those who work in Pa (a model's envelope, the
   // calibration's residuals). Held in memory, not stored (stress_star is): add() and
   // model_envelope() fill it; the calibration's loader fills a record read from a file with
   // stress_star times the file's k* (docs/calibration.md), once, so that its residuals subtract
@@ -58,9 +65,9 @@ struct EnvelopeRecord {
   // Elastic probes by the one threshold (core/conventions.hpp).
   bool elastic() const { return is_elastic_amplitude(amplitude); }
   bool has_fabric() const { return !fabric.empty() && fabric.size() == size(); }
-  // The strain tensor of probe i: the probe is axisymmetric (docs/physics.md section 5), so its
-  // Rendulic pair fixes it.
-  Eigen::Matrix3d strain_tensor(std::size_t i) const { return from_rendulic_pair(strain[i]); }
+  // The strain tensor of probe i: the probe is diagonal and in the plane (docs/physics.md
+  // section 5, docs/probes.md "Probe planes"), so its pair fixes it.
+  Eigen::Matrix3d strain_tensor(std::size_t i) const { return from_plane_pair(plane, strain[i]); }
   // Appends one probe; the pairs follow from the tensors (core/conventions.hpp).
   void add(double theta, const Eigen::Matrix3d& d_eps, const Eigen::Matrix3d& d_sigma,
            const Eigen::Matrix3d& d_f);

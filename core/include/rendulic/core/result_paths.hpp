@@ -63,11 +63,14 @@ inline std::string envelope(const std::string& state_group, const std::string& n
 inline std::string elastic_range(const std::string& state_group) {
   return state_group + kElasticRange;
 }
-// The name of an envelope: "<method>_<amplitude %g>", e.g. "dynamic_5e-05".
-inline std::string envelope_name(const std::string& method, double amplitude) {
+// The name of an envelope: "<method>_<amplitude %g>", e.g. "dynamic_5e-05"; in a probe plane
+// other than the Rendulic one (docs/probes.md "Probe planes") "<method>_<plane>_<amplitude>",
+// e.g. "dynamic_deviatoric_5e-05".
+inline std::string envelope_name(const std::string& method, double amplitude,
+                                 const std::string& plane = "rendulic") {
   char buf[64];
-  std::snprintf(buf, sizeof buf, "%s_%g", method.c_str(), amplitude);
-  return buf;
+  std::snprintf(buf, sizeof buf, "_%g", amplitude);
+  return method + (plane == "rendulic" ? "" : "_" + plane) + buf;
 }
 // "/calibration/<model>".
 inline std::string calibration(const std::string& model) {

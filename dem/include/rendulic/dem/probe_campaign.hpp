@@ -36,18 +36,24 @@ namespace rendulic::dem {
 // what rank 0 sent: the relaxed reference for `dynamic` (rank 0 relaxed it once for all), the
 // given state for `minimisation` (its reference minimisation is repeated on every rank: it is
 // deterministic and costs about one probe, against sending a second kind of state).
-void compute_worker_share(const std::string& method, const DemSystem& state, double amplitude,
+void compute_worker_share(const std::string& method, const std::string& plane,
+                          const DemSystem& state, double amplitude,
                           const std::vector<double>& theta_deg, const ProbeOptions& options);
 
-// The probe directions: M equally spaced angles from 35.26 deg (core probe_directions_deg).
-std::vector<double> probe_directions(int m);
+// The probe directions: M equally spaced angles from the plane's start, 35.26 deg in the
+// Rendulic plane (core plane_directions_deg).
+std::vector<double> probe_directions(int m, const ProbePlane& plane = rendulic_plane());
 // The loading rate for a state (1/s).
 double probe_rate(const DemSystem& state, const ProbeOptions& options);
 
+// The envelope functions probe in `plane` (core/conventions.hpp, docs/probes.md "Probe
+// planes"); the Rendulic plane by default.
 Envelope dynamic_envelope(const DemSystem& state, double amplitude,
-                          const std::vector<double>& theta_deg, const ProbeOptions& options);
+                          const std::vector<double>& theta_deg, const ProbeOptions& options,
+                          const ProbePlane& plane = rendulic_plane());
 Envelope minimisation_envelope(const DemSystem& state, double amplitude,
-                               const std::vector<double>& theta_deg, const ProbeOptions& options);
+                               const std::vector<double>& theta_deg, const ProbeOptions& options,
+                               const ProbePlane& plane = rendulic_plane());
 // The packing of a frictionless state for the energy-based static tools (minimisation, force
 // balance at rest); InputError naming dem.friction for a frictional one.
 PackingData packing_of(const DemSystem& state);
@@ -58,14 +64,15 @@ PackingData geometry_of(const DemSystem& state);
 // tangential springs too (sticking contacts, docs/probes.md).
 Envelope linear_response_envelope(const DemSystem& state, double amplitude,
                                   const std::vector<double>& theta_deg, const ProbeOptions& options,
-                                  LinearResponse* response = nullptr);
+                                  LinearResponse* response = nullptr,
+                                  const ProbePlane& plane = rendulic_plane());
 
 // What a campaign hands on for each envelope as soon as it is made: its method and amplitude,
 // the envelope, and for the linear response the response itself (its 6x6 Mandel stiffness and
 // fabric stiffness), otherwise nullptr.
 using EnvelopeSink = std::function<void(const std::string& method, double amplitude,
                                         const Envelope& envelope, const LinearResponse* response)>;
-// The whole campaign of one state: every method x amplitude, in that order, each handed to
+// The whole campaign of one state: every method x plane x amplitude, in that order, each handed to
 // `sink` (the run's stages write it, app/stages_probes.cpp) and returned in the same order.
 std::vector<Envelope> probe_campaign(const DemSystem& state,
                                      const std::vector<std::string>& methods,

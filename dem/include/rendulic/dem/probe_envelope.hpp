@@ -19,12 +19,13 @@ namespace rendulic::dem {
 // that the results file stores and every reader takes its view from.
 using Envelope = EnvelopeRecord;
 
-// The elastic envelope of the linear response for the given directions and amplitude: the
-// probe strain of core probe_strain(theta, amplitude), d_sigma = C d_eps, d_F = G d_eps.
-// Throws std::invalid_argument if the response is not ok (it holds no stiffness).
+// The elastic envelope of the linear response for the given directions and amplitude in a
+// probe plane: the probe strain of core plane_strain(plane, theta, amplitude) (probe_strain in
+// the Rendulic plane), d_sigma = C d_eps, d_F = G d_eps. Throws std::invalid_argument if the
+// response is not ok (it holds no stiffness).
 Envelope linear_response_envelope(const LinearResponse& response,
                                   const std::vector<double>& theta_deg, double amplitude,
-                                  double k_star);
+                                  double k_star, const ProbePlane& plane = rendulic_plane());
 
 // The Rendulic map of an envelope: response = map * strain + center, fitted by least squares
 // over the probes (core/affine_map.hpp; exact for a linear law, where center = 0), and its
@@ -44,6 +45,9 @@ RendulicMap fit_rendulic_map(const std::vector<Eigen::Vector2d>& strain,
 // The exact map of a 6x6 Mandel stiffness restricted to axisymmetric strains:
 // (sqrt2 lat, ax) of d_eps -> (sqrt2 lat, ax) of M d_eps.
 Eigen::Matrix2d rendulic_map_of(const Matrix6d& stiffness);
+// The same in any probe plane: the plane's pair of d_eps -> the plane's pair of M d_eps (the
+// projection of the response on the plane; rendulic_map_of for the Rendulic plane).
+Eigen::Matrix2d plane_map_of(const Matrix6d& stiffness, const ProbePlane& plane);
 // Ellipse of a 2x2 map for a given strain amplitude (center 0).
 RendulicMap ellipse_of(const Eigen::Matrix2d& map, double amplitude);
 

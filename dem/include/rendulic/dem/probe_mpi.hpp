@@ -48,9 +48,10 @@ class MpiSession {
   int size() const { return size_; }
   // A worker's share of one envelope: dem::compute_worker_share (probe_campaign.hpp), passed
   // in so that the campaigns call this layer and not the other way round.
-  using ShareFn =
-      std::function<void(const std::string& method, const DemSystem& state, double amplitude,
-                         const std::vector<double>& theta_deg, const ProbeOptions& options)>;
+  // `plane` is the probe plane's name (core/conventions.hpp).
+  using ShareFn = std::function<void(
+      const std::string& method, const std::string& plane, const DemSystem& state, double amplitude,
+      const std::vector<double>& theta_deg, const ProbeOptions& options)>;
   // Ranks != 0: compute shares of the campaigns rank 0 sends until it releases them. Never
   // prints and never writes files; an error of a task is sent back to rank 0, which reports it.
   void serve(const ShareFn& compute);
@@ -162,8 +163,9 @@ class ByteReader {
 // ranks stay in step for the next task.
 class ProbeTaskScope {
  public:
-  ProbeTaskScope(const std::string& method, const DemSystem& state, double amplitude,
-                 const std::vector<double>& theta_deg, const ProbeOptions& options);
+  ProbeTaskScope(const std::string& method, const std::string& plane, const DemSystem& state,
+                 double amplitude, const std::vector<double>& theta_deg,
+                 const ProbeOptions& options);
   ~ProbeTaskScope();
   ProbeTaskScope(const ProbeTaskScope&) = delete;
   ProbeTaskScope& operator=(const ProbeTaskScope&) = delete;

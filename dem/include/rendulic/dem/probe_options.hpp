@@ -18,6 +18,9 @@ namespace rendulic::dem {
 struct ProbeOptions {
   int directions = 36;                            // equally spaced from 35.26 deg
   std::vector<double> amplitudes = {5e-5, 2e-3};  // |d_eps|, Frobenius
+  // Probe planes by name (core/conventions.hpp kProbePlaneNames; docs/probes.md "Probe
+  // planes"): every method and amplitude is probed in each.
+  std::vector<std::string> planes = {"rendulic"};
   // Loading rate of the largest strain component: from the inertial number
   // I = rate 2<r> sqrt(rho / P) at the state's pressure, unless `rate` > 0 fixes it (1/s).
   double inertial_number = 1e-4;
