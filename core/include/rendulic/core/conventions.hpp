@@ -1,7 +1,7 @@
 // Sign conventions, tensor invariants, Rendulic coordinates and probe planes: the one place that
-// defines them
-// (docs/physics.md sections 2, 3 and 5; docs/models.md "Coordinates"; docs/probes.md "Probe
-// planes"). Everything else calls these functions instead of re-deriving a sign or a sqrt(2).
+// defines them (docs/physics.md sections 2, 3 and 5; docs/models.md "Coordinates";
+// docs/probes.md "Probe planes"). Everything else calls these functions instead of re-deriving
+// a sign or a sqrt(2).
 //
 // - Strain epsilon = -E: compression positive. Stress: compression positive.
 // - Q_dev = +-sqrt(2 J2), the sign of J3 (+ for axial compression, - for axial extension).

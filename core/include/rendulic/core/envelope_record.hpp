@@ -9,11 +9,11 @@
 // Stored: attributes amplitude, method, directions, k_star, plane and plane_basis (the probe
 // plane, core/conventions.hpp; a file without them reads as the Rendulic plane) and the
 // envelope's own scalar attributes; datasets theta_deg[m], strain[m,2], stress_star[m,2],
-// fabric[m,2],
-// d_stress[m,3,3] (Pa), d_fabric[m,3,3], the fabric split d_fabric_volume, d_fabric_rotation,
-// d_fabric_contacts [m,3,3] when made, and one [m] dataset per probe diagnostic. The names of
-// the diagnostics and extra attributes are listed in the string attributes `diagnostics` and
-// `attributes` (comma-separated) so that a reader finds them without guessing.
+// fabric[m,2], d_stress[m,3,3] (Pa), d_fabric[m,3,3], the fabric split d_fabric_volume,
+// d_fabric_rotation, d_fabric_contacts [m,3,3] when made, and one [m] dataset per probe
+// diagnostic. The names of the diagnostics and extra attributes are listed in the string
+// attributes `diagnostics` and `attributes` (comma-separated) so that a reader finds them
+// without guessing.
 #pragma once
 
 #include <Eigen/Dense>
