@@ -509,20 +509,13 @@ LinearResponse linear_response(const PackingData& packing, const LinearResponseO
   keep.assign(n, 1);
   std::vector<int> count(n);
   using Matrix6 = Eigen::Matrix<double, 6, 6>;
-  std::vector<Matrix6> local(n);
-  std::vector<Matrix12d> blocks(all.size());
-  for (std::size_t q = 0; q < all.size(); ++q) blocks[q] = contact_matrix(all[q]);
   for (bool changed = true; changed;) {
     changed = false;
     std::fill(count.begin(), count.end(), 0);
-    for (auto& b : local) b.setZero();
-    for (std::size_t q = 0; q < all.size(); ++q) {
-      const FrictionalContact& c = all[q];
+    for (const FrictionalContact& c : all) {
       if (!keep[c.i] || !keep[c.j]) continue;
       ++count[c.i];
       ++count[c.j];
-      local[c.i] += blocks[q].topLeftCorner<6, 6>();
-      local[c.j] += blocks[q].bottomRightCorner<6, 6>();
     }
     for (int p = 0; p < n; ++p) {
       if (keep[p] && count[p] < options.min_contacts) {
@@ -531,6 +524,16 @@ LinearResponse linear_response(const PackingData& packing, const LinearResponseO
         ++out.n_rattlers;
       }
     }
+  }
+  // Each particle's own 6x6 block over the contacts that remain.
+  std::vector<Matrix12d> blocks(all.size());
+  for (std::size_t q = 0; q < all.size(); ++q) blocks[q] = contact_matrix(all[q]);
+  std::vector<Matrix6> local(n, Matrix6::Zero());
+  for (std::size_t q = 0; q < all.size(); ++q) {
+    const FrictionalContact& c = all[q];
+    if (!keep[c.i] || !keep[c.j]) continue;
+    local[c.i] += blocks[q].topLeftCorner<6, 6>();
+    local[c.j] += blocks[q].bottomRightCorner<6, 6>();
   }
   // Local zero modes: a particle whose contacts cannot hold some motion of it alone (the
   // symmetric part of its 6x6 block has an eigenvalue below floppy_tolerance * k). With
