@@ -74,12 +74,8 @@ template <class A>
 void io(A& a, ProbeOptions& o) {
   auto& [directions, amplitudes, planes, inertial_number, rate, dt_factor, relax, minimise, linear,
          threads, probe_done, stop] = o;
-  a(directions), a(amplitudes);
-  std::uint64_t n_planes = planes.size();
-  a(n_planes);
-  planes.resize(n_planes);  // a reader's; the writer's keeps its size
-  for (std::string& plane : planes) a(plane);
-  a(inertial_number), a(rate), a(dt_factor), a(relax), a(minimise);
+  a(directions), a(amplitudes), a(planes), a(inertial_number), a(rate), a(dt_factor), a(relax);
+  a(minimise);
   a(linear), a(threads);
   // Rank 0's progress display and stop request: not sent, a worker counts nothing and is
   // released by rank 0.

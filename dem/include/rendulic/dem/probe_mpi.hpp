@@ -86,6 +86,12 @@ class ByteWriter {
     (*this)(n);
     raw(v.data(), n * sizeof(T));
   }
+  template <class T>
+  requires(!std::is_arithmetic_v<T>) void operator()(std::vector<T>& v) {
+    std::uint64_t n = v.size();
+    (*this)(n);
+    for (T& x : v) (*this)(x);
+  }
   void operator()(std::string& s) {
     std::uint64_t n = s.size();
     (*this)(n);
@@ -124,6 +130,15 @@ class ByteReader {
     if (n > (bytes_.size() - at_) / sizeof(T)) overrun();
     v.resize(n);
     raw(v.data(), n * sizeof(T));
+  }
+  // Elements of another kind (strings, records): each takes at least one byte, which bounds n.
+  template <class T>
+  requires(!std::is_arithmetic_v<T>) void operator()(std::vector<T>& v) {
+    std::uint64_t n = 0;
+    (*this)(n);
+    if (n > bytes_.size() - at_) overrun();
+    v.resize(n);
+    for (T& x : v) (*this)(x);
   }
   void operator()(std::string& s) {
     std::uint64_t n = 0;
