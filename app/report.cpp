@@ -664,6 +664,9 @@ std::string path_section(const ResultsReader& r) {
   std::ostringstream md;
   md << "\n## Path (docs/dem.md \"Paths\")\n\n- type: `" << type << "`";
   if (r.has_attr(p, "rate")) md << ", rate " << fmt(r.attr_double(p, "rate")) << " 1/s";
+  if (r.has_attr(p, "inertial_number"))
+    md << " at most, holding I = " << fmt(r.attr_double(p, "inertial_number")) << " (at least "
+       << fmt(r.attr_double(p, "rate_min")) << " 1/s)";
   md << ", to s = " << fmt(s.back(), 3) << "\n";
   const double end = s.back();
   const dem::WindowMean w = dem::window_mean(s, q_over_p, dem::kSteadyStateFrom * end, end);
@@ -681,6 +684,14 @@ std::string path_section(const ResultsReader& r) {
       md << "- sliding contacts (at the Coulomb limit), steady state: "
          << (f.ok ? fmt(f.mean, 3) + " +- " + fmt(f.standard_error, 2) : std::string("-"))
          << " of the contacts\n";
+    }
+  }
+  // Whether the steady state is quasi-static: I <= 1e-3 (docs/physics.md section 4).
+  if (r.exists(p + datasets::kInertialNumber)) {
+    const std::vector<double> inertial = r.read_vector(p + datasets::kInertialNumber);
+    if (inertial.size() == s.size()) {
+      const dem::WindowMean f = dem::window_mean(s, inertial, dem::kSteadyStateFrom * end, end);
+      if (f.samples > 0) md << "- inertial number, steady state: " << fmt(f.mean, 3) << "\n";
     }
   }
   md << "- p at the end / p at the start: "

@@ -117,6 +117,8 @@ void stage_prepare(const Scenario& sc, ResultsWriter& out, const RunContext& ctx
   write_relax(out, paths::kPreparation, "", p.relax);
   out.attr(paths::kPreparation, "steps", p.steps);
   out.attr(paths::kPreparation, "gamma_b", o.prepare_gamma_b);
+  if (o.system.material.frictional())  // the friction it ran with (isotropic.friction_factor)
+    out.attr(paths::kPreparation, "friction", p.system.material().mu);
   out.attr(paths::kPreparation, "wall_time_s", progress.elapsed());
   session.system = std::move(p.system);
 }
@@ -153,6 +155,8 @@ void stage_isotropic(const Scenario&, ResultsWriter& out, const RunContext& ctx,
   for (std::size_t k = 0; k < c.snapshots.size(); ++k)
     branches.emplace_back(o.loading.snapshot_nu[k], std::move(c.snapshots[k]));
   warn_cap("at nu_max", r);
+  if (o.system.material.frictional()) out.attr(paths::kIsotropic, "friction", sys.material().mu);
+  dem::use_run_material(sys, o);
   const dem::Measures me = sys.measure();
   session.path_start_pressure = me.pressure;
   out.attr(paths::kIsotropic, "max_inertial_number", c.max_inertial_number);
@@ -194,6 +198,10 @@ void stage_path(const Scenario&, ResultsWriter& out, const RunContext& ctx,
   dem::PathSummary p = dem::run_path(
       sys, o.path, path_recorder(out, paths::kPath, o.system.material), progress.fn());
   out.attr(paths::kPath, "rate", o.path.rate);
+  if (o.path.inertial_number > 0) {  // the rate followed p: the samples' time and I record it
+    out.attr(paths::kPath, "inertial_number", o.path.inertial_number);
+    out.attr(paths::kPath, "rate_min", o.path.rate_min);
+  }
   out.attr(paths::kPath, "type", o.path.type);
   if (dem::path_type(o.path.type).mixed()) {
     out.attr(paths::kPath, "servo_error", p.servo_error);

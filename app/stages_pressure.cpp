@@ -2,10 +2,10 @@
 // range and its dependence on pressure; docs/dem.md "Pressure branches"). The isotropic stage
 // snapshots the loading at pressure.volume_fractions on its way to nu_max; from each snapshot
 // this stage repeats, under /pressure/nu<nu>, what the run does at nu_max: relaxation, the
-// undrained path (at the main path's inertial number: its rate scaled by sqrt(P / P_main)),
-// the states brought to rest, and for each state the stages the run requests among
-// elastic_range, probes, linear_response and fits. The branches' states are stored without
-// their configuration (positions, checkpoint): the main states carry those.
+// undrained path (at the main path's inertial number: its rate scaled by sqrt(P / P_main), or
+// path.inertial_number held), the states brought to rest, and for each state the stages the
+// run requests among elastic_range, probes, linear_response and fits. The branches' states are
+// stored without their configuration (positions, checkpoint): the main states carry those.
 #include <cmath>
 
 #include "rendulic/core/errors.hpp"
@@ -13,6 +13,7 @@
 #include "rendulic/core/result_paths.hpp"
 #include "rendulic/dem/probe_campaign.hpp"
 #include "rendulic/dem/probe_elastic_range.hpp"
+#include "rendulic/dem/run_protocol.hpp"
 #include "stages.hpp"
 
 namespace rendulic::app {
@@ -36,10 +37,12 @@ void stage_pressure(const Scenario& sc, ResultsWriter& out, const RunContext& ct
     log::info("[pressure] branch nu = ", nu);
     dem::DemSystem sys = snapshot;
     const dem::RelaxSummary r = dem::relax(sys, o.relax);
+    dem::use_run_material(sys, o);  // as the main branch, from its path on
     const dem::Measures start = sys.measure();
     dem::PathOptions path = o.path;
-    // The same inertial number as the main path: I ~ rate / sqrt(P).
-    if (session.path_start_pressure > 0 && start.pressure > 0)
+    // The same inertial number as the main path: I ~ rate / sqrt(P) (a path that holds
+    // path.inertial_number does so itself).
+    if (path.inertial_number == 0 && session.path_start_pressure > 0 && start.pressure > 0)
       path.rate = o.path.rate * std::sqrt(start.pressure / session.path_start_pressure);
     out.attr(G, "volume_fraction", start.volume_fraction);
     out.attr(G, "pressure_star", start.pressure_star);

@@ -59,6 +59,7 @@ dem::DemSystem isotropic_state(const dem::DemRunOptions& o, int n, std::uint64_t
   dem::CompressOptions loading = o.loading;
   loading.inertial_number = 0.0;
   dem::load_isotropic(sys, loading, o.relax);
+  dem::use_run_material(sys, o);
   return sys;
 }
 

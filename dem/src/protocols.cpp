@@ -45,6 +45,10 @@ bool CompressOptions::IsValid(std::string* why) const {
 }
 bool PathOptions::IsValid(std::string* why) const {
   if (!(rate > 0 && std::isfinite(rate))) return fail(why, "path rate must be > 0");
+  if (!(inertial_number >= 0 && std::isfinite(inertial_number)))
+    return fail(why, "the path's inertial number must be >= 0");
+  if (inertial_number > 0 && !(rate_min > 0 && rate_min <= rate))
+    return fail(why, "the path's rate_min must be in (0, rate]");
   if (!(eps_dev_max > 0)) return fail(why, "eps_dev_max must be > 0");
   if (samples < 2) return fail(why, "path samples must be >= 2");
   for (double e : snapshot_eps_dev)
@@ -203,6 +207,10 @@ double inertial_number(const Material& m, double rate, double pressure) {
   return std::abs(rate) * 2.0 * m.r_mean * std::sqrt(m.density / pressure);
 }
 
+double rate_for_inertial_number(const Material& m, double inertial, double pressure) {
+  return pressure > 0 ? inertial * std::sqrt(pressure / m.density) / (2.0 * m.r_mean) : 0.0;
+}
+
 double relax_ratio(const DemSystem& sys) {
   const Material& m = sys.material();
   const double floor = static_cast<double>(sys.particles().size()) *
@@ -346,9 +354,8 @@ CompressSummary compress_isotropic(DemSystem& sys, const CompressOptions& o, con
     const double remaining = sign * (total - done);
     if (o.inertial_number > 0 && it % kRateUpdate == 0) {
       const double P = pressure(sys.stress());
-      const double r =
-          P > 0 ? o.inertial_number * std::sqrt(P / mat.density) / (2.0 * mat.r_mean) : o.rate_min;
-      rate = std::clamp(r, o.rate_min, o.rate_max);
+      rate =
+          std::clamp(rate_for_inertial_number(mat, o.inertial_number, P), o.rate_min, o.rate_max);
     }
     const bool last = remaining <= 3.0 * rate * dt;
     // d ln(nu) / dt = -tr(D) = 3 * rate for D = -rate I.
@@ -427,7 +434,17 @@ PathSummary run_path(DemSystem& sys, const PathOptions& o, const SampleFn& sampl
   const bool mixed = type.mixed();
   const double kFactor = mixed ? 1.0 : std::sqrt(shape.squaredNorm());
   const double dt = sys.dt();
-  const double inc = kFactor * o.rate * dt;
+  // The rate of the coming steps: o.rate, or the one that holds o.inertial_number at the
+  // pressure (as the isotropic loading does), refreshed every kRateUpdate steps.
+  const bool held = o.inertial_number > 0;
+  const Material& mat = sys.material();
+  constexpr int kRateUpdate = 20;
+  double rate = o.rate;
+  auto update_rate = [&] {
+    rate = std::clamp(rate_for_inertial_number(mat, o.inertial_number, pressure(sys.stress())),
+                      o.rate_min, o.rate);
+  };
+  if (held) update_rate();
   auto path_strain = [&] { return kFactor * std::abs(sys.strain_E()[axis]); };
   std::vector<std::size_t> snap_order(o.snapshot_eps_dev.size());
   std::iota(snap_order.begin(), snap_order.end(), 0);
@@ -461,9 +478,8 @@ PathSummary run_path(DemSystem& sys, const PathOptions& o, const SampleFn& sampl
   // Samples carry the path's rate (max |D_aa| of the imposed axes = rate) and the inertial
   // number it has at the sample's pressure; the first sample is the state at rest before the
   // path. On mixed paths they also measure how well the servo holds its target.
-  const Material& mat = sys.material();
   auto record = [&](Measures m, bool moving) {
-    m.strain_rate = moving ? o.rate : 0.0;
+    m.strain_rate = moving ? rate : 0.0;
     m.inertial_number = inertial_number(mat, m.strain_rate, m.pressure);
     if (m.pressure > 0 && std::isfinite(m.inertial_number))
       s.max_inertial_number = std::max(s.max_inertial_number, m.inertial_number);
@@ -483,9 +499,12 @@ PathSummary run_path(DemSystem& sys, const PathOptions& o, const SampleFn& sampl
   // Events (samples, snapshots, the end) are hit exactly by shortening the step's rate; a path
   // whose strain stops growing (a servo that cannot hold its target) is stopped by the cap.
   constexpr double kHit = 1e-12;  // relative tolerance of landing on an event
-  const auto max_steps =
-      static_cast<std::int64_t>(10.0 * o.eps_dev_max / inc) + 10 * (o.samples + 10);
+  const auto max_steps = static_cast<std::int64_t>(10.0 * o.eps_dev_max /
+                                                   (kFactor * (held ? o.rate_min : o.rate) * dt)) +
+                         10 * (o.samples + 10);
   for (std::int64_t it = 0;; ++it) {
+    if (held && it > 0 && it % kRateUpdate == 0) update_rate();
+    const double inc = kFactor * rate * dt;
     if (it > max_steps)
       throw InputError("path: " + o.type + " did not reach s = " + std::to_string(o.eps_dev_max) +
                        " in " + std::to_string(max_steps) + " steps (the strain stopped growing)");
@@ -496,12 +515,12 @@ PathSummary run_path(DemSystem& sys, const PathOptions& o, const SampleFn& sampl
       event = std::min(event, o.snapshot_eps_dev[snap_order[next_snap]]);
     const double f = std::min(1.0, (event - now) / inc);
     if (mixed) {
-      control.axis[0].rate = o.rate * std::max(f, 0.0) * shape[0];
+      control.axis[0].rate = rate * std::max(f, 0.0) * shape[0];
       for (int a = 1; a < 3; ++a) control.axis[a].target_stress = lateral_target(stress_diag);
       sys.step_measuring_stress(control.velocity_gradient(stress_diag, mat.k_star(), dt, integral));
       stress_diag = sys.last_stress_diag();
     } else {
-      sys.step(o.rate * std::max(f, 0.0) * shape);
+      sys.step(rate * std::max(f, 0.0) * shape);
     }
     ++s.steps;
     const double after = path_strain();

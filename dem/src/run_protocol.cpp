@@ -11,7 +11,7 @@ PreparedPacking prepare_packing(const DemRunOptions& o, std::uint64_t seed, cons
     if (task) task(name);
   };
   start("gas");
-  SystemOptions prep = o.system;
+  SystemOptions prep = loading_system_options(o);
   prep.material.gamma_b = o.prepare_gamma_b;
   check_time_step(prep.material, prep.dt_factor, "preparation.gamma_b");
   DemSystem sys = make_gas(prep, o.gas, seed);
@@ -29,7 +29,19 @@ PreparedPacking prepare_packing(const DemRunOptions& o, std::uint64_t seed, cons
   const Measures at_nu0 = sys.measure();
   const std::int64_t steps = sys.steps();
   // Every later step runs with the material's own background damping.
-  return {DemSystem::restore(sys.save(), o.system), at_nu0, std::move(c), r, steps};
+  return {DemSystem::restore(sys.save(), loading_system_options(o)), at_nu0, std::move(c), r,
+          steps};
+}
+
+SystemOptions loading_system_options(const DemRunOptions& o) {
+  SystemOptions s = o.system;
+  s.material.mu *= o.loading_friction_factor;
+  return s;
+}
+
+void use_run_material(DemSystem& sys, const DemRunOptions& o) {
+  if (o.loading_friction_factor == 1.0) return;
+  sys = DemSystem::restore(sys.save(), o.system);
 }
 
 IsotropicLoading load_isotropic(DemSystem& sys, const CompressOptions& loading,

@@ -88,8 +88,9 @@ const OptionTable<DemRunOptions>& dem_run_option_table() {
            .unit = "-",
            .help = "Coulomb friction coefficient mu of the tangential contact (|f_t| <= mu "
                    "|f_n|, with rotations and a tangential spring per contact, docs/physics.md "
-                   "section 1b); 0 = frictionless (the seed study). The energy minimisation, "
-                   "static probes and linear response refuse mu > 0.",
+                   "section 1b); 0 = frictionless (the seed study). The energy minimisation "
+                   "and the minimisation probes refuse mu > 0; the linear response takes the "
+                   "sticking contacts.",
            .min = 0,
            .max = 10},
           [](O& o) -> double& { return o.system.material.mu; }},
@@ -189,6 +190,15 @@ const OptionTable<DemRunOptions>& dem_run_option_table() {
            .min = 0,
            .max = 1},
           [](O& o) -> double& { return o.loading.target_pressure_star; }},
+      Row{{.path = "isotropic.friction_factor",
+           .unit = "-",
+           .help = "Friction of the preparation and the isotropic loading as a fraction of "
+                   "dem.friction (1: the same; 0: frictionless, which jams the densest random "
+                   "packing); from the path on every stage runs with dem.friction "
+                   "(docs/dem.md 'Dense frictional packings').",
+           .min = 0,
+           .max = 1},
+          [](O& o) -> double& { return o.loading_friction_factor; }},
       Row{{.path = "isotropic.samples",
            .unit = "-",
            .help = "Samples of the isotropic branch (equally spaced in ln nu, ends included).",
@@ -244,6 +254,23 @@ const OptionTable<DemRunOptions>& dem_run_option_table() {
            .max = 1e6,
            .min_open = true},
           [](O& o) -> double& { return o.path.rate; }},
+      Row{{.path = "path.inertial_number",
+           .unit = "-",
+           .help = "0: the path runs at path.rate throughout. > 0: its rate follows the "
+                   "pressure so that it holds this inertial number, at most path.rate and at "
+                   "least path.rate_min (a loose frictional packing whose p falls on the path "
+                   "stays quasi-static; docs/dem.md 'Paths').",
+           .min = 0,
+           .max = 1e-2},
+          [](O& o) -> double& { return o.path.inertial_number; }},
+      Row{{.path = "path.rate_min",
+           .unit = "1/s",
+           .help = "Smallest rate of a path that holds path.inertial_number (where p is near "
+                   "zero, e.g. a liquefied packing); at most path.rate.",
+           .min = 0,
+           .max = 1e6,
+           .min_open = true},
+          [](O& o) -> double& { return o.path.rate_min; }},
       Row{{.path = "path.direction",
            .unit = "-",
            .help = "Principal strain-rate direction (D_xx, D_yy, D_zz up to a positive factor, "
@@ -364,6 +391,8 @@ DemRunOptions dem_options_from_scenario(const Scenario& sc) {
     throw InputError(where("isotropic.nu_max") + ": must exceed preparation.nu0");
   if (o.loading.rate_min > o.loading.rate_max)
     throw InputError(where("isotropic.rate_min") + ": must not exceed isotropic.rate_max");
+  if (o.path.inertial_number > 0 && o.path.rate_min > o.path.rate)
+    throw InputError(where("path.rate_min") + ": must not exceed path.rate");
   if (o.state_labels.size() != o.path.snapshot_eps_dev.size())
     throw InputError(where("states.labels") + ": needs one label per states.eps_dev entry (" +
                      std::to_string(o.path.snapshot_eps_dev.size()) + ")");

@@ -2,7 +2,7 @@
 // number of the imposed rate at that sample's pressure, I = rate 2<r> sqrt(rho / P), also on
 // the steps shortened to land on samples and snapshots; the loading's snapshots land exactly
 // on their volume fractions without changing the loading; window means and their batch-means
-// standard errors.
+// standard errors; a path that holds an inertial number.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -45,6 +45,52 @@ TEST(PathRecords, InertialNumberIsTheImposedRatesAtEverySample) {
     const double want = expected_inertial(sys.material(), o.rate, rows[k].pressure);
     EXPECT_NEAR(rows[k].inertial_number, want, 1e-12 * want) << k;
     EXPECT_EQ(rows[k].strain_rate, o.rate) << k;
+  }
+}
+
+// A path that holds an inertial number takes its rate from the pressure, between rate_min and
+// rate: the samples record that rate, and the inertial number it gives at their pressure is the
+// target up to the pressure's change over the few steps between rate updates.
+TEST(PathRecords, AHeldInertialNumberTakesItsRateFromThePressure) {
+  const DemSystem start = jammed(0.78);
+  const Material& m = start.material();
+  const double P0 = start.stress().trace() / 3.0;
+  // The inverse of I(rate, P), checked against the independent formula above.
+  EXPECT_NEAR(expected_inertial(m, rate_for_inertial_number(m, 3e-4, P0), P0), 3e-4, 1e-18);
+  EXPECT_EQ(rate_for_inertial_number(m, 3e-4, 0.0), 0.0);
+  PathOptions o;
+  o.type = "undrained_compression";
+  o.rate = 6000.0;
+  o.rate_min = 100.0;
+  o.eps_dev_max = 1e-3;
+  o.samples = 7;
+  o.snapshot_eps_dev = {3.3e-4};
+  o.inertial_number = expected_inertial(m, 2000.0, P0);  // 2000 1/s at the start
+  DemSystem sys = start;
+  std::vector<Measures> rows;
+  const PathSummary p = run_path(sys, o, [&](const Measures& r) { rows.push_back(r); });
+  ASSERT_EQ(rows.size(), 7u);
+  for (std::size_t k = 1; k < rows.size(); ++k) {
+    EXPECT_GT(rows[k].strain_rate, o.rate_min) << k;
+    EXPECT_LT(rows[k].strain_rate, o.rate) << k;
+    EXPECT_NEAR(rows[k].inertial_number, o.inertial_number, 0.02 * o.inertial_number) << k;
+  }
+  EXPECT_NEAR(rows.back().eps_dev, 1e-3, 1e-12);  // events still land exactly
+  EXPECT_NEAR(p.snapshots[0].strain_E().norm(), 3.3e-4, 1e-14);
+  // The pressure changed along the path, and the rate with it.
+  EXPECT_NE(rows[1].strain_rate, rows.back().strain_rate);
+  // The bounds: a target beyond what `rate` gives runs at `rate`, one below rate_min at it.
+  for (const auto& [target, want] : {std::pair{10.0 * o.inertial_number, o.rate},
+                                     std::pair{1e-3 * o.inertial_number, o.rate_min}}) {
+    PathOptions b = o;
+    b.inertial_number = target;
+    b.eps_dev_max = 2e-4;
+    b.snapshot_eps_dev = {};
+    b.samples = 3;
+    DemSystem again = start;
+    std::vector<Measures> r;
+    run_path(again, b, [&](const Measures& x) { r.push_back(x); });
+    for (std::size_t k = 1; k < r.size(); ++k) EXPECT_EQ(r[k].strain_rate, want) << target;
   }
 }
 

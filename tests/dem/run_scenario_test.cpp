@@ -53,11 +53,11 @@ TEST(RunScenario, EveryKeyReachesItsMember) {
       "gamma_b = 0.3\nnu0 = 0.6\n"
       "[relax]\nkinetic_to_elastic = 1e-4\ntime_cap = 1e-3\n"
       "[isotropic]\nnu_max = 0.8\nsamples = 70\ninertial_number = 1e-4\nrate_max = 500.0\n"
-      "rate_min = 60.0\npressure_star = 0.02\n"
+      "rate_min = 60.0\npressure_star = 0.02\nfriction_factor = 0.25\n"
       "[pressure]\nvolume_fractions = [0.7]\n"
       "[path]\nrate = 300.0\neps_dev_max = 0.1\nsamples = 50\ntype = \"proportional\"\n"
       "direction = [1.0, 0.0, -1.0]\nservo_gain = 1e5\nservo_integral_gain = 1e9\n"
-      "servo_tolerance = 0.05\n"
+      "servo_tolerance = 0.05\ninertial_number = 2e-4\nrate_min = 7.0\n"
       "[states]\neps_dev = [0.01, 0.05]\nlabels = [\"p\", \"q\"]\nkinetic_to_elastic = 1e-7\n"
       "time_cap = 1e-3\nforce_tolerance = 1e-8\n",
       "run.toml", s);
@@ -102,13 +102,17 @@ TEST(RunScenario, EveryKeyReachesItsMember) {
   EXPECT_EQ(o.path.servo.integral_gain, 1e9);
   EXPECT_EQ(o.path.servo_tolerance, 0.05);
   EXPECT_EQ(o.loading.target_pressure_star, 0.02);
+  EXPECT_EQ(o.loading_friction_factor, 0.25);
+  EXPECT_EQ(loading_system_options(o).material.mu, 0.25 * 0.3);
+  EXPECT_EQ(o.path.inertial_number, 2e-4);
+  EXPECT_EQ(o.path.rate_min, 7.0);
   EXPECT_EQ(o.state_labels, (std::vector<std::string>{"p", "q"}));
   EXPECT_EQ(o.state_rest.relax.kinetic_to_elastic, 1e-7);
   EXPECT_EQ(o.state_rest.relax.time_cap, 1e-3);
   EXPECT_EQ(o.state_rest.minimise.force_tolerance, 1e-8);
   EXPECT_EQ(o.state_rest.minimise.k, 2e8);
   // Every row of the table was set above: one key per row, none forgotten.
-  EXPECT_EQ(dem_run_option_table().rows().size(), 40u);
+  EXPECT_EQ(dem_run_option_table().rows().size(), 43u);
 }
 
 TEST(RunScenario, ACodeBuiltRunIsHeldToTheKeysRanges) {
@@ -118,6 +122,21 @@ TEST(RunScenario, ACodeBuiltRunIsHeldToTheKeysRanges) {
   o.system.dt_factor = 1.5;
   EXPECT_FALSE(dem_run_option_table().check(o, &why));
   EXPECT_NE(why.find("dem.dt_factor"), std::string::npos) << why;
+}
+
+TEST(RunScenario, APathFloorAboveItsRateIsRefusedNamingIt) {
+  const ScenarioSchema s = schema();
+  const Scenario sc = Scenario::from_string(
+      "[path]\nrate = 50.0\ninertial_number = 1e-3\nrate_min = 60.0\n", "run.toml", s);
+  try {
+    dem_options_from_scenario(sc);
+    FAIL() << "accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("path.rate_min"), std::string::npos) << e.what();
+  }
+  // Without a held inertial number the floor is not used, and not checked.
+  EXPECT_NO_THROW(dem_options_from_scenario(
+      Scenario::from_string("[path]\nrate = 50.0\nrate_min = 60.0\n", "run.toml", s)));
 }
 
 }  // namespace

@@ -93,6 +93,8 @@ struct CompressOptions {
 // (samples, snapshots, the end) are hit by shortening a step, and that step's D is not the
 // rate of the loading.
 double inertial_number(const Material& material, double rate, double pressure);
+// Its inverse: the rate (1/s) that gives inertial number `inertial` at pressure P (0 at P <= 0).
+double rate_for_inertial_number(const Material& material, double inertial, double pressure);
 
 // Below this P* a packing counts as unjammed for the inertial-number bookkeeping: as P -> 0
 // the inertial number diverges at any finite rate, and it means nothing for a fluid.
@@ -149,6 +151,10 @@ double path_strain(const PathType& type, const Eigen::Matrix3d& strain);
 struct PathOptions {
   std::string type = "undrained_extension";  // one of path_type_choices()
   double rate = 500.0;                       // largest |D_aa| of the strain-controlled axes, 1/s
+  // > 0: the rate follows the pressure so that the path holds this inertial number, between
+  // rate_min and rate (rate_for_inertial_number, updated every few steps); 0: `rate` throughout.
+  double inertial_number = 0;
+  double rate_min = 1.0;  // 1/s, the floor where p is small (a liquefied packing)
   // The principal strain-rate direction of a proportional path (D's diagonal up to a positive
   // factor, extension positive); not used by the other paths.
   std::vector<double> direction = {1.0, -0.5, -0.5};

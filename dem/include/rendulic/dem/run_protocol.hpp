@@ -25,6 +25,9 @@ struct DemRunOptions {
   GasOptions gas{.n_particles = 9261, .volume_fraction = 0.3, .velocity = 1.0};
   double mix_time = 0;           // s at fixed cell before compressing the gas
   double prepare_gamma_b = 0.1;  // background damping during gas, compression, relax at nu0
+  // Friction of the preparation and the isotropic loading as a fraction of the material's mu
+  // (loading_system_options); 1 prepares with the run's own friction.
+  double loading_friction_factor = 1.0;
   // gas -> nu0 at one constant rate
   CompressOptions prepare{.target_nu = 0.64, .rate_max = 300, .rate_min = 300};
   RelaxOptions relax{.kinetic_to_elastic = 1e-5, .time_cap = 2e-3};  // at nu0 and at nu_max
@@ -43,19 +46,31 @@ struct DemRunOptions {
 // (PathOptions{}.servo, the same reasoning) with the loading's largest rate as its bound.
 inline const ServoOptions kPressureServo = PathOptions{}.servo;
 
+// The system options of the preparation and the isotropic loading: the run's, with the friction
+// mu x loading_friction_factor (docs/dem.md "Dense frictional packings": a packing loaded with
+// less friction jams denser).
+SystemOptions loading_system_options(const DemRunOptions& options);
+// `sys` (a packing of the loading, at rest) carried on with the run's own material, as every
+// stage from the path on runs: friction raised to mu, the tangential springs as they are (all
+// zero after a frictionless loading, within the loading's smaller Coulomb limit otherwise). A
+// no-op when the loading already ran with it (loading_friction_factor = 1), which keeps such
+// runs bitwise as they were.
+void use_run_material(DemSystem& sys, const DemRunOptions& options);
+
 // Called with the name of each step as it starts ("gas", "compress to nu0", "relax at nu0").
 using TaskFn = std::function<void(const std::string&)>;
 
 struct PreparedPacking {
-  DemSystem system;             // at nu0, running with the material's own background damping
-  Measures at_nu0;              // measured at the end of the relaxation at nu0
+  DemSystem system;  // at nu0, with the material's own background damping, the loading's mu
+  Measures at_nu0;   // measured at the end of the relaxation at nu0
   CompressSummary compression;  // gas -> nu0
   RelaxSummary relax;           // at nu0
   std::int64_t steps = 0;
 };
 // The random gas of `seed`, its mixing, its compression to nu0 and the relaxation there, all at
 // options.prepare_gamma_b (refused with an InputError naming preparation.gamma_b if that makes
-// the time step unstable).
+// the time step unstable) and with the loading's friction (loading_system_options), which the
+// returned system keeps.
 PreparedPacking prepare_packing(const DemRunOptions& options, std::uint64_t seed,
                                 const TaskFn& task = {}, const ProgressFn& progress = {});
 
