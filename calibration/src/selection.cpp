@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <set>
 #include <sstream>
 
@@ -228,6 +229,40 @@ std::string explain(const std::vector<SelectionRow>& rows, const std::vector<boo
   return out;
 }
 
+// The kinds the selected law predicts no better than no change at all (misfit >= 1: the
+// yardstick's scale is the data's own size), with the best other candidate on each: a
+// selection by BIC among laws that all miss a block must not read as "this law fits".
+std::string misses(const std::vector<SelectionRow>& rows, const std::vector<bool>& candidate,
+                   int sel, bool stress) {
+  auto score = [&](std::size_t i) -> const SetScore& {
+    return stress ? rows[i].stress : rows[i].all;
+  };
+  std::vector<std::string> parts;
+  for (const auto& [kind, m] : score(static_cast<std::size_t>(sel)).fitted_by_kind) {
+    if (!(m >= 1.0)) continue;
+    std::ostringstream o;
+    o << kind << " " << fmt(m);
+    double best = std::numeric_limits<double>::infinity();
+    std::string best_law;
+    for (std::size_t i = 0; i < rows.size(); ++i) {
+      if (static_cast<int>(i) == sel || !candidate[i]) continue;
+      const auto it = score(i).fitted_by_kind.find(kind);
+      if (it != score(i).fitted_by_kind.end() && it->second < best)
+        best = it->second, best_law = rows[i].model;
+    }
+    if (best < 1.0)
+      o << " (" << best_law << ": " << fmt(best) << ")";
+    else
+      o << " (no other law below 1 either)";
+    parts.push_back(o.str());
+  }
+  if (parts.empty()) return "";
+  std::string list;
+  for (const auto& p : parts) list += (list.empty() ? "" : "; ") + p;
+  return " Read with care: " + rows[static_cast<std::size_t>(sel)].model +
+         " predicts these blocks no better than no change at all (misfit 1): " + list + ".";
+}
+
 }  // namespace
 
 Selection select_model(const std::vector<ModelScore>& models, const SelectionRule& rule) {
@@ -291,6 +326,7 @@ Selection select_model(const std::vector<ModelScore>& models, const SelectionRul
     s << ").";
     const std::string e = explain(out.rows, cand_all, sel, false, rule);
     if (!e.empty()) s << " Against it: " << e << ".";
+    s << misses(out.rows, cand_all, sel, false);
   } else {
     s << "No law predicts every block of this scene's data.";
   }
@@ -299,7 +335,7 @@ Selection select_model(const std::vector<ModelScore>& models, const SelectionRul
       << out.selected_stress << " (BIC " << fmt(out.rows[sel_s].stress.bic, 6) << ")";
     const std::string e = explain(out.rows, cand_stress, sel_s, true, rule);
     if (!e.empty()) s << ": " << e;
-    s << ".";
+    s << "." << misses(out.rows, cand_stress, sel_s, true);
   } else if (sel_s >= 0) {
     // The laws without fabric, compared with the selected one on the stress blocks.
     std::vector<bool> only_stress(out.rows.size());

@@ -165,6 +165,27 @@ TEST(Yardstick, SelectionRule) {
   other.held_out_states = {"a"};
   s = select_model({fake("rich", 6, 0.02, 0.02), fake("simple", 3, 0.02, 0.02), other});
   EXPECT_EQ(s.selected, "simple");
+  EXPECT_EQ(s.sentence.find("Read with care"), std::string::npos) << s.sentence;
+}
+
+// A law selected by BIC although it misses a block (misfit >= 1: no better than predicting no
+// change) is flagged, naming the block and the best other law there.
+TEST(Yardstick, ASelectedLawThatMissesABlockIsFlagged) {
+  ModelScore simple = fake("simple", 3, 0.02, 0.02), rich = fake("rich", 9, 0.02, 0.02);
+  for (auto* m : {&simple, &rich}) {
+    BlockScore b;
+    b.state = "a";
+    b.kind = "path_stress";
+    b.id = "path/stress";
+    b.components = 10;
+    b.noise = 1e-3;
+    b.misfit = m == &simple ? 1.9 : 0.77;
+    m->blocks.push_back(b);
+  }
+  const Selection s = select_model({simple, rich});
+  ASSERT_EQ(s.selected, "simple") << s.sentence;  // few components: BIC barely sees the path
+  EXPECT_NE(s.sentence.find("Read with care: simple"), std::string::npos) << s.sentence;
+  EXPECT_NE(s.sentence.find("path_stress 1.9 (rich: 0.77)"), std::string::npos) << s.sentence;
 }
 
 }  // namespace
