@@ -78,8 +78,9 @@ class State:
 
 @dataclass
 class Envelope:
-    """One response envelope (docs/probes.md): per probe direction theta_deg, the Rendulic
-    pairs (sqrt2 lateral, axial) of strain, stress/k* and fabric, the tensors d_stress (Pa)
+    """One response envelope (docs/probes.md): per probe direction theta_deg, the pairs in its
+    probe plane (the Rendulic pairs, sqrt2 lateral and axial, in the default plane) of strain,
+    stress/k* and fabric, the tensors d_stress (Pa)
     and d_fabric [m,3,3], and the stored fits of the stress and fabric pairs."""
     state: str
     name: str
@@ -99,6 +100,7 @@ class Envelope:
     fit_fabric: Optional[Fit]
     stiffness: Optional[np.ndarray] = None
     fabric_stiffness: Optional[np.ndarray] = None
+    plane: str = "rendulic"  # the probe plane of the pairs (docs/probes.md "Probe planes")
 
     @property
     def stress(self) -> np.ndarray:
@@ -229,12 +231,14 @@ def material_point_path(model: str, state, params=None, kind: str = "undrained",
 
 def probe(packing: str | os.PathLike, out: str | os.PathLike, methods=(), amplitudes=(),
           directions: int = 0, label: str = "imported", sets=None, threads: int = 0,
-          quiet: bool = False, progress: Progress = None) -> Results:
+          quiet: bool = False, progress: Progress = None, planes=()) -> Results:
     """Probes a packing as `rendulic probe` (docs/interop.md): a LAMMPS data file or dump, or
-    "RESULTS.h5:/states/LABEL". sets: {key: value} or ["key=value"] scenario overrides.
-    Returns the written results file."""
+    "RESULTS.h5:/states/LABEL". planes: probe planes as `--planes` (rendulic, deviatoric,
+    meridian_<Lode deg>; docs/probes.md "Probe planes"), empty for the scenario's.
+    sets: {key: value} or ["key=value"] scenario overrides. Returns the written results file."""
     return Results(_rendulic.probe(os.fspath(packing), os.fspath(out), label, list(methods),
-                                   list(amplitudes), directions, sets, threads, quiet, progress))
+                                   list(amplitudes), directions, list(planes), sets, threads,
+                                   quiet, progress))
 
 
 def run(scenario: str | os.PathLike, out: str | os.PathLike, sets=None, threads: int = 0,

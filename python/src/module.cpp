@@ -152,6 +152,7 @@ py::dict envelope_dict(const ResultsReader& in, const std::string& group) {
   d["method"] = e.method;
   d["amplitude"] = e.amplitude;
   d["k_star"] = e.k_star;
+  d["plane"] = e.plane.name;
   d["theta_deg"] = array_of(e.theta_deg);
   d["strain"] = pairs_of(e.strain);
   d["stress_star"] = pairs_of(e.stress_star);
@@ -602,8 +603,8 @@ PYBIND11_MODULE(_rendulic, m) {
       "probe",
       [](const std::string& packing, const std::string& out, const std::string& label,
          const std::vector<std::string>& methods, const std::vector<double>& amplitudes,
-         int directions, const py::object& sets, int threads, bool quiet,
-         const py::object& progress) {
+         int directions, const std::vector<std::string>& planes, const py::object& sets,
+         int threads, bool quiet, const py::object& progress) {
         app::ProbeRequest r;
         r.packing = packing;
         r.out = out;
@@ -611,6 +612,7 @@ PYBIND11_MODULE(_rendulic, m) {
         r.methods = methods;
         r.amplitudes = amplitudes;
         r.directions = directions;
+        r.planes = planes;
         r.sets = sets_of(sets);
         r.threads = threads;
         r.quiet = quiet;
@@ -618,8 +620,9 @@ PYBIND11_MODULE(_rendulic, m) {
         return long_work(progress, quiet, [&] { return app::probe_packing(r).string(); });
       },
       "packing"_a, "out"_a, "label"_a = "imported", "methods"_a = std::vector<std::string>{},
-      "amplitudes"_a = std::vector<double>{}, "directions"_a = 0, "sets"_a = py::none(),
-      "threads"_a = 0, "quiet"_a = false, "progress"_a = py::none());
+      "amplitudes"_a = std::vector<double>{}, "directions"_a = 0,
+      "planes"_a = std::vector<std::string>{}, "sets"_a = py::none(), "threads"_a = 0,
+      "quiet"_a = false, "progress"_a = py::none());
 
   m.def(
       "run",

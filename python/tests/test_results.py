@@ -88,6 +88,27 @@ def test_probe_equals_cli_probe(cli_run, tmp_path):
         np.testing.assert_allclose(ea.stress_star, eb.stress_star, rtol=1e-9)
 
 
+def test_probe_planes_equal_cli_planes(cli_run, tmp_path):
+    # True-triaxial probes through the module: the deviatoric plane's linear response, the same
+    # as `rendulic probe --planes deviatoric`, its pairs the projections on the plane's basis.
+    packing = f"{cli_run}:/states/a"
+    cli("probe", packing, "--methods", "linear_response", "--planes", "deviatoric", "--quiet",
+        "--threads", "1", "--directions", "8", "--out", tmp_path / "cli")
+    ref = rendulic.Results(tmp_path / "cli" / "results.h5")
+    mod = rendulic.probe(packing, tmp_path / "mod", methods=["linear_response"], directions=8,
+                         planes=["deviatoric"], threads=1, quiet=True)
+    envs = mod.envelopes()
+    assert envs and all(e.plane == "deviatoric" for e in envs)
+    assert all("_deviatoric_" in e.name for e in envs)
+    for ea, eb in zip(envs, ref.envelopes(), strict=True):
+        np.testing.assert_array_equal(ea.stress_star, eb.stress_star)
+    basis = np.asarray(mod.attributes(f"/states/imported/envelopes/{envs[0].name}")["plane_basis"])
+    u, v = basis.reshape(2, 3)
+    d = np.array([np.diag(t) for t in envs[0].d_stress]) / envs[0].k_star
+    np.testing.assert_allclose(envs[0].stress_star, np.stack([d @ u, d @ v], axis=1),
+                               rtol=1e-10, atol=1e-15)
+
+
 def test_fit_equals_cli_fit(cli_run, tmp_path):
     e = rendulic.Results(cli_run).envelopes(state="b", method="dynamic")[0]
     csv = tmp_path / "env.csv"
