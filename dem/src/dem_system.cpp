@@ -125,24 +125,17 @@ DemSystem DemSystem::restore(const State& s, const SystemOptions& options) {
     d.list_.build(ref, s.ref_lengths, skin);
   else
     d.list_.build(ref, s.ref_lengths, skin, s.ref_half_skin);
-  if (d.friction_) {
+  // A saved history (3 doubles per list entry), or none: springs from zero.
+  auto history = [&](const std::vector<double>& saved, const char* what) {
     const std::size_t entries = 3 * d.list_.index.size();
-    if (s.tangential_history.empty())
-      d.hist_.assign(entries, 0.0);
-    else if (s.tangential_history.size() == entries)
-      d.hist_ = s.tangential_history;
-    else
-      throw InputError("DEM state: its tangential history does not match its neighbour list");
-  }
-  if (d.rolling_) {
-    const std::size_t entries = 3 * d.list_.index.size();
-    if (s.rolling_history.empty())
-      d.hist_r_.assign(entries, 0.0);
-    else if (s.rolling_history.size() == entries)
-      d.hist_r_ = s.rolling_history;
-    else
-      throw InputError("DEM state: its rolling history does not match its neighbour list");
-  }
+    if (saved.empty()) return std::vector<double>(entries, 0.0);
+    if (saved.size() != entries)
+      throw InputError(std::string("DEM state: its ") + what +
+                       " history does not match its neighbour list");
+    return saved;
+  };
+  if (d.friction_) d.hist_ = history(s.tangential_history, "tangential");
+  if (d.rolling_) d.hist_r_ = history(s.rolling_history, "rolling");
   d.note_list_built();
   return d;
 }

@@ -125,23 +125,25 @@ TEST(RollingFriction, RigidlyTurningPairKeepsItsRollingSpringInTheTangentPlane) 
     const State now = s.save();
     return Vec(now.rolling_history[0], now.rolling_history[1], now.rolling_history[2]);
   };
-  const Vec l_start = s.contacts().at(0).branch;
+  auto branch = [&] {  // x_0 - x_1 (no periodic image: both in the cell's middle)
+    const Particles& p = s.particles();
+    return Vec(p.position(0) - p.position(1));
+  };
+  const Vec l_start = branch();
   const double theta = 0.005;
   const int steps = static_cast<int>(theta / omega / s.dt());
   double worst_normal = 0, worst_length = 0;
   for (int k = 0; k < steps; ++k) {
     s.step(Vec::Zero());
-    const std::vector<Contact> cs = s.contacts();
-    ASSERT_EQ(cs.size(), 1u);
-    const Vec n = cs[0].branch.normalized();
-    worst_normal = std::max(worst_normal, std::abs(spring().dot(n)));
+    ASSERT_EQ(s.measure().contacts, 1);
+    worst_normal = std::max(worst_normal, std::abs(spring().dot(branch().normalized())));
     worst_length = std::max(worst_length, std::abs(spring().norm() - xr0.norm()));
   }
   // Without the turning, xr . n would grow to theta |xr| = 5e-3 |xr|; w_0 = w_1 exactly, so
   // the length changes only by the turning's round-off.
   EXPECT_LT(worst_normal, 1e-12 * xr0.norm());
   EXPECT_LT(worst_length, 1e-12 * xr0.norm());
-  const Vec l_end = s.contacts().at(0).branch;
+  const Vec l_end = branch();
   const double turned = std::atan2(l_start.cross(l_end)[2], l_start.dot(l_end));
   EXPECT_GT(turned, 0.9 * theta);
   const Vec expected = Eigen::AngleAxisd(turned, Vec::UnitZ()) * xr0;
