@@ -42,8 +42,9 @@ struct BenchOptions {
   std::int64_t n_particles = 9261;
   std::vector<int> threads = {1, 2};
   std::vector<double> volume_fractions = {0.64, 0.82};
-  double seconds = 1.0;  // timed wall time per figure and repetition (at least)
-  double friction = 0;   // > 0: also 1 thread with this mu on the same states
+  double seconds = 1.0;         // timed wall time per figure and repetition (at least)
+  double friction = 0;          // > 0: also 1 thread with this mu on the same states
+  double rolling_friction = 0;  // > 0 (with friction): also with this mu_r
   int repetitions = 3;
   std::uint64_t seed = 1;
 };
@@ -191,86 +192,116 @@ Subcommand add_bench(CLI::App& parent) {
                   "also time 1 thread with Coulomb friction mu (dem.friction) on the same states, "
                   "beside the frictionless engine, wall and CPU time")
       ->check(CLI::Range(0.0, 10.0));
+  sub->add_option("--rolling-friction", o->rolling_friction,
+                  "with --friction: also time 1 thread with rolling resistance mu_r "
+                  "(dem.rolling_friction) on the same states")
+      ->check(CLI::Range(0.0, 1.0));
   sub->add_option("--repetitions", o->repetitions,
                   "repetitions (idle: the best is reported; loaded: the mean)")
       ->capture_default_str()
       ->check(CLI::Range(1, 100));
-  return {sub, [o]() -> int {
-            const int all_cores = omp_get_max_threads();
-            if (!o->lammps_dir.empty()) std::filesystem::create_directories(o->lammps_dir);
-            std::vector<int> settings = o->threads;
-            settings.push_back(0);  // the default
-            nlohmann::ordered_json json = nlohmann::ordered_json::array();
-            if (!o->json)
-              std::cout << "volume_fraction  threads  n_particles  ns_per_particle_step"
-                        << (o->load ? "  loaded" : "") << "\n";
-            for (double nu : o->volume_fractions) {
-              if (!o->json) std::cerr << "bench: preparing nu = " << nu << " ...\n";
-              const dem::DemSystem state = prepared_state(*o, nu);
-              if (!o->lammps_dir.empty()) {
-                std::ostringstream name;
-                name << "nu" << std::lround(100 * nu) << ".data";
-                write_lammps(state, std::filesystem::path(o->lammps_dir) / name.str());
-              }
-              std::vector<Figure> idle, loaded;
-              for (int t : settings) idle.push_back(time_steps(state, t, all_cores, *o));
-              if (o->load) {
-                BusyLoop busy;
-                for (int t : settings) loaded.push_back(time_steps(state, t, all_cores, *o));
-              }
-              for (std::size_t k = 0; k < settings.size(); ++k) {
-                const int t = settings[k];
-                if (o->json) {
-                  nlohmann::ordered_json row;
-                  row["volume_fraction"] = nu;
-                  row["threads"] = t;
-                  row["n_particles"] = o->n_particles;
-                  row["ns_per_particle_step"] = idle[k].best;
-                  if (o->load) row["ns_per_particle_step_loaded"] = loaded[k].mean;
-                  json.push_back(row);
-                } else {
-                  std::cout << std::setw(15) << nu << std::setw(9)
-                            << (t > 0 ? std::to_string(t) : "default") << std::setw(13)
-                            << o->n_particles << std::setw(22) << std::setprecision(4)
-                            << idle[k].best;
-                  if (o->load) std::cout << std::setw(8) << std::setprecision(4) << loaded[k].mean;
-                  std::cout << "\n";
-                }
-              }
-              if (o->friction > 0) {
-                // The same state and steps, frictionless and frictional (springs from zero).
-                dem::SystemOptions f;
-                f.material.mu = o->friction;
-                const dem::DemSystem rough = dem::DemSystem::restore(state.save(), f);
-                const Figure smooth_1 = time_steps(state, 1, all_cores, *o);
-                const Figure rough_1 = time_steps(rough, 1, all_cores, *o);
-                if (o->json) {
-                  for (const auto& [mu, fig] : {std::pair{0.0, smooth_1}, {o->friction, rough_1}}) {
-                    nlohmann::ordered_json row;
-                    row["volume_fraction"] = nu;
-                    row["threads"] = 1;
-                    row["n_particles"] = o->n_particles;
-                    row["friction"] = mu;
-                    row["ns_per_particle_step"] = fig.best;
-                    row["ns_per_particle_step_cpu"] = fig.best_cpu;
-                    json.push_back(row);
-                  }
-                } else {
-                  std::cout << "  1 thread, ns per particle-step (wall / CPU): frictionless "
-                            << std::setprecision(4) << smooth_1.best << " / " << smooth_1.best_cpu
-                            << ", friction " << o->friction << ": " << rough_1.best << " / "
-                            << rough_1.best_cpu << " (" << std::setprecision(3)
-                            << rough_1.best_cpu / smooth_1.best_cpu << "x CPU)\n";
-                }
-              }
-              if (o->load && !o->json && settings.front() == 1)
-                std::cout << "  loaded, default against 1 thread: " << std::setprecision(3)
-                          << loaded.back().mean / loaded.front().mean << "x\n";
+  return {
+      sub, [o]() -> int {
+        const int all_cores = omp_get_max_threads();
+        if (o->rolling_friction > 0 && !(o->friction > 0))
+          throw InputError(
+              "bench: --rolling-friction needs --friction > 0 (rotations exist only with "
+              "friction)");
+        if (!o->lammps_dir.empty()) std::filesystem::create_directories(o->lammps_dir);
+        std::vector<int> settings = o->threads;
+        settings.push_back(0);  // the default
+        nlohmann::ordered_json json = nlohmann::ordered_json::array();
+        if (!o->json)
+          std::cout << "volume_fraction  threads  n_particles  ns_per_particle_step"
+                    << (o->load ? "  loaded" : "") << "\n";
+        for (double nu : o->volume_fractions) {
+          if (!o->json) std::cerr << "bench: preparing nu = " << nu << " ...\n";
+          const dem::DemSystem state = prepared_state(*o, nu);
+          if (!o->lammps_dir.empty()) {
+            std::ostringstream name;
+            name << "nu" << std::lround(100 * nu) << ".data";
+            write_lammps(state, std::filesystem::path(o->lammps_dir) / name.str());
+          }
+          std::vector<Figure> idle, loaded;
+          for (int t : settings) idle.push_back(time_steps(state, t, all_cores, *o));
+          if (o->load) {
+            BusyLoop busy;
+            for (int t : settings) loaded.push_back(time_steps(state, t, all_cores, *o));
+          }
+          for (std::size_t k = 0; k < settings.size(); ++k) {
+            const int t = settings[k];
+            if (o->json) {
+              nlohmann::ordered_json row;
+              row["volume_fraction"] = nu;
+              row["threads"] = t;
+              row["n_particles"] = o->n_particles;
+              row["ns_per_particle_step"] = idle[k].best;
+              if (o->load) row["ns_per_particle_step_loaded"] = loaded[k].mean;
+              json.push_back(row);
+            } else {
+              std::cout << std::setw(15) << nu << std::setw(9)
+                        << (t > 0 ? std::to_string(t) : "default") << std::setw(13)
+                        << o->n_particles << std::setw(22) << std::setprecision(4) << idle[k].best;
+              if (o->load) std::cout << std::setw(8) << std::setprecision(4) << loaded[k].mean;
+              std::cout << "\n";
             }
-            if (o->json) std::cout << json.dump(2) << "\n";
-            omp_set_num_threads(all_cores);
-            return 0;
-          }};
+          }
+          if (o->friction > 0) {
+            // The same state and steps, frictionless and frictional (springs from zero).
+            dem::SystemOptions f;
+            f.material.mu = o->friction;
+            const dem::DemSystem rough = dem::DemSystem::restore(state.save(), f);
+            const Figure smooth_1 = time_steps(state, 1, all_cores, *o);
+            const Figure rough_1 = time_steps(rough, 1, all_cores, *o);
+            // And with rolling resistance (its springs from zero too).
+            Figure rolling_1;
+            if (o->rolling_friction > 0) {
+              f.material.mu_r = o->rolling_friction;
+              rolling_1 = time_steps(dem::DemSystem::restore(state.save(), f), 1, all_cores, *o);
+            }
+            if (o->json) {
+              for (const auto& [mu, fig] : {std::pair{0.0, smooth_1}, {o->friction, rough_1}}) {
+                nlohmann::ordered_json row;
+                row["volume_fraction"] = nu;
+                row["threads"] = 1;
+                row["n_particles"] = o->n_particles;
+                row["friction"] = mu;
+                row["ns_per_particle_step"] = fig.best;
+                row["ns_per_particle_step_cpu"] = fig.best_cpu;
+                json.push_back(row);
+              }
+              if (o->rolling_friction > 0) {
+                nlohmann::ordered_json row;
+                row["volume_fraction"] = nu;
+                row["threads"] = 1;
+                row["n_particles"] = o->n_particles;
+                row["friction"] = o->friction;
+                row["rolling_friction"] = o->rolling_friction;
+                row["ns_per_particle_step"] = rolling_1.best;
+                row["ns_per_particle_step_cpu"] = rolling_1.best_cpu;
+                json.push_back(row);
+              }
+            } else {
+              std::cout << "  1 thread, ns per particle-step (wall / CPU): frictionless "
+                        << std::setprecision(4) << smooth_1.best << " / " << smooth_1.best_cpu
+                        << ", friction " << o->friction << ": " << rough_1.best << " / "
+                        << rough_1.best_cpu << " (" << std::setprecision(3)
+                        << rough_1.best_cpu / smooth_1.best_cpu << "x CPU)\n";
+              if (o->rolling_friction > 0)
+                std::cout << "  with rolling friction " << o->rolling_friction << ": "
+                          << std::setprecision(4) << rolling_1.best << " / " << rolling_1.best_cpu
+                          << " (" << std::setprecision(3) << rolling_1.best_cpu / rough_1.best_cpu
+                          << "x CPU of the frictional step)\n";
+            }
+          }
+          if (o->load && !o->json && settings.front() == 1)
+            std::cout << "  loaded, default against 1 thread: " << std::setprecision(3)
+                      << loaded.back().mean / loaded.front().mean << "x\n";
+        }
+        if (o->json) std::cout << json.dump(2) << "\n";
+        omp_set_num_threads(all_cores);
+        return 0;
+      }};
 }
 
 }  // namespace rendulic::app

@@ -95,6 +95,16 @@ std::optional<dem::DemSystem> restore_checkpoint(const ResultsReader& in, const 
       for (int a = 0; a < 3; ++a)
         s.tangential_history[static_cast<std::size_t>(3 * e + a)] = xi(e, a);
     s.sliding_dissipation = in.attr_double(cp, "sliding_dissipation");
+    // With rolling resistance, its springs, one per entry as the tangential ones.
+    if (in.exists(cp + datasets::kRollingSprings)) {
+      const Eigen::MatrixXd xr = in.read_matrix(cp + datasets::kRollingSprings);
+      if (xr.rows() != xi.rows() || (xr.rows() > 0 && xr.cols() != 3))
+        throw InputError(where + ": rolling springs must be [entries,3] as the tangential ones");
+      s.rolling_history.resize(static_cast<std::size_t>(xr.rows()) * 3);
+      for (Eigen::Index e = 0; e < xr.rows(); ++e)
+        for (int a = 0; a < 3; ++a)
+          s.rolling_history[static_cast<std::size_t>(3 * e + a)] = xr(e, a);
+    }
   }
   return dem::DemSystem::restore(s, options);
 }

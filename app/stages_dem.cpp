@@ -94,6 +94,11 @@ void write_material(ResultsWriter& out, const dem::SystemOptions& system,
     out.attr(paths::kMaterial, "k_t_ratio", m.k_t_ratio);
     out.attr(paths::kMaterial, "gamma_t_ratio", m.gamma_t_ratio);
   }
+  if (m.rolling()) {  // files without rolling keep their layout
+    out.attr(paths::kMaterial, "rolling_friction", m.mu_r);
+    out.attr(paths::kMaterial, "k_r_ratio", m.k_r_ratio);
+    out.attr(paths::kMaterial, "gamma_r_ratio", m.gamma_r_ratio);
+  }
 }
 
 void stage_prepare(const Scenario& sc, ResultsWriter& out, const RunContext& ctx,
@@ -330,6 +335,12 @@ void write_state(ResultsWriter& out, const std::string& g, const dem::DemSystem&
       springs(static_cast<Eigen::Index>(e), a) = st.tangential_history[3 * e + a];
   out.write(cp + datasets::kTangentialSprings, springs);
   out.attr(cp, "sliding_dissipation", st.sliding_dissipation);
+  if (!sys.material().rolling()) return;  // frictional checkpoints keep theirs
+  Eigen::MatrixXd rolling(static_cast<Eigen::Index>(entries), 3);
+  for (std::size_t e = 0; e < entries; ++e)
+    for (int a = 0; a < 3; ++a)
+      rolling(static_cast<Eigen::Index>(e), a) = st.rolling_history[3 * e + a];
+  out.write(cp + datasets::kRollingSprings, rolling);
 }
 
 void stage_states(const Scenario&, ResultsWriter& out, const RunContext& ctx,

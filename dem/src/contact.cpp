@@ -26,6 +26,13 @@ bool Material::IsValid(std::string* why) const {
   if (!(k_t_ratio > 0 && std::isfinite(k_t_ratio))) return fail("dem.k_t_ratio must be positive");
   if (!(gamma_t_ratio >= 0 && std::isfinite(gamma_t_ratio)))
     return fail("dem.gamma_t_ratio must be >= 0");
+  if (!(mu_r >= 0 && std::isfinite(mu_r))) return fail("dem.rolling_friction (mu_r) must be >= 0");
+  if (!(k_r_ratio > 0 && std::isfinite(k_r_ratio))) return fail("dem.k_r_ratio must be positive");
+  if (!(gamma_r_ratio >= 0 && std::isfinite(gamma_r_ratio)))
+    return fail("dem.gamma_r_ratio must be >= 0");
+  if (mu_r > 0 && !(mu > 0))
+    return fail(
+        "dem.rolling_friction > 0 needs dem.friction > 0 (rotations exist only with friction)");
   return true;
 }
 
@@ -66,9 +73,16 @@ double stability_limit(const Material& m) {
   const double m_min = m.sphere_mass(m.r_min());
   // A tangential spring moves the translation and the rotation (1/m + r^2/I = 3.5/m).
   constexpr double kTangentialLever = 3.5;
-  const double k = m.frictional() ? std::max(m.k, kTangentialLever * m.k_t_ratio * m.k) : m.k;
-  const double gamma =
+  double k = m.frictional() ? std::max(m.k, kTangentialLever * m.k_t_ratio * m.k) : m.k;
+  double gamma =
       m.frictional() ? std::max(m.gamma, kTangentialLever * m.gamma_t_ratio * m.gamma) : m.gamma;
+  // A rolling spring turns the rotation alone, through a' <= r (a'^2 / I <= 2.5 / m).
+  constexpr double kRollingLever = 2.5;
+  if (m.rolling()) {
+    k = std::max(m.k, (kTangentialLever * m.k_t_ratio + kRollingLever * m.k_r_ratio) * m.k);
+    gamma = std::max(
+        m.gamma, (kTangentialLever * m.gamma_t_ratio + kRollingLever * m.gamma_r_ratio) * m.gamma);
+  }
   const double omega_max = std::sqrt(2.0 * kMaxContacts * k / m_min);
   const double damping_rate = (2.0 * kMaxContacts * gamma + m.gamma_b) / m_min;
   double limit = 2.0 / omega_max;

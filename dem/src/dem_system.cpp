@@ -88,6 +88,7 @@ DemSystem::DemSystem(Particles particles, const PeriodicCell& cell, const System
 
 void DemSystem::init_rotations() {
   friction_ = options_.material.frictional();
+  rolling_ = friction_ && options_.material.rolling();
   const std::size_t n = p_.size();
   for (auto* v : {&p_.wx, &p_.wy, &p_.wz, &p_.tx, &p_.ty, &p_.tz})
     if (v->size() != n) v->assign(n, 0.0);
@@ -124,15 +125,17 @@ DemSystem DemSystem::restore(const State& s, const SystemOptions& options) {
     d.list_.build(ref, s.ref_lengths, skin);
   else
     d.list_.build(ref, s.ref_lengths, skin, s.ref_half_skin);
-  if (d.friction_) {
+  // A saved history (3 doubles per list entry), or none: springs from zero.
+  auto history = [&](const std::vector<double>& saved, const char* what) {
     const std::size_t entries = 3 * d.list_.index.size();
-    if (s.tangential_history.empty())
-      d.hist_.assign(entries, 0.0);
-    else if (s.tangential_history.size() == entries)
-      d.hist_ = s.tangential_history;
-    else
-      throw InputError("DEM state: its tangential history does not match its neighbour list");
-  }
+    if (saved.empty()) return std::vector<double>(entries, 0.0);
+    if (saved.size() != entries)
+      throw InputError(std::string("DEM state: its ") + what +
+                       " history does not match its neighbour list");
+    return saved;
+  };
+  if (d.friction_) d.hist_ = history(s.tangential_history, "tangential");
+  if (d.rolling_) d.hist_r_ = history(s.rolling_history, "rolling");
   d.note_list_built();
   return d;
 }
@@ -151,6 +154,7 @@ State DemSystem::save() const {
   s.ref_lengths = list_.ref_lengths();
   s.ref_half_skin = list_.half_skins();
   if (friction_) s.tangential_history = hist_;
+  if (rolling_) s.rolling_history = hist_r_;
   s.sliding_dissipation = sliding_dissipation_;
   return s;
 }
@@ -189,8 +193,9 @@ void DemSystem::rebuild_list() {
     const std::vector<std::int64_t> old_offset = list_.offset;
     const std::vector<std::int32_t> old_index = list_.index;
     const std::vector<double> old = std::move(hist_);
+    const std::vector<double> old_rolling = std::move(hist_r_);
     list_.build(p_, L, skin, choose_half_skins(u, p_.radius, skin), team);
-    carry_history(old_offset, old_index, old);
+    carry_history(old_offset, old_index, old, old_rolling);
   } else {
     list_.build(p_, L, skin, choose_half_skins(u, p_.radius, skin), team);
   }
@@ -199,29 +204,37 @@ void DemSystem::rebuild_list() {
 
 void DemSystem::carry_history(const std::vector<std::int64_t>& old_offset,
                               const std::vector<std::int32_t>& old_index,
-                              const std::vector<double>& old) {
-  // The history belongs to the pair, not to the list entry: the pairs in contact (xi != 0; a
-  // pair that lost contact dropped its history in the force loop) keyed (min, max) with xi as
-  // the lower index sees it, then looked up for every entry of the new list. A pair may change
-  // its row between builds; xi then changes sign.
+                              const std::vector<double>& old,
+                              const std::vector<double>& old_rolling) {
+  // The history belongs to the pair, not to the list entry: the pairs in contact (a spring !=
+  // 0; a pair that lost contact dropped its history in the force loop) keyed (min, max) with xi
+  // as the lower index sees it, then looked up for every entry of the new list. A pair may
+  // change its row between builds; xi then changes sign, the rolling spring does not (its
+  // velocity, -a' n x (w_i - w_j), is the same for either order).
   const std::size_t n = p_.size();
   struct Kept {
     std::uint64_t key;
     double xi[3];
+    double xr[3];
   };
+  const bool roll = rolling_ && old_rolling.size() == old.size();
   std::vector<Kept> kept;
   if (old.size() == 3 * old_index.size() && old_offset.size() == n + 1)
     for (std::size_t i = 0; i < n; ++i)
       for (std::int64_t e = old_offset[i]; e < old_offset[i + 1]; ++e) {
         const double* x = old.data() + 3 * e;
-        if (x[0] == 0 && x[1] == 0 && x[2] == 0) continue;
+        const double* r = roll ? old_rolling.data() + 3 * e : nullptr;
+        const bool rolls = r && (r[0] != 0 || r[1] != 0 || r[2] != 0);
+        if (x[0] == 0 && x[1] == 0 && x[2] == 0 && !rolls) continue;
         const std::size_t j = static_cast<std::size_t>(old_index[e]);
         const double sign = i < j ? 1.0 : -1.0;
-        kept.push_back(
-            {std::min(i, j) * n + std::max(i, j), {sign * x[0], sign * x[1], sign * x[2]}});
+        kept.push_back({std::min(i, j) * n + std::max(i, j),
+                        {sign * x[0], sign * x[1], sign * x[2]},
+                        {r ? r[0] : 0.0, r ? r[1] : 0.0, r ? r[2] : 0.0}});
       }
   std::sort(kept.begin(), kept.end(), [](const Kept& a, const Kept& b) { return a.key < b.key; });
   hist_.assign(3 * list_.index.size(), 0.0);
+  if (rolling_) hist_r_.assign(3 * list_.index.size(), 0.0);
   if (kept.empty()) return;
   for (std::size_t i = 0; i < n; ++i)
     for (std::int64_t e = list_.offset[i]; e < list_.offset[i + 1]; ++e) {
@@ -232,6 +245,8 @@ void DemSystem::carry_history(const std::vector<std::int64_t>& old_offset,
       if (it == kept.end() || it->key != key) continue;
       const double sign = i < j ? 1.0 : -1.0;
       for (int a = 0; a < 3; ++a) hist_[3 * e + a] = sign * it->xi[a];
+      if (rolling_)
+        for (int a = 0; a < 3; ++a) hist_r_[3 * e + a] = it->xr[a];
     }
 }
 
@@ -326,6 +341,8 @@ void DemSystem::make_blocks() {
     if (rot16_.size() < 16 * rows) rot16_.resize(16 * rows, 0.0);
     block_dissipation_.assign(blocks, 0.0);
     if (hist_.size() != 3 * list_.index.size()) hist_.assign(3 * list_.index.size(), 0.0);
+    if (rolling_ && hist_r_.size() != 3 * list_.index.size())
+      hist_r_.assign(3 * list_.index.size(), 0.0);
   }
   blocks_builds_ = list_.builds();
 }
@@ -417,6 +434,8 @@ void DemSystem::force_block(std::size_t b) {
 // per-entry loop would add them (the row's own sum kept across chunks, the partners' shares
 // added at once), so that the result is still a function of the list alone.
 namespace {
+// kRolling adds the rolling spring (input and output, in place) and the rolling torque on i.
+template <bool kRolling>
 struct FrictionLanes {
   static constexpr std::size_t kLanes = 64;
   // Inputs: branch vector l, |l|^2, radii, the relative velocity at the step's end (v_end) and
@@ -460,9 +479,16 @@ struct FrictionLanes {
     kAi,
     kAj,
     kWork,
-    kFields
+    kFields,
+    kXrx = kFields,
+    kXry,
+    kXrz,
+    kQx,
+    kQy,
+    kQz,
+    kRollingFields
   };
-  alignas(64) double v[kFields][kLanes];
+  alignas(64) double v[kRolling ? kRollingFields : kFields][kLanes];
   std::int64_t entry[kLanes];
   std::int32_t row[kLanes], partner[kLanes];
 };
@@ -488,9 +514,14 @@ struct LaneMath {
 
 // Pass (2): the contact law of the chunk, four lanes (contacts) at a time; the lanes past
 // `count` compute on stale inputs and are never read.
-void friction_law(FrictionLanes& c, std::size_t count, const NormalContact& law,
-                  const TangentialContact& tangential, double dt) {
-  using F = FrictionLanes;
+// With kRolling, the rolling resistance too (docs/physics.md section 1b): the rolling velocity
+// v_r = -a' n x (w_i - w_j), a' = a_i a_j / (a_i + a_j), goes through the tangential law with
+// the rolling constants; its force f_r is no force but the torque a' n x f_r on i (-that on j).
+template <bool kRolling>
+void friction_law(FrictionLanes<kRolling>& c, std::size_t count, const NormalContact& law,
+                  const TangentialContact& tangential, const TangentialContact& rolling,
+                  double dt) {
+  using F = FrictionLanes<kRolling>;
   using A3 = std::array<V4, 3>;
   auto in = [&](int field, std::size_t k) { return load4(&c.v[field][k]); };
   auto out = [&](int field, std::size_t k, V4 x) { store4(&c.v[field][k], x); };
@@ -525,6 +556,25 @@ void friction_law(FrictionLanes& c, std::size_t count, const NormalContact& law,
     A3 ft;
     V4 work{};
     tangential.force<A3, V4, LaneMath>(x, c_mid, c_end, dt, f_n, &work, ft);
+    if constexpr (kRolling) {
+      const V4 ar = ai * aj / (ai + aj);
+      auto rolling_velocity = [&](int wi, int wj) {
+        const A3 w = {in(wi, k) - in(wj, k), in(wi + 1, k) - in(wj + 1, k),
+                      in(wi + 2, k) - in(wj + 2, k)};
+        return A3{-ar * (n[1] * w[2] - n[2] * w[1]), -ar * (n[2] * w[0] - n[0] * w[2]),
+                  -ar * (n[0] * w[1] - n[1] * w[0])};
+      };
+      const A3 r_end = rolling_velocity(F::kWeix, F::kWejx);
+      const A3 r_mid = rolling_velocity(F::kWmix, F::kWmjx);
+      A3 xr = in3(F::kXrx, k);
+      TangentialContact::turn<A3, LaneMath>(xr, n);
+      A3 fr;
+      rolling.force<A3, V4, LaneMath>(xr, r_mid, r_end, dt, f_n, &work, fr);
+      for (int a = 0; a < 3; ++a) out(F::kXrx + a, k, xr[a]);
+      out(F::kQx, k, ar * (n[1] * fr[2] - n[2] * fr[1]));
+      out(F::kQy, k, ar * (n[2] * fr[0] - n[0] * fr[2]));
+      out(F::kQz, k, ar * (n[0] * fr[1] - n[1] * fr[0]));
+    }
     for (int a = 0; a < 3; ++a) {
       out(F::kXix + a, k, x[a]);
       out(F::kFx + a, k, f_n * n[a] + ft[a]);
@@ -539,15 +589,16 @@ void friction_law(FrictionLanes& c, std::size_t count, const NormalContact& law,
 }
 }  // namespace
 
-template <bool kStress>
+template <bool kStress, bool kRolling>
 void DemSystem::force_block_friction(std::size_t b) {
-  using F = FrictionLanes;
+  using F = FrictionLanes<kRolling>;
   const std::size_t n = p_.size();
   const Eigen::Vector3d L = cell_.lengths();
   V4 shift[27];
   image_shifts(L, shift);
   const NormalContact law = options_.material.contact();
   const TangentialContact tangential = options_.material.tangential();
+  const TangentialContact rolling = options_.material.rolling_contact();
   const bool advance = advancing_;
   const double dt = advance ? dt_ : 0.0;
   const V4 D = {last_D_[0], last_D_[1], last_D_[2], 0.0};
@@ -556,6 +607,7 @@ void DemSystem::force_block_friction(std::size_t b) {
   double* __restrict A = va8_.data() + 4;
   double* __restrict Q = rot16_.data();
   double* __restrict H = hist_.data();
+  double* __restrict HR = hist_r_.data();
   const std::int64_t* __restrict off = list_.offset.data();
   const std::int32_t* __restrict idx = partner_.data();
   double* __restrict sd = stress_scratch_.data();
@@ -592,7 +644,7 @@ void DemSystem::force_block_friction(std::size_t b) {
     fi = ti = si = V4{};
   };
   auto run_chunk = [&] {
-    friction_law(lanes, count, law, tangential, dt);
+    friction_law<kRolling>(lanes, count, law, tangential, rolling, dt);
     for (std::size_t k = 0; k < count; ++k) {
       const std::size_t i = static_cast<std::size_t>(lanes.row[k]);
       if (i != row) {
@@ -607,9 +659,18 @@ void DemSystem::force_block_friction(std::size_t b) {
       ti -= v[F::kAi][k] * nxf;
       store4(Q + 16 * j + 12, load4(Q + 16 * j + 12) - v[F::kAj][k] * nxf);
       if constexpr (kStress) si += V4{v[F::kLx][k], v[F::kLy][k], v[F::kLz][k], 0.0} * f;
+      if constexpr (kRolling) {
+        const V4 q = {v[F::kQx][k], v[F::kQy][k], v[F::kQz][k], 0.0};
+        ti += q;
+        store4(Q + 16 * j + 12, load4(Q + 16 * j + 12) - q);
+      }
       if (advance) {
         double* xi = H + 3 * lanes.entry[k];
         xi[0] = v[F::kXix][k], xi[1] = v[F::kXiy][k], xi[2] = v[F::kXiz][k];
+        if constexpr (kRolling) {
+          double* xr = HR + 3 * lanes.entry[k];
+          xr[0] = v[F::kXrx][k], xr[1] = v[F::kXry][k], xr[2] = v[F::kXrz][k];
+        }
         dissipated += v[F::kWork][k];
       }
     }
@@ -643,6 +704,11 @@ void DemSystem::force_block_friction(std::size_t b) {
         std::uint64_t bits[3];
         std::memcpy(bits, xi, sizeof bits);
         if (advance && (bits[0] | bits[1] | bits[2]) != 0) xi[0] = xi[1] = xi[2] = 0.0;
+        if constexpr (kRolling)
+          if (advance) {
+            double* xr = HR + 3 * e;
+            xr[0] = xr[1] = xr[2] = 0.0;
+          }
         continue;
       }
       const double* qj = Q + 16 * j;
@@ -660,6 +726,8 @@ void DemSystem::force_block_friction(std::size_t b) {
         v[F::kWmjx + a][k] = wmj[a];
         v[F::kXix + a][k] = xi[a];
       }
+      if constexpr (kRolling)
+        for (int a = 0; a < 3; ++a) v[F::kXrx + a][k] = HR[3 * e + a];
       v[F::kR2][k] = r2;
       v[F::kRi][k] = ri;
       v[F::kRj][k] = rj;
@@ -699,8 +767,10 @@ void DemSystem::forces_of_thread(std::size_t t, std::size_t T, double half_kick)
   const std::size_t n = p_.size();
   const std::size_t blocks = block_lo_.size() - 1;
   const std::size_t b0 = blocks * t / T, b1 = blocks * (t + 1) / T;
-  if (friction_)
-    for (std::size_t b = b0; b < b1; ++b) force_block_friction<kStress>(b);
+  if (rolling_)
+    for (std::size_t b = b0; b < b1; ++b) force_block_friction<kStress, true>(b);
+  else if (friction_)
+    for (std::size_t b = b0; b < b1; ++b) force_block_friction<kStress, false>(b);
   else
     for (std::size_t b = b0; b < b1; ++b) force_block<kStress>(b);
   if (T > 1) {
@@ -1021,6 +1091,26 @@ double DemSystem::elastic_energy() const {
     e += law.energy(c.overlap);
     if (friction_) e += tan.energy(c.spring.squaredNorm());
   }
+  if (rolling_) e += rolling_energy();
+  return e;
+}
+
+double DemSystem::rolling_energy() const {
+  // Over the touching entries (the test of contacts()): a spring of a pair that just separated
+  // without a step (refresh_forces) is no contact's.
+  double e = 0;
+  if (!rolling_) return e;
+  const TangentialContact roll = options_.material.rolling_contact();
+  const Eigen::Vector3d L = cell_.lengths();
+  for (std::size_t i = 0; i < p_.size(); ++i)
+    for (std::int64_t k = list_.offset[i]; k < list_.offset[i + 1]; ++k) {
+      const std::int32_t j = list_.index[k];
+      const Eigen::Vector3d l = p_.position(i) - p_.position(j) +
+                                NeighborList::shift(list_.shift_code[k]).cwiseProduct(L);
+      if (l.norm() >= p_.radius[i] + p_.radius[j]) continue;
+      const Eigen::Vector3d xr(hist_r_[3 * k], hist_r_[3 * k + 1], hist_r_[3 * k + 2]);
+      e += roll.energy(xr.squaredNorm());
+    }
   return e;
 }
 
@@ -1077,6 +1167,7 @@ Measures DemSystem::measure() const {
   }
   if (friction_) {
     m.elastic_energy += m.tangential_energy;
+    if (rolling_) m.elastic_energy += rolling_energy();
     m.rotational_energy = rotational_energy();
     m.sliding_dissipation = sliding_dissipation_;
     if (!cs.empty()) m.sliding_fraction /= static_cast<double>(cs.size());

@@ -396,6 +396,10 @@ bool LinearFriction::IsValid(std::string* why) const {
   };
   if (!(k_t > 0.0) || !std::isfinite(k_t)) return fail("linear response: k_t must be positive");
   if (!(mu > 0.0) || !std::isfinite(mu)) return fail("linear response: mu must be positive");
+  if (mu_r != 0.0)
+    return fail(
+        "linear response: dem.rolling_friction > 0 is not supported (no rolling springs in its "
+        "Jacobian); use the dynamic probes");
   if (!(coulomb_tolerance >= 0.0) || !(coulomb_tolerance < 1.0))
     return fail("linear response: coulomb_tolerance must be in [0, 1)");
   return true;

@@ -514,6 +514,7 @@ Envelope linear_response_envelope(const DemSystem& state, double amplitude,
     LinearFriction friction;
     friction.k_t = m.tangential().k_t;
     friction.mu = m.mu;
+    friction.mu_r = m.mu_r;
     for (const Contact& c : state.contacts()) {
       if (c.spring != Eigen::Vector3d::Zero()) friction.springs.push_back({c.i, c.j, c.spring});
     }

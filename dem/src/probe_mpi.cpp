@@ -40,15 +40,17 @@ void io(A& a, Particles& p) {
 template <class A>
 void io(A& a, State& s) {
   auto& [particles, lengths, strain_E, last_D, time, steps, ref_x, ref_y, ref_z, ref_lengths,
-         ref_half_skin, tangential_history, sliding_dissipation] = s;
+         ref_half_skin, tangential_history, sliding_dissipation, rolling_history] = s;
   a(particles), a(lengths), a(strain_E), a(last_D), a(time), a(steps);
   a(ref_x), a(ref_y), a(ref_z), a(ref_lengths), a(ref_half_skin);
-  a(tangential_history), a(sliding_dissipation);
+  a(tangential_history), a(sliding_dissipation), a(rolling_history);
 }
 template <class A>
 void io(A& a, Material& m) {
-  auto& [k, gamma, gamma_b, density, r_mean, w, mu, k_t_ratio, gamma_t_ratio] = m;
+  auto& [k, gamma, gamma_b, density, r_mean, w, mu, k_t_ratio, gamma_t_ratio, mu_r, k_r_ratio,
+         gamma_r_ratio] = m;
   a(k), a(gamma), a(gamma_b), a(density), a(r_mean), a(w), a(mu), a(k_t_ratio), a(gamma_t_ratio);
+  a(mu_r), a(k_r_ratio), a(gamma_r_ratio);
 }
 template <class A>
 void io(A& a, SystemOptions& o) {

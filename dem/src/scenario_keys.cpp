@@ -110,6 +110,35 @@ const OptionTable<DemRunOptions>& dem_run_option_table() {
            .min = 0,
            .max = 1},
           [](O& o) -> double& { return o.system.material.gamma_t_ratio; }},
+      Row{{.path = "dem.rolling_friction",
+           .unit = "-",
+           .help =
+               "Rolling friction coefficient mu_r: the rolling resistance's Coulomb-like "
+               "limit |f_r| <= mu_r |f_n| on the rolling spring-dashpot's pseudo-force, "
+               "whose torque a' n x f_r (a' the reduced lever) resists the pair's relative "
+               "rolling (docs/physics.md section 1b); 0 = none. Needs dem.friction > 0; "
+               "the linear response refuses mu_r > 0. At most 1: its limit torque a' mu_r |f_n| "
+               "(a' <= a) is then at most the sliding torque a |f_n| of mu = 1.",
+           .min = 0,
+           .max = 1},
+          [](O& o) -> double& { return o.system.material.mu_r; }},
+      Row{{.path = "dem.k_r_ratio",
+           .unit = "-",
+           .help = "Rolling stiffness k_r / k (used when dem.rolling_friction > 0); 2/7, as "
+                   "k_t / k, makes the rolling spring's resistance to a turn (a'^2 k_r) a "
+                   "quarter of the tangential spring's for equal spheres, so that rolling does "
+                   "not set the time step.",
+           .min = 0,
+           .max = 1,
+           .min_open = true},
+          [](O& o) -> double& { return o.system.material.k_r_ratio; }},
+      Row{{.path = "dem.gamma_r_ratio",
+           .unit = "-",
+           .help = "Rolling contact viscosity gamma_r / gamma (used when dem.rolling_friction "
+                   "> 0); 2/7, as gamma_t / gamma, for the same reason as dem.k_r_ratio.",
+           .min = 0,
+           .max = 1},
+          [](O& o) -> double& { return o.system.material.gamma_r_ratio; }},
       Row{{.path = "preparation.nu_gas",
            .unit = "-",
            .help = "Volume fraction of the initial random gas.",

@@ -48,7 +48,8 @@ TEST(RunScenario, EveryKeyReachesItsMember) {
   const Scenario sc = Scenario::from_string(
       "[material]\nk = 2e8\ngamma = 0.5\ngamma_b = 0.2\ndensity = 1000.0\nr_mean = 2e-3\nw = 2.0\n"
       "[dem]\nn_particles = 1000\ndt_factor = 0.01\nskin = 0.4\nfriction = 0.3\nk_t_ratio = 0.5\n"
-      "gamma_t_ratio = 0.25\n"
+      "gamma_t_ratio = 0.25\nrolling_friction = 0.05\nk_r_ratio = 0.125\ngamma_r_ratio = "
+      "0.375\n"
       "[preparation]\nnu_gas = 0.25\ngas_velocity = 2.0\nmix_time = 1e-3\nrate = 200.0\n"
       "gamma_b = 0.3\nnu0 = 0.6\n"
       "[relax]\nkinetic_to_elastic = 1e-4\ntime_cap = 1e-3\n"
@@ -72,6 +73,9 @@ TEST(RunScenario, EveryKeyReachesItsMember) {
   EXPECT_EQ(m.mu, 0.3);
   EXPECT_EQ(m.k_t_ratio, 0.5);
   EXPECT_EQ(m.gamma_t_ratio, 0.25);
+  EXPECT_EQ(m.mu_r, 0.05);
+  EXPECT_EQ(m.k_r_ratio, 0.125);
+  EXPECT_EQ(m.gamma_r_ratio, 0.375);
   EXPECT_EQ(material_from_scenario(sc).k, 2e8);
   EXPECT_EQ(o.gas.n_particles, 1000u);
   EXPECT_EQ(o.system.dt_factor, 0.01);

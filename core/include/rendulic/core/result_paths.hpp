@@ -111,10 +111,12 @@ inline constexpr char kStrainE[] = "/strain_E";
 inline constexpr char kLastD[] = "/last_D";
 // ... of a frictional state only: angular velocities and torques [N,3], the tangential spring
 // of each entry of the neighbour list [entries,3] in the list's order (the list is rebuilt
-// identically from the reference state) and the sliding dissipation so far (attribute).
+// identically from the reference state) and the sliding dissipation so far (attribute); with
+// rolling resistance, the rolling spring of each entry likewise.
 inline constexpr char kAngularVelocities[] = "/angular_velocities";
 inline constexpr char kTorques[] = "/torques";
 inline constexpr char kTangentialSprings[] = "/tangential_springs";
+inline constexpr char kRollingSprings[] = "/rolling_springs";
 // The remaining series of /isotropic and /path, one row per sample.
 inline constexpr char kPressure[] = "/pressure";  // Pa
 inline constexpr char kPressureStar[] = "/pressure_star";

@@ -146,8 +146,19 @@ struct Material {
   double mu = 0.0;
   double k_t_ratio = 2.0 / 7.0;
   double gamma_t_ratio = 2.0 / 7.0;
+  // Rolling resistance (docs/physics.md section 1b; 0 = none, and the engine's frictional path
+  // without it): the tangential law again, on the rolling displacement, with k_r, gamma_r and
+  // mu_r. Rotations exist only with friction, so mu_r > 0 needs mu > 0. The defaults equal the
+  // tangential ratios: the rolling spring's stiffness against a turn, a'^2 k_r, is then a
+  // quarter of the tangential spring's, a^2 k_t, for equal spheres (a' = a / 2), so that
+  // rolling does not set the time step.
+  double mu_r = 0.0;
+  double k_r_ratio = 2.0 / 7.0;
+  double gamma_r_ratio = 2.0 / 7.0;
   bool frictional() const { return mu > 0; }
+  bool rolling() const { return mu_r > 0; }
   TangentialContact tangential() const { return {k_t_ratio * k, gamma_t_ratio * gamma, mu}; }
+  TangentialContact rolling_contact() const { return {k_r_ratio * k, gamma_r_ratio * gamma, mu_r}; }
   double r_min() const { return 2.0 * r_mean / (1.0 + w); }
   double r_max() const { return w * r_min(); }
   // k* = k / (2 <r>): the stress scale of sigma* (seed paper section 2.2).
@@ -178,7 +189,9 @@ double time_step(const Material& m, double factor);
 // bound with the damping rate (2 z gamma + gamma_b) / m_min in place of omega_max. With
 // friction a tangential spring acts on the translation and, through the lever r, on the
 // rotation (I = 2/5 m r^2): k_t (1/m + r^2/I) = 3.5 k_t / m, so max(k, 3.5 k_t) takes k's
-// place (and max(gamma, 3.5 gamma_t) gamma's).
+// place (and max(gamma, 3.5 gamma_t) gamma's). A rolling spring acts on the rotation alone,
+// through the lever a' <= r: a'^2 k_r / I <= 2.5 k_r / m, added to the tangential term
+// (max(k, 3.5 k_t + 2.5 k_r); the same for the dashpots).
 double stability_limit(const Material& m);
 // Throws InputError (naming `key`) if factor gives a dt at or beyond stability_limit().
 void check_time_step(const Material& m, double factor, const std::string& key);

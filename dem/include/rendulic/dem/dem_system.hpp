@@ -82,6 +82,8 @@ struct State {
   // dissipation so far, J.
   std::vector<double> tangential_history;
   double sliding_dissipation = 0;
+  // With rolling resistance, the rolling spring of each entry likewise (empty without).
+  std::vector<double> rolling_history;
 };
 
 class DemSystem {
@@ -103,11 +105,13 @@ class DemSystem {
 
   Measures measure() const;
   std::vector<Contact> contacts() const;
-  Eigen::Matrix3d stress() const;    // eq. 1, Pa
-  Eigen::Matrix3d fabric() const;    // eq. 2
-  double kinetic_energy() const;     // translation of the peculiar velocities
-  double elastic_energy() const;     // normal springs, plus the tangential ones with friction
+  Eigen::Matrix3d stress() const;  // eq. 1, Pa
+  Eigen::Matrix3d fabric() const;  // eq. 2
+  double kinetic_energy() const;   // translation of the peculiar velocities
+  // Normal springs, plus the tangential ones with friction and the rolling ones with rolling.
+  double elastic_energy() const;
   double rotational_energy() const;  // sum I omega^2 / 2 (zero without friction)
+  // Dissipated by slip at the Coulomb limits: sliding, and rolling slip with rolling.
   double sliding_dissipation() const { return sliding_dissipation_; }
   double volume_fraction() const { return solid_volume_ / volume(); }
 
@@ -163,13 +167,17 @@ class DemSystem {
   void force_block(std::size_t b);
   // The same with friction (docs/physics.md section 1b): normal and tangential forces, torques,
   // the history of each entry advanced when advancing_.
-  template <bool kStress>
+  // kRolling: with rolling resistance (its springs in hist_r_), a template argument so that
+  // the path without it is the same code as before rolling existed.
+  template <bool kStress, bool kRolling>
   void force_block_friction(std::size_t b);
   // Copies the rows' mid-step velocities and angular velocities into rot16_ (friction).
   void pack_rotations(std::size_t lo, std::size_t hi, double half_kick);
   // Before a rebuild: the history of the pairs in contact, keyed by pair, to carry over.
   void carry_history(const std::vector<std::int64_t>& old_offset,
-                     const std::vector<std::int32_t>& old_index, const std::vector<double>& old);
+                     const std::vector<std::int32_t>& old_index, const std::vector<double>& old,
+                     const std::vector<double>& old_rolling);
+  double rolling_energy() const;  // the rolling springs' energy (0 without rolling)
   void init_rotations();
   void sum_stress();  // last_stress_diag_ from the per-particle terms of the last evaluation
   template <bool kStress>
@@ -215,6 +223,10 @@ class DemSystem {
   bool friction_ = false;
   bool advancing_ = false;    // a step (history advanced, slip counted) or a refresh (not)
   std::vector<double> hist_;  // xi per list entry (3 doubles), as its row sees the pair
+  // Rolling resistance (material().mu_r > 0): the rolling spring per list entry (3 doubles;
+  // the same for either order of the pair).
+  bool rolling_ = false;
+  std::vector<double> hist_r_;
   // Per row, then per slot: mid-step velocity, mid-step and predicted angular velocity, the
   // torque accumulator (4 doubles each).
   AlignedVector rot16_;

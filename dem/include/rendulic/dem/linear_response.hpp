@@ -138,6 +138,8 @@ LinearResponse linear_response(const PackingData& packing, const LinearResponseO
 struct LinearFriction {
   double k_t = 0.0;  // tangential stiffness, kg/s^2
   double mu = 0.0;   // Coulomb coefficient (> 0)
+  // The engine's rolling friction coefficient: must be 0, the Jacobian has no rolling springs.
+  double mu_r = 0.0;
   // A contact with |f_t| >= (1 - coulomb_tolerance) mu f_n is at the Coulomb limit.
   double coulomb_tolerance = 1e-3;
   struct Spring {
