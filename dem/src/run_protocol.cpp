@@ -35,7 +35,9 @@ PreparedPacking prepare_packing(const DemRunOptions& o, std::uint64_t seed, cons
 
 SystemOptions loading_system_options(const DemRunOptions& o) {
   SystemOptions s = o.system;
+  // Rolling resistance with it: mu_r > 0 needs mu > 0, and a dense loading wants neither.
   s.material.mu *= o.loading_friction_factor;
+  s.material.mu_r *= o.loading_friction_factor;
   return s;
 }
 

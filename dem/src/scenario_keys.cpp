@@ -222,9 +222,9 @@ const OptionTable<DemRunOptions>& dem_run_option_table() {
       Row{{.path = "isotropic.friction_factor",
            .unit = "-",
            .help = "Friction of the preparation and the isotropic loading as a fraction of "
-                   "dem.friction (1: the same; 0: frictionless, which jams the densest random "
-                   "packing); from the path on every stage runs with dem.friction "
-                   "(docs/dem.md 'Dense frictional packings').",
+                   "dem.friction and dem.rolling_friction (1: the same; 0: frictionless, which "
+                   "jams the densest random packing); from the path on every stage runs with "
+                   "the material's own (docs/dem.md 'Dense frictional packings').",
            .min = 0,
            .max = 1},
           [](O& o) -> double& { return o.loading_friction_factor; }},

@@ -108,6 +108,7 @@ TEST(RunScenario, EveryKeyReachesItsMember) {
   EXPECT_EQ(o.loading.target_pressure_star, 0.02);
   EXPECT_EQ(o.loading_friction_factor, 0.25);
   EXPECT_EQ(loading_system_options(o).material.mu, 0.25 * 0.3);
+  EXPECT_EQ(loading_system_options(o).material.mu_r, 0.25 * 0.05);
   EXPECT_EQ(o.path.inertial_number, 2e-4);
   EXPECT_EQ(o.path.rate_min, 7.0);
   EXPECT_EQ(o.state_labels, (std::vector<std::string>{"p", "q"}));
@@ -116,7 +117,7 @@ TEST(RunScenario, EveryKeyReachesItsMember) {
   EXPECT_EQ(o.state_rest.minimise.force_tolerance, 1e-8);
   EXPECT_EQ(o.state_rest.minimise.k, 2e8);
   // Every row of the table was set above: one key per row, none forgotten.
-  EXPECT_EQ(dem_run_option_table().rows().size(), 43u);
+  EXPECT_EQ(dem_run_option_table().rows().size(), 46u);
 }
 
 TEST(RunScenario, ACodeBuiltRunIsHeldToTheKeysRanges) {

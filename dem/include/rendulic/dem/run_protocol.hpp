@@ -47,8 +47,8 @@ struct DemRunOptions {
 inline const ServoOptions kPressureServo = PathOptions{}.servo;
 
 // The system options of the preparation and the isotropic loading: the run's, with the friction
-// mu x loading_friction_factor (docs/dem.md "Dense frictional packings": a packing loaded with
-// less friction jams denser).
+// mu x loading_friction_factor and the rolling friction mu_r x the same (docs/dem.md "Dense
+// frictional packings": a packing loaded with less friction jams denser).
 SystemOptions loading_system_options(const DemRunOptions& options);
 // `sys` (a packing of the loading, at rest) carried on with the run's own material, as every
 // stage from the path on runs: friction raised to mu, the tangential springs as they are (all
