@@ -268,6 +268,7 @@ inline constexpr const char* kCounters[] = {
     "backbone_contacts_closed",
     "load_steps",
     "relax_steps",
+    "relax_iterations",
     "relax_converged",
     "iterations",
     "converged",
@@ -277,6 +278,7 @@ inline constexpr const char* kCounters[] = {
     "n_rattlers",
     "n_backbone_contacts",
     "reference_relax_steps",
+    "reference_relax_iterations",
 };
 
 namespace detail {
