@@ -19,6 +19,7 @@
 #include "rendulic/core/option_table.hpp"
 #include "rendulic/dem/probe_elastic_range.hpp"
 #include "rendulic/dem/probe_mpi.hpp"
+#include "rendulic/dem/rest.hpp"
 #include "rendulic/dem/scenario_keys.hpp"
 
 namespace rendulic::dem {
@@ -212,7 +213,8 @@ void io(A& a, ProbeOutcome& o) {
 // What one probe of each method reports (ProbeOutcome plus the method's own diagnostics).
 struct DynamicProbe {
   ProbeOutcome outcome;
-  RelaxSummary relaxed;
+  RelaxSummary relaxed;       // relax_method "dynamic"
+  MinimiseSummary minimised;  // relax_method "fire"
   std::int64_t load_steps = 0;
   // Friction: the work the contacts dissipated by sliding during the probe (J) and the
   // fraction of contacts at the Coulomb limit once relaxed (zero without friction).
@@ -221,7 +223,8 @@ struct DynamicProbe {
 };
 template <class A>
 void io(A& a, DynamicProbe& r) {
-  a(r.outcome), a(r.relaxed), a(r.load_steps), a(r.sliding_dissipation), a(r.sliding_fraction);
+  a(r.outcome), a(r.relaxed), a(r.minimised), a(r.load_steps), a(r.sliding_dissipation);
+  a(r.sliding_fraction);
 }
 struct MinimisationProbe {
   ProbeOutcome outcome;
@@ -300,6 +303,9 @@ Envelope dynamic_envelope_of(const DemSystem& given, double amplitude,
   // envelope does not depend on the thread count.
   DemSystem state = given;
   RelaxSummary reference;
+  MinimiseSummary reference_minimised;
+  // FIRE needs an energy to minimise: a frictional packing keeps the dynamic relaxation.
+  const bool fire = options.relax_method == "fire" && !given.material().frictional();
   if (!given_is_reference && options.dt_factor > 0.0 &&
       options.dt_factor != given.options().dt_factor) {
     SystemOptions so = given.options();
@@ -310,7 +316,12 @@ Envelope dynamic_envelope_of(const DemSystem& given, double amplitude,
   if (!given_is_reference) {
     const int saved_threads = omp_get_max_threads();
     omp_set_num_threads(1);
-    reference = relax(state, options.relax);
+    // The reference ends where its probes do: at a minimum for FIRE, else relaxed dynamically.
+    if (fire) {
+      reference_minimised = settle_at_minimum(state, options.minimise);
+    } else {
+      reference = relax(state, options.relax);
+    }
     omp_set_num_threads(saved_threads);
   }
   detail::ProbeTaskScope scope("dynamic", plane.name, state, amplitude, theta_deg, options);
@@ -335,7 +346,14 @@ Envelope dynamic_envelope_of(const DemSystem& given, double amplitude,
     DemSystem sys = state;
     const Eigen::Matrix3d d_eps = plane_strain(plane, theta_deg[p], amplitude);
     r.load_steps = impose_strain_increment(sys, d_eps.diagonal(), rate);
-    r.relaxed = relax(sys, options.relax);
+    if (fire) {
+      RelaxOptions first = options.relax;
+      first.kinetic_to_elastic = options.relax_fire_from;
+      r.relaxed = relax(sys, first);
+      r.minimised = settle_at_minimum(sys, options.minimise);
+    } else {
+      r.relaxed = relax(sys, options.relax);
+    }
     const Measures after = sys.measure();
     const std::vector<std::uint64_t> keys_after = contact_keys(sys.contacts());
     r.sliding_dissipation = after.sliding_dissipation - before.sliding_dissipation;
@@ -355,7 +373,9 @@ Envelope dynamic_envelope_of(const DemSystem& given, double amplitude,
     diag["relax_steps"].push_back(static_cast<double>(r.relaxed.steps));
     diag["relax_time"].push_back(r.relaxed.time);
     diag["kinetic_to_elastic"].push_back(r.relaxed.ratio);
-    diag["relax_converged"].push_back(r.relaxed.converged ? 1.0 : 0.0);
+    diag["relax_iterations"].push_back(static_cast<double>(r.minimised.iterations));
+    diag["relax_converged"].push_back((fire ? r.minimised.converged : r.relaxed.converged) ? 1.0
+                                                                                           : 0.0);
   }
   if (state.material().frictional()) {
     // Sliding makes the response depend on the direction of loading: an envelope whose probes
@@ -381,6 +401,13 @@ Envelope dynamic_envelope_of(const DemSystem& given, double amplitude,
   env.attributes["kinetic_to_elastic_given"] = relax_ratio(given);
   env.attributes["kinetic_to_elastic_before"] = relax_ratio(state);
   env.attributes["reference_relax_steps"] = static_cast<double>(reference.steps);
+  env.attributes["relax_fire"] = fire ? 1.0 : 0.0;
+  env.attributes["reference_relax_iterations"] =
+      static_cast<double>(reference_minimised.iterations);
+  if (fire) {
+    env.attributes["relax_fire_from"] = options.relax_fire_from;
+    env.attributes["relax_force_tolerance"] = options.minimise.force_tolerance;
+  }
   return env;
 }
 
@@ -639,8 +666,8 @@ const OptionTable<ProbeOptions>& probe_option_table() {
           [](ProbeOptions& o) -> double& { return o.dt_factor; }},
       Row{{.path = "probes.relax_kinetic_to_elastic",
            .unit = "-",
-           .help = "Dynamic probes relax at fixed cell until kinetic/elastic energy is below "
-                   "this.",
+           .help = "Dynamic probes with probes.relax_method = dynamic relax at fixed cell until "
+                   "kinetic/elastic energy is below this.",
            .min = 0.0,
            .max = 1.0,
            .min_open = true,
@@ -653,10 +680,27 @@ const OptionTable<ProbeOptions>& probe_option_table() {
            .max = kInf,
            .min_open = true},
           [](ProbeOptions& o) -> double& { return o.relax.time_cap; }},
+      Row{{.path = "probes.relax_method",
+           .unit = "-",
+           .help = "How a dynamic probe relaxes after its loading, at fixed cell: fire (the engine "
+                   "down to probes.relax_fire_from, then FIRE to probes.force_tolerance; a "
+                   "frictional packing relaxes dynamically) or dynamic (the seed's: the engine "
+                   "to probes.relax_kinetic_to_elastic).",
+           .choices = {"dynamic", "fire"}},
+          [](ProbeOptions& o) -> std::string& { return o.relax_method; }},
+      Row{{.path = "probes.relax_fire_from",
+           .unit = "-",
+           .help = "probes.relax_method = fire: the engine's relaxation first runs down to this "
+                   "kinetic/elastic energy, then FIRE takes over.",
+           .min = 0.0,
+           .max = 1.0,
+           .min_open = true,
+           .max_open = true},
+          [](ProbeOptions& o) -> double& { return o.relax_fire_from; }},
       Row{{.path = "probes.force_tolerance",
            .unit = "-",
-           .help = "Minimisation probes stop when the largest net force is below this x mean "
-                   "contact force.",
+           .help = "Minimisation probes, and dynamic probes with probes.relax_method = fire, "
+                   "stop when the largest net force is below this x mean contact force.",
            .min = 0.0,
            .max = 1.0,
            .min_open = true,

@@ -74,10 +74,10 @@ void io(A& a, LinearResponseOptions& o) {
 }
 template <class A>
 void io(A& a, ProbeOptions& o) {
-  auto& [directions, amplitudes, planes, inertial_number, rate, dt_factor, relax, minimise, linear,
-         threads, probe_done, stop] = o;
+  auto& [directions, amplitudes, planes, inertial_number, rate, dt_factor, relax, relax_method,
+         relax_fire_from, minimise, linear, threads, probe_done, stop] = o;
   a(directions), a(amplitudes), a(planes), a(inertial_number), a(rate), a(dt_factor), a(relax);
-  a(minimise);
+  a(relax_method), a(relax_fire_from), a(minimise);
   a(linear), a(threads);
   // Rank 0's progress display and stop request: not sent, a worker counts nothing and is
   // released by rank 0.

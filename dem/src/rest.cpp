@@ -111,24 +111,14 @@ bool RestOptions::IsValid(std::string* why) const {
   return relax.IsValid(why) && minimise.IsValid(why);
 }
 
-RestSummary bring_to_rest(DemSystem& sys, const RestOptions& options) {
-  std::string why;
-  if (!options.IsValid(&why)) throw InputError("states: " + why);
-  if (sys.material().frictional()) return rest_frictional(sys, options);
-  RestSummary s;
-  s.relaxed = relax(sys, options.relax);
-  const double k = sys.material().k;
+MinimiseSummary settle_at_minimum(DemSystem& sys, const MinimiseOptions& options,
+                                  double* max_displacement) {
+  MinimiseOptions mo = options;
+  mo.k = sys.material().k;
   PackingData packing = packing_of(sys);
-  s.after_relax = force_balance(packing, k);
   const Eigen::MatrixX3d start = packing.positions;
-  const Eigen::Matrix3d stress_relaxed = sys.stress();
-  MinimiseOptions mo = options.minimise;
-  mo.k = k;
-  s.minimised = minimise_energy(packing, mo);
-  if (!s.minimised.converged)
-    throw std::runtime_error("states: the energy minimisation did not converge (" +
-                             s.minimised.message + ")");
-  s.max_displacement = (packing.positions - start).rowwise().norm().maxCoeff();
+  const MinimiseSummary summary = minimise_energy(packing, mo);
+  if (max_displacement) *max_displacement = (packing.positions - start).rowwise().norm().maxCoeff();
   // The minimum becomes the state: positions wrapped into the cell, at rest, and a neighbour
   // list built afresh from there (restore() builds it from the reference positions).
   State st = sys.save();
@@ -149,8 +139,27 @@ RestSummary bring_to_rest(DemSystem& sys, const RestOptions& options) {
   st.ref_z = p.z;
   st.ref_lengths = L;
   st.ref_half_skin.clear();
+  // At rest the cell stands still too: the dashpots see the last imposed strain rate (a probe's
+  // loading, about 1.6 % of an elastic probe's stress response at quick.toml's rate).
+  st.last_D = Eigen::Vector3d::Zero();
   sys = DemSystem::restore(st, sys.options());
   sys.zero_velocities();  // recomputes the forces at the new positions
+  return summary;
+}
+
+RestSummary bring_to_rest(DemSystem& sys, const RestOptions& options) {
+  std::string why;
+  if (!options.IsValid(&why)) throw InputError("states: " + why);
+  if (sys.material().frictional()) return rest_frictional(sys, options);
+  RestSummary s;
+  s.relaxed = relax(sys, options.relax);
+  const double k = sys.material().k;
+  s.after_relax = force_balance(packing_of(sys), k);
+  const Eigen::Matrix3d stress_relaxed = sys.stress();
+  s.minimised = settle_at_minimum(sys, options.minimise, &s.max_displacement);
+  if (!s.minimised.converged)
+    throw std::runtime_error("states: the energy minimisation did not converge (" +
+                             s.minimised.message + ")");
   s.at_rest = force_balance(packing_of(sys), k);
   s.stress_change = sys.stress() - stress_relaxed;
   return s;

@@ -6,6 +6,7 @@
 // threads; a stop request skips the remaining probes.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <iostream>
@@ -68,6 +69,7 @@ void expect_same_ellipse(const Envelope& a, const Envelope& b, const char* what)
 
 TEST_F(ProbeCampaign, LinearResponseMinimisationAndDynamicElasticEnvelopesAgree) {
   ProbeOptions opt;
+  opt.relax_method = "dynamic";  // the seed's relaxation; FIRE's: FireRelaxationKeeps...
   const std::vector<double> theta = probe_directions(12);
   const double amp = 5e-5;
   LinearResponse lr;
@@ -195,6 +197,7 @@ TEST_F(ProbeCampaign, CampaignProbesEveryPlaneAndRefusesAnUnknownOne) {
 // linear response; a factor beyond the bound is refused, naming the key.
 TEST_F(ProbeCampaign, LargerProbeTimeStepKeepsTheElasticEnvelope) {
   ProbeOptions opt;
+  opt.relax_method = "dynamic";  // the time step matters most where the engine relaxes
   opt.dt_factor = 0.1;
   const std::vector<double> theta = probe_directions(12);
   const double amp = 5e-5;
@@ -208,6 +211,62 @@ TEST_F(ProbeCampaign, LargerProbeTimeStepKeepsTheElasticEnvelope) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("probes.dt_factor"), std::string::npos) << e.what();
   }
+}
+
+// probes.relax_method = "fire" (docs/probes.md "Methods"): the dynamic loading, then FIRE at
+// the fixed cell instead of the engine's damped relaxation. Independent method: the elastic
+// envelope is the linear response's, every probe's stress response within 1 % of the
+// envelope's largest (|d_sigma*| over the directions) and the ellipse as the dynamic
+// relaxation's is held (expect_same_ellipse). The key selects the method: FIRE iterations after
+// the engine's relaxation to probes.relax_fire_from with "fire", none with "dynamic"; an unknown
+// name is refused; a frictional packing (no energy to minimise) keeps the dynamic relaxation.
+TEST_F(ProbeCampaign, FireRelaxationKeepsTheElasticEnvelope) {
+  ProbeOptions opt;
+  opt.relax_method = "fire";
+  const std::vector<double> theta = probe_directions(12);
+  const double amp = 5e-5;
+  const Envelope linear = linear_response_envelope(*state_, amp, theta, opt);
+  const Envelope fire = dynamic_envelope(*state_, amp, theta, opt);
+  expect_same_ellipse(fire, linear, "dynamic, FIRE relaxation vs linear response");
+  double largest = 0.0, worst = 0.0;
+  for (std::size_t i = 0; i < fire.size(); ++i) {
+    largest = std::max(largest, linear.stress_star[i].norm());
+    worst = std::max(worst, (fire.stress_star[i] - linear.stress_star[i]).norm());
+    EXPECT_GT(fire.diagnostics.at("relax_iterations")[i], 0.0) << i;
+    EXPECT_LE(fire.diagnostics.at("kinetic_to_elastic")[i], opt.relax_fire_from) << i;
+    EXPECT_EQ(fire.diagnostics.at("relax_converged")[i], 1.0) << i;
+    EXPECT_GT(fire.diagnostics.at("load_steps")[i], 0.0) << i;
+  }
+  std::cout << "FIRE relaxation: largest |d_sigma* - linear response| = " << worst / largest
+            << " of the largest |d_sigma*|\n";
+  EXPECT_LE(worst, 0.01 * largest);
+  EXPECT_EQ(fire.attributes.at("relax_fire"), 1.0);
+
+  opt.relax_method = "dynamic";
+  const Envelope dynamic = dynamic_envelope(*state_, amp, probe_directions(4), opt);
+  EXPECT_EQ(dynamic.attributes.at("relax_fire"), 0.0);
+  for (std::size_t i = 0; i < dynamic.size(); ++i) {
+    EXPECT_GT(dynamic.diagnostics.at("relax_steps")[i], 0.0) << i;
+    EXPECT_EQ(dynamic.diagnostics.at("relax_iterations")[i], 0.0) << i;
+  }
+
+  opt.relax_method = "steepest";
+  try {
+    dynamic_envelope(*state_, amp, theta, opt);
+    ADD_FAILURE() << "an unknown relaxation method was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("probes.relax_method"), std::string::npos) << e.what();
+  }
+
+  // The same packing with friction, at rest (no tangential spring yet): FIRE is not used.
+  SystemOptions so = state_->options();
+  so.material.mu = 0.5;
+  const DemSystem frictional = DemSystem::restore(state_->save(), so);
+  opt.relax_method = "fire";
+  const Envelope kept = dynamic_envelope(frictional, amp, probe_directions(4), opt);
+  EXPECT_EQ(kept.attributes.at("relax_fire"), 0.0);
+  for (std::size_t i = 0; i < kept.size(); ++i)
+    EXPECT_GT(kept.diagnostics.at("relax_steps")[i], 0.0) << i;
 }
 
 // The fabric split of every probe (docs/probes.md "Fabric split") sums to its fabric change;

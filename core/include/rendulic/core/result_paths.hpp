@@ -270,6 +270,7 @@ inline constexpr const char* kCounters[] = {
     "backbone_contacts_closed",
     "load_steps",
     "relax_steps",
+    "relax_iterations",
     "relax_converged",
     "iterations",
     "converged",
@@ -279,6 +280,7 @@ inline constexpr const char* kCounters[] = {
     "n_rattlers",
     "n_backbone_contacts",
     "reference_relax_steps",
+    "reference_relax_iterations",
 };
 
 namespace detail {

@@ -31,6 +31,15 @@ struct ProbeOptions {
   double dt_factor = 0.0;
   // Relaxation after loading (dynamic): E_kin / E_el below kinetic_to_elastic, or time_cap.
   RelaxOptions relax{1e-9, 2e-3, 200};
+  // How a dynamic probe relaxes once loaded (docs/probes.md "Methods", docs/accuracy.md
+  // "FIRE for the relaxation tail"): "fire" (the engine at fixed cell down to
+  // relax_fire_from, then FIRE at fixed cell to `minimise`'s force tolerance; frictionless
+  // packings only, a frictional one relaxes as "dynamic") or "dynamic" (the seed's: the
+  // engine at fixed cell to `relax`).
+  std::string relax_method = "fire";
+  // "fire": the engine's relaxation first runs down to this E_kin / E_el (the inertial part of
+  // a plastic probe's rearrangements), FIRE then takes the slow tail.
+  double relax_fire_from = 1e-5;
   // Minimisation probes: FIRE to max net force < force_tolerance * mean contact force.
   MinimiseOptions minimise{};
   LinearResponseOptions linear{};

@@ -57,6 +57,15 @@ struct RestSummary {
   Eigen::Matrix3d stress_change;  // Pa, stress at rest - after the dynamic relaxation
 };
 
+// Minimises the energy of a frictionless `sys` at its fixed cell by FIRE (options.k is taken
+// from the material) and puts the state at the minimum: positions there (wrapped into the
+// cell), velocities zero, forces and the neighbour list recomputed from there; clock, strain
+// and step count are kept. The state is moved even if FIRE did not converge (the summary says
+// so; the caller judges). Throws InputError for a frictional packing (packing_of). Also the
+// dynamic probes' relaxation with probes.relax_method = "fire" (docs/probes.md).
+MinimiseSummary settle_at_minimum(DemSystem& sys, const MinimiseOptions& options,
+                                  double* max_displacement = nullptr);
+
 // Relaxes `sys` dynamically, then minimises its energy at the fixed cell and puts the state
 // at the minimum: positions there (wrapped into the cell), velocities zero, forces and the
 // neighbour list recomputed from there; clock, strain and step count are kept. Throws
