@@ -444,6 +444,10 @@ class Sweeper {
     po.inertial_number = x.inertial_number;
     po.rate = 0.0;  // the inertial number sets the rate
     po.relax.kinetic_to_elastic = x.relax;
+    // The sweep's `relax` factor is the seed's relaxation threshold, which the FIRE tail (the
+    // default, docs/accuracy.md "FIRE for the relaxation tail") does not use: the sweep measures
+    // the seed's relaxation throughout, as its tables were made.
+    po.relax_method = "dynamic";
     try {
       dem::Envelope env;
       Stopwatch w;

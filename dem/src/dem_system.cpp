@@ -1049,6 +1049,19 @@ std::vector<Contact> DemSystem::contacts() const {
         c.sliding = limit > 0 && ft.norm() >= (1.0 - kSlidingTolerance) * limit;
         const Eigen::Vector3d spring(hist_[3 * e], hist_[3 * e + 1], hist_[3 * e + 2]);
         c.spring = swap ? Eigen::Vector3d(-spring) : spring;
+        if (rolling_) {
+          // The rolling law as the force loop states it (friction_law): v_r = -a' n x (w_i -
+          // w_j), its spring held at its limit, the torque a' n x f_r on the row's i. v_r and
+          // f_r do not depend on the pair's order; the torque on the reported i does.
+          const double ar = ai * aj / (ai + aj);
+          const Eigen::Vector3d vr = -ar * nrm.cross(wi - wj);
+          Eigen::Vector3d xr(hist_r_[3 * e], hist_r_[3 * e + 1], hist_r_[3 * e + 2]);
+          Eigen::Vector3d fr;
+          options_.material.rolling_contact().force(xr, Eigen::Vector3d(Eigen::Vector3d::Zero()),
+                                                    vr, 0.0, c.force, &unused, fr);
+          const Eigen::Vector3d q = ar * nrm.cross(fr);
+          c.rolling_torque = swap ? Eigen::Vector3d(-q) : q;
+        }
       }
       out.push_back(c);
     }

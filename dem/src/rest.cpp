@@ -61,8 +61,8 @@ ForceBalance force_balance(const DemSystem& sys) {
     // Levers as the engine's (docs/dem.md "Friction"): r - delta/2 from each centre to the
     // contact point, -n from i and +n from j; the tangential force alone has a moment.
     const Eigen::Vector3d m = -nrm.cross(c.tangential);
-    torque.row(c.i) += ((p.radius[c.i] - 0.5 * c.overlap) * m).transpose();
-    torque.row(c.j) += ((p.radius[c.j] - 0.5 * c.overlap) * m).transpose();
+    torque.row(c.i) += ((p.radius[c.i] - 0.5 * c.overlap) * m + c.rolling_torque).transpose();
+    torque.row(c.j) += ((p.radius[c.j] - 0.5 * c.overlap) * m - c.rolling_torque).transpose();
     if (keep[c.i] && keep[c.j]) {
       sum += std::abs(c.force);
       ++b.contacts;

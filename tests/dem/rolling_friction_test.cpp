@@ -187,6 +187,40 @@ TEST(RollingFriction, RestoredRunContinuesBitIdentically) {
   EXPECT_GT(a.sliding_dissipation(), 0.0);
 }
 
+// The contact list (contacts(), which the force balance of a state at rest reads) states the
+// rolling torque as the engine's four-lane loop does: at zero velocities the torques it sums
+// per particle, levers and rolling couples, are the engine's torque accumulators.
+TEST(RollingFriction, ContactsCarryTheEnginesRollingTorques) {
+  SystemOptions o;
+  o.material.mu = 0.5;
+  o.material.mu_r = 0.1;
+  GasOptions g;
+  g.n_particles = 1000;
+  g.volume_fraction = 0.4;
+  g.velocity = 50.0;
+  DemSystem s = make_gas(o, g, 7);
+  s.advance(600, Vec::Constant(-3000.0));
+  s.zero_velocities();  // forces and torques again, at rest: no dashpot, springs as they are
+  const Particles& p = s.particles();
+  std::vector<Vec> t(p.size(), Vec::Zero());
+  double rolling = 0;
+  for (const Contact& c : s.contacts()) {
+    const Vec m = -(c.branch / c.branch.norm()).cross(c.tangential);
+    t[c.i] += (p.radius[c.i] - 0.5 * c.overlap) * m + c.rolling_torque;
+    t[c.j] += (p.radius[c.j] - 0.5 * c.overlap) * m - c.rolling_torque;
+    rolling = std::max(rolling, c.rolling_torque.norm());
+  }
+  ASSERT_GT(rolling, 0.0);
+  double largest = 0, worst = 0;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    largest = std::max(largest, t[i].norm());
+    worst = std::max(worst, (t[i] - Vec(p.tx[i], p.ty[i], p.tz[i])).norm());
+  }
+  EXPECT_LT(worst, 1e-9 * largest) << worst << " of " << largest;
+  // Without the rolling couples the sums would miss them by about their size.
+  EXPECT_GT(rolling, 1e-3 * largest);
+}
+
 TEST(RollingFriction, KeysRefuseRollingWithoutFrictionAndBadValues) {
   Material mat;
   mat.mu_r = 0.1;  // mu = 0
