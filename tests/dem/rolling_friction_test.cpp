@@ -158,10 +158,9 @@ std::vector<double> flat(const Particles& p) {
   return v;
 }
 
-TEST(RollingFriction, RestoredRunContinuesBitIdentically) {
-  // A dense, hot frictional gas with rolling, compressed: contacts form, stick, slide and roll, and
-  // the list is rebuilt after the save, so the rolling springs go through save, restore and
-  // the carrying of history across rebuilds.
+// A dense, hot frictional gas of 1000 particles with rolling, to be compressed: contacts
+// form, stick, slide and roll, and the list is rebuilt along the way.
+DemSystem rolling_gas() {
   SystemOptions o;
   o.material.mu = 0.5;
   o.material.mu_r = 0.1;
@@ -169,8 +168,14 @@ TEST(RollingFriction, RestoredRunContinuesBitIdentically) {
   g.n_particles = 1000;
   g.volume_fraction = 0.4;
   g.velocity = 50.0;  // fast: many collisions, and rebuilds
+  return make_gas(o, g, 7);
+}
+
+TEST(RollingFriction, RestoredRunContinuesBitIdentically) {
+  // The list is rebuilt after the save, so the rolling springs go through save, restore and
+  // the carrying of history across rebuilds.
   const Vec D = Vec::Constant(-3000.0);
-  DemSystem a = make_gas(o, g, 7);
+  DemSystem a = rolling_gas();
   a.advance(300, D);
   const State half = a.save();
   double rolling2 = 0;
@@ -191,14 +196,7 @@ TEST(RollingFriction, RestoredRunContinuesBitIdentically) {
 // rolling torque as the engine's four-lane loop does: at zero velocities the torques it sums
 // per particle, levers and rolling couples, are the engine's torque accumulators.
 TEST(RollingFriction, ContactsCarryTheEnginesRollingTorques) {
-  SystemOptions o;
-  o.material.mu = 0.5;
-  o.material.mu_r = 0.1;
-  GasOptions g;
-  g.n_particles = 1000;
-  g.volume_fraction = 0.4;
-  g.velocity = 50.0;
-  DemSystem s = make_gas(o, g, 7);
+  DemSystem s = rolling_gas();
   s.advance(600, Vec::Constant(-3000.0));
   s.zero_velocities();  // forces and torques again, at rest: no dashpot, springs as they are
   const Particles& p = s.particles();
