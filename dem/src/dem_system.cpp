@@ -1055,7 +1055,9 @@ std::vector<Contact> DemSystem::contacts() const {
           // f_r do not depend on the pair's order; the torque on the reported i does.
           const double ar = ai * aj / (ai + aj);
           const Eigen::Vector3d vr = -ar * nrm.cross(wi - wj);
-          Eigen::Vector3d xr(hist_r_[3 * e], hist_r_[3 * e + 1], hist_r_[3 * e + 2]);
+          c.rolling_spring =
+              Eigen::Vector3d(hist_r_[3 * e], hist_r_[3 * e + 1], hist_r_[3 * e + 2]);
+          Eigen::Vector3d xr = c.rolling_spring;
           Eigen::Vector3d fr;
           options_.material.rolling_contact().force(xr, Eigen::Vector3d(Eigen::Vector3d::Zero()),
                                                     vr, 0.0, c.force, &unused, fr);
@@ -1096,34 +1098,25 @@ double DemSystem::kinetic_energy() const {
   return e;
 }
 
+namespace {
+// The rolling springs' energy, summed apart from the other springs (in the contacts' order).
+double rolling_energy(const std::vector<Contact>& contacts, const TangentialContact& roll) {
+  double e = 0;
+  for (const Contact& c : contacts) e += roll.energy(c.rolling_spring.squaredNorm());
+  return e;
+}
+}  // namespace
+
 double DemSystem::elastic_energy() const {
   double e = 0;
   const NormalContact law = options_.material.contact();
   const TangentialContact tan = options_.material.tangential();
-  for (const Contact& c : contacts()) {
+  const std::vector<Contact> cs = contacts();
+  for (const Contact& c : cs) {
     e += law.energy(c.overlap);
     if (friction_) e += tan.energy(c.spring.squaredNorm());
   }
-  if (rolling_) e += rolling_energy();
-  return e;
-}
-
-double DemSystem::rolling_energy() const {
-  // Over the touching entries (the test of contacts()): a spring of a pair that just separated
-  // without a step (refresh_forces) is no contact's.
-  double e = 0;
-  if (!rolling_) return e;
-  const TangentialContact roll = options_.material.rolling_contact();
-  const Eigen::Vector3d L = cell_.lengths();
-  for (std::size_t i = 0; i < p_.size(); ++i)
-    for (std::int64_t k = list_.offset[i]; k < list_.offset[i + 1]; ++k) {
-      const std::int32_t j = list_.index[k];
-      const Eigen::Vector3d l = p_.position(i) - p_.position(j) +
-                                NeighborList::shift(list_.shift_code[k]).cwiseProduct(L);
-      if (l.norm() >= p_.radius[i] + p_.radius[j]) continue;
-      const Eigen::Vector3d xr(hist_r_[3 * k], hist_r_[3 * k + 1], hist_r_[3 * k + 2]);
-      e += roll.energy(xr.squaredNorm());
-    }
+  if (rolling_) e += rolling_energy(cs, options_.material.rolling_contact());
   return e;
 }
 
@@ -1180,7 +1173,7 @@ Measures DemSystem::measure() const {
   }
   if (friction_) {
     m.elastic_energy += m.tangential_energy;
-    if (rolling_) m.elastic_energy += rolling_energy();
+    if (rolling_) m.elastic_energy += rolling_energy(cs, options_.material.rolling_contact());
     m.rotational_energy = rotational_energy();
     m.sliding_dissipation = sliding_dissipation_;
     if (!cs.empty()) m.sliding_fraction /= static_cast<double>(cs.size());

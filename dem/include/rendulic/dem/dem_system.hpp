@@ -177,7 +177,6 @@ class DemSystem {
   void carry_history(const std::vector<std::int64_t>& old_offset,
                      const std::vector<std::int32_t>& old_index, const std::vector<double>& old,
                      const std::vector<double>& old_rolling);
-  double rolling_energy() const;  // the rolling springs' energy (0 without rolling)
   void init_rotations();
   void sum_stress();  // last_stress_diag_ from the per-particle terms of the last evaluation
   template <bool kStress>

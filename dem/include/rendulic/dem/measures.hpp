@@ -51,7 +51,9 @@ struct Contact {
   // displacement of i's contact point relative to j's), both in the tangent plane.
   Eigen::Vector3d tangential = Eigen::Vector3d::Zero();  // N
   Eigen::Vector3d spring = Eigen::Vector3d::Zero();      // m
-  // With rolling resistance: the rolling torque on i (that on j is its opposite), N m.
+  // With rolling resistance: the rolling spring (the same for either order of the pair), m,
+  // and the rolling torque on i (that on j is its opposite), N m.
+  Eigen::Vector3d rolling_spring = Eigen::Vector3d::Zero();
   Eigen::Vector3d rolling_torque = Eigen::Vector3d::Zero();
   bool sliding = false;  // |tangential| at the Coulomb limit (kSlidingTolerance)
 };
