@@ -33,6 +33,15 @@ std::vector<double> column(const Eigen::MatrixXd& m, int c) {
   for (Eigen::Index i = 0; i < m.rows(); ++i) v[static_cast<std::size_t>(i)] = m(i, c);
   return v;
 }
+// A checkpoint's [entries, 3] spring dataset as the State's history (3 doubles per entry); the
+// caller has checked its columns.
+std::vector<double> spring_history(const Eigen::MatrixXd& m) {
+  if (m.rows() == 0) return {};
+  using Rows = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
+  std::vector<double> h(static_cast<std::size_t>(m.rows()) * 3);
+  Eigen::Map<Rows>(h.data(), m.rows(), 3) = m;
+  return h;
+}
 Eigen::Vector3d three(const ResultsReader& in, const std::string& path) {
   const std::vector<double> v = in.read_vector(path);
   if (v.size() != 3) throw InputError(in.path().string() + ": " + path + " must hold 3 numbers");
@@ -90,20 +99,14 @@ std::optional<dem::DemSystem> restore_checkpoint(const ResultsReader& in, const 
       throw InputError(where + ": tangential springs must be [entries,3]");
     p.wx = column(w, 0), p.wy = column(w, 1), p.wz = column(w, 2);
     p.tx = column(t, 0), p.ty = column(t, 1), p.tz = column(t, 2);
-    s.tangential_history.resize(static_cast<std::size_t>(xi.rows()) * 3);
-    for (Eigen::Index e = 0; e < xi.rows(); ++e)
-      for (int a = 0; a < 3; ++a)
-        s.tangential_history[static_cast<std::size_t>(3 * e + a)] = xi(e, a);
+    s.tangential_history = spring_history(xi);
     s.sliding_dissipation = in.attr_double(cp, "sliding_dissipation");
     // With rolling resistance, its springs, one per entry as the tangential ones.
     if (in.exists(cp + datasets::kRollingSprings)) {
       const Eigen::MatrixXd xr = in.read_matrix(cp + datasets::kRollingSprings);
       if (xr.rows() != xi.rows() || (xr.rows() > 0 && xr.cols() != 3))
         throw InputError(where + ": rolling springs must be [entries,3] as the tangential ones");
-      s.rolling_history.resize(static_cast<std::size_t>(xr.rows()) * 3);
-      for (Eigen::Index e = 0; e < xr.rows(); ++e)
-        for (int a = 0; a < 3; ++a)
-          s.rolling_history[static_cast<std::size_t>(3 * e + a)] = xr(e, a);
+      s.rolling_history = spring_history(xr);
     }
   }
   return dem::DemSystem::restore(s, options);

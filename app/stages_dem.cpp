@@ -57,6 +57,12 @@ Eigen::MatrixXd as_matrix(const std::vector<double>& x, const std::vector<double
   return m;
 }
 
+// A spring history (3 doubles per list entry, State) as its checkpoint's [entries, 3] dataset.
+Eigen::MatrixXd springs_matrix(const std::vector<double>& history) {
+  using Rows = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
+  return Eigen::Map<const Rows>(history.data(), static_cast<Eigen::Index>(history.size() / 3), 3);
+}
+
 // The series that only a frictional packing has (frictionless files keep their layout).
 void append_friction(ResultsWriter& out, const std::string& g, const dem::Measures& m,
                      const dem::Material& material) {
@@ -328,19 +334,10 @@ void write_state(ResultsWriter& out, const std::string& g, const dem::DemSystem&
   if (!sys.material().frictional()) return;  // frictionless checkpoints keep their layout
   out.write(cp + datasets::kAngularVelocities, as_matrix(p.wx, p.wy, p.wz));
   out.write(cp + datasets::kTorques, as_matrix(p.tx, p.ty, p.tz));
-  const std::size_t entries = st.tangential_history.size() / 3;
-  Eigen::MatrixXd springs(static_cast<Eigen::Index>(entries), 3);
-  for (std::size_t e = 0; e < entries; ++e)
-    for (int a = 0; a < 3; ++a)
-      springs(static_cast<Eigen::Index>(e), a) = st.tangential_history[3 * e + a];
-  out.write(cp + datasets::kTangentialSprings, springs);
+  out.write(cp + datasets::kTangentialSprings, springs_matrix(st.tangential_history));
   out.attr(cp, "sliding_dissipation", st.sliding_dissipation);
   if (!sys.material().rolling()) return;  // frictional checkpoints keep theirs
-  Eigen::MatrixXd rolling(static_cast<Eigen::Index>(entries), 3);
-  for (std::size_t e = 0; e < entries; ++e)
-    for (int a = 0; a < 3; ++a)
-      rolling(static_cast<Eigen::Index>(e), a) = st.rolling_history[3 * e + a];
-  out.write(cp + datasets::kRollingSprings, rolling);
+  out.write(cp + datasets::kRollingSprings, springs_matrix(st.rolling_history));
 }
 
 void stage_states(const Scenario&, ResultsWriter& out, const RunContext& ctx,
