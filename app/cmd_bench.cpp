@@ -260,27 +260,21 @@ Subcommand add_bench(CLI::App& parent) {
               rolling_1 = time_steps(dem::DemSystem::restore(state.save(), f), 1, all_cores, *o);
             }
             if (o->json) {
-              for (const auto& [mu, fig] : {std::pair{0.0, smooth_1}, {o->friction, rough_1}}) {
+              // One row per contact law (rolling_friction only where it is on).
+              auto row_of = [&](double mu, double mu_r, const Figure& fig) {
                 nlohmann::ordered_json row;
                 row["volume_fraction"] = nu;
                 row["threads"] = 1;
                 row["n_particles"] = o->n_particles;
                 row["friction"] = mu;
+                if (mu_r > 0) row["rolling_friction"] = mu_r;
                 row["ns_per_particle_step"] = fig.best;
                 row["ns_per_particle_step_cpu"] = fig.best_cpu;
                 json.push_back(row);
-              }
-              if (o->rolling_friction > 0) {
-                nlohmann::ordered_json row;
-                row["volume_fraction"] = nu;
-                row["threads"] = 1;
-                row["n_particles"] = o->n_particles;
-                row["friction"] = o->friction;
-                row["rolling_friction"] = o->rolling_friction;
-                row["ns_per_particle_step"] = rolling_1.best;
-                row["ns_per_particle_step_cpu"] = rolling_1.best_cpu;
-                json.push_back(row);
-              }
+              };
+              row_of(0.0, 0.0, smooth_1);
+              row_of(o->friction, 0.0, rough_1);
+              if (o->rolling_friction > 0) row_of(o->friction, o->rolling_friction, rolling_1);
             } else {
               std::cout << "  1 thread, ns per particle-step (wall / CPU): frictionless "
                         << std::setprecision(4) << smooth_1.best << " / " << smooth_1.best_cpu
