@@ -7,6 +7,7 @@
 // ours and the output folder to be writable first, and the script reports data it cannot draw
 // in one line (exit 2), so a bad file or folder is the usual one-line exit 2, never a Python
 // traceback. Its process is killed if ours is stopped by a signal.
+#include <omp.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -37,11 +38,17 @@ struct Spawned {
 };
 
 // Runs argv without a shell (no quoting issues with odd file names). With `capture`, its
-// stderr is collected; with `silence`, its output goes to /dev/null.
-Spawned spawn(const std::vector<std::string>& args, bool silence, bool capture = false) {
+// stderr is collected; with `silence`, its output goes to /dev/null. `env` is added to the
+// environment (built here: the child of a threaded process must not allocate before exec).
+Spawned spawn(const std::vector<std::string>& args, bool silence, bool capture = false,
+              const std::vector<std::string>& env = {}) {
   std::vector<char*> argv;
   for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
   argv.push_back(nullptr);
+  std::vector<char*> envp;
+  for (char** e = environ; *e; ++e) envp.push_back(*e);
+  for (const auto& e : env) envp.push_back(const_cast<char*>(e.c_str()));
+  envp.push_back(nullptr);
   int pipefd[2] = {-1, -1};
   if (capture && ::pipe(pipefd) != 0) throw std::runtime_error("plot: cannot create a pipe");
   const pid_t pid = fork();
@@ -56,7 +63,7 @@ Spawned spawn(const std::vector<std::string>& args, bool silence, bool capture =
       ::close(pipefd[0]);
       ::close(pipefd[1]);
     }
-    execvp(argv[0], argv.data());
+    execvpe(argv[0], argv.data(), envp.data());
     _exit(127);
   }
   const int handle = cleanup::kill_on_death(pid);
@@ -140,7 +147,12 @@ int plot_results(const std::filesystem::path& file, const std::filesystem::path&
     log::info("figures drawn by ", script_file.string());
   }
   args.insert(args.end(), {file.string(), out_dir.string()});
-  const Spawned r = spawn(args, false, true);
+  // The figures are independent: plot.py draws them in as many processes as this run may
+  // use threads (--threads; the user's own RENDULIC_PLOT_JOBS wins).
+  std::vector<std::string> env;
+  if (const char* jobs = std::getenv("RENDULIC_PLOT_JOBS"); !jobs || !*jobs)
+    env.push_back("RENDULIC_PLOT_JOBS=" + std::to_string(omp_get_max_threads()));
+  const Spawned r = spawn(args, false, true, env);
   if (r.code == 0) {
     // The figures it skipped, and why: one note per line, as every message of the tool.
     std::istringstream notes(r.err);

@@ -526,11 +526,22 @@ TEST(FaultsSystem, AnInterruptedPlotLeavesNoFigureScriptRunningNorItsFile) {
   const std::string cmdline = read_file("/proc/" + std::to_string(script) + "/cmdline");
   const auto arg1 = cmdline.find('\0') + 1;
   EXPECT_EQ(cmdline.substr(arg1, 3), std::string("-c\0", 3));
+  // With more than one core the script draws in worker processes: stop it while they draw
+  // (if they are seen in time), and none may draw on after it.
+  std::vector<pid_t> workers;
+  wait_for(
+      [&] {
+        workers = children_of(script);
+        return !workers.empty();
+      },
+      10);
   kill(pid, SIGTERM);
   int status = 0;
   waitpid(pid, &status, 0);
   EXPECT_TRUE(WIFSIGNALED(status));
   EXPECT_TRUE(wait_for([&] { return !running(script); }, 30)) << "the figure script runs on";
+  // The script ends only after its workers (terminated and joined on its way out).
+  for (pid_t w : workers) EXPECT_FALSE(running(w)) << "a figure worker runs on";
 }
 
 TEST(FaultsSystem, TheNextRunTidiesStaleTemporariesAndTheStoredScenarioReplays) {

@@ -10,6 +10,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <set>
 #include <string>
 
@@ -281,7 +282,8 @@ TEST(Plot, DrawsEveryFigureOfASeedLikeFile) {
 
 // A stand-in figure script that records that it ran and with which arguments.
 const char* const kMarkerScript =
-    "import sys\nopen(sys.argv[2] + '/ran.txt', 'w').write(__file__ + ' ' + sys.argv[1])\n";
+    "import os, sys\nopen(sys.argv[2] + '/ran.txt', 'w').write(__file__ + ' ' + sys.argv[1] + "
+    "' jobs=' + os.environ.get('RENDULIC_PLOT_JOBS', ''))\n";
 
 TEST(Plot, RunsTheScriptOfTheOptionTheEnvironmentOrTheInstallPrefix) {
   if (python().empty()) GTEST_SKIP() << "no python3 with matplotlib and h5py";
@@ -312,11 +314,56 @@ TEST(Plot, RunsTheScriptOfTheOptionTheEnvironmentOrTheInstallPrefix) {
   EXPECT_EQ(r.code, 0) << r.out;
   EXPECT_NE(ran(dir / "o3").find("share/rendulic/plot.py"), std::string::npos) << ran(dir / "o3");
   EXPECT_NE(r.out.find("figures drawn by"), std::string::npos) << r.out;
+  // The script may draw in as many processes as rendulic may use threads; the user's own
+  // RENDULIC_PLOT_JOBS wins.
+  r = rendulic::testing::run_command("OMP_NUM_THREADS=3 " + std::string(RENDULIC_EXE) + " plot " +
+                                     f.string() + " --out " + (dir / "o4").string() + " --script " +
+                                     mine.string());
+  EXPECT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(ran(dir / "o4").find(" jobs=3"), std::string::npos) << ran(dir / "o4");
+  r = rendulic::testing::run_command("RENDULIC_PLOT_JOBS=5 OMP_NUM_THREADS=3 " +
+                                     std::string(RENDULIC_EXE) + " plot " + f.string() + " --out " +
+                                     (dir / "o5").string() + " --script " + mine.string());
+  EXPECT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(ran(dir / "o5").find(" jobs=5"), std::string::npos) << ran(dir / "o5");
   // A script that is not there: one line naming it, exit 2.
   r = rendulic::testing::run_rendulic("plot " + f.string() + " --script " +
                                       (dir / "nope.py").string());
   EXPECT_EQ(r.code, 2) << r.out;
   EXPECT_NE(r.out.find("nope.py: no figure script there (--script)"), std::string::npos) << r.out;
+}
+
+// Drawn in two processes, the figures are the same files, listed in the same order, as drawn
+// in one (the PNG bytes too: each figure is drawn by the same code from the same data).
+TEST(Plot, TwoProcessesDrawTheSameFiguresAsOne) {
+  if (python().empty()) GTEST_SKIP() << "no python3 with matplotlib and h5py";
+  const fs::path f = rendulic::app::testing::seed_like("plot_jobs", false);
+  const fs::path dir = rendulic::testing::fresh_dir("app_plot_system/jobs");
+  std::string listed[2];
+  for (int jobs : {1, 2}) {
+    const CliResult r = rendulic::testing::run_command(
+        "RENDULIC_PLOT_JOBS=" + std::to_string(jobs) + " " + python() + " " + kScript.string() +
+        " " + f.string() + " " + (dir / std::to_string(jobs)).string() + " 2>/dev/null");
+    ASSERT_EQ(r.code, 0) << r.out;
+    listed[jobs - 1] = r.out;
+    // Paths differ only by the folder name.
+    for (std::size_t at;
+         (at = listed[jobs - 1].find((dir / std::to_string(jobs)).string())) != std::string::npos;)
+      listed[jobs - 1].replace(at, (dir / std::to_string(jobs)).string().size(), "DIR");
+  }
+  EXPECT_EQ(listed[0], listed[1]);
+  int compared = 0;
+  for (const auto& e : fs::directory_iterator(dir / "1")) {
+    if (e.path().extension() != ".png") continue;
+    const fs::path other = dir / "2" / e.path().filename();
+    ASSERT_TRUE(fs::exists(other)) << other;
+    std::ifstream a(e.path(), std::ios::binary), b(other, std::ios::binary);
+    const std::string da((std::istreambuf_iterator<char>(a)), {}),
+        db((std::istreambuf_iterator<char>(b)), {});
+    EXPECT_EQ(da, db) << e.path().filename();
+    ++compared;
+  }
+  EXPECT_GE(compared, 7);
 }
 
 TEST(Plot, RefusesAFileThatIsNotOurs) {
