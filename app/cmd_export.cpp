@@ -67,6 +67,11 @@ Subcommand add_export(CLI::App& parent) {
               m.k_t_ratio = in.attr_double(paths::kMaterial, "k_t_ratio");
               m.gamma_t_ratio = in.attr_double(paths::kMaterial, "gamma_t_ratio");
             }
+            if (in.has_attr(paths::kMaterial, "rolling_friction")) {
+              m.mu_r = in.attr_double(paths::kMaterial, "rolling_friction");
+              m.k_r_ratio = in.attr_double(paths::kMaterial, "k_r_ratio");
+              m.gamma_r_ratio = in.attr_double(paths::kMaterial, "gamma_r_ratio");
+            }
             std::cout << dem::lammps_pair_lines(m);
             return 0;
           }};

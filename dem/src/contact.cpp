@@ -41,9 +41,16 @@ std::string lammps_pair_lines(const Material& m) {
   s << std::setprecision(17) << "pair_style granular\npair_coeff * * hooke " << m.k << " "
     << m.gamma << " damping velocity tangential ";
   if (m.frictional())
-    s << "linear_history " << m.k_t_ratio * m.k << " " << m.gamma_t_ratio << " " << m.mu << "\n";
+    s << "linear_history " << m.k_t_ratio * m.k << " " << m.gamma_t_ratio << " " << m.mu;
   else
-    s << "linear_nohistory 0 0\n";
+    s << "linear_nohistory 0 0";
+  // LAMMPS's rolling damping is a coefficient of its own (force x time / length), unlike the
+  // tangential one, which it takes as a multiple of the normal damping.
+  if (m.rolling()) {
+    const TangentialContact r = m.rolling_contact();
+    s << " rolling sds " << r.k_t << " " << r.gamma_t << " " << r.mu;
+  }
+  s << "\n";
   return s.str();
 }
 

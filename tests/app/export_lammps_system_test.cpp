@@ -97,4 +97,37 @@ TEST(Export, RefusesAStateThatIsNotThere) {
   EXPECT_FALSE(fs::exists(dir / "z.data"));
 }
 
+// A frictional run with rolling resistance: export prints the stored material's tangential
+// and rolling settings (docs/interop.md "Friction against LAMMPS"), and LAMMPS accepts them.
+TEST(Export, PrintsTheFrictionAndRollingSettingsOfTheStoredMaterial) {
+  const fs::path dir = rendulic::testing::fresh_dir("app_export/rolling");
+  const auto run = run_rendulic(
+      "run " + (fs::path(RENDULIC_SOURCE_DIR) / "data/scenarios/quick.toml").string() +
+          " --quiet --out " + (dir / "run").string() +
+          " --set 'run.stages=[\"prepare\",\"isotropic\",\"path\",\"states\"]' "
+          "--set dem.n_particles=100 --set dem.friction=0.5 --set dem.rolling_friction=0.1 "
+          "--set dem.k_r_ratio=0.25 --set dem.gamma_r_ratio=0.5 --set isotropic.nu_max=0.66 "
+          "--set path.eps_dev_max=0.002 --set 'states.eps_dev=[0.001]' "
+          "--set 'states.labels=[\"a\"]'",
+      false);
+  ASSERT_EQ(run.code, 0) << run.err;
+  const fs::path data = dir / "a.data";
+  const auto r = run_rendulic(
+      "export " + (dir / "run" / "results.h5").string() + " --state a --lammps " + data.string(),
+      false);
+  ASSERT_EQ(r.code, 0) << r.err;
+  // k_t = 2/7 k, x_gamma_t = 2/7 (the defaults); k_r = 0.25 k, gamma_r = 0.5 gamma (1 kg/s).
+  EXPECT_NE(r.out.find("tangential linear_history 28571428.571428571 0.2857142857142857 0.5 "
+                       "rolling sds 25000000 0.5 0.10000000000000001\n"),
+            std::string::npos)
+      << r.out;
+  if (!have_lammps()) GTEST_SKIP() << "lmp not installed: the LAMMPS check is skipped";
+  std::ofstream(dir / "in.stress") << lammps_input(r.out);
+  const auto l =
+      run_command("cd " + dir.string() + " && lmp -nocite -log none -echo none -var data " +
+                  data.string() + " -in in.stress");
+  EXPECT_EQ(l.code, 0) << l.out;
+  EXPECT_NE(l.out.find("STRESS "), std::string::npos) << l.out;
+}
+
 }  // namespace
