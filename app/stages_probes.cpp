@@ -135,9 +135,12 @@ std::vector<dem::Envelope> write_probe_campaign(const dem::DemSystem& state,
         if (lr) {
           if (lr->direction_dependent() && amplitude == options.amplitudes.front())
             log::warning(state_group, ": ", lr->n_coulomb_limit, " of ", lr->n_backbone_contacts,
-                         " contacts at the Coulomb limit: the frictional linear response "
-                         "depends on the loading direction (treated as sticking: an upper "
-                         "bound), not an elastic envelope");
+                         " contacts at the Coulomb limit",
+                         lr->n_rolling_limit > 0 ? " and " + std::to_string(lr->n_rolling_limit) +
+                                                       " at the rolling limit"
+                                                 : std::string(),
+                         ": the frictional linear response depends on the loading direction "
+                         "(treated as sticking: an upper bound), not an elastic envelope");
           out.write(group + datasets::kStiffness, Eigen::MatrixXd(lr->stiffness));
           out.write(group + datasets::kFabricStiffness, Eigen::MatrixXd(lr->fabric_stiffness));
         }

@@ -396,10 +396,9 @@ bool LinearFriction::IsValid(std::string* why) const {
   };
   if (!(k_t > 0.0) || !std::isfinite(k_t)) return fail("linear response: k_t must be positive");
   if (!(mu > 0.0) || !std::isfinite(mu)) return fail("linear response: mu must be positive");
-  if (mu_r != 0.0)
-    return fail(
-        "linear response: dem.rolling_friction > 0 is not supported (no rolling springs in its "
-        "Jacobian); use the dynamic probes");
+  if (!(mu_r >= 0.0) || !std::isfinite(mu_r)) return fail("linear response: mu_r must be >= 0");
+  if (mu_r > 0.0 && (!(k_r > 0.0) || !std::isfinite(k_r)))
+    return fail("linear response: k_r must be positive with rolling resistance");
   if (!(coulomb_tolerance >= 0.0) || !(coulomb_tolerance < 1.0))
     return fail("linear response: coulomb_tolerance must be in [0, 1)");
   return true;
@@ -411,14 +410,20 @@ namespace {
 // engine's contact point), and the blocks of its linearised forces (docs/probes.md "Linear
 // response of a frictional packing"), with theta the rotations and dl = dE l + du_i - du_j:
 //   dF_i   = A dl + B_i theta_i + B_j theta_j,       dF_j = -dF_i,
-//   dtau_p = C_p dl - k_t a_p P (a_i theta_i + a_j theta_j)   (p = i, j).
+//   dtau_p = C_p dl - k_t a_p P (a_i theta_i + a_j theta_j) -+ k_r a'^2 P (theta_i - theta_j)
+// (p = i, j; the last term, upper sign for i, with rolling resistance: a' = a_i a_j / (a_i +
+// a_j) and the rolling pseudo-force f_r, whose couple a' n x f_r on i also enters C_p).
 struct FrictionalContact {
   int i = 0, j = 0;
   Eigen::Vector3d n = Eigen::Vector3d::Zero();
   double r = 0, a_i = 0, a_j = 0, f_n = 0;
   Eigen::Vector3d f_t = Eigen::Vector3d::Zero();
   bool at_limit = false;
+  double a_r = 0, k_r = 0;  // a' and the rolling stiffness (0 without rolling resistance)
+  Eigen::Vector3d f_r = Eigen::Vector3d::Zero();
+  bool rolling_at_limit = false;
   Eigen::Matrix3d A, B_i, B_j, C_i, C_j, P;
+  Eigen::Vector3d rolling_torque() const { return a_r * n.cross(f_r); }  // on i
 };
 
 Eigen::Matrix3d cross_matrix(const Eigen::Vector3d& v) {
@@ -442,6 +447,18 @@ void linearise(FrictionalContact& c, double k, double k_t) {
   const Eigen::Matrix3d turn = cross_matrix(c.f_t) * c.P / c.r;             // -a_p dn x f_t
   c.C_i = lever + c.a_i * turn + c.a_i * k_t * nx;
   c.C_j = lever + c.a_j * turn + c.a_j * k_t * nx;
+  if (c.k_r > 0) {
+    // The couple q = a' n x f_r on i (-q on j) moves with dl through its lever (d a' = alpha
+    // n.dl, alpha = (a_i^2 + a_j^2) / (2 (a_i + a_j)^2)) and the turned normal (dn = P dl / r);
+    // the rolling spring, turned with the normal as the tangential one, gives no torque
+    // along n x n. Its growth by -a' n x (theta_i - theta_j) is the k_r a'^2 P term above.
+    const double s = c.a_i + c.a_j;
+    const double alpha = (c.a_i * c.a_i + c.a_j * c.a_j) / (2.0 * s * s);
+    const Eigen::Matrix3d roll =
+        alpha * c.n.cross(c.f_r) * c.n.transpose() - (c.a_r / c.r) * cross_matrix(c.f_r) * c.P;
+    c.C_i += roll;
+    c.C_j -= roll;
+  }
 }
 
 }  // namespace
@@ -460,12 +477,19 @@ LinearResponse linear_response(const PackingData& packing, const LinearResponseO
   out.n_particles = n;
   out.volume = packing.volume();
 
-  std::map<std::pair<int, int>, Eigen::Vector3d> spring;
+  std::map<std::pair<int, int>, Eigen::Vector3d> spring, rolling_spring;
   for (const LinearFriction::Spring& s : friction.springs) {
     if (s.i < 0 || s.j < 0 || s.i >= n || s.j >= n || s.i == s.j || !s.xi.allFinite())
       throw InputError("linear response: a tangential spring names an invalid pair");
     spring[{std::min(s.i, s.j), std::max(s.i, s.j)}] = s.i < s.j ? s.xi : Eigen::Vector3d(-s.xi);
   }
+  for (const LinearFriction::Spring& s : friction.rolling_springs) {
+    if (s.i < 0 || s.j < 0 || s.i >= n || s.j >= n || s.i == s.j || !s.xi.allFinite())
+      throw InputError("linear response: a rolling spring names an invalid pair");
+    rolling_spring[{std::min(s.i, s.j), std::max(s.i, s.j)}] = s.xi;  // either order
+  }
+  if (!friction.rolling() && !rolling_spring.empty())
+    throw InputError("linear response: rolling springs given without rolling resistance (mu_r)");
   std::vector<FrictionalContact> all;
   for (const PairGeometry& p : find_pairs(packing, 0.0)) {
     if (!(p.overlap > 0.0)) continue;
@@ -488,6 +512,18 @@ LinearResponse linear_response(const PackingData& packing, const LinearResponseO
       if (ft > limit) c.f_t *= limit / ft;
       c.at_limit = ft >= (1.0 - friction.coulomb_tolerance) * limit;
     }
+    if (friction.rolling()) {
+      c.k_r = friction.k_r;
+      c.a_r = c.a_i * c.a_j / (c.a_i + c.a_j);
+      if (const auto rs = rolling_spring.find({p.i, p.j}); rs != rolling_spring.end()) {
+        Eigen::Vector3d xr = rs->second;
+        TangentialContact::turn(xr, c.n);
+        c.f_r = -friction.k_r * xr;
+        const double limit = friction.mu_r * c.f_n, fr = c.f_r.norm();
+        if (fr > limit) c.f_r *= limit / fr;
+        c.rolling_at_limit = fr >= (1.0 - friction.coulomb_tolerance) * limit;
+      }
+    }
     linearise(c, k, k_t);
     all.push_back(c);
   }
@@ -501,8 +537,10 @@ LinearResponse linear_response(const PackingData& packing, const LinearResponseO
   auto contact_matrix = [&](const FrictionalContact& c) {
     Matrix12d J;
     const double si = 1.0 / radius(c.i), sj = 1.0 / radius(c.j);
-    const Eigen::Matrix3d D_ii = -k_t * c.a_i * c.a_i * c.P, D_ij = -k_t * c.a_i * c.a_j * c.P,
-                          D_jj = -k_t * c.a_j * c.a_j * c.P;
+    const double rolling = c.k_r * c.a_r * c.a_r;
+    const Eigen::Matrix3d D_ii = -(k_t * c.a_i * c.a_i + rolling) * c.P,
+                          D_ij = -(k_t * c.a_i * c.a_j - rolling) * c.P,
+                          D_jj = -(k_t * c.a_j * c.a_j + rolling) * c.P;
     J << c.A, si * c.B_i, -c.A, sj * c.B_j,                       //
         si * c.C_i, si * si * D_ii, -si * c.C_i, si * sj * D_ij,  //
         -c.A, -si * c.B_i, c.A, -sj * c.B_j,                      //
@@ -580,8 +618,12 @@ LinearResponse linear_response(const PackingData& packing, const LinearResponseO
     const Eigen::Vector3d nxf = c.n.cross(c.f_t);
     net.block<1, 3>(c.i, 3) -= c.a_i / radius(c.i) * nxf.transpose();
     net.block<1, 3>(c.j, 3) -= c.a_j / radius(c.j) * nxf.transpose();
+    const Eigen::Vector3d couple = c.rolling_torque();
+    net.block<1, 3>(c.i, 3) += couple.transpose() / radius(c.i);
+    net.block<1, 3>(c.j, 3) -= couple.transpose() / radius(c.j);
     sum_f += f.norm();
     out.n_coulomb_limit += c.at_limit ? 1 : 0;
+    out.n_rolling_limit += c.rolling_at_limit ? 1 : 0;
   }
   out.stress = 0.5 * (stress + stress.transpose()) / out.volume;
   out.fabric /= out.volume;
@@ -712,8 +754,10 @@ LinearResponse linear_response(const PackingData& packing, const LinearResponseO
   std::ostringstream os;
   os << "linear response (frictional): " << n << " particles, " << out.n_rattlers << " rattlers, "
      << out.n_backbone_contacts << " backbone contacts, " << out.n_coulomb_limit
-     << " at the Coulomb limit, " << out.n_floppy
-     << " struts with their spin held, residual force ratio " << out.residual_force_ratio;
+     << " at the Coulomb limit, ";
+  if (friction.rolling()) os << out.n_rolling_limit << " at the rolling limit, ";
+  os << out.n_floppy << " struts with their spin held, residual force ratio "
+     << out.residual_force_ratio;
   out.message = os.str();
   out.seconds_total = seconds_since(t_start);
   return out;

@@ -542,8 +542,11 @@ Envelope linear_response_envelope(const DemSystem& state, double amplitude,
     friction.k_t = m.tangential().k_t;
     friction.mu = m.mu;
     friction.mu_r = m.mu_r;
+    if (m.rolling()) friction.k_r = m.rolling_contact().k_t;
     for (const Contact& c : state.contacts()) {
       if (c.spring != Eigen::Vector3d::Zero()) friction.springs.push_back({c.i, c.j, c.spring});
+      if (c.rolling_spring != Eigen::Vector3d::Zero())
+        friction.rolling_springs.push_back({c.i, c.j, c.rolling_spring});
     }
     LinearResponse lr = linear_response(geometry_of(state), lo, friction);
     if (response) *response = lr;

@@ -44,6 +44,7 @@ Envelope linear_response_envelope(const LinearResponse& response,
     env.attributes["coulomb_limit_fraction"] = response.coulomb_limit_fraction;
     env.attributes["direction_dependent"] = response.direction_dependent() ? 1.0 : 0.0;
     env.attributes["n_floppy"] = response.n_floppy;
+    env.attributes["n_rolling_limit"] = response.n_rolling_limit;
   }
   return env;
 }

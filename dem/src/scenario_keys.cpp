@@ -112,13 +112,12 @@ const OptionTable<DemRunOptions>& dem_run_option_table() {
           [](O& o) -> double& { return o.system.material.gamma_t_ratio; }},
       Row{{.path = "dem.rolling_friction",
            .unit = "-",
-           .help =
-               "Rolling friction coefficient mu_r: the rolling resistance's Coulomb-like "
-               "limit |f_r| <= mu_r |f_n| on the rolling spring-dashpot's pseudo-force, "
-               "whose torque a' n x f_r (a' the reduced lever) resists the pair's relative "
-               "rolling (docs/physics.md section 1b); 0 = none. Needs dem.friction > 0; "
-               "the linear response refuses mu_r > 0. At most 1: its limit torque a' mu_r |f_n| "
-               "(a' <= a) is then at most the sliding torque a |f_n| of mu = 1.",
+           .help = "Rolling friction coefficient mu_r: the rolling resistance's Coulomb-like "
+                   "limit |f_r| <= mu_r |f_n| on the rolling spring-dashpot's pseudo-force, "
+                   "whose torque a' n x f_r (a' the reduced lever) resists the pair's relative "
+                   "rolling (docs/physics.md section 1b); 0 = none. Needs dem.friction > 0. "
+                   "At most 1: its limit torque a' mu_r |f_n| "
+                   "(a' <= a) is then at most the sliding torque a |f_n| of mu = 1.",
            .min = 0,
            .max = 1},
           [](O& o) -> double& { return o.system.material.mu_r; }},

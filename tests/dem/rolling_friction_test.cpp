@@ -259,14 +259,17 @@ TEST(RollingFriction, KeysRefuseRollingWithoutFrictionAndBadValues) {
   EXPECT_EQ(stability_limit(rolling), stability_limit(frictional));
   rolling.mu_r = 0.1;
   EXPECT_LT(stability_limit(rolling), stability_limit(frictional));
-  // The linear response has no rolling springs: it refuses mu_r > 0.
+  // The linear response takes rolling springs with their stiffness, and refuses mu_r > 0
+  // without one.
   LinearFriction lf;
   lf.k_t = 1e7;
   lf.mu = 0.5;
   EXPECT_TRUE(lf.IsValid(&why)) << why;
   lf.mu_r = 0.1;
   EXPECT_FALSE(lf.IsValid(&why));
-  EXPECT_NE(why.find("dem.rolling_friction"), std::string::npos) << why;
+  EXPECT_NE(why.find("k_r"), std::string::npos) << why;
+  lf.k_r = 1e6;
+  EXPECT_TRUE(lf.IsValid(&why)) << why;
 }
 
 }  // namespace

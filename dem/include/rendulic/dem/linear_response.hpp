@@ -116,7 +116,10 @@ struct LinearResponse {
   bool frictional = false;
   int n_coulomb_limit = 0;
   double coulomb_limit_fraction = 0.0;  // of the backbone contacts
-  bool direction_dependent() const { return n_coulomb_limit > 0; }
+  // With rolling resistance: backbone contacts whose rolling spring is at its limit mu_r f_n
+  // (the same tolerance), treated as sticking too.
+  int n_rolling_limit = 0;
+  bool direction_dependent() const { return n_coulomb_limit > 0 || n_rolling_limit > 0; }
 
   // d_sigma (Pa) and d_F for a strain increment (compression positive).
   Eigen::Matrix3d stress_increment(const Eigen::Matrix3d& d_eps) const {
@@ -138,15 +141,20 @@ LinearResponse linear_response(const PackingData& packing, const LinearResponseO
 struct LinearFriction {
   double k_t = 0.0;  // tangential stiffness, kg/s^2
   double mu = 0.0;   // Coulomb coefficient (> 0)
-  // The engine's rolling friction coefficient: must be 0, the Jacobian has no rolling springs.
+  // Rolling resistance (docs/physics.md; off at mu_r = 0): the rolling spring's stiffness k_r
+  // and limit mu_r f_n, and the rolling springs (pair i < j; the same for either order).
+  double k_r = 0.0;
   double mu_r = 0.0;
-  // A contact with |f_t| >= (1 - coulomb_tolerance) mu f_n is at the Coulomb limit.
+  // A contact with |f_t| >= (1 - coulomb_tolerance) mu f_n is at the Coulomb limit (and one
+  // with |f_r| >= (1 - coulomb_tolerance) mu_r f_n at its rolling limit).
   double coulomb_tolerance = 1e-3;
   struct Spring {
     int i = 0, j = 0;
     Eigen::Vector3d xi = Eigen::Vector3d::Zero();
   };
   std::vector<Spring> springs;
+  std::vector<Spring> rolling_springs;
+  bool rolling() const { return mu_r > 0; }
   bool IsValid(std::string* why) const;
 };
 // The linear response of a frictional packing at rest (options.min_contacts is the caller's:
