@@ -84,31 +84,43 @@ std::vector<PairGeometry> find_pairs(const PackingData& packing, double skin) {
     std::vector<int> fill(start.begin(), start.end() - 1);
     for (int p = 0; p < n; ++p) members[fill[bin_of[p]]++] = p;
   }
-  // Neighbouring bins, without repeats (fewer than 3 bins along an axis would otherwise visit
-  // a bin twice and count its pairs twice).
-  auto neighbours = [&](int b0, int a) {
-    std::vector<int> out;
-    for (int d = -1; d <= 1; ++d) {
-      const int v = ((b0 + d) % bins[a] + bins[a]) % bins[a];
-      if (std::find(out.begin(), out.end(), v) == out.end()) out.push_back(v);
-    }
-    return out;
-  };
+  // Neighbouring bins of each bin along each axis, without repeats (fewer than 3 bins along an
+  // axis would otherwise visit a bin twice and count its pairs twice); made once, not per
+  // particle (the FIRE probes rebuild their pairs often).
+  std::array<std::vector<std::vector<int>>, 3> neighbours;
+  for (int a = 0; a < 3; ++a) {
+    neighbours[a].resize(bins[a]);
+    for (int b0 = 0; b0 < bins[a]; ++b0)
+      for (int d = -1; d <= 1; ++d) {
+        const int v = ((b0 + d) % bins[a] + bins[a]) % bins[a];
+        auto& out = neighbours[a][b0];
+        if (std::find(out.begin(), out.end(), v) == out.end()) out.push_back(v);
+      }
+  }
+  const bool orthorhombic = packing.cell.is_orthorhombic();
+  const Eigen::Vector3d h_diagonal = h.diagonal(), h_inv_diagonal = h_inv.diagonal();
   for (int p = 0; p < n; ++p) {
     const int b = bin_of[p];
     const int bx = b / (bins[1] * bins[2]), by = (b / bins[2]) % bins[1], bz = b % bins[2];
     const Eigen::Vector3d xp = packing.positions.row(p).transpose();
-    for (int nx : neighbours(bx, 0)) {
-      for (int ny : neighbours(by, 1)) {
-        for (int nz : neighbours(bz, 2)) {
+    const double rp = packing.radii(p);
+    for (int nx : neighbours[0][bx]) {
+      for (int ny : neighbours[1][by]) {
+        for (int nz : neighbours[2][bz]) {
           const int nb = (nx * bins[1] + ny) * bins[2] + nz;
           for (int m = start[nb]; m < start[nb + 1]; ++m) {
             const int q = members[m];
             if (q <= p) continue;
+            const Eigen::Vector3d dx = xp - packing.positions.row(q).transpose();
             const Eigen::Vector3d l =
-                minimum_image(packing.cell, h_inv, xp - packing.positions.row(q).transpose());
+                orthorhombic ? minimum_image_orthorhombic(h_diagonal, h_inv_diagonal, dx)
+                             : minimum_image(packing.cell, h_inv, dx);
+            // Most candidates are far apart: skip them on |l|^2 with a margin that can only
+            // keep a pair the exact test below then decides (so the set is the same).
+            const double reach = rp + packing.radii(q) + skin;
+            if (l.squaredNorm() > reach * reach * (1.0 + 1e-9)) continue;
             const double r = l.norm();
-            const double overlap = packing.radii(p) + packing.radii(q) - r;
+            const double overlap = rp + packing.radii(q) - r;
             if (overlap > -skin) pairs.push_back({p, q, l, r, overlap});
           }
         }

@@ -44,6 +44,18 @@ inline Eigen::Vector3d minimum_image(const PeriodicCell& cell, const Eigen::Matr
   return cell.h * s;
 }
 
+// minimum_image() in an orthorhombic cell (h and h_inverse diagonal, passed as their
+// diagonals): the same numbers (the off-diagonal products are exact zeros), a third of the
+// arithmetic. The probe tools' hot loops (find_pairs, the FIRE forces) take it when
+// PeriodicCell::is_orthorhombic(): every probe strain is principal.
+inline Eigen::Vector3d minimum_image_orthorhombic(const Eigen::Vector3d& h_diagonal,
+                                                  const Eigen::Vector3d& h_inverse_diagonal,
+                                                  const Eigen::Vector3d& separation) {
+  Eigen::Vector3d s = h_inverse_diagonal.cwiseProduct(separation);
+  s -= s.unaryExpr([](double v) { return std::nearbyint(v); }).eval();
+  return h_diagonal.cwiseProduct(s);
+}
+
 // How one axis of the cell moves.
 struct AxisControl {
   enum class Mode { kStrainRate, kStress };
