@@ -445,11 +445,12 @@ struct FrictionLanes {
   static constexpr std::size_t kLanes = 64;
   // Input records of an entry (x, y, z, fourth lane): the branch vector l (|l|^2), the relative
   // velocity at the step's end (r_i) and at mid-step (r_j), both with the affine part D l; the
-  // angular velocities of i and j, predicted (we) and mid-step (wm); the stored spring xi (and
-  // the rolling one). Whole records rather than one array per component: pass (1) writes a
-  // record with one vector store instead of three scalar ones (each after an extraction from
-  // the vector), and the transposition in pass (2) is ~3 instructions per record.
-  enum In { kL, kVe, kVm, kWei, kWej, kWmi, kWmj, kXi, kIn, kXr = kIn, kRollingIn };
+  // stored spring xi (and the rolling one). The angular velocities pass (2) reads from rot16_
+  // itself (the records of row and partner, still in the cache). Whole records rather than
+  // one array per component: pass (1) writes a record with one vector store instead of three
+  // scalar ones (each after an extraction from the vector), and the transposition in pass (2)
+  // is ~3 instructions per record.
+  enum In { kL, kVe, kVm, kXi, kIn, kXr = kIn, kRollingIn };
   // Outputs: the pair force f on i (a_i), n x f_t, the torques' direction (a_j), the spring
   // (the slip work); the rolling spring and the rolling torque on i.
   enum Out { kF, kNxf, kXiWork, kOut, kXrOut = kOut, kQ, kRollingOut };
@@ -536,9 +537,9 @@ struct LaneMath {
 // v_r = -a' n x (w_i - w_j), a' = a_i a_j / (a_i + a_j), goes through the tangential law with
 // the rolling constants; its force f_r is no force but the torque a' n x f_r on i (-that on j).
 template <bool kRolling>
-void friction_law(FrictionLanes<kRolling>& c, std::size_t count, const NormalContact& law,
-                  const TangentialContact& tangential, const TangentialContact& rolling,
-                  double dt) {
+void friction_law(FrictionLanes<kRolling>& c, std::size_t count, const double* Q,
+                  const NormalContact& law, const TangentialContact& tangential,
+                  const TangentialContact& rolling, double dt) {
   using F = FrictionLanes<kRolling>;
   using A3 = std::array<V4, 3>;
   for (std::size_t k = 0; k < count; k += 4) {
@@ -572,7 +573,14 @@ void friction_law(FrictionLanes<kRolling>& c, std::size_t count, const NormalCon
       for (int a = 0; a < 3; ++a) p[a] -= pn * n[a];
       return p;
     };
-    const A3 wei = in3(F::kWei), wej = in3(F::kWej), wmi = in3(F::kWmi), wmj = in3(F::kWmj);
+    // Angular velocities from rot16_: at +4 mid-step, at +8 predicted.
+    auto rot = [&](const std::int32_t* who, int at) {
+      const auto t = components(Q + 16 * who[k] + at, Q + 16 * who[k + 1] + at,
+                                Q + 16 * who[k + 2] + at, Q + 16 * who[k + 3] + at);
+      return A3{t[0], t[1], t[2]};
+    };
+    const A3 wei = rot(c.row, 8), wej = rot(c.partner, 8), wmi = rot(c.row, 4),
+             wmj = rot(c.partner, 4);
     const A3 c_end = contact_point(ve, wei, wej);
     const A3 c_mid = contact_point(A3{vm_rj[0], vm_rj[1], vm_rj[2]}, wmi, wmj);
     // The spring turned with the contact: back into the tangent plane, its length kept.
@@ -660,7 +668,7 @@ void DemSystem::force_block_friction(std::size_t b) {
     fi = ti = si = V4{};
   };
   auto run_chunk = [&] {
-    friction_law<kRolling>(lanes, count, law, tangential, rolling, dt);
+    friction_law<kRolling>(lanes, count, Q, law, tangential, rolling, dt);
     for (std::size_t k = 0; k < count; ++k) {
       const std::size_t i = static_cast<std::size_t>(lanes.row[k]);
       if (i != row) {
@@ -710,7 +718,7 @@ void DemSystem::force_block_friction(std::size_t b) {
   const std::int64_t last_entry = off[hi] - 1;
   for (std::size_t i = lo; i < hi; ++i) {
     const V4 pi = load4(P + 4 * i), vi = load4(W + 8 * i);
-    const V4 vmi = load4(Q + 16 * i), wmi = load4(Q + 16 * i + 4), wei = load4(Q + 16 * i + 8);
+    const V4 vmi = load4(Q + 16 * i);
     const double ri = P[4 * i + 3];
     const std::int64_t end = off[i + 1];
     for (std::int64_t e = off[i]; e < end; ++e) {
@@ -733,10 +741,6 @@ void DemSystem::force_block_friction(std::size_t b) {
       store4(rec[F::kL], V4{l[0], l[1], l[2], r2});
       store4(rec[F::kVe], V4{ve[0], ve[1], ve[2], ri});
       store4(rec[F::kVm], V4{vm[0], vm[1], vm[2], rj});
-      store4(rec[F::kWei], wei);
-      store4(rec[F::kWej], load4(qj + 8));
-      store4(rec[F::kWmi], wmi);
-      store4(rec[F::kWmj], load4(qj + 4));
       store4(rec[F::kXi], V4{xi[0], xi[1], xi[2], 0.0});
       std::uint64_t bits[3];
       std::memcpy(bits, xi, sizeof bits);
