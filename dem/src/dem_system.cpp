@@ -706,9 +706,9 @@ void DemSystem::force_block_friction(std::size_t b) {
     }
     count = 0;
   };
-  // Pass (1). It waits on memory: a touching partner is four cache lines (position, velocity
-  // with accumulator, rot16_), not two as in the frictionless loop, so the records of the entry
-  // kAhead places on are requested while this one is handled. Every entry's records are
+  // Pass (1). A touching partner is four cache lines (position, velocity with accumulator,
+  // rot16_), not two as in the frictionless loop, so the records of the entry kAhead places
+  // on are requested while this one is handled. Every entry's records are
   // written to the next free place and only a touching one advances it: no branch on the
   // touching test, which a loop over 2.6 touching entries of 4.4 (nu = 0.64) would mispredict
   // at every third entry; the partner's records are fetched for the prefetch anyway.
