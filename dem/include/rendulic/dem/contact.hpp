@@ -59,6 +59,12 @@ struct ScalarMath {
   static double sqrt(double x) { return std::sqrt(x); }
   static double abs(double x) { return std::abs(x); }
   static double select(bool c, double a, double b) { return c ? a : b; }
+  // a where c holds, else rare(x, y) (a scalar function): for a value that is costly and
+  // rarely needed, which the engine's lanes then compute for the lanes that need it alone.
+  template <class F>
+  static double unless(bool c, double a, F rare, double x, double y) {
+    return c ? a : rare(x, y);
+  }
 };
 
 // With the engine's four-lane arithmetic the law passes 32-byte vectors between functions
@@ -85,10 +91,14 @@ struct TangentialContact {
     // The projection shortened xi by the factor sqrt(1 - e), e = xn^2 / |xi|^2 (the contact's
     // turn per step, squared: tiny). The inverse, (1 - e)^(-1/2) = 1 + e/2 + 3e^2/8 + ..., to
     // round-off for e < 1e-5 (the next term is below 1e-15), saves a square root.
+    // Beyond, the exact factor (a division and a square root) for the few contacts that
+    // need it alone (M::unless).
     const auto e = M::select(len2 > 0.0, xn * xn / len2, 0.0);
     const auto p2 = xi[0] * xi[0] + xi[1] * xi[1] + xi[2] * xi[2];
-    const auto exact = M::select(p2 > 0.0, M::sqrt(len2 / p2), 1.0);
-    const auto s = M::select(e < 1e-5, 1.0 + e * (0.5 + 0.375 * e), exact);
+    const auto s = M::unless(
+        e < 1e-5, 1.0 + e * (0.5 + 0.375 * e),
+        [](double len2_, double p2_) { return p2_ > 0.0 ? std::sqrt(len2_ / p2_) : 1.0; }, len2,
+        p2);
     for (int a = 0; a < 3; ++a) xi[a] *= s;
   }
   // Advances xi by v_mid dt and sets f to the tangential force on i, f_t = -k_t xi - gamma_t

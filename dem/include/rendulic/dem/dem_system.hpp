@@ -171,7 +171,8 @@ class DemSystem {
   // the path without it is the same code as before rolling existed.
   template <bool kStress, bool kRolling>
   void force_block_friction(std::size_t b);
-  // Copies the rows' mid-step velocities and angular velocities into rot16_ (friction).
+  // Copies the rows' mid-step velocities and angular velocities into rot16_ and clears their
+  // force and torque accumulators (friction: force_block_friction adds to them).
   void pack_rotations(std::size_t lo, std::size_t hi, double half_kick);
   // Before a rebuild: the history of the pairs in contact, keyed by pair, to carry over.
   void carry_history(const std::vector<std::int64_t>& old_offset,
