@@ -948,22 +948,76 @@ def figure_list(f, out, ctx):
 def draw_all(path, out, keep=False, jobs=1):
     """Draws every figure of results file `path` into folder `out`. Returns (files written,
     notes on skipped figures, {name: Figure} when keep, else {}): keep leaves the figures open
-    for a caller that inspects them. jobs > 1 draws the figures in that many forked processes
-    (each figure is independent; the lists come back in figure order either way)."""
+    for a caller that inspects them. jobs > 1 draws the figures in that many processes (each
+    figure is independent; the lists come back in figure order either way)."""
     os.makedirs(out, exist_ok=True)
     if keep or jobs <= 1:
         return draw_figures(path, out, None, keep)
     with h5py.File(path, "r") as f:
         count = len(figure_list(f, out, {}))
-    import multiprocessing
+    return draw_forked(path, out, count, min(jobs, count))
+
+
+def draw_forked(path, out, count, jobs):
+    """draw_all's figures in `jobs` processes: this one draws figures 0, jobs, 2 jobs, ... and
+    each forked child k draws k, k + jobs, ... and sends its lists back through a pipe. Stopped
+    (rendulic sends SIGTERM when it is stopped itself), this process kills and reaps its
+    children before it exits, and a child dies with this process in any case: none draws on."""
+    import json
     import signal
-    # Stopped (rendulic sends SIGTERM when it is stopped itself), leave through the `with`,
-    # whose exit terminates the workers: none draws on after us.
-    signal.signal(signal.SIGTERM, lambda *_: sys.exit(128 + signal.SIGTERM))
-    with multiprocessing.get_context("fork").Pool(min(jobs, count)) as pool:
-        parts = pool.starmap(draw_figures, [(path, out, [i], False) for i in range(count)],
-                             chunksize=1)
-    return [w for p in parts for w in p[0]], [n for p in parts for n in p[1]], {}
+
+    children = []  # (pid, read end of its pipe, k)
+
+    def stop(*_):
+        for pid, _, _ in children:
+            try:
+                os.kill(pid, signal.SIGKILL)
+                os.waitpid(pid, 0)
+            except OSError:
+                pass
+        os._exit(128 + signal.SIGTERM)
+
+    def share(k):
+        return [(i, *draw_figures(path, out, [i], False)[:2]) for i in range(k, count, jobs)]
+
+    previous = signal.signal(signal.SIGTERM, stop)
+    for k in range(1, jobs):
+        r, w = os.pipe()
+        pid = os.fork()
+        if pid == 0:
+            signal.signal(signal.SIGTERM, signal.SIG_DFL)
+            try:  # PR_SET_PDEATHSIG: killed with this process, whatever kills it
+                import ctypes
+                ctypes.CDLL(None).prctl(1, int(signal.SIGKILL))
+            except (OSError, AttributeError):
+                pass
+            os.close(r)
+            try:
+                data = json.dumps({"figures": share(k)})
+            except BaseException as e:  # noqa: BLE001  reported by the parent in one line
+                data = json.dumps({"error": f"{type(e).__name__}: {e}"})
+            with os.fdopen(w, "w") as f:
+                f.write(data)
+            os._exit(0)
+        os.close(w)
+        children.append((pid, r, k))
+    figures = share(0)
+    errors = []
+    for pid, r, k in children:
+        with os.fdopen(r, "r") as f:
+            data = f.read()
+        os.waitpid(pid, 0)
+        got = json.loads(data) if data else {"error": f"drawing process {k} ended without a word"}
+        if "error" in got:
+            errors.append(got["error"])
+        else:
+            figures += [tuple(x) for x in got["figures"]]
+    children.clear()
+    signal.signal(signal.SIGTERM, previous)
+    if errors:
+        raise RuntimeError(errors[0])
+    figures.sort(key=lambda x: x[0])
+    return [w for _, ws, _ in figures for w in ws], [n for _, _, ns in figures for n in ns], {}
 
 
 def draw_figures(path, out, which, keep):
