@@ -981,8 +981,13 @@ def draw_forked(path, out, count, jobs):
         return [(i, *draw_figures(path, out, [i], False)[:2]) for i in range(k, count, jobs)]
 
     previous = signal.signal(signal.SIGTERM, stop)
+    parent = os.getpid()
     for k in range(1, jobs):
         r, w = os.pipe()
+        # A stop between the fork and the child's entry in `children` would leave that child
+        # to draw on: the signal waits until the entry is made (and the child, until it will die
+        # with this process).
+        signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGTERM})
         pid = os.fork()
         if pid == 0:
             signal.signal(signal.SIGTERM, signal.SIG_DFL)
@@ -991,6 +996,9 @@ def draw_forked(path, out, count, jobs):
                 ctypes.CDLL(None).prctl(1, int(signal.SIGKILL))
             except (OSError, AttributeError):
                 pass
+            if os.getppid() != parent:  # it died before the line above took effect
+                os._exit(1)
+            signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGTERM})
             os.close(r)
             try:
                 data = json.dumps({"figures": share(k)})
@@ -1001,6 +1009,7 @@ def draw_forked(path, out, count, jobs):
             os._exit(0)
         os.close(w)
         children.append((pid, r, k))
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGTERM})
     figures = share(0)
     errors = []
     for pid, r, k in children:
