@@ -982,13 +982,24 @@ def draw_forked(path, out, count, jobs):
 
     previous = signal.signal(signal.SIGTERM, stop)
     parent = os.getpid()
+    mine = [0]  # the shares this process draws: its own, and any a fork could not take
     for k in range(1, jobs):
-        r, w = os.pipe()
         # A stop between the fork and the child's entry in `children` would leave that child
         # to draw on: the signal waits until the entry is made (and the child, until it will die
         # with this process).
         signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGTERM})
-        pid = os.fork()
+        try:
+            r, w = os.pipe()
+            try:
+                pid = os.fork()
+            except OSError:
+                os.close(r)
+                os.close(w)
+                raise
+        except OSError:  # no process (or pipe) to spare: this one draws that share too
+            signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGTERM})
+            mine.append(k)
+            continue
         if pid == 0:
             signal.signal(signal.SIGTERM, signal.SIG_DFL)
             try:  # PR_SET_PDEATHSIG: killed with this process, whatever kills it
@@ -1010,7 +1021,7 @@ def draw_forked(path, out, count, jobs):
         os.close(w)
         children.append((pid, r, k))
         signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGTERM})
-    figures = share(0)
+    figures = [x for k in mine for x in share(k)]
     errors = []
     for pid, r, k in children:
         with os.fdopen(r, "r") as f:

@@ -339,28 +339,43 @@ TEST(Plot, TwoProcessesDrawTheSameFiguresAsOne) {
   if (python().empty()) GTEST_SKIP() << "no python3 with matplotlib and h5py";
   const fs::path f = rendulic::app::testing::seed_like("plot_jobs", false);
   const fs::path dir = rendulic::testing::fresh_dir("app_plot_system/jobs");
-  std::string listed[2];
-  for (int jobs : {1, 2}) {
+  // One process, two, and two asked for where no process can be forked (the script then draws
+  // every share itself).
+  const std::string variants[3] = {"1", "2", "2-nofork"};
+  std::string listed[3];
+  for (int v = 0; v < 3; ++v) {
+    const fs::path out = dir / variants[v];
+    const std::string args = f.string() + " " + out.string();
+    const std::string command =
+        v < 2 ? python() + " " + kScript.string() + " " + args
+              : python() +
+                    " -c 'import os, runpy, sys\n"
+                    "def no(): raise OSError(11, \"Resource temporarily unavailable\")\n"
+                    "os.fork = no\n"
+                    "sys.argv = sys.argv[1:]\n"
+                    "runpy.run_path(sys.argv[0], run_name=\"__main__\")' " +
+                    kScript.string() + " " + args;
     const CliResult r = rendulic::testing::run_command(
-        "RENDULIC_PLOT_JOBS=" + std::to_string(jobs) + " " + python() + " " + kScript.string() +
-        " " + f.string() + " " + (dir / std::to_string(jobs)).string() + " 2>/dev/null");
-    ASSERT_EQ(r.code, 0) << r.out;
-    listed[jobs - 1] = r.out;
+        "RENDULIC_PLOT_JOBS=" + variants[v].substr(0, 1) + " " + command + " 2>/dev/null");
+    ASSERT_EQ(r.code, 0) << variants[v] << ": " << r.out;
+    listed[v] = r.out;
     // Paths differ only by the folder name.
-    for (std::size_t at;
-         (at = listed[jobs - 1].find((dir / std::to_string(jobs)).string())) != std::string::npos;)
-      listed[jobs - 1].replace(at, (dir / std::to_string(jobs)).string().size(), "DIR");
+    for (std::size_t at; (at = listed[v].find(out.string())) != std::string::npos;)
+      listed[v].replace(at, out.string().size(), "DIR");
   }
   EXPECT_EQ(listed[0], listed[1]);
+  EXPECT_EQ(listed[0], listed[2]);
   int compared = 0;
   for (const auto& e : fs::directory_iterator(dir / "1")) {
     if (e.path().extension() != ".png") continue;
-    const fs::path other = dir / "2" / e.path().filename();
-    ASSERT_TRUE(fs::exists(other)) << other;
-    std::ifstream a(e.path(), std::ios::binary), b(other, std::ios::binary);
-    const std::string da((std::istreambuf_iterator<char>(a)), {}),
-        db((std::istreambuf_iterator<char>(b)), {});
-    EXPECT_EQ(da, db) << e.path().filename();
+    for (const char* v : {"2", "2-nofork"}) {
+      const fs::path other = dir / v / e.path().filename();
+      ASSERT_TRUE(fs::exists(other)) << other;
+      std::ifstream a(e.path(), std::ios::binary), b(other, std::ios::binary);
+      const std::string da((std::istreambuf_iterator<char>(a)), {}),
+          db((std::istreambuf_iterator<char>(b)), {});
+      EXPECT_EQ(da, db) << v << " " << e.path().filename();
+    }
     ++compared;
   }
   EXPECT_GE(compared, 7);
