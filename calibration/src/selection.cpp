@@ -175,8 +175,19 @@ std::string explain(const std::vector<SelectionRow>& rows, const std::vector<boo
                     const std::vector<bool>& describe = {}) {
   auto score = [&](int i) -> const SetScore& { return stress ? rows[i].stress : rows[i].all; };
   const SetScore& s = score(sel);
+  // The other laws by rising BIC (then name): the sentence reads the same whatever order the
+  // laws were fitted in (a run's, or `rendulic calibrate --model` in the user's order).
+  std::vector<std::size_t> order(rows.size());
+  for (std::size_t i = 0; i < rows.size(); ++i) order[i] = i;
+  auto bic = [&](std::size_t i) {  // an unscored law last, keeping the order strict
+    const double b = score(static_cast<int>(i)).bic;
+    return std::isfinite(b) ? b : std::numeric_limits<double>::infinity();
+  };
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    return bic(a) != bic(b) ? bic(a) < bic(b) : rows[a].model < rows[b].model;
+  });
   std::vector<std::string> parts;
-  for (std::size_t i = 0; i < rows.size(); ++i) {
+  for (const std::size_t i : order) {
     if (static_cast<int>(i) == sel || !candidate[i]) continue;
     if (!describe.empty() && !describe[i]) continue;
     const SetScore& m = score(static_cast<int>(i));
@@ -211,8 +222,9 @@ std::string explain(const std::vector<SelectionRow>& rows, const std::vector<boo
   }
   // Pairs of other laws where the richer adds nothing over the simpler (e.g. the anisotropy
   // term of the elastic laws when an elasto-plastic law is selected).
-  for (std::size_t a = 0; a < rows.size() && describe.empty(); ++a)
-    for (std::size_t b = 0; b < rows.size(); ++b) {
+  for (const std::size_t a : order)
+    for (const std::size_t b : order) {
+      if (!describe.empty()) break;
       if (a == b || !candidate[a] || !candidate[b] || static_cast<int>(a) == sel ||
           static_cast<int>(b) == sel || rows[b].n_free <= rows[a].n_free)
         continue;

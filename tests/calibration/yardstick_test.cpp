@@ -168,6 +168,28 @@ TEST(Yardstick, SelectionRule) {
   EXPECT_EQ(s.sentence.find("Read with care"), std::string::npos) << s.sentence;
 }
 
+// The sentence names the other laws by rising BIC, whatever order they were fitted in (a run
+// fits the scenario's laws in one order, `rendulic calibrate --model` in the user's).
+TEST(Yardstick, TheSentenceDoesNotDependOnTheOrderOfTheLaws) {
+  const ModelScore a = fake("simple", 3, 0.02, 0.02), b = fake("middle", 5, 0.0199, 0.02),
+                   c = fake("rich", 8, 0.0198, 0.02);
+  const Selection one = select_model({a, b, c}), other = select_model({c, a, b});
+  EXPECT_EQ(one.selected, "simple");
+  EXPECT_EQ(other.selected, "simple");
+  EXPECT_EQ(one.sentence, other.sentence);
+  // The others by rising BIC: middle (fewer parameters, nearly the same fit) before rich.
+  double bic_middle = 0, bic_rich = 0;
+  for (const auto& r : one.rows) {
+    if (r.model == "middle") bic_middle = r.all.bic;
+    if (r.model == "rich") bic_rich = r.all.bic;
+  }
+  ASSERT_LT(bic_middle, bic_rich);
+  const auto m = one.sentence.find("middle ("), r = one.sentence.find("rich (");
+  ASSERT_NE(m, std::string::npos) << one.sentence;
+  ASSERT_NE(r, std::string::npos) << one.sentence;
+  EXPECT_LT(m, r) << one.sentence;
+}
+
 // A law selected by BIC although it misses a block (misfit >= 1: no better than predicting no
 // change) is flagged, naming the block and the best other law there.
 TEST(Yardstick, ASelectedLawThatMissesABlockIsFlagged) {
