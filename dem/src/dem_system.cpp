@@ -521,9 +521,11 @@ struct LaneMath {
     return c ? lanes(a) : lanes(b);
   }
   // The rare value lane by lane, only for the lanes where c fails (ScalarMath::unless): one
-  // branch per four contacts, almost never taken, instead of the value for all four.
-  template <class Mask, class F>
-  static V4 unless(Mask c, V4 a, F rare, V4 x, V4 y) {
+  // branch per four contacts, almost never taken, instead of the value for all four (a: lanes,
+  // or one value for all).
+  template <class Mask, class A, class F>
+  static V4 unless(Mask c, A a_, F rare, V4 x, V4 y) {
+    V4 a = lanes(a_);
     if ((c[0] & c[1] & c[2] & c[3]) == 0) [[unlikely]]
       for (int q = 0; q < 4; ++q)
         if (!c[q]) a[q] = rare(x[q], y[q]);

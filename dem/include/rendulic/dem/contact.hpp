@@ -120,7 +120,11 @@ struct TangentialContact {
     // slip work). The reset spring is multiplied by 1 / k_t, not divided by k_t: three
     // divisions fewer per contact, a change in the last bit.
     const auto slides = f2 > limit * limit;
-    const auto s = M::select(slides, limit / M::sqrt(f2), 1.0);
+    // A division and a square root only where the contact slides (M::unless, as in turn()):
+    // in the engine's lanes most contacts stick (docs/performance.md "Friction").
+    const auto s = M::unless(
+        f2 <= limit * limit, 1.0, [](double limit_, double f2_) { return limit_ / std::sqrt(f2_); },
+        limit, f2);
     const double inv_k_t = 1.0 / k_t;
     S slip_work{};
     for (int a = 0; a < 3; ++a) {
