@@ -520,16 +520,17 @@ struct LaneMath {
   static V4 select(Mask c, A a, B b) {
     return c ? lanes(a) : lanes(b);
   }
-  // The rare value lane by lane, only for the lanes where c fails (ScalarMath::unless): one
-  // branch per four contacts, almost never taken, instead of the value for all four (a: lanes,
-  // or one value for all).
+  // The rare value only if some lane needs it (ScalarMath::unless): one branch per four
+  // contacts, rarely taken, instead of the value for all four every time; then for the four
+  // lanes at once (a: lanes, or one value for all). Lane by lane instead (a branch per lane,
+  // scalar divisions and square roots in series), the frictional step was 2 % slower; in
+  // the benchmark's states one quadruple in nine has a sliding lane (docs/performance.md
+  // "Friction").
   template <class Mask, class A, class F>
-  static V4 unless(Mask c, A a_, F rare, V4 x, V4 y) {
-    V4 a = lanes(a_);
+  static V4 unless(Mask c, A a, F rare, V4 x, V4 y) {
     if ((c[0] & c[1] & c[2] & c[3]) == 0) [[unlikely]]
-      for (int q = 0; q < 4; ++q)
-        if (!c[q]) a[q] = rare(x[q], y[q]);
-    return a;
+      return select(c, a, rare(x, y));
+    return lanes(a);
   }
 };
 
