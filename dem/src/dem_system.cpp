@@ -520,14 +520,17 @@ struct LaneMath {
   static V4 select(Mask c, A a, B b) {
     return c ? lanes(a) : lanes(b);
   }
-  // The rare value lane by lane, only for the lanes where c fails (ScalarMath::unless): one
-  // branch per four contacts, almost never taken, instead of the value for all four.
-  template <class Mask, class F>
-  static V4 unless(Mask c, V4 a, F rare, V4 x, V4 y) {
+  // The rare value only if some lane needs it (ScalarMath::unless): one branch per four
+  // contacts, rarely taken, instead of the value for all four every time; then for the four
+  // lanes at once (a: lanes, or one value for all). Lane by lane instead (a branch per lane,
+  // scalar divisions and square roots in series), the frictional step was 2 % slower; in
+  // the benchmark's states one quadruple in nine has a sliding lane (docs/performance.md
+  // "Friction").
+  template <class Mask, class A, class F>
+  static V4 unless(Mask c, A a, F rare, V4 x, V4 y) {
     if ((c[0] & c[1] & c[2] & c[3]) == 0) [[unlikely]]
-      for (int q = 0; q < 4; ++q)
-        if (!c[q]) a[q] = rare(x[q], y[q]);
-    return a;
+      return select(c, a, rare(x, y));
+    return lanes(a);
   }
 };
 
@@ -767,24 +770,38 @@ void DemSystem::force_block_friction(std::size_t b) {
   if (advance) block_dissipation_[b] = dissipated;
 }
 
-void DemSystem::pack_rotations(std::size_t lo, std::size_t hi, double half_kick) {
+void DemSystem::pack_rotations(std::size_t lo, std::size_t hi, double half_kick,
+                               bool opening_kick) {
   // Mid-step velocities, and angular ones: mid-step, then predicted at the step's end as the
-  // translational ones are (w + dt/2 tau / I). The torque accumulator, in the same cache line
-  // as the predicted angular velocity, and the force accumulator, beside the velocity the
-  // kick has just written, are cleared here for force_block_friction: there, as a pass of
-  // their own, the two stores per row cost 7 % of the step (each line fetched again).
+  // translational ones are (w + dt/2 tau / I). With opening_kick, the rotations' opening half
+  // kick first, in the same pass: as a pass of its own it read w, tau and 1 / I once more. The
+  // torque accumulator, in the same cache line as the predicted angular velocity, and the
+  // force accumulator, beside the velocity the kick has just written, are cleared here for
+  // force_block_friction: there, as a pass of their own, the two stores per row cost 7 % of
+  // the step (each line fetched again).
   double* __restrict Q = rot16_.data();
   double* __restrict A = va8_.data() + 4;
+  double* __restrict wx = p_.wx.data();
+  double* __restrict wy = p_.wy.data();
+  double* __restrict wz = p_.wz.data();
+  const double* __restrict tx = p_.tx.data();
+  const double* __restrict ty = p_.ty.data();
+  const double* __restrict tz = p_.tz.data();
   for (std::size_t i = lo; i < hi; ++i) {
     const double hi_ = half_kick * inv_inertia_[i];
+    if (opening_kick) {
+      wx[i] += hi_ * tx[i];
+      wy[i] += hi_ * ty[i];
+      wz[i] += hi_ * tz[i];
+    }
     double* q = Q + 16 * i;
     store4(A + 8 * i, V4{});
     store4(q + 12, V4{});
     q[0] = p_.vx[i], q[1] = p_.vy[i], q[2] = p_.vz[i];
-    q[4] = p_.wx[i], q[5] = p_.wy[i], q[6] = p_.wz[i];
-    q[8] = p_.wx[i] + hi_ * p_.tx[i];
-    q[9] = p_.wy[i] + hi_ * p_.ty[i];
-    q[10] = p_.wz[i] + hi_ * p_.tz[i];
+    q[4] = wx[i], q[5] = wy[i], q[6] = wz[i];
+    q[8] = wx[i] + hi_ * tx[i];
+    q[9] = wy[i] + hi_ * ty[i];
+    q[10] = wz[i] + hi_ * tz[i];
   }
 }
 
@@ -892,7 +909,7 @@ void DemSystem::refresh_forces() {
   }
   if (friction_) {
     if (blocks_builds_ != list_.builds()) make_blocks();
-    pack_rotations(0, n, 0.0);
+    pack_rotations(0, n, 0.0, false);
   }
   advancing_ = false;  // the forces of the current state: the history stays
   compute_forces<true>(0.0, 1);
@@ -980,15 +997,8 @@ void DemSystem::step_impl(const Eigen::Vector3d& D) {
       const double ux = xi - rx * a[0], uy = yi - ry * a[1], uz = zi - rz * a[2];
       keep_two_largest(std::sqrt(ux * ux + uy * uy + uz * uz) - s_min * a[3], e1, e2);
     }
-    if (friction_) {  // the rotations' half kick, then the rows' records for the force loop
-      for (std::size_t i = lo; i < hi; ++i) {
-        const double hi_ = h * inv_inertia_[i];
-        p_.wx[i] += hi_ * p_.tx[i];
-        p_.wy[i] += hi_ * p_.ty[i];
-        p_.wz[i] += hi_ * p_.tz[i];
-      }
-      pack_rotations(lo, hi, h);
-    }
+    // The rotations' half kick, then the rows' records for the force loop.
+    if (friction_) pack_rotations(lo, hi, h, true);
     tops_[t] = {e1, e2};
     if (T > 1) {
 #pragma omp barrier

@@ -59,8 +59,8 @@ struct ScalarMath {
   static double sqrt(double x) { return std::sqrt(x); }
   static double abs(double x) { return std::abs(x); }
   static double select(bool c, double a, double b) { return c ? a : b; }
-  // a where c holds, else rare(x, y) (a scalar function): for a value that is costly and
-  // rarely needed, which the engine's lanes then compute for the lanes that need it alone.
+  // a where c holds, else rare(x, y) (a function of M's values): for a value that is costly
+  // and rarely needed, which the engine's lanes then compute only when a lane needs it.
   template <class F>
   static double unless(bool c, double a, F rare, double x, double y) {
     return c ? a : rare(x, y);
@@ -97,7 +97,7 @@ struct TangentialContact {
     const auto p2 = xi[0] * xi[0] + xi[1] * xi[1] + xi[2] * xi[2];
     const auto s = M::unless(
         e < 1e-5, 1.0 + e * (0.5 + 0.375 * e),
-        [](double len2_, double p2_) { return p2_ > 0.0 ? std::sqrt(len2_ / p2_) : 1.0; }, len2,
+        [](auto len2_, auto p2_) { return M::select(p2_ > 0.0, M::sqrt(len2_ / p2_), 1.0); }, len2,
         p2);
     for (int a = 0; a < 3; ++a) xi[a] *= s;
   }
@@ -120,7 +120,11 @@ struct TangentialContact {
     // slip work). The reset spring is multiplied by 1 / k_t, not divided by k_t: three
     // divisions fewer per contact, a change in the last bit.
     const auto slides = f2 > limit * limit;
-    const auto s = M::select(slides, limit / M::sqrt(f2), 1.0);
+    // A division and a square root only where the contact slides (M::unless, as in turn()):
+    // in the engine's lanes most contacts stick (docs/performance.md "Friction").
+    const auto s = M::unless(
+        f2 <= limit * limit, 1.0, [](auto limit_, auto f2_) { return limit_ / M::sqrt(f2_); },
+        limit, f2);
     const double inv_k_t = 1.0 / k_t;
     S slip_work{};
     for (int a = 0; a < 3; ++a) {

@@ -172,8 +172,9 @@ class DemSystem {
   template <bool kStress, bool kRolling>
   void force_block_friction(std::size_t b);
   // Copies the rows' mid-step velocities and angular velocities into rot16_ and clears their
-  // force and torque accumulators (friction: force_block_friction adds to them).
-  void pack_rotations(std::size_t lo, std::size_t hi, double half_kick);
+  // force and torque accumulators (friction: force_block_friction adds to them); with
+  // opening_kick, first the rotations' opening half kick (half_kick = dt / 2).
+  void pack_rotations(std::size_t lo, std::size_t hi, double half_kick, bool opening_kick);
   // Before a rebuild: the history of the pairs in contact, keyed by pair, to carry over.
   void carry_history(const std::vector<std::int64_t>& old_offset,
                      const std::vector<std::int32_t>& old_index, const std::vector<double>& old,
