@@ -222,20 +222,20 @@ std::string explain(const std::vector<SelectionRow>& rows, const std::vector<boo
   }
   // Pairs of other laws where the richer adds nothing over the simpler (e.g. the anisotropy
   // term of the elastic laws when an elasto-plastic law is selected).
-  for (const std::size_t a : order)
-    for (const std::size_t b : order) {
-      if (!describe.empty()) break;
-      if (a == b || !candidate[a] || !candidate[b] || static_cast<int>(a) == sel ||
-          static_cast<int>(b) == sel || rows[b].n_free <= rows[a].n_free)
-        continue;
-      const double d = score(static_cast<int>(b)).bic - score(static_cast<int>(a)).bic;
-      if (d >= -rule.bic_tolerance && score(static_cast<int>(b)).fitted_misfit >=
-                                          0.98 * score(static_cast<int>(a)).fitted_misfit)
-        parts.push_back(rows[b].model + " adds nothing over " + rows[a].model + " (BIC " +
-                        (d >= 0 ? "+" : "") + fmt(d) + ", misfit " +
-                        fmt(score(static_cast<int>(b)).fitted_misfit) + " against " +
-                        fmt(score(static_cast<int>(a)).fitted_misfit) + ")");
-    }
+  if (describe.empty())
+    for (const std::size_t a : order)
+      for (const std::size_t b : order) {
+        if (a == b || !candidate[a] || !candidate[b] || static_cast<int>(a) == sel ||
+            static_cast<int>(b) == sel || rows[b].n_free <= rows[a].n_free)
+          continue;
+        const double d = score(static_cast<int>(b)).bic - score(static_cast<int>(a)).bic;
+        if (d >= -rule.bic_tolerance && score(static_cast<int>(b)).fitted_misfit >=
+                                            0.98 * score(static_cast<int>(a)).fitted_misfit)
+          parts.push_back(rows[b].model + " adds nothing over " + rows[a].model + " (BIC " +
+                          (d >= 0 ? "+" : "") + fmt(d) + ", misfit " +
+                          fmt(score(static_cast<int>(b)).fitted_misfit) + " against " +
+                          fmt(score(static_cast<int>(a)).fitted_misfit) + ")");
+      }
   std::string out;
   for (const auto& p : parts) out += (out.empty() ? "" : "; ") + p;
   return out;
