@@ -7,14 +7,11 @@
 // ours and the output folder to be writable first, and the script reports data it cannot draw
 // in one line (exit 2), so a bad file or folder is the usual one-line exit 2, never a Python
 // traceback. Its process is killed if ours is stopped by a signal.
-#include <fcntl.h>
 #include <omp.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include <algorithm>
 #include <cerrno>
-#include <csignal>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -23,7 +20,6 @@
 #include <memory>
 #include <sstream>
 #include <string>
-#include <string_view>
 #include <vector>
 
 #include "commands.hpp"
@@ -32,7 +28,6 @@
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/log.hpp"
 #include "rendulic/core/results.hpp"
-#include "report.hpp"
 
 namespace rendulic::app {
 namespace {
@@ -42,89 +37,54 @@ struct Spawned {
   std::string err;  // its stderr, when captured
 };
 
-// A started process: its pid, the read end of its stderr (-1 unless captured) and its entry
-// in cleanup.hpp's table (killed if this process dies first).
-struct Child {
-  pid_t pid = -1;
-  int err_fd = -1;
-  int handle = -1;
-};
-
-// Starts argv without a shell (no quoting issues with odd file names). With `capture`, its
-// stderr goes to a pipe for reap(); with `silence`, its output goes to /dev/null. `env`
-// entries (NAME=value) replace or add to the environment (built here: the child of a
-// threaded process must not allocate before exec).
-Child launch(const std::vector<std::string>& args, bool silence, bool capture = false,
-             const std::vector<std::string>& env = {}) {
+// Runs argv without a shell (no quoting issues with odd file names). With `capture`, its
+// stderr is collected; with `silence`, its output goes to /dev/null. `env` is added to the
+// environment (built here: the child of a threaded process must not allocate before exec).
+Spawned spawn(const std::vector<std::string>& args, bool silence, bool capture = false,
+              const std::vector<std::string>& env = {}) {
   std::vector<char*> argv;
   for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
   argv.push_back(nullptr);
   std::vector<char*> envp;
-  for (char** e = environ; *e; ++e) {
-    const std::string_view var(*e);
-    const bool replaced = std::any_of(env.begin(), env.end(), [&](const std::string& mine) {
-      const auto eq = mine.find('=');
-      return var.substr(0, eq + 1) == std::string_view(mine).substr(0, eq + 1);
-    });
-    if (!replaced) envp.push_back(*e);
-  }
+  for (char** e = environ; *e; ++e) envp.push_back(*e);
   for (const auto& e : env) envp.push_back(const_cast<char*>(e.c_str()));
   envp.push_back(nullptr);
   int pipefd[2] = {-1, -1};
-  if (capture && ::pipe2(pipefd, O_CLOEXEC) != 0)
-    throw std::runtime_error("plot: cannot create a pipe");
+  if (capture && ::pipe(pipefd) != 0) throw std::runtime_error("plot: cannot create a pipe");
   const pid_t pid = fork();
-  if (pid < 0) {
-    for (int fd : pipefd)
-      if (fd >= 0) ::close(fd);
-    throw std::runtime_error("plot: cannot start a process");
-  }
+  if (pid < 0) throw std::runtime_error("plot: cannot start a process");
   if (pid == 0) {
     if (silence) {
       std::freopen("/dev/null", "w", stdout);
       std::freopen("/dev/null", "w", stderr);
     }
-    if (capture) ::dup2(pipefd[1], STDERR_FILENO);  // dup2 clears O_CLOEXEC on the copy
-    // Nothing else of ours: an inherited descriptor of an open HDF5 file would hold its lock.
-    if (::close_range(3, ~0U, 0) != 0)
-      for (int fd = 3; fd < 1024; ++fd) ::close(fd);
+    if (capture) {
+      ::dup2(pipefd[1], STDERR_FILENO);
+      ::close(pipefd[0]);
+      ::close(pipefd[1]);
+    }
     execvpe(argv[0], argv.data(), envp.data());
     _exit(127);
   }
-  Child c{pid, -1, cleanup::kill_on_death(pid)};
+  const int handle = cleanup::kill_on_death(pid);
+  Spawned r;
   if (capture) {
     ::close(pipefd[1]);
-    c.err_fd = pipefd[0];
-  }
-  return c;
-}
-
-// Waits for a started process (reading its stderr to the end first).
-Spawned reap(Child& c) {
-  Spawned r;
-  if (c.err_fd >= 0) {
     char buf[4096];
     for (;;) {
-      const ssize_t n = ::read(c.err_fd, buf, sizeof buf);
+      const ssize_t n = ::read(pipefd[0], buf, sizeof buf);
       if (n < 0 && errno == EINTR) continue;
       if (n <= 0) break;
       r.err.append(buf, static_cast<std::size_t>(n));
     }
-    ::close(c.err_fd);
+    ::close(pipefd[0]);
   }
   int status = 0;
-  while (waitpid(c.pid, &status, 0) < 0 && errno == EINTR) {
+  while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
   }
-  cleanup::forget(c.handle);
-  c = Child{};
+  cleanup::forget(handle);
   r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   return r;
-}
-
-Spawned spawn(const std::vector<std::string>& args, bool silence, bool capture = false,
-              const std::vector<std::string>& env = {}) {
-  Child c = launch(args, silence, capture, env);
-  return reap(c);
 }
 
 std::string last_line(const std::string& text) {
@@ -157,32 +117,9 @@ std::filesystem::path plot_script_file(const std::filesystem::path& script) {
   return {};
 }
 
-namespace {
-
-// The first interpreter that has both modules: PATH's python3 may be a private build (pyenv,
-// conda) without Debian's packages, which live under /usr/bin/python3. Looked for once per
-// process (a run's report looks again only if the first look found none).
-const std::string& plotting_python() {
-  static std::string found;
-  if (found.empty())
-    for (const char* candidate : {"python3", "/usr/bin/python3"})
-      if (spawn({candidate, "-c", "import h5py, matplotlib"}, true).code == 0) {
-        found = candidate;
-        break;
-      }
-  if (found.empty())
-    throw InputError(
-        "plot: needs python3 with matplotlib and h5py (bash .ci/setup.sh installs "
-        "python3-matplotlib and python3-h5py)");
-  return found;
-}
-
-// The command that draws the figures of `file` (part: "" every figure, else plot.py's
-// --part), after checking that the file is ours and the folder writable.
-std::vector<std::string> plot_command(const std::filesystem::path& file,
-                                      const std::filesystem::path& out_dir,
-                                      const std::filesystem::path& script_file,
-                                      const std::string& part) {
+int plot_results(const std::filesystem::path& file, const std::filesystem::path& out_dir,
+                 const std::filesystem::path& script) {
+  const std::filesystem::path script_file = plot_script_file(script);
   { ResultsReader check(file); }
   std::error_code ec;
   std::filesystem::create_directories(out_dir, ec);
@@ -190,85 +127,43 @@ std::vector<std::string> plot_command(const std::filesystem::path& file,
     throw InputError(out_dir.string() + ": cannot create the figures folder: " + ec.message());
   if (::access(out_dir.c_str(), W_OK) != 0)
     throw InputError(out_dir.string() + ": cannot write figures here: " + std::strerror(errno));
-  std::vector<std::string> args = {plotting_python()};
-  if (script_file.empty())
+  // The first interpreter that has both modules: PATH's python3 may be a private build
+  // (pyenv, conda) without Debian's packages, which live under /usr/bin/python3.
+  std::string python;
+  for (const char* candidate : {"python3", "/usr/bin/python3"})
+    if (spawn({candidate, "-c", "import h5py, matplotlib"}, true).code == 0) {
+      python = candidate;
+      break;
+    }
+  if (python.empty())
+    throw InputError(
+        "plot: needs python3 with matplotlib and h5py (bash .ci/setup.sh installs "
+        "python3-matplotlib and python3-h5py)");
+  std::vector<std::string> args = {python};
+  if (script_file.empty()) {
     args.insert(args.end(), {"-c", kPlotScript});
-  else
+  } else {
     args.push_back(script_file.string());
-  args.insert(args.end(), {file.string(), out_dir.string()});
-  if (!part.empty()) args.insert(args.end(), {"--part", part});
-  return args;
-}
-
-// The figure script's end: its notes (figures it skipped, and why) as info lines, or its one
-// line about data it cannot draw (exit 2) as the usual InputError naming `file`.
-void plot_outcome(const Spawned& r, const std::filesystem::path& file) {
-  if (r.code == 0) {
-    std::istringstream notes(r.err);
-    for (std::string line; std::getline(notes, line);)
-      if (!line.empty()) log::info(line);
-    return;
+    log::info("figures drawn by ", script_file.string());
   }
-  if (r.code == 2)
-    throw InputError(file.string() + ": cannot draw the figures: " + printable(last_line(r.err)));
-  throw std::runtime_error("plot: the figure script failed (exit " + std::to_string(r.code) +
-                           "): " + printable(last_line(r.err)));
-}
-
-}  // namespace
-
-int plot_results(const std::filesystem::path& file, const std::filesystem::path& out_dir,
-                 const std::filesystem::path& script, const std::string& part) {
-  const std::filesystem::path script_file = plot_script_file(script);
-  const std::vector<std::string> args = plot_command(file, out_dir, script_file, part);
-  if (!script_file.empty()) log::info("figures drawn by ", script_file.string());
+  args.insert(args.end(), {file.string(), out_dir.string()});
   // The figures are independent: plot.py draws them in as many processes as this run may
   // use threads (--threads; the user's own RENDULIC_PLOT_JOBS wins).
   std::vector<std::string> env;
   if (const char* jobs = std::getenv("RENDULIC_PLOT_JOBS"); !jobs || !*jobs)
     env.push_back("RENDULIC_PLOT_JOBS=" + std::to_string(omp_get_max_threads()));
-  plot_outcome(spawn(args, false, true, env), file);
-  return 0;
-}
-
-struct EarlyFigures::Drawing {
-  Child child;
-  std::filesystem::path file;  // the results file the figures are of, for messages
-};
-
-EarlyFigures::EarlyFigures() = default;
-
-EarlyFigures::~EarlyFigures() {
-  if (!drawing_) return;
-  ::kill(drawing_->child.pid, SIGTERM);  // plot.py takes its worker processes with it
-  reap(drawing_->child);
-}
-
-bool EarlyFigures::start(const std::filesystem::path& snapshot, const std::filesystem::path& file,
-                         const std::filesystem::path& out_dir) {
-  if (drawing_ || snapshot.empty()) return false;
-  try {
-    const std::vector<std::string> args =
-        plot_command(snapshot, out_dir, plot_script_file(), "measured");
-    auto d = std::make_unique<Drawing>();
-    // One process: the calibration beside it has the other core(s).
-    d->child = launch(args, false, true, {"RENDULIC_PLOT_JOBS=1"});
-    d->file = file;
-    drawing_ = std::move(d);
-    return true;
-  } catch (const std::exception& e) {
-    // The report stage draws every figure then, and says what is wrong if it still is.
-    log::debug("figures are drawn after the calibration: ", e.what());
-    return false;
+  const Spawned r = spawn(args, false, true, env);
+  if (r.code == 0) {
+    // The figures it skipped, and why: one note per line, as every message of the tool.
+    std::istringstream notes(r.err);
+    for (std::string line; std::getline(notes, line);)
+      if (!line.empty()) log::info(line);
+    return 0;
   }
-}
-
-void EarlyFigures::finish() {
-  if (!drawing_) return;
-  const Spawned r = reap(drawing_->child);
-  const std::filesystem::path file = drawing_->file;
-  drawing_.reset();
-  plot_outcome(r, file);
+  if (r.code == 2)  // plot.py's one line about data it cannot draw
+    throw InputError(file.string() + ": cannot draw the figures: " + printable(last_line(r.err)));
+  throw std::runtime_error("plot: the figure script failed (exit " + std::to_string(r.code) +
+                           "): " + printable(last_line(r.err)));
 }
 
 Subcommand add_plot(CLI::App& parent) {
@@ -283,7 +178,7 @@ Subcommand add_plot(CLI::App& parent) {
                   "(also: RENDULIC_PLOT_SCRIPT)");
   return {sub, [file, out, script]() -> int {
             std::filesystem::path dir = *out;
-            if (dir.empty()) dir = figures_folder(*file);
+            if (dir.empty()) dir = std::filesystem::path(*file).parent_path() / "figures";
             return plot_results(*file, dir, *script);
           }};
 }

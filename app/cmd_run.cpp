@@ -55,9 +55,7 @@ std::filesystem::path run_scenario(const RunRequest& r) {
   out.attr("/", "seed", scenario.get_int("run.seed"));
   out.attr("/", "scenario", scenario.to_toml());
   out.attr("/", "scenario_file", r.scenario);
-  // After `writer`, so destroyed before it: a figure process still drawing from the writer's
-  // snapshot is stopped before the snapshot goes.
-  RunContext ctx{out_dir, r.threads, r.quiet, r.progress_every, std::make_shared<EarlyFigures>()};
+  RunContext ctx{out_dir, r.threads, r.quiet, r.progress_every};
   {
     // Say first what will run, on what, and where it goes.
     std::string plan;
@@ -65,7 +63,7 @@ std::filesystem::path run_scenario(const RunRequest& r) {
       plan += (plan.empty() ? "" : ", ") + st;
     log::info(r.scenario, ": N = ", scenario.get_int("dem.n_particles"), ", stages ", plan,
               "; writing ", (out_dir / "results.h5").string(),
-              " (on 2 idle cores quick.toml takes under a minute, paper.toml ~25 min)");
+              " (on 2 idle cores quick.toml takes ~2 min, paper.toml ~25 min)");
   }
   if (r.mpi_ranks > 1) log::info(r.mpi_ranks, " MPI ranks share the probe campaigns");
   try {

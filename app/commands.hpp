@@ -93,35 +93,9 @@ models::StepOptions step_options_for(const std::string& scheme, double tolerance
 
 // Draws the figures of a results file into out_dir (cmd_plot.cpp); used by the report stage.
 // The figure script is `script` if given, else the first of RENDULIC_PLOT_SCRIPT, plot.py
-// beside the binary, <prefix>/share/rendulic/plot.py, and the copy compiled in. `part`
-// "measured" or "models" draws only the figures without or with the calibrated laws.
+// beside the binary, <prefix>/share/rendulic/plot.py, and the copy compiled in.
 int plot_results(const std::filesystem::path& file, const std::filesystem::path& out_dir,
-                 const std::filesystem::path& script = {}, const std::string& part = {});
-
-// The figures of a run that need no calibrated law, drawn by one background process while the
-// calibration stage runs, from a snapshot of the results so far (docs/performance.md "Figures
-// beside the calibration"); the report stage draws the others, then finish()es these.
-// Destroyed unfinished (the run failed or was stopped), it stops the drawing and reaps it.
-class EarlyFigures {
- public:
-  EarlyFigures();
-  EarlyFigures(const EarlyFigures&) = delete;
-  EarlyFigures& operator=(const EarlyFigures&) = delete;
-  ~EarlyFigures();
-  // Starts drawing the "measured" figures of `snapshot` (a copy of results file `file`, kept
-  // until finish()) into out_dir. False, with nothing started, if it cannot (no python with
-  // matplotlib, a folder it cannot write): the report stage then draws every figure and says
-  // what is wrong.
-  bool start(const std::filesystem::path& snapshot, const std::filesystem::path& file,
-             const std::filesystem::path& out_dir);
-  bool started() const { return drawing_ != nullptr; }
-  // Waits for the drawing: its notes become info lines, its failure plot_results's error.
-  void finish();
-
- private:
-  struct Drawing;
-  std::unique_ptr<Drawing> drawing_;
-};
+                 const std::filesystem::path& script = {});
 
 // The figure script plot_results would run given `script` (empty: the compiled-in copy).
 std::filesystem::path plot_script_file(const std::filesystem::path& script = {});

@@ -2,8 +2,6 @@
 // protocol of docs/physics.md section 4.
 #include "pipeline.hpp"
 
-#include <omp.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -11,7 +9,6 @@
 #include <string>
 #include <vector>
 
-#include "commands.hpp"
 #include "packing_system.hpp"
 #include "progress.hpp"
 #include "rendulic/calibration/settings.hpp"
@@ -43,9 +40,9 @@ struct Stage {
 
 void report_stage(const Scenario& scenario, const std::filesystem::path& results,
                   const RunContext& ctx) {
+  (void)ctx;
   log::info("[report] started");
-  const auto path =
-      write_report(results, scenario.get_bool("report.figures"), ctx.early_figures.get());
+  const auto path = write_report(results, scenario.get_bool("report.figures"));
   log::info("[report] wrote ", path.string());
 }
 
@@ -216,14 +213,6 @@ void run_pipeline(const Scenario& scenario, ResultsWriter& out, const RunContext
     // Every stage says when it starts and ends, in a log as on a terminal: a short stage
     // shows no progress line of its own (progress.hpp).
     log::info("[", s.name, "] started");
-    // The calibration leaves cores idle (its laws are fitted one after the other, most on one
-    // or two threads): the figures that do not need it are drawn meanwhile, from a snapshot
-    // of what the stages before it wrote. Not with --threads 1: the user gave one core.
-    if (s.name == std::string("calibration") && ctx.early_figures && omp_get_max_threads() > 1 &&
-        stage_requested(scenario, "report") && scenario.get_bool("report.figures"))
-      if (ctx.early_figures->start(out.snapshot(), out.final_path(),
-                                   figures_folder(out.final_path())))
-        log::info("[calibration] the figures without the calibrated laws are drawn meanwhile");
     const auto t0 = std::chrono::steady_clock::now();
     s.run(scenario, out, ctx, session);
     const double secs =

@@ -4,7 +4,6 @@
 #pragma once
 
 #include <filesystem>
-#include <memory>
 #include <string>
 #include <vector>
 
@@ -13,17 +12,12 @@
 
 namespace rendulic::app {
 
-class EarlyFigures;
-
 struct RunContext {
   std::filesystem::path out_dir;
   int threads = 0;     // 0: OpenMP's default
   bool quiet = false;  // no progress display and no info lines (log level warning)
   // In a log (stderr not a terminal): seconds of work between two progress lines.
   double progress_every = 30.0;
-  // When set, the figures that need no calibrated law are drawn while the calibration stage
-  // runs (commands.hpp), and the report stage finishes them.
-  std::shared_ptr<EarlyFigures> early_figures;
 };
 
 // Whether run.stages lists the stage `name`.

@@ -923,13 +923,10 @@ def fig_path_rate(f, out, ctx):
 
 # --- driver ---------------------------------------------------------------------------------
 def figure_list(f, out, ctx):
-    """(name, draw, part) of every figure of file `f`, in drawing order. part "models": the
-    figure reads the calibrated laws (/calibration); "measured": only what the DEM stages and
-    the fits wrote, which `rendulic run` draws while the calibration runs."""
     if "sweep" in f:  # a sweep file (rendulic sweep): the Pareto and path-rate charts
-        return [("Pareto chart", lambda: fig_pareto(f, out, ctx), "measured"),
-                ("path rate", lambda: fig_path_rate(f, out, ctx), "measured")]
-    measured = [
+        return [("Pareto chart", lambda: fig_pareto(f, out, ctx)),
+                ("path rate", lambda: fig_path_rate(f, out, ctx))]
+    return [
         ("isotropic branch", lambda: fig_isotropic(f, out, ctx)),
         ("Fig. 1", lambda: fig1_path(f, out, ctx)),
         ("Fig. 2", lambda: fig2_strain_circle(f, out, ctx)),
@@ -940,39 +937,32 @@ def figure_list(f, out, ctx):
         ("Fig. 7", lambda: fig7_trends(f, out, ctx)),
         ("elastic range", lambda: fig_elastic_range(f, out, ctx)),
         ("yield against P*", lambda: fig_yield_pressure(f, out, ctx)),
-    ]
-    models = [
         ("models elastic stress", lambda: fig_model_envelopes(f, out, ctx, "elastic", "stress")),
         ("models plastic stress", lambda: fig_model_envelopes(f, out, ctx, "plastic", "stress")),
         ("models elastic fabric", lambda: fig_model_envelopes(f, out, ctx, "elastic", "fabric")),
         ("models plastic fabric", lambda: fig_model_envelopes(f, out, ctx, "plastic", "fabric")),
         ("models path", lambda: fig_models_path(f, out, ctx)),
     ]
-    return ([(n, d, "measured") for n, d in measured] + [(n, d, "models") for n, d in models])
 
 
-def draw_all(path, out, keep=False, jobs=1, part=None):
-    """Draws every figure of results file `path` into folder `out` (part "measured" or
-    "models": only those of figure_list's part). Returns (files written, notes on skipped
-    figures, {name: Figure} when keep, else {}): keep leaves the figures open for a caller that
-    inspects them. jobs > 1 draws the figures in that many processes (each figure is
-    independent; the lists come back in figure order either way)."""
+def draw_all(path, out, keep=False, jobs=1):
+    """Draws every figure of results file `path` into folder `out`. Returns (files written,
+    notes on skipped figures, {name: Figure} when keep, else {}): keep leaves the figures open
+    for a caller that inspects them. jobs > 1 draws the figures in that many processes (each
+    figure is independent; the lists come back in figure order either way)."""
     os.makedirs(out, exist_ok=True)
+    if keep or jobs <= 1:
+        return draw_figures(path, out, None, keep)
     with h5py.File(path, "r") as f:
-        chosen = [i for i, (_, _, p) in enumerate(figure_list(f, out, {})) if part in (None, p)]
-    if keep or jobs <= 1 or len(chosen) <= 1:
-        drawn, kept = draw_figures(path, out, chosen, keep)
-    else:
-        drawn, kept = draw_forked(path, out, chosen, min(jobs, len(chosen))), {}
-    return [w for _, ws, _ in drawn for w in ws], [n for _, _, ns in drawn for n in ns], kept
+        count = len(figure_list(f, out, {}))
+    return draw_forked(path, out, count, min(jobs, count))
 
 
-def draw_forked(path, out, chosen, jobs):
-    """draw_all's figures `chosen` in `jobs` processes: this one draws chosen[0], chosen[jobs],
-    ... and each forked child k draws chosen[k], chosen[k + jobs], ... and sends its lists back
-    through a pipe. Stopped (rendulic sends SIGTERM when it is stopped itself), this process
-    kills and reaps its children before it exits, and a child dies with this process in any
-    case: none draws on. Returns [(i, written, notes)] in figure order."""
+def draw_forked(path, out, count, jobs):
+    """draw_all's figures in `jobs` processes: this one draws figures 0, jobs, 2 jobs, ... and
+    each forked child k draws k, k + jobs, ... and sends its lists back through a pipe. Stopped
+    (rendulic sends SIGTERM when it is stopped itself), this process kills and reaps its
+    children before it exits, and a child dies with this process in any case: none draws on."""
     import json
     import signal
 
@@ -988,7 +978,7 @@ def draw_forked(path, out, chosen, jobs):
         os._exit(128 + signal.SIGTERM)
 
     def share(k):
-        return draw_figures(path, out, chosen[k::jobs], False)[0]
+        return [(i, *draw_figures(path, out, [i], False)[:2]) for i in range(k, count, jobs)]
 
     previous = signal.signal(signal.SIGTERM, stop)
     parent = os.getpid()
@@ -1046,17 +1036,16 @@ def draw_forked(path, out, chosen, jobs):
     signal.signal(signal.SIGTERM, previous)
     if errors:
         raise RuntimeError(errors[0])
-    return sorted(figures, key=lambda x: x[0])
+    figures.sort(key=lambda x: x[0])
+    return [w for _, ws, _ in figures for w in ws], [n for _, _, ns in figures for n in ns], {}
 
 
 def draw_figures(path, out, which, keep):
-    """Draws the figures of figure_list numbered in `which`, with the file opened once.
-    Returns ([(i, files written, notes) per figure], {name: Figure} when keep, else {})."""
-    drawn = []
+    """Draws the figures of figure_list numbered in `which` (None: all), as draw_all says."""
     ctx = {"written": [], "notes": [], "keep": {} if keep else None}
     with plt.rc_context(STYLE), h5py.File(path, "r") as f:
-        for i, (name, draw, _) in enumerate(figure_list(f, out, ctx)):
-            if i not in which:
+        for i, (name, draw) in enumerate(figure_list(f, out, ctx)):
+            if which is not None and i not in which:
                 continue
             try:
                 draw()
@@ -1065,9 +1054,7 @@ def draw_figures(path, out, which, keep):
                 if not keep:
                     plt.close("all")
                 ctx["notes"].append(f"{name}: {e}")
-            drawn.append((i, ctx["written"], ctx["notes"]))
-            ctx["written"], ctx["notes"] = [], []
-    return drawn, ctx["keep"] or {}
+    return ctx["written"], ctx["notes"], ctx["keep"] or {}
 
 
 def plot_jobs():
@@ -1080,15 +1067,10 @@ def plot_jobs():
 
 
 def main():
-    args = sys.argv[1:]
-    part = None
-    if len(args) == 4 and args[2] == "--part" and args[3] in ("measured", "models"):
-        part = args[3]
-        args = args[:2]
-    if len(args) != 2:
-        print("usage: plot.py FILE.h5 OUTDIR [--part measured|models]", file=sys.stderr)
+    if len(sys.argv) != 3:
+        print("usage: plot.py FILE.h5 OUTDIR", file=sys.stderr)
         return 2
-    written, notes, _ = draw_all(args[0], args[1], jobs=plot_jobs(), part=part)
+    written, notes, _ = draw_all(sys.argv[1], sys.argv[2], jobs=plot_jobs())
     for w in written:
         print(w)
     for n in notes:

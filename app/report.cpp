@@ -833,25 +833,15 @@ std::string report_markdown(const ResultsReader& r, const std::vector<Claim>& cl
   return md.str();
 }
 
-std::filesystem::path figures_folder(const std::filesystem::path& results_file) {
-  return results_file.parent_path() / "figures";
-}
-
-std::filesystem::path write_report(const std::filesystem::path& results_file, bool with_figures,
-                                   EarlyFigures* early) {
+std::filesystem::path write_report(const std::filesystem::path& results_file, bool with_figures) {
   namespace fs = std::filesystem;
   const ResultsReader r(results_file);
   const auto claims = evaluate_claims(r);
   std::vector<std::string> figures;
   const fs::path dir = results_file.parent_path();
   if (with_figures) {
-    if (early && early->started()) {
-      plot_results(results_file, figures_folder(results_file), {}, "models");
-      early->finish();
-    } else {
-      plot_results(results_file, figures_folder(results_file));
-    }
-    for (const auto& e : fs::directory_iterator(figures_folder(results_file)))
+    plot_results(results_file, dir / "figures");
+    for (const auto& e : fs::directory_iterator(dir / "figures"))
       figures.push_back(e.path().string());
     std::sort(figures.begin(), figures.end());
   }

@@ -26,15 +26,8 @@ std::vector<Claim> evaluate_claims(const ResultsReader& results);
 std::string report_markdown(const ResultsReader& results, const std::vector<Claim>& claims,
                             const std::vector<std::string>& figures);
 
-// The folder of a results file's figures: figures/ beside it.
-std::filesystem::path figures_folder(const std::filesystem::path& results_file);
-
 // Writes DIR/report.md atomically and the figures into DIR/figures (if plotting is
-// available; otherwise the report says so). Returns the report path. With `early` started
-// (a run whose calibration drew the other figures meanwhile), only the figures of the
-// calibrated laws are drawn here, and then the early ones are waited for.
-class EarlyFigures;
-std::filesystem::path write_report(const std::filesystem::path& results_file, bool with_figures,
-                                   EarlyFigures* early = nullptr);
+// available; otherwise the report says so). Returns the report path.
+std::filesystem::path write_report(const std::filesystem::path& results_file, bool with_figures);
 
 }  // namespace rendulic::app

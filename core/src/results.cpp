@@ -183,22 +183,14 @@ bool unlocked(const fs::path& p) {
 struct ResultsWriter::Impl {
   fs::path final_path, tmp_path;
   fs::path partial_copy, partial_new;  // the saved copy of the completed stages, and its next
-  fs::path snapshot_copy;              // snapshot(): another process may still read it
   std::string partial_completed;       // what the saved copy holds; empty: no copy
   std::optional<Handle> file;          // the open temporary file
-  int tmp_handle = -1, partial_handle = -1, partial_new_handle = -1, snapshot_handle = -1;
+  int tmp_handle = -1, partial_handle = -1, partial_new_handle = -1;
   bool committed = false;
   std::vector<fs::path> created_folders;  // innermost first, removed again if left empty
   std::vector<std::string> notes;
 
-  ~Impl() {
-    if (!snapshot_copy.empty()) {
-      std::error_code ec;
-      fs::remove(snapshot_copy, ec);
-      cleanup::forget(snapshot_handle);
-    }
-    abandon();
-  }
+  ~Impl() { abandon(); }
 
   hid_t id() const { return file->get(); }
 
@@ -245,9 +237,7 @@ struct ResultsWriter::Impl {
       std::size_t k = 0;
       while (k < rest.size() && k < 10 && std::isdigit(static_cast<unsigned char>(rest[k]))) ++k;
       const std::string suffix = rest.substr(k);
-      if (k == 0 || (suffix != "" && suffix != ".partial" && suffix != ".partial-new" &&
-                     suffix != ".snapshot"))
-        continue;
+      if (k == 0 || (suffix != "" && suffix != ".partial" && suffix != ".partial-new")) continue;
       found.emplace_back(it->path(), rest.substr(0, k));
     }
     for (const auto& [path, pid_text] : found) {
@@ -637,22 +627,6 @@ bool ResultsWriter::save_partial(const std::string& completed) {
       m.partial_copy, kept,
       "rendulic: stopped by a signal; " + completed + " kept in " + kept.string());
   return true;
-}
-
-fs::path ResultsWriter::snapshot() {
-  Impl& m = *impl_;
-  if (m.committed || !m.file) return {};
-  if (H5Fflush(m.id(), H5F_SCOPE_GLOBAL) < 0) return {};
-  if (m.snapshot_copy.empty()) {
-    m.snapshot_copy = with_suffix(m.tmp_path, ".snapshot");
-    m.snapshot_handle = cleanup::remove_on_death(m.snapshot_copy);
-  }
-  if (!copy_whole_file(m.tmp_path, m.snapshot_copy).empty()) {
-    std::error_code ec;
-    fs::remove(m.snapshot_copy, ec);
-    return {};
-  }
-  return m.snapshot_copy;
 }
 
 std::string ResultsWriter::keep_partial() {

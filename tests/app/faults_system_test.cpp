@@ -544,35 +544,6 @@ TEST(FaultsSystem, AnInterruptedPlotLeavesNoFigureScriptRunningNorItsFile) {
   for (pid_t w : workers) EXPECT_FALSE(running(w)) << "a figure worker runs on";
 }
 
-TEST(FaultsSystem, AStopWhileFiguresAreDrawnBesideTheCalibrationLeavesNoScriptNorSnapshot) {
-  // The figures without the calibrated laws are drawn by a process of their own from a
-  // snapshot of the results, while the calibration and the report go on: a stop then ends
-  // that process too and removes the snapshot.
-  const fs::path d = fresh_dir("signal_early_figures");
-  const fs::path out = d / "out";
-  const pid_t pid = start("run " + tiny_scenario().string() +
-                              " --threads 2 --set run.stages=prepare,isotropic,path,states,"
-                              "probes,fits,calibration,report --out " +
-                              out.string(),
-                          d / "stderr.txt");
-  pid_t script = 0;
-  auto drawing = [&] {
-    for (pid_t c : children_of(pid))
-      if (read_file("/proc/" + std::to_string(c) + "/cmdline").find(".snapshot") !=
-          std::string::npos)
-        script = c;
-    return script != 0;
-  };
-  ASSERT_TRUE(wait_for(drawing, 120))
-      << "no figures drawn beside the calibration: " << read_file(d / "stderr.txt");
-  kill(pid, SIGTERM);
-  int status = 0;
-  waitpid(pid, &status, 0);
-  EXPECT_TRUE(WIFSIGNALED(status)) << "the run ended before the signal";
-  EXPECT_TRUE(wait_for([&] { return !running(script); }, 30)) << "the figure script runs on";
-  EXPECT_TRUE(temporaries(out).empty()) << temporaries(out).front();
-}
-
 TEST(FaultsSystem, TheNextRunTidiesStaleTemporariesAndTheStoredScenarioReplays) {
   const fs::path d = fresh_dir("next_run");
   const fs::path out = d / "out";
@@ -582,7 +553,6 @@ TEST(FaultsSystem, TheNextRunTidiesStaleTemporariesAndTheStoredScenarioReplays) 
   waitpid(dead, nullptr, 0);
   const std::string tag = std::to_string(dead);
   std::ofstream(out / (".results.h5.tmp-" + tag)) << "half a file";
-  std::ofstream(out / (".results.h5.tmp-" + tag + ".snapshot")) << "a snapshot for the figures";
   {
     rendulic::ResultsWriter w(d / "saved.h5");
     w.attr("/timings", "prepare", 1.0);

@@ -381,46 +381,6 @@ TEST(Plot, TwoProcessesDrawTheSameFiguresAsOne) {
   EXPECT_GE(compared, 7);
 }
 
-TEST(Plot, ARunDrawsItsFiguresBesideTheCalibrationAsPlotDrawsThemAfter) {
-  // `rendulic run` draws the figures without the calibrated laws while the calibration runs,
-  // from a snapshot of the file before it: the same figures, to the byte, as `rendulic plot`
-  // of the committed file, and no snapshot left behind.
-  if (python().empty()) GTEST_SKIP() << "no python3 with matplotlib and h5py";
-  const fs::path dir = rendulic::testing::fresh_dir("app_plot_system/early");
-  const fs::path out = dir / "run";
-  const CliResult r = rendulic::testing::run_rendulic(
-      "run " + rendulic::testing::tiny_scenario(dir).string() +
-          " --threads 2 --set run.stages=prepare,isotropic,path,states,probes,linear_response,"
-          "fits,calibration,report --out " +
-          out.string(),
-      false);
-  ASSERT_EQ(r.code, 0) << r.err;
-  EXPECT_NE(r.err.find("the figures without the calibrated laws are drawn meanwhile"),
-            std::string::npos)
-      << r.err;
-  for (const auto& e : fs::directory_iterator(out))
-    EXPECT_EQ(e.path().filename().string().find(".tmp"), std::string::npos) << e.path();
-  ASSERT_EQ(run("plot " + (out / "results.h5").string() + " --out " + (dir / "after").string()), 0);
-  std::set<std::string> drawn, after;
-  for (const auto& e : fs::directory_iterator(out / "figures")) drawn.insert(e.path().filename());
-  for (const auto& e : fs::directory_iterator(dir / "after")) after.insert(e.path().filename());
-  EXPECT_EQ(drawn, after);
-  int compared = 0;
-  for (const std::string& name : drawn) {
-    if (fs::path(name).extension() != ".png" || !after.count(name)) continue;
-    std::ifstream a(out / "figures" / name, std::ios::binary),
-        b(dir / "after" / name, std::ios::binary);
-    const std::string da((std::istreambuf_iterator<char>(a)), {}),
-        db((std::istreambuf_iterator<char>(b)), {});
-    EXPECT_EQ(da, db) << name;
-    ++compared;
-  }
-  // Both parts: the measured figures (Figs. 1-7, ...) and the calibrated laws'.
-  EXPECT_TRUE(drawn.count("fig3_elastic_stress.png"));
-  EXPECT_TRUE(drawn.count("models_elastic_stress.png"));
-  EXPECT_GE(compared, 10);
-}
-
 TEST(Plot, RefusesAFileThatIsNotOurs) {
   const fs::path dir = fs::path(RENDULIC_TEST_TMP) / "app_plot_bad";
   fs::create_directories(dir);

@@ -72,13 +72,6 @@ class ResultsWriter {
   // FINAL.partial (never onto FINAL) and returns a note for the error line ("; the stages
   // prepare, isotropic are kept in out/results.h5.partial"), or "" if nothing was saved.
   std::string keep_partial();
-  // A consistent copy of everything written so far, for a reader in another process while
-  // this writer goes on (the figures `rendulic run` draws while its calibration runs; docs/
-  // performance.md "Figures beside the calibration"). Returns its path (the temporary name +
-  // ".snapshot"), or an empty path if the copy cannot be made. A later call rewrites the same
-  // file, so not while a reader has it open. The copy goes with the writer (committed or not),
-  // on a signal, and as a stale temporary with the next writer in the folder.
-  std::filesystem::path snapshot();
 
   // Lines about stale temporary files of killed runs that the constructor found in the
   // output folder and removed (or kept as FINAL.partial); for the caller to print.
