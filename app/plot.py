@@ -951,18 +951,21 @@ def draw_all(path, out, keep=False, jobs=1):
     for a caller that inspects them. jobs > 1 draws the figures in that many processes (each
     figure is independent; the lists come back in figure order either way)."""
     os.makedirs(out, exist_ok=True)
-    if keep or jobs <= 1:
-        return draw_figures(path, out, None, keep)
     with h5py.File(path, "r") as f:
         count = len(figure_list(f, out, {}))
-    return draw_forked(path, out, count, min(jobs, count))
+    if keep or jobs <= 1:
+        drawn, kept = draw_figures(path, out, range(count), keep)
+    else:
+        drawn, kept = draw_forked(path, out, count, min(jobs, count)), {}
+    return [w for _, ws, _ in drawn for w in ws], [n for _, _, ns in drawn for n in ns], kept
 
 
 def draw_forked(path, out, count, jobs):
     """draw_all's figures in `jobs` processes: this one draws figures 0, jobs, 2 jobs, ... and
     each forked child k draws k, k + jobs, ... and sends its lists back through a pipe. Stopped
     (rendulic sends SIGTERM when it is stopped itself), this process kills and reaps its
-    children before it exits, and a child dies with this process in any case: none draws on."""
+    children before it exits, and a child dies with this process in any case: none draws on.
+    Returns [(i, files written, notes)] in figure order."""
     import json
     import signal
 
@@ -978,7 +981,7 @@ def draw_forked(path, out, count, jobs):
         os._exit(128 + signal.SIGTERM)
 
     def share(k):
-        return [(i, *draw_figures(path, out, [i], False)[:2]) for i in range(k, count, jobs)]
+        return draw_figures(path, out, range(k, count, jobs), False)[0]
 
     previous = signal.signal(signal.SIGTERM, stop)
     parent = os.getpid()
@@ -1036,16 +1039,17 @@ def draw_forked(path, out, count, jobs):
     signal.signal(signal.SIGTERM, previous)
     if errors:
         raise RuntimeError(errors[0])
-    figures.sort(key=lambda x: x[0])
-    return [w for _, ws, _ in figures for w in ws], [n for _, _, ns in figures for n in ns], {}
+    return sorted(figures, key=lambda x: x[0])
 
 
 def draw_figures(path, out, which, keep):
-    """Draws the figures of figure_list numbered in `which` (None: all), as draw_all says."""
+    """Draws the figures of figure_list numbered in `which`, with the file opened once.
+    Returns ([(i, files written, notes) per figure], {name: Figure} when keep, else {})."""
+    drawn = []
     ctx = {"written": [], "notes": [], "keep": {} if keep else None}
     with plt.rc_context(STYLE), h5py.File(path, "r") as f:
         for i, (name, draw) in enumerate(figure_list(f, out, ctx)):
-            if which is not None and i not in which:
+            if i not in which:
                 continue
             try:
                 draw()
@@ -1054,7 +1058,9 @@ def draw_figures(path, out, which, keep):
                 if not keep:
                     plt.close("all")
                 ctx["notes"].append(f"{name}: {e}")
-    return ctx["written"], ctx["notes"], ctx["keep"] or {}
+            drawn.append((i, ctx["written"], ctx["notes"]))
+            ctx["written"], ctx["notes"] = [], []
+    return drawn, ctx["keep"] or {}
 
 
 def plot_jobs():
