@@ -951,11 +951,11 @@ def draw_all(path, out, keep=False, jobs=1):
     for a caller that inspects them. jobs > 1 draws the figures in that many processes (each
     figure is independent; the lists come back in figure order either way)."""
     os.makedirs(out, exist_ok=True)
-    with h5py.File(path, "r") as f:
-        count = len(figure_list(f, out, {}))
     if keep or jobs <= 1:
-        drawn, kept = draw_figures(path, out, range(count), keep)
+        drawn, kept = draw_figures(path, out, None, keep)
     else:
+        with h5py.File(path, "r") as f:
+            count = len(figure_list(f, out, {}))
         drawn, kept = draw_forked(path, out, count, min(jobs, count)), {}
     return [w for _, ws, _ in drawn for w in ws], [n for _, _, ns in drawn for n in ns], kept
 
@@ -1043,13 +1043,14 @@ def draw_forked(path, out, count, jobs):
 
 
 def draw_figures(path, out, which, keep):
-    """Draws the figures of figure_list numbered in `which`, with the file opened once.
+    """Draws the figures of figure_list numbered in `which` (None: all), with the file opened
+    once.
     Returns ([(i, files written, notes) per figure], {name: Figure} when keep, else {})."""
     drawn = []
     ctx = {"written": [], "notes": [], "keep": {} if keep else None}
     with plt.rc_context(STYLE), h5py.File(path, "r") as f:
         for i, (name, draw) in enumerate(figure_list(f, out, ctx)):
-            if i not in which:
+            if which is not None and i not in which:
                 continue
             try:
                 draw()
