@@ -20,50 +20,17 @@ std::uint8_t encode(int sx, int sy, int sz) {
   return static_cast<std::uint8_t>((sx + 1) + 3 * (sy + 1) + 9 * (sz + 1));
 }
 
-// Calls visit(j, code, ox, oy, oz) for every candidate partner of i (j != i), in a fixed order;
-// (ox, oy, oz) = s L is the image offset of the code.
+// Without bins (fewer than three on some axis): calls visit(j, code, ox, oy, oz) for every
+// j > i, seen through its image nearest to i, in index order; (ox, oy, oz) = s L is the image
+// offset of the code. The binned search (the half stencil) is NeighborList::build's own.
 template <class Visit>
-void for_candidates(std::size_t i, const Particles& p, const Eigen::Vector3d& L,
-                    const std::array<int, 3>& nb, const std::vector<int>& bin_of,
-                    const std::vector<std::int64_t>& bin_start,
-                    const std::vector<std::int32_t>& bin_members, bool brute, Visit&& visit) {
-  const std::size_t n = p.size();
-  if (brute) {
-    for (std::size_t j = i + 1; j < n; ++j) {
-      const int sx = -static_cast<int>(std::lround((p.x[i] - p.x[j]) / L[0]));
-      const int sy = -static_cast<int>(std::lround((p.y[i] - p.y[j]) / L[1]));
-      const int sz = -static_cast<int>(std::lround((p.z[i] - p.z[j]) / L[2]));
-      visit(static_cast<std::int32_t>(j), encode(sx, sy, sz), sx * L[0], sy * L[1], sz * L[2]);
-    }
-    return;
+void for_later_images(std::size_t i, const Particles& p, const Eigen::Vector3d& L, Visit&& visit) {
+  for (std::size_t j = i + 1; j < p.size(); ++j) {
+    const int sx = -static_cast<int>(std::lround((p.x[i] - p.x[j]) / L[0]));
+    const int sy = -static_cast<int>(std::lround((p.y[i] - p.y[j]) / L[1]));
+    const int sz = -static_cast<int>(std::lround((p.z[i] - p.z[j]) / L[2]));
+    visit(static_cast<std::int32_t>(j), encode(sx, sy, sz), sx * L[0], sy * L[1], sz * L[2]);
   }
-  const int b = bin_of[i];
-  const int bx = b % nb[0], by = (b / nb[0]) % nb[1], bz = b / (nb[0] * nb[1]);
-  // Half stencil: the own bin (partners of higher index) and the 13 "forward" bins, so that
-  // each pair is met once (nb >= 3 on every axis makes the 27 bins distinct).
-  for (int dz = -1; dz <= 1; ++dz)
-    for (int dy = -1; dy <= 1; ++dy)
-      for (int dx = -1; dx <= 1; ++dx) {
-        const bool own = dx == 0 && dy == 0 && dz == 0;
-        const bool forward = dz > 0 || (dz == 0 && (dy > 0 || (dy == 0 && dx > 0)));
-        if (!own && !forward) continue;
-        int cx = bx + dx, cy = by + dy, cz = bz + dz;
-        // A partner in a wrapped bin is seen through its image: l = x_i - x_j + s L.
-        int sx = 0, sy = 0, sz = 0;
-        if (cx < 0) cx += nb[0], sx = 1;
-        if (cx >= nb[0]) cx -= nb[0], sx = -1;
-        if (cy < 0) cy += nb[1], sy = 1;
-        if (cy >= nb[1]) cy -= nb[1], sy = -1;
-        if (cz < 0) cz += nb[2], sz = 1;
-        if (cz >= nb[2]) cz -= nb[2], sz = -1;
-        const int c = cx + nb[0] * (cy + nb[1] * cz);
-        const std::uint8_t code = encode(sx, sy, sz);
-        const double ox = sx * L[0], oy = sy * L[1], oz = sz * L[2];
-        for (std::int64_t k = bin_start[c]; k < bin_start[c + 1]; ++k) {
-          const std::int32_t j = bin_members[k];
-          if (!own || static_cast<std::size_t>(j) > i) visit(j, code, ox, oy, oz);
-        }
-      }
 }
 
 }  // namespace
@@ -169,16 +136,16 @@ void NeighborList::build(const Particles& p, const Eigen::Vector3d& L, double sk
       const std::size_t s = J.size();
       const double xi = p.x[i], yi = p.y[i], zi = p.z[i], ci = p.radius[i] + half_skin_[i];
       if (brute) {
-        for_candidates(i, p, L, nb, bin_of, bin_start, bin_members, brute,
-                       [&](std::int32_t j, std::uint8_t code, double ox, double oy, double oz) {
-                         const std::size_t u = static_cast<std::size_t>(j);
-                         const double dx = xi - p.x[u] + ox, dy = yi - p.y[u] + oy,
-                                      dz = zi - p.z[u] + oz, rc = ci + p.radius[u] + half_skin_[u];
-                         if (dx * dx + dy * dy + dz * dz < rc * rc) {
-                           J.push_back(j);
-                           C.push_back(code);
-                         }
-                       });
+        for_later_images(
+            i, p, L, [&](std::int32_t j, std::uint8_t code, double ox, double oy, double oz) {
+              const std::size_t u = static_cast<std::size_t>(j);
+              const double dx = xi - p.x[u] + ox, dy = yi - p.y[u] + oy, dz = zi - p.z[u] + oz,
+                           rc = ci + p.radius[u] + half_skin_[u];
+              if (dx * dx + dy * dy + dz * dz < rc * rc) {
+                J.push_back(j);
+                C.push_back(code);
+              }
+            });
       } else {
         const int b = bin_of[i];
         const int ibx = b % nb[0], iby = (b / nb[0]) % nb[1], ibz = b / (nb[0] * nb[1]);
