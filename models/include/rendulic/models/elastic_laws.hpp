@@ -14,7 +14,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <string>
 #include <type_traits>
 #include <vector>
@@ -82,7 +81,7 @@ inline Matrix6d anisotropic_matrix(double b, double g, double beta_a,
 }  // namespace detail
 
 // Family 1: d_sigma = K tr(d_eps) I + 2 G d_eps^D, K and G times (P/p_ref)^n_p.
-struct IsotropicElastic {
+struct IsotropicElastic : WithoutPlasticity {
   static constexpr std::string_view kName = "isotropic_elastic";
   enum : int { kK, kG, kNp, kPref, kCf, kNnu, kNuRef, kCount };
   static const std::vector<ParameterInfo>& parameter_info();
@@ -110,20 +109,10 @@ struct IsotropicElastic {
     moduli(p, s, &k, &g);
     return detail::anisotropic_matrix(k, g, 0.0, Eigen::Matrix3d::Zero());
   }
-  static Vector6d initial_internal(const double*, const Eigen::Matrix3d&, const Eigen::Matrix3d&) {
-    return Vector6d::Zero();
-  }
-  static bool admissible(const double*, const MaterialState&, std::string*) { return true; }
-  template <typename T>
-  static void correct(const T*, StateT<T>*, bool) {}
-  template <typename T>
-  static T yield_function(const T*, const StateT<T>&) {
-    return T(-std::numeric_limits<double>::infinity());
-  }
 };
 
 // Family 2 (Kumar, Luding, Magnanimo 2014), see the file comment.
-struct AnisotropicElastic {
+struct AnisotropicElastic : WithoutPlasticity {
   static constexpr std::string_view kName = "anisotropic_elastic";
   enum : int { kB, kG, kBetaA, kNp, kPref, kAg, kCf, kNnu, kNuRef, kCount };
   static const std::vector<ParameterInfo>& parameter_info();
@@ -152,16 +141,6 @@ struct AnisotropicElastic {
     double b, g;
     moduli(p, s, &b, &g);
     return detail::anisotropic_matrix(b, g, p[kBetaA], dev(s.fabric));
-  }
-  static Vector6d initial_internal(const double*, const Eigen::Matrix3d&, const Eigen::Matrix3d&) {
-    return Vector6d::Zero();
-  }
-  static bool admissible(const double*, const MaterialState&, std::string*) { return true; }
-  template <typename T>
-  static void correct(const T*, StateT<T>*, bool) {}
-  template <typename T>
-  static T yield_function(const T*, const StateT<T>&) {
-    return T(-std::numeric_limits<double>::infinity());
   }
 };
 

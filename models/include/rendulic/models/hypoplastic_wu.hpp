@@ -13,7 +13,6 @@
 #pragma once
 
 #include <cmath>
-#include <limits>
 #include <string>
 #include <vector>
 
@@ -21,7 +20,8 @@
 
 namespace rendulic::models {
 
-struct HypoplasticWu {
+// Rate-independent but without a yield surface: admissible is its own (tr(sigma) > 0).
+struct HypoplasticWu : WithoutPlasticity {
   static constexpr std::string_view kName = "hypoplastic_wu";
   enum : int { kC1, kC2, kC3, kC4, kCount };
   static const std::vector<ParameterInfo>& parameter_info();
@@ -53,21 +53,12 @@ struct HypoplasticWu {
     if (n > 0.0) t += to_mandel(nonlinear_term(p, s.stress)) * to_mandel(de).transpose() / n;
     return t;
   }
-  static Vector6d initial_internal(const double*, const Eigen::Matrix3d&, const Eigen::Matrix3d&) {
-    return Vector6d::Zero();
-  }
   static bool admissible(const double*, const MaterialState& s, std::string* why) {
     if (s.stress.trace() > 0.0) return true;
     if (why)
       *why = "hypoplastic_wu needs tr(sigma) > 0 (compression), got " + format_g(s.stress.trace()) +
              " Pa";
     return false;
-  }
-  template <typename T>
-  static void correct(const T*, StateT<T>*, bool) {}
-  template <typename T>
-  static T yield_function(const T*, const StateT<T>&) {
-    return T(-std::numeric_limits<double>::infinity());
   }
 };
 

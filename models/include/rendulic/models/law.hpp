@@ -10,6 +10,7 @@
 #pragma once
 
 #include <Eigen/Dense>
+#include <limits>
 #include <memory>
 #include <string>
 #include <string_view>
@@ -48,6 +49,22 @@ struct RateT {
   bool plastic = false;  // the plastic (loading) branch was active
 };
 using LawRate = RateT<double>;
+
+// The parts of a scalar-generic law (law_model.hpp) that a law without plasticity and without
+// internal variables shares: no internal variables, every state admissible, nothing to
+// correct, no yield surface (f = -inf). Such a law derives from it and states only its rate.
+struct WithoutPlasticity {
+  static Vector6d initial_internal(const double*, const Eigen::Matrix3d&, const Eigen::Matrix3d&) {
+    return Vector6d::Zero();
+  }
+  static bool admissible(const double*, const MaterialState&, std::string*) { return true; }
+  template <typename T>
+  static void correct(const T*, StateT<T>*, bool) {}
+  template <typename T>
+  static T yield_function(const T*, const StateT<T>&) {
+    return T(-std::numeric_limits<double>::infinity());
+  }
+};
 
 struct ParameterInfo {
   std::string name;
