@@ -960,6 +960,22 @@ def draw_all(path, out, keep=False, jobs=1):
     return [w for _, ws, _ in drawn for w in ws], [n for _, _, ns in drawn for n in ns], kept
 
 
+def fork_with_pipe():
+    """(pid as os.fork returns it, read end, write end) of a pipe and a forked process, or None
+    when there is no pipe or no process to spare (a pipe made for a fork that failed is closed
+    again)."""
+    try:
+        r, w = os.pipe()
+    except OSError:
+        return None
+    try:
+        return os.fork(), r, w
+    except OSError:
+        os.close(r)
+        os.close(w)
+        return None
+
+
 def draw_forked(path, out, count, jobs):
     """draw_all's figures in `jobs` processes: this one draws figures 0, jobs, 2 jobs, ... and
     each forked child k draws k, k + jobs, ... and sends its lists back through a pipe. Stopped
@@ -991,18 +1007,12 @@ def draw_forked(path, out, count, jobs):
         # to draw on: the signal waits until the entry is made (and the child, until it will die
         # with this process).
         signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGTERM})
-        try:
-            r, w = os.pipe()
-            try:
-                pid = os.fork()
-            except OSError:
-                os.close(r)
-                os.close(w)
-                raise
-        except OSError:  # no process (or pipe) to spare: this one draws that share too
+        forked = fork_with_pipe()
+        if forked is None:  # no process (or pipe) to spare: this one draws that share too
             signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGTERM})
             mine.append(k)
             continue
+        pid, r, w = forked
         if pid == 0:
             signal.signal(signal.SIGTERM, signal.SIG_DFL)
             try:  # PR_SET_PDEATHSIG: killed with this process, whatever kills it
