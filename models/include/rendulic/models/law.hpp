@@ -52,7 +52,8 @@ using LawRate = RateT<double>;
 
 // The parts of a scalar-generic law (law_model.hpp) that a law without plasticity and without
 // internal variables shares: no internal variables, every state admissible, nothing to
-// correct, no yield surface (f = -inf). Such a law derives from it and states only its rate.
+// correct, no yield surface (f = -inf). Such a law derives from it and states the rest (its
+// parameters, rate and tangent); one that needs its own admissible() still writes that.
 struct WithoutPlasticity {
   static Vector6d initial_internal(const double*, const Eigen::Matrix3d&, const Eigen::Matrix3d&) {
     return Vector6d::Zero();

@@ -7,6 +7,7 @@
 //   static bool admissible(const double* p, const MaterialState& s, std::string* why)
 //   template <class T> static void correct(const T* p, StateT<T>* s, bool on_surface)
 //   template <class T> static T yield_function(const T* p, const StateT<T>& s)  (-inf: none)
+// (a law without plasticity takes the last four from WithoutPlasticity, law.hpp)
 // so that calibration code can call M::rate<ceres::Jet<...>> directly (docs/calibration.md
 // "Predictions and derivatives": autodiff through the law where the law is smooth), and integrate
 // the law with Jets through the driver (driver_core.hpp) via StaticLawOps.
