@@ -50,7 +50,8 @@ DemSystem packing(std::size_t n, double nu) {
 
 // Args: volume fraction (percent), threads, particles, friction mu in hundredths (0: the
 // frictionless engine; > 0: the same state restored with friction, its springs starting at
-// zero, docs/performance.md "Friction").
+// zero, docs/performance.md "Friction"), and the pair loop's form (DemSystem::set_fixed_loop:
+// 0 chosen by timing, 1 branchy, 2 compact).
 void BM_Step(benchmark::State& state) {
   const double nu = state.range(0) / 100.0;
   const int threads = static_cast<int>(state.range(1));
@@ -64,18 +65,22 @@ void BM_Step(benchmark::State& state) {
   DemSystem s = mu > 0 ? DemSystem::restore(cache.at(key).save(), options) : cache.at(key);
   omp_set_num_threads(threads);
   s.set_fixed_team(threads);  // this many threads, not the team the engine would choose
+  s.set_fixed_loop(static_cast<int>(state.range(4)));
   const Eigen::Vector3d D(400.0, -200.0, -200.0);  // strain-controlled extension
   for (auto _ : state) s.step(D);
   // items_per_second = particle-steps per second: ns per particle-step = 1e9 / items_per_second.
   state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(n));
 }
 BENCHMARK(BM_Step)
-    ->Args({64, 1, 9261, 0})
-    ->Args({82, 1, 9261, 0})
-    ->Args({64, 2, 9261, 0})
-    ->Args({82, 2, 9261, 0})
-    ->Args({64, 1, 9261, 50})
-    ->Args({82, 1, 9261, 50})
+    ->Args({64, 1, 9261, 0, 0})
+    ->Args({82, 1, 9261, 0, 0})
+    ->Args({64, 2, 9261, 0, 0})
+    ->Args({82, 2, 9261, 0, 0})
+    ->Args({64, 1, 9261, 50, 0})
+    ->Args({82, 1, 9261, 50, 0})
+    // The loop's two forms against N (docs/performance.md "The contact test and the branch
+    // predictor").
+    ->ArgsProduct({{64, 82}, {1}, {4000, 9261}, {0}, {0, 1, 2}})
     ->Unit(benchmark::kMicrosecond)
     ->UseRealTime();
 

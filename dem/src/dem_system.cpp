@@ -362,7 +362,16 @@ int DemSystem::choose_team(bool* adaptive) {
 // The pair forces of the rows of block b: partner shares go to the partner's accumulator or to
 // the block's foreign slot, the rows' own sums to their accumulators. Only this block's rows and
 // slots are written, and in an order fixed by the list alone.
-template <bool kStress>
+//
+// kCompact: each row's touching entries are first gathered (branch-free) into a short buffer,
+// then the law runs on them alone. The branchy loop (if not touching, next entry) costs a
+// mispredicted branch per entry the predictor cannot foresee; it learns the pattern of a
+// whole step when the list is short (same entries, same outcomes step after step), not when
+// it is long: at nu = 0.64 (a quarter of the entries touch) one thread's step at N = 9261
+// takes 1.6x as long as with the buffer, at N = 4000 0.8x (docs/performance.md "The contact
+// test and the branch predictor"). Both forms give the same bits; the step chooses by
+// timing (DemSystem::step_impl).
+template <bool kStress, bool kCompact>
 void DemSystem::force_block(std::size_t b) {
   const std::size_t n = p_.size();
   const Eigen::Vector3d L = cell_.lengths();
@@ -393,13 +402,8 @@ void DemSystem::force_block(std::size_t b) {
     const double ri = P[4 * i + 3];
     const std::int64_t end = off[i + 1];
     V4 fi = {}, si = {};
-    for (std::int64_t e = off[i]; e < end; ++e) {
-      const std::size_t j = static_cast<std::size_t>(idx[e]);
-      const V4 l = pi - load4(P + 4 * j);  // branch vector x_i - x_j (images: slots)
-      const V4 l2 = l * l;
-      const double r2 = l2[0] + l2[1] + l2[2];
-      const double R = ri + P[4 * j + 3];
-      if (r2 >= R * R) continue;
+    // The pair (i, j) in contact: l = x_i - x_j (images: slots), r2 = |l|^2, R = r_i + r_j.
+    const auto pair = [&](std::size_t j, const V4& l, double r2, double R) {
       const double d = std::sqrt(r2);
       const double inv = 1.0 / d;
       // The contact law (contact.hpp) as a multiple of l, with l . v_rel, v_rel the true
@@ -411,6 +415,38 @@ void DemSystem::force_block(std::size_t b) {
       fi += g;
       store4(wj + 4, load4(wj + 4) - g);
       if constexpr (kStress) si += l * g;
+    };
+    if constexpr (kCompact) {
+      // Every entry is written at the next free place, which only a touching one advances.
+      constexpr std::int64_t kChunk = 64;
+      alignas(32) V4 cl[kChunk];
+      double cr2[kChunk], cR[kChunk];
+      std::int32_t cj[kChunk];
+      for (std::int64_t e0 = off[i]; e0 < end; e0 += kChunk) {
+        const std::int64_t e1 = std::min(end, e0 + kChunk);
+        std::size_t k = 0;
+        for (std::int64_t e = e0; e < e1; ++e) {
+          const std::size_t j = static_cast<std::size_t>(idx[e]);
+          const V4 l = pi - load4(P + 4 * j);
+          const V4 l2 = l * l;
+          const double r2 = l2[0] + l2[1] + l2[2];
+          const double R = ri + P[4 * j + 3];
+          cl[k] = l, cr2[k] = r2, cR[k] = R, cj[k] = idx[e];
+          k += r2 < R * R;
+        }
+        for (std::size_t q = 0; q < k; ++q)
+          pair(static_cast<std::size_t>(cj[q]), cl[q], cr2[q], cR[q]);
+      }
+    } else {
+      for (std::int64_t e = off[i]; e < end; ++e) {
+        const std::size_t j = static_cast<std::size_t>(idx[e]);
+        const V4 l = pi - load4(P + 4 * j);
+        const V4 l2 = l * l;
+        const double r2 = l2[0] + l2[1] + l2[2];
+        const double R = ri + P[4 * j + 3];
+        if (r2 >= R * R) continue;
+        pair(j, l, r2, R);
+      }
     }
     store4(A + 8 * i, load4(A + 8 * i) + fi);
     if constexpr (kStress) {
@@ -819,8 +855,10 @@ void DemSystem::forces_of_thread(std::size_t t, std::size_t T, double half_kick)
     for (std::size_t b = b0; b < b1; ++b) force_block_friction<kStress, true>(b);
   else if (friction_)
     for (std::size_t b = b0; b < b1; ++b) force_block_friction<kStress, false>(b);
+  else if (compact_)
+    for (std::size_t b = b0; b < b1; ++b) force_block<kStress, true>(b);
   else
-    for (std::size_t b = b0; b < b1; ++b) force_block<kStress>(b);
+    for (std::size_t b = b0; b < b1; ++b) force_block<kStress, false>(b);
   if (T > 1) {
 #pragma omp barrier
   }
@@ -928,11 +966,15 @@ void DemSystem::step_measuring_stress(const Eigen::Vector3d& D) { step_impl<true
 
 template <bool kStress>
 void DemSystem::step_impl(const Eigen::Vector3d& D) {
-  // Step times (wall, without list builds) feed the team controller when it has a choice.
+  // Step times (wall, without list builds) feed the team controller when it has a choice, and
+  // the choice of the frictionless pair loop's form (force_block): the branchy one (1) or the
+  // compact one (2), which give the same bits, chosen by the same kind of timed windows.
   bool timed = false;
   const int team = choose_team(&timed);
-  const auto start =
-      timed ? std::chrono::steady_clock::now() : std::chrono::steady_clock::time_point{};
+  const bool loop_timed = !friction_ && fixed_loop_ == 0;
+  compact_ = fixed_loop_ > 0 ? fixed_loop_ == 2 : loop_timed && loop_controller_.choose(2) == 2;
+  const auto start = timed || loop_timed ? std::chrono::steady_clock::now()
+                                         : std::chrono::steady_clock::time_point{};
   last_team_ = team;
   const double dt = dt_, h = 0.5 * dt_;
   const Eigen::Vector3d s = (D * dt).array().exp();
@@ -1014,9 +1056,9 @@ void DemSystem::step_impl(const Eigen::Vector3d& D) {
   }
   double rebuild_seconds = 0;
   if (rebuild) {
-    const auto r0 = timed ? std::chrono::steady_clock::now() : start;
+    const auto r0 = timed || loop_timed ? std::chrono::steady_clock::now() : start;
     rebuild_list();
-    if (timed)
+    if (timed || loop_timed)
       rebuild_seconds =
           std::chrono::duration<double>(std::chrono::steady_clock::now() - r0).count();
     compute_forces<kStress>(h, team);
@@ -1026,10 +1068,15 @@ void DemSystem::step_impl(const Eigen::Vector3d& D) {
   if (friction_)  // in block order: the same sum on any team
     for (const double e : block_dissipation_) sliding_dissipation_ += e;
   ++steps_;
-  if (timed)
-    controller_.record(
-        team, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() -
-                  rebuild_seconds);
+  if (timed || loop_timed) {
+    const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() -
+        rebuild_seconds;
+    if (timed) controller_.record(team, seconds);
+    // The loop's windows count only steps with the team in use (not the team's explorations).
+    if (loop_timed && (!timed || team == controller_.current()))
+      loop_controller_.record(compact_ ? 2 : 1, seconds);
+  }
 }
 
 void DemSystem::advance(std::int64_t n, const Eigen::Vector3d& D) {

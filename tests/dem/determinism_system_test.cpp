@@ -1,8 +1,10 @@
 // Parallel determinism (dem_system.hpp): the force loop's blocks and their reduction order
 // depend on N only, so 1, 2 and 3 threads give bitwise the same particles after many steps with
 // list rebuilds and a servo (stress-controlled) phase, and so does a run that changes its team
-// size from step to step or restarts from a saved state on another thread count. A system
-// test because two threads on a shared machine may wait on each other for seconds.
+// size from step to step or restarts from a saved state on another thread count. The pair loop's
+// two forms (the branchy and the compact one, DemSystem::set_fixed_loop) give the same bits too,
+// so the form can be chosen by timing. A system test because two threads on a shared machine
+// may wait on each other for seconds.
 #include <gtest/gtest.h>
 #include <omp.h>
 
@@ -81,6 +83,29 @@ TEST(Determinism, ChangingTheTeamWhileRunningOrOnRestartChangesNothing) {
   omp_set_num_threads(saved);
   EXPECT_EQ(flat(a.particles()), flat(c.particles()));
   EXPECT_EQ(a.cell().lengths(), c.cell().lengths());
+}
+
+TEST(Determinism, BothFormsOfThePairLoopGiveTheSameBits) {
+  const int saved = omp_get_max_threads();
+  std::vector<std::vector<double>> results;
+  // Fixed forms on one and two threads, the form chosen by timing, and a form changing every
+  // 25 steps: a dilute gas (most entries not touching) compressed, then stress-controlled.
+  for (int form : {1, 2, 0, -1})
+    for (int threads : {1, 2}) {
+      omp_set_num_threads(threads);
+      DemSystem s = gas();
+      s.set_fixed_team(threads);
+      for (int k = 0; k < 600; k += 25) {
+        s.set_fixed_loop(form >= 0 ? form : 1 + (k / 25) % 2);
+        drive(s, k, k + 25);
+        if (form > 0) {
+          EXPECT_EQ(s.compact_loop(), form == 2);
+        }
+      }
+      results.push_back(flat(s.particles()));
+    }
+  omp_set_num_threads(saved);
+  for (std::size_t r = 1; r < results.size(); ++r) EXPECT_EQ(results[0], results[r]) << r;
 }
 
 }  // namespace

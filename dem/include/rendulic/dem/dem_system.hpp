@@ -137,6 +137,11 @@ class DemSystem {
   // omp_get_max_threads()); k > 0: always min(k, max_team(N, k)) threads (benchmarks).
   void set_fixed_team(int threads) { fixed_team_ = threads; }
   const TeamController& team_controller() const { return controller_; }
+  // The frictionless pair loop's form (force_block): 0 (the default) chosen while running by
+  // timing, 1 the branchy loop, 2 the compact one (tests, benchmarks). Results are the same.
+  void set_fixed_loop(int form) { fixed_loop_ = form; }
+  bool compact_loop() const { return compact_; }  // the form of the last step
+  const TeamController& loop_controller() const { return loop_controller_; }
   // Diagonal of the stress from the last force evaluation that computed it (servo steps).
   Eigen::Vector3d last_stress_diag() const { return last_stress_diag_; }
 
@@ -163,7 +168,8 @@ class DemSystem {
   // Inside a parallel region of T threads (or serially with T = 1): thread t's share of it.
   template <bool kStress>
   void forces_of_thread(std::size_t t, std::size_t T, double half_kick);
-  template <bool kStress>
+  // kCompact: the touching entries gathered first (the loop's two forms, dem_system.cpp).
+  template <bool kStress, bool kCompact>
   void force_block(std::size_t b);
   // The same with friction (docs/physics.md section 1b): normal and tangential forces, torques,
   // the history of each entry advanced when advancing_.
@@ -218,6 +224,10 @@ class DemSystem {
   std::vector<Top> tops_;
   TeamController controller_;
   int fixed_team_ = 0;
+  // The pair loop's form as a two-rung ladder: "size" 1 the branchy loop, 2 the compact one.
+  TeamController loop_controller_;
+  int fixed_loop_ = 0;
+  bool compact_ = false;
   int last_team_ = 1;
   // Friction (material().mu > 0): force_block_friction runs instead of force_block (its own
   // compaction and four-lane tangential law, dem_system.cpp).
