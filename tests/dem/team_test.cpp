@@ -1,7 +1,9 @@
 // The team-size rule and controller of DEM steps (team.hpp). The rule is checked on its own and
 // on real systems (which team a step actually used), the controller on synthetic step times:
 // a model machine where a team is faster (idle), slower by a descheduled member's time slice
-// per step (loaded), or one turning into the other. No wall clock is read.
+// per step (loaded), or one turning into the other. No wall clock is read. The pair loop's form
+// (DemSystem::set_fixed_loop), chosen by a controller of the same kind, is checked on a real
+// system: the default tries both forms, a fixed form and a frictional system never switch.
 #include "rendulic/dem/team.hpp"
 
 #include <gtest/gtest.h>
@@ -64,6 +66,44 @@ TEST(TeamRule, ASmallSystemStepsOnOneThreadAndALargerOneUsesTheTeam) {
   omp_set_num_threads(1);  // one thread available: no team, whatever is asked
   large.advance(1, Eigen::Vector3d::Zero());
   EXPECT_EQ(large.team(), 1);
+  omp_set_num_threads(saved);
+}
+
+TEST(LoopForm, TheDefaultTriesBothFormsAFixedOneAndFrictionNever) {
+  const int saved = omp_get_max_threads();
+  omp_set_num_threads(1);
+  SystemOptions o;
+  GasOptions g;
+  g.volume_fraction = 0.3;
+  g.n_particles = 1000;
+  const Eigen::Vector3d D = Eigen::Vector3d::Constant(-100.0);
+  // The default: the first window (20 ms of steps) is the branchy form, the next tries the
+  // compact one. The cap only bounds a broken controller's run.
+  DemSystem s = make_gas(o, g, 3);
+  bool seen[2] = {false, false};
+  for (int k = 0; k < 200000 && !(seen[0] && seen[1]); ++k) {
+    s.step(D);
+    seen[s.compact_loop() ? 1 : 0] = true;
+  }
+  EXPECT_TRUE(seen[0]);
+  EXPECT_TRUE(seen[1]);
+  EXPECT_GE(s.loop_controller().explorations(), 1);
+  // Fixed: the same form at every step, no window explored.
+  for (int form : {1, 2}) {
+    DemSystem f = make_gas(o, g, 3);
+    f.set_fixed_loop(form);
+    for (int k = 0; k < 3000; ++k) {
+      f.step(D);
+      ASSERT_EQ(f.compact_loop(), form == 2) << k;
+    }
+    EXPECT_EQ(f.loop_controller().explorations(), 0);
+  }
+  // Friction has its own loop: the controller is never consulted.
+  o.material.mu = 0.5;
+  DemSystem fr = make_gas(o, g, 3);
+  for (int k = 0; k < 3000; ++k) fr.step(D);
+  EXPECT_FALSE(fr.compact_loop());
+  EXPECT_EQ(fr.loop_controller().explorations(), 0);
   omp_set_num_threads(saved);
 }
 
