@@ -365,12 +365,13 @@ int DemSystem::choose_team(bool* adaptive) {
 //
 // kCompact: each row's touching entries are first gathered (branch-free) into a short buffer,
 // then the law runs on them alone. The branchy loop (if not touching, next entry) costs a
-// mispredicted branch per entry the predictor cannot foresee; it learns the pattern of a
-// whole step when the list is short (same entries, same outcomes step after step), not when
-// it is long: at nu = 0.64 (a quarter of the entries touch) one thread's step at N = 9261
-// takes 1.6x as long as with the buffer, at N = 4000 0.8x (docs/performance.md "The contact
-// test and the branch predictor"). Both forms give the same bits; the step chooses by
-// timing (DemSystem::step_impl).
+// mispredicted branch per entry the predictor cannot foresee; it seems to learn the pattern
+// of a whole step when the list is short (same entries, same outcomes step after step), not
+// when it is long (inferred from timings; no hardware counters were available): at
+// nu = 0.64 (a quarter of the entries touch) one thread's step at N = 9261 takes 1.6x as long
+// as with the buffer, at N = 4000 0.8x (docs/performance.md "The contact test and the branch
+// predictor"). Both forms give the same bits; the step chooses by timing
+// (DemSystem::step_impl).
 template <bool kStress, bool kCompact>
 void DemSystem::force_block(std::size_t b) {
   const std::size_t n = p_.size();
