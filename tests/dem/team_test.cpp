@@ -47,19 +47,22 @@ TEST(TeamRule, BlocksArePowersOfTwoGrowingSlowerThanN) {
   EXPECT_EQ(block_count(9261), 4u);  // paper.toml's
 }
 
+// A dilute gas of n particles: cheap steps.
+DemSystem dilute_gas(std::size_t n, const SystemOptions& o = {}) {
+  GasOptions g;
+  g.volume_fraction = 0.3;
+  g.n_particles = n;
+  return make_gas(o, g, 3);
+}
+
 TEST(TeamRule, ASmallSystemStepsOnOneThreadAndALargerOneUsesTheTeam) {
   const int saved = omp_get_max_threads();
   omp_set_num_threads(2);
-  SystemOptions o;
-  GasOptions g;
-  g.volume_fraction = 0.3;
-  g.n_particles = 300;
-  DemSystem small = make_gas(o, g, 3);
+  DemSystem small = dilute_gas(300);
   small.set_fixed_team(2);  // even when asked for two threads
   small.advance(3, Eigen::Vector3d::Zero());
   EXPECT_EQ(small.team(), 1);
-  g.n_particles = 1000;
-  DemSystem large = make_gas(o, g, 3);
+  DemSystem large = dilute_gas(1000);
   large.set_fixed_team(2);
   large.advance(3, Eigen::Vector3d::Zero());
   EXPECT_EQ(large.team(), 2);
@@ -72,14 +75,10 @@ TEST(TeamRule, ASmallSystemStepsOnOneThreadAndALargerOneUsesTheTeam) {
 TEST(LoopForm, TheDefaultTriesBothFormsAFixedOneAndFrictionNever) {
   const int saved = omp_get_max_threads();
   omp_set_num_threads(1);
-  SystemOptions o;
-  GasOptions g;
-  g.volume_fraction = 0.3;
-  g.n_particles = 1000;
   const Eigen::Vector3d D = Eigen::Vector3d::Constant(-100.0);
   // The default: the first window (20 ms of steps) is the branchy form, the next tries the
   // compact one. The cap only bounds a broken controller's run.
-  DemSystem s = make_gas(o, g, 3);
+  DemSystem s = dilute_gas(1000);
   bool seen[2] = {false, false};
   for (int k = 0; k < 200000 && !(seen[0] && seen[1]); ++k) {
     s.step(D);
@@ -90,7 +89,7 @@ TEST(LoopForm, TheDefaultTriesBothFormsAFixedOneAndFrictionNever) {
   EXPECT_GE(s.loop_controller().explorations(), 1);
   // Fixed: the same form at every step, no window explored.
   for (int form : {1, 2}) {
-    DemSystem f = make_gas(o, g, 3);
+    DemSystem f = dilute_gas(1000);
     f.set_fixed_loop(form);
     for (int k = 0; k < 3000; ++k) {
       f.step(D);
@@ -99,8 +98,9 @@ TEST(LoopForm, TheDefaultTriesBothFormsAFixedOneAndFrictionNever) {
     EXPECT_EQ(f.loop_controller().explorations(), 0);
   }
   // Friction has its own loop: the controller is never consulted.
+  SystemOptions o;
   o.material.mu = 0.5;
-  DemSystem fr = make_gas(o, g, 3);
+  DemSystem fr = dilute_gas(1000, o);
   for (int k = 0; k < 3000; ++k) fr.step(D);
   EXPECT_FALSE(fr.compact_loop());
   EXPECT_EQ(fr.loop_controller().explorations(), 0);
