@@ -403,16 +403,29 @@ void DemSystem::force_block(std::size_t b) {
     const double ri = P[4 * i + 3];
     const std::int64_t end = off[i + 1];
     V4 fi = {}, si = {};
-    // The pair (i, j) in contact: l = x_i - x_j (images: slots), r2 = |l|^2, R = r_i + r_j.
-    const auto pair = [&](std::size_t j, const V4& l, double r2, double R) {
-      const double d = std::sqrt(r2);
+    // Entry e's pair (i, j): l = x_i - x_j (images: slots), r2 = |l|^2, R = r_i + r_j.
+    struct Pair {
+      V4 l;
+      std::size_t j;
+      double r2, R;
+    };
+    const auto entry = [&](std::int64_t e) {
+      const std::size_t j = static_cast<std::size_t>(idx[e]);
+      const V4 l = pi - load4(P + 4 * j);
+      const V4 l2 = l * l;
+      return Pair{l, j, l2[0] + l2[1] + l2[2], ri + P[4 * j + 3]};
+    };
+    // The force of a pair in contact.
+    const auto contact = [&](const Pair& c) {
+      const V4& l = c.l;
+      const double d = std::sqrt(c.r2);
       const double inv = 1.0 / d;
       // The contact law (contact.hpp) as a multiple of l, with l . v_rel, v_rel the true
       // relative velocity (peculiar part plus the affine part D l).
-      double* wj = W + 8 * j;  // the partner's velocity, then its force accumulator
+      double* wj = W + 8 * c.j;  // the partner's velocity, then its force accumulator
       const V4 lrel = l * (vi - load4(wj) + D * l);
       const double lv = lrel[0] + lrel[1] + lrel[2];
-      const V4 g = law.force_over_distance(R - d, inv, lv) * l;
+      const V4 g = law.force_over_distance(c.R - d, inv, lv) * l;
       fi += g;
       store4(wj + 4, load4(wj + 4) - g);
       if constexpr (kStress) si += l * g;
@@ -420,6 +433,8 @@ void DemSystem::force_block(std::size_t b) {
     if constexpr (kCompact) {
       // Every entry is written at the next free place, which only a touching one advances.
       constexpr std::int64_t kChunk = 64;
+      // One array per field, 48 bytes per entry: a buffer of padded 64-byte Pairs measured 2-5 %
+      // slower (BM_Step, compact form).
       alignas(32) V4 cl[kChunk];
       double cr2[kChunk], cR[kChunk];
       std::int32_t cj[kChunk];
@@ -427,26 +442,18 @@ void DemSystem::force_block(std::size_t b) {
         const std::int64_t e1 = std::min(end, e0 + kChunk);
         std::size_t k = 0;
         for (std::int64_t e = e0; e < e1; ++e) {
-          const std::size_t j = static_cast<std::size_t>(idx[e]);
-          const V4 l = pi - load4(P + 4 * j);
-          const V4 l2 = l * l;
-          const double r2 = l2[0] + l2[1] + l2[2];
-          const double R = ri + P[4 * j + 3];
-          cl[k] = l, cr2[k] = r2, cR[k] = R, cj[k] = idx[e];
-          k += r2 < R * R;
+          const Pair c = entry(e);
+          cl[k] = c.l, cr2[k] = c.r2, cR[k] = c.R, cj[k] = idx[e];
+          k += c.r2 < c.R * c.R;
         }
         for (std::size_t q = 0; q < k; ++q)
-          pair(static_cast<std::size_t>(cj[q]), cl[q], cr2[q], cR[q]);
+          contact(Pair{cl[q], static_cast<std::size_t>(cj[q]), cr2[q], cR[q]});
       }
     } else {
       for (std::int64_t e = off[i]; e < end; ++e) {
-        const std::size_t j = static_cast<std::size_t>(idx[e]);
-        const V4 l = pi - load4(P + 4 * j);
-        const V4 l2 = l * l;
-        const double r2 = l2[0] + l2[1] + l2[2];
-        const double R = ri + P[4 * j + 3];
-        if (r2 >= R * R) continue;
-        pair(j, l, r2, R);
+        const Pair c = entry(e);
+        if (c.r2 >= c.R * c.R) continue;
+        contact(c);
       }
     }
     store4(A + 8 * i, load4(A + 8 * i) + fi);
@@ -974,8 +981,9 @@ void DemSystem::step_impl(const Eigen::Vector3d& D) {
   const int team = choose_team(&timed);
   const bool loop_timed = !friction_ && fixed_loop_ == 0;
   compact_ = fixed_loop_ > 0 ? fixed_loop_ == 2 : loop_timed && loop_controller_.choose(2) == 2;
-  const auto start = timed || loop_timed ? std::chrono::steady_clock::now()
-                                         : std::chrono::steady_clock::time_point{};
+  const bool clocked = timed || loop_timed;
+  const auto start =
+      clocked ? std::chrono::steady_clock::now() : std::chrono::steady_clock::time_point{};
   last_team_ = team;
   const double dt = dt_, h = 0.5 * dt_;
   const Eigen::Vector3d s = (D * dt).array().exp();
@@ -1057,9 +1065,9 @@ void DemSystem::step_impl(const Eigen::Vector3d& D) {
   }
   double rebuild_seconds = 0;
   if (rebuild) {
-    const auto r0 = timed || loop_timed ? std::chrono::steady_clock::now() : start;
+    const auto r0 = clocked ? std::chrono::steady_clock::now() : start;
     rebuild_list();
-    if (timed || loop_timed)
+    if (clocked)
       rebuild_seconds =
           std::chrono::duration<double>(std::chrono::steady_clock::now() - r0).count();
     compute_forces<kStress>(h, team);
@@ -1069,7 +1077,7 @@ void DemSystem::step_impl(const Eigen::Vector3d& D) {
   if (friction_)  // in block order: the same sum on any team
     for (const double e : block_dissipation_) sliding_dissipation_ += e;
   ++steps_;
-  if (timed || loop_timed) {
+  if (clocked) {
     const double seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() -
         rebuild_seconds;
