@@ -1,12 +1,8 @@
 // The DEM engine's step, forces and measures (docs/physics.md sections 1-3; scheme in
-// dem_system.hpp). The contact loop is the hot path: a per-particle gather over the half
-// neighbour list from packed records (position + radius, velocity, force accumulator: three
-// cache lines per partner), with the periodic image taken from a 27-entry shift table rather
-// than a rounding per pair. Measured alternatives that lost (docs/performance.md): a
-// branch-free first pass that compacts the touching pairs, and an AVX-512 gather version of
-// the pair loop; rows are ~9 entries long, too short for either to pay. With friction a
-// contact costs ~7x more, and there the touching entries are compacted and the tangential law
-// runs on four contacts at once (force_block_friction, docs/performance.md "Friction").
+// dem_system.hpp). The frictionless pair loop, the hot path, lives in pair_loop.cpp. With
+// friction a contact costs ~7x more, and there the touching entries are compacted and the
+// tangential law runs on four contacts at once (force_block_friction, docs/performance.md
+// "Friction").
 #include "rendulic/dem/dem_system.hpp"
 
 #include <omp.h>
@@ -26,24 +22,11 @@
 
 #include "rendulic/core/conventions.hpp"
 #include "rendulic/core/errors.hpp"
+#include "vec4.hpp"
 
 namespace rendulic::dem {
+using namespace vec4;
 namespace {
-// Four doubles handled as one vector (AVX with -march=native, SSE pairs otherwise); records are
-// 32-byte aligned (CacheAlignedAllocator). Without AVX, GCC notes at every use that passing
-// such a vector by value has another ABI than with it; these helpers are internal to this file
-// and inlined, so no ABI is involved.
-#if defined(__GNUC__) && !defined(__clang__)
-#pragma GCC diagnostic ignored "-Wpsabi"
-#endif
-typedef double V4 __attribute__((vector_size(32)));
-inline V4 load4(const double* p) { return *reinterpret_cast<const V4*>(p); }
-inline void store4(double* p, V4 v) { *reinterpret_cast<V4*>(p) = v; }
-inline double dot3(V4 a, V4 b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-inline V4 cross3(V4 a, V4 b) {
-  return V4{a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0], 0.0};
-}
-
 // e1 >= e2 stay the two largest values seen.
 inline void keep_two_largest(double e, double& e1, double& e2) {
   if (e > e1)
@@ -51,14 +34,6 @@ inline void keep_two_largest(double e, double& e1, double& e2) {
   else if (e > e2)
     e2 = e;
 }
-// The 27 periodic image shifts of the cell as 4-double records (fourth lane 0), by image code.
-void image_shifts(const Eigen::Vector3d& L, V4* shift) {
-  for (int c = 0; c < 27; ++c) {
-    const Eigen::Vector3d s = NeighborList::shift(static_cast<std::uint8_t>(c));
-    shift[c] = V4{s[0] * L[0], s[1] * L[1], s[2] * L[2], 0.0};
-  }
-}
-
 }  // namespace
 
 bool SystemOptions::IsValid(std::string* why) const {
@@ -338,6 +313,7 @@ void DemSystem::make_blocks() {
                               std::lower_bound(keys.begin(), keys.end(), key(e)) - keys.begin()));
   }
   slot_lo_[blocks] = slot_particle_.size();
+  if (!friction_) order_contacts_first();
   const std::size_t rows = n + slot_particle_.size();
   if (pos4_.size() < 4 * rows) pos4_.resize(4 * rows, 0.0);
   if (va8_.size() < 8 * rows) va8_.resize(8 * rows, 0.0);
@@ -357,112 +333,6 @@ int DemSystem::choose_team(bool* adaptive) {
   const int most = max_team(p_.size(), fixed_team_ > 0 ? std::min(fixed_team_, threads) : threads);
   *adaptive = fixed_team_ == 0 && most > 1;
   return *adaptive ? controller_.choose(most) : most;
-}
-
-// The pair forces of the rows of block b: partner shares go to the partner's accumulator or to
-// the block's foreign slot, the rows' own sums to their accumulators. Only this block's rows and
-// slots are written, and in an order fixed by the list alone.
-//
-// kCompact: each row's touching entries are first gathered (branch-free) into a short buffer,
-// then the law runs on them alone. The branchy loop (if not touching, next entry) costs a
-// mispredicted branch per entry the predictor cannot foresee; it seems to learn the pattern
-// of a whole step when the list is short (same entries, same outcomes step after step), not
-// when it is long (inferred from timings; no hardware counters were available): at
-// nu = 0.64 (a quarter of the entries touch) one thread's step at N = 9261 takes 1.6x as long
-// as with the buffer, at N = 4000 0.8x (docs/performance.md "The contact test and the branch
-// predictor"). Both forms give the same bits; the step chooses by timing
-// (DemSystem::step_impl).
-template <bool kStress, bool kCompact>
-void DemSystem::force_block(std::size_t b) {
-  const std::size_t n = p_.size();
-  const Eigen::Vector3d L = cell_.lengths();
-  // A pair is handled as whole 4-double records: one vector operation per record instead of
-  // three scalar ones. The fourth lanes carry the radii (positions) and zeros (velocities, the
-  // shifts, D), so that of the branch vector l holds r_i - r_j: it never enters a sum (r2 and
-  // l . v_rel add lanes 0-2 only) and leaves only an unused value in the accumulators' lane 3.
-  V4 shift[27];
-  image_shifts(L, shift);
-  const NormalContact law = options_.material.contact();
-  const V4 D = {last_D_[0], last_D_[1], last_D_[2], 0.0};
-  double* __restrict P = pos4_.data();
-  double* __restrict W = va8_.data();
-  double* __restrict A = va8_.data() + 4;
-  const std::int64_t* __restrict off = list_.offset.data();
-  const std::int32_t* __restrict idx = partner_.data();
-  double* __restrict sd = stress_scratch_.data();
-  const std::size_t lo = block_lo_[b], hi = block_lo_[b + 1];
-  for (std::size_t i = lo; i < hi; ++i) store4(A + 8 * i, V4{});
-  for (std::size_t s = slot_lo_[b]; s < slot_lo_[b + 1]; ++s) {
-    const std::size_t r = n + s, j = static_cast<std::size_t>(slot_particle_[s]);
-    store4(P + 4 * r, load4(P + 4 * j) - shift[slot_code_[s]]);
-    store4(W + 8 * r, load4(W + 8 * j));
-    store4(A + 8 * r, V4{});
-  }
-  for (std::size_t i = lo; i < hi; ++i) {
-    const V4 pi = load4(P + 4 * i), vi = load4(W + 8 * i);
-    const double ri = P[4 * i + 3];
-    const std::int64_t end = off[i + 1];
-    V4 fi = {}, si = {};
-    // Entry e's pair (i, j): l = x_i - x_j (images: slots), r2 = |l|^2, R = r_i + r_j.
-    struct Pair {
-      V4 l;
-      std::size_t j;
-      double r2, R;
-    };
-    const auto entry = [&](std::int64_t e) {
-      const std::size_t j = static_cast<std::size_t>(idx[e]);
-      const V4 l = pi - load4(P + 4 * j);
-      const V4 l2 = l * l;
-      return Pair{l, j, l2[0] + l2[1] + l2[2], ri + P[4 * j + 3]};
-    };
-    // The force of a pair in contact.
-    const auto contact = [&](const Pair& c) {
-      const V4& l = c.l;
-      const double d = std::sqrt(c.r2);
-      const double inv = 1.0 / d;
-      // The contact law (contact.hpp) as a multiple of l, with l . v_rel, v_rel the true
-      // relative velocity (peculiar part plus the affine part D l).
-      double* wj = W + 8 * c.j;  // the partner's velocity, then its force accumulator
-      const V4 lrel = l * (vi - load4(wj) + D * l);
-      const double lv = lrel[0] + lrel[1] + lrel[2];
-      const V4 g = law.force_over_distance(c.R - d, inv, lv) * l;
-      fi += g;
-      store4(wj + 4, load4(wj + 4) - g);
-      if constexpr (kStress) si += l * g;
-    };
-    if constexpr (kCompact) {
-      // Every entry is written at the next free place, which only a touching one advances.
-      constexpr std::int64_t kChunk = 64;
-      // One array per field, 48 bytes per entry: a buffer of padded 64-byte Pairs measured 2-5 %
-      // slower (BM_Step, compact form).
-      alignas(32) V4 cl[kChunk];
-      double cr2[kChunk], cR[kChunk];
-      std::int32_t cj[kChunk];
-      for (std::int64_t e0 = off[i]; e0 < end; e0 += kChunk) {
-        const std::int64_t e1 = std::min(end, e0 + kChunk);
-        std::size_t k = 0;
-        for (std::int64_t e = e0; e < e1; ++e) {
-          const Pair c = entry(e);
-          cl[k] = c.l, cr2[k] = c.r2, cR[k] = c.R, cj[k] = idx[e];
-          k += c.r2 < c.R * c.R;
-        }
-        for (std::size_t q = 0; q < k; ++q)
-          contact(Pair{cl[q], static_cast<std::size_t>(cj[q]), cr2[q], cR[q]});
-      }
-    } else {
-      for (std::int64_t e = off[i]; e < end; ++e) {
-        const Pair c = entry(e);
-        if (c.r2 >= c.R * c.R) continue;
-        contact(c);
-      }
-    }
-    store4(A + 8 * i, load4(A + 8 * i) + fi);
-    if constexpr (kStress) {
-      sd[3 * i] = si[0];
-      sd[3 * i + 1] = si[1];
-      sd[3 * i + 2] = si[2];
-    }
-  }
 }
 
 // force_block with friction (contact.hpp, TangentialContact; docs/physics.md section 1b). The

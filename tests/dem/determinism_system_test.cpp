@@ -108,5 +108,70 @@ TEST(Determinism, BothFormsOfThePairLoopGiveTheSameBits) {
   for (std::size_t r = 1; r < results.size(); ++r) EXPECT_EQ(results[0], results[r]) << r;
 }
 
+// The branchy loop visits each row's contacts first and keeps that order as contacts come and
+// go (pair_loop.cpp); its forces at rest, after compression, extension and a small move of
+// every particle that made and broke contacts since the rows were ordered, against an
+// independent all-pairs sum of the contact law (k delta - gamma v_n) n, v_n from the relative
+// velocity D l of the cell's strain rate (minimum image; the cell is more than twice the
+// largest pair distance).
+TEST(Determinism, ForcesAtRestMatchAnAllPairsSum) {
+  const int saved = omp_get_max_threads();
+  omp_set_num_threads(1);
+  SystemOptions o;
+  GasOptions g;
+  g.n_particles = 1500;
+  g.volume_fraction = 0.4;
+  g.velocity = 50.0;
+  DemSystem s = make_gas(o, g, 7);
+  s.set_fixed_loop(1);
+  CompressOptions c;
+  c.target_nu = 0.66;
+  c.rate_max = c.rate_min = 3000;
+  compress_isotropic(s, c);
+  const Eigen::Vector3d D(400.0, -200.0, -200.0);
+  for (int k = 0; k < 300; ++k) s.step(D);
+  // Every particle moved by up to 0.01 <r> (well within the list's skin: the contact count
+  // below checks that the list still holds every pair), then the forces at rest by the same
+  // loop: rows ordered at the old positions meet contacts made and broken since.
+  Particles& q = s.mutable_particles();
+  const double r = s.material().r_mean;
+  for (std::size_t i = 0; i < q.size(); ++i) {
+    q.x[i] += 0.01 * r * std::sin(1.7 * static_cast<double>(i));
+    q.y[i] += 0.01 * r * std::sin(2.3 * static_cast<double>(i) + 1.0);
+    q.z[i] += 0.01 * r * std::sin(3.1 * static_cast<double>(i) + 2.0);
+  }
+  s.zero_velocities();
+  omp_set_num_threads(saved);
+  const Particles& p = s.particles();
+  const Eigen::Vector3d L = s.cell().lengths();
+  const double k = s.material().k, gamma = s.material().gamma;
+  const std::size_t n = p.size();
+  std::vector<Eigen::Vector3d> f(n, Eigen::Vector3d::Zero());
+  double largest = 0;
+  std::size_t contacts = 0;
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t j = i + 1; j < n; ++j) {
+      Eigen::Vector3d l(p.x[i] - p.x[j], p.y[i] - p.y[j], p.z[i] - p.z[j]);
+      for (int a = 0; a < 3; ++a) l[a] -= L[a] * std::round(l[a] / L[a]);
+      const double d = l.norm(), delta = p.radius[i] + p.radius[j] - d;
+      if (delta <= 0) continue;
+      // At rest the dashpot still sees the cell's strain rate: v_i - v_j = D l.
+      const double rate = l.dot(D.cwiseProduct(l)) / d;
+      const Eigen::Vector3d fij = (k * delta - gamma * rate) * l / d;
+      f[i] += fij;
+      f[j] -= fij;
+      largest = std::max(largest, k * delta);
+      ++contacts;
+    }
+  ASSERT_GT(contacts, n);  // a connected packing, not a gas
+  ASSERT_EQ(s.contacts().size(), contacts);
+  ASSERT_GT(L.minCoeff(), 4.0 * *std::max_element(p.radius.begin(), p.radius.end()));
+  for (std::size_t i = 0; i < n; ++i) {
+    EXPECT_NEAR(p.fx[i], f[i][0], 1e-10 * largest) << i;
+    EXPECT_NEAR(p.fy[i], f[i][1], 1e-10 * largest) << i;
+    EXPECT_NEAR(p.fz[i], f[i][2], 1e-10 * largest) << i;
+  }
+}
+
 }  // namespace
 }  // namespace rendulic::dem

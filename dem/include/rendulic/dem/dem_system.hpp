@@ -159,6 +159,7 @@ class DemSystem {
   void pack_positions();
   void note_list_built();  // after every build: blocks, targets, packed positions
   void make_blocks();
+  void order_contacts_first();  // partner_first_ and first_end_ (frictionless)
   // Team size of the next step; *adaptive: the controller chose it (the step is timed).
   int choose_team(bool* adaptive);
   // Forces at the current positions from the velocities in va8_; then, if half_kick != 0,
@@ -215,6 +216,11 @@ class DemSystem {
   // the partner lies outside the entry's block or is seen through another image.
   std::vector<std::size_t> block_lo_, slot_lo_;
   std::vector<std::int32_t> slot_particle_, partner_;
+  // Frictionless: each row of partner_ with its entries in contact first, then the others, each
+  // part in the list's order (ordered at every build, and again by force_block when the row's
+  // contacts change); first_end_[i]: the end of row i's first part.
+  std::vector<std::int32_t> partner_first_;
+  std::vector<std::int64_t> first_end_;
   std::vector<std::uint8_t> slot_code_;  // the periodic image of each slot (NeighborList code)
   std::int64_t blocks_builds_ = -1;      // list build the blocks belong to
   // Per-thread partial results of a step (two largest excesses), padded to a cache line.
