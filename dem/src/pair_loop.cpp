@@ -21,27 +21,19 @@ namespace rendulic::dem {
 using namespace vec4;
 namespace {
 
-// a * b + c and c - a * b, each rounded once where the hardware fuses (FMA) and never fused
+// a * b + c (kNegate: c - a * b), rounded once where the hardware fuses (FMA) and never fused
 // otherwise: this file is compiled without implicit contraction (-ffp-contract=off,
 // dem/CMakeLists.txt), so a sum's rounding is fixed by the source, not by what the compiler
 // fuses around it in each context: the loop's forms and a row's two ways of taking its sums
-// give the same bits.
+// give the same bits. (c - a * b as (-a) * b + c costs an extra negation: 3 % of the step.)
+template <bool kNegate = false>
 inline V4 fused_multiply_add(V4 a, V4 b, V4 c) {
 #if defined(__FMA__)
-  return reinterpret_cast<V4>(_mm256_fmadd_pd(reinterpret_cast<__m256d>(a),
-                                              reinterpret_cast<__m256d>(b),
-                                              reinterpret_cast<__m256d>(c)));
+  const __m256d x = reinterpret_cast<__m256d>(a), y = reinterpret_cast<__m256d>(b),
+                z = reinterpret_cast<__m256d>(c);
+  return reinterpret_cast<V4>(kNegate ? _mm256_fnmadd_pd(x, y, z) : _mm256_fmadd_pd(x, y, z));
 #else
-  return a * b + c;
-#endif
-}
-inline V4 fused_negative_multiply_add(V4 a, V4 b, V4 c) {
-#if defined(__FMA__)
-  return reinterpret_cast<V4>(_mm256_fnmadd_pd(reinterpret_cast<__m256d>(a),
-                                               reinterpret_cast<__m256d>(b),
-                                               reinterpret_cast<__m256d>(c)));
-#else
-  return c - a * b;
+  return kNegate ? c - a * b : a * b + c;
 #endif
 }
 
@@ -49,8 +41,8 @@ inline V4 fused_negative_multiply_add(V4 a, V4 b, V4 c) {
 // entries e with touches(e) first, then the others, each part in the list's order. Returns the
 // end of the first part.
 template <class Touches>
-std::int64_t contacts_first(const std::int32_t* list_order, std::int32_t* first,
-                            std::int64_t begin, std::int64_t end, Touches&& touches) {
+std::int64_t contacts_first(const std::int32_t* list_order, std::int32_t* first, std::int64_t begin,
+                            std::int64_t end, Touches&& touches) {
   std::int64_t w = begin;
   for (std::int64_t e = begin; e < end; ++e)
     if (touches(e)) first[w++] = list_order[e];
@@ -157,7 +149,7 @@ void DemSystem::force_block(std::size_t b) {
       const double s = law.force_over_distance(c.R - d, inv, lv);
       const V4 sv = {s, s, s, s};
       fi = fused_multiply_add(sv, l, fi);
-      store4(share, fused_negative_multiply_add(sv, l, load4(share)));
+      store4(share, fused_multiply_add<true>(sv, l, load4(share)));
       if constexpr (kStress) si = fused_multiply_add(l, sv * l, si);
     };
     if constexpr (kCompact) {
