@@ -313,7 +313,7 @@ void DemSystem::make_blocks() {
                               std::lower_bound(keys.begin(), keys.end(), key(e)) - keys.begin()));
   }
   slot_lo_[blocks] = slot_particle_.size();
-  if (!friction_) order_contacts_first();
+  if (!friction_) reset_contacts_first();
   const std::size_t rows = n + slot_particle_.size();
   if (pos4_.size() < 4 * rows) pos4_.resize(4 * rows, 0.0);
   if (va8_.size() < 8 * rows) va8_.resize(8 * rows, 0.0);

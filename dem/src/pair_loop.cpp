@@ -3,7 +3,7 @@
 // from packed records (position + radius; velocity + force accumulator), the periodic images
 // through the blocks' foreign slots. Two forms that give the same bits (branchy, and compact:
 // the touching entries gathered first), the step choosing by timing; the branchy one meets
-// each row's contacts first (order_contacts_first, docs/performance.md "Contacts first in each
+// each row's contacts first (partner_first_, docs/performance.md "Contacts first in each
 // row"). Measured alternatives that lost are listed in docs/performance.md.
 #if defined(__AVX__)
 #include <immintrin.h>
@@ -54,28 +54,13 @@ std::int64_t contacts_first(const std::int32_t* list_order, std::int32_t* first,
 
 }  // namespace
 
-void DemSystem::order_contacts_first() {
-  // Each row of partner_ split by the contact test at the build's positions: until the row
-  // changes, the branchy loop meets its contacts first and its other entries after them, so
-  // its contact test changes outcome about once per row instead of at random (at nu = 0.82
-  // one entry in six does not touch). partner_ itself keeps the list's order, which fixes the
-  // order of a row's sums (force_block).
-  const std::size_t n = p_.size();
-  V4 shift[27];
-  image_shifts(cell_.lengths(), shift);
-  partner_first_.resize(partner_.size());
-  first_end_.resize(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    const V4 xi = {p_.x[i], p_.y[i], p_.z[i], 0.0};
-    first_end_[i] = contacts_first(
-        partner_.data(), partner_first_.data(), list_.offset[i], list_.offset[i + 1],
-        [&](std::int64_t e) {
-          const std::size_t j = static_cast<std::size_t>(list_.index[e]);
-          const V4 l = xi - (V4{p_.x[j], p_.y[j], p_.z[j], 0.0} - shift[list_.shift_code[e]]);
-          const double R = p_.radius[i] + p_.radius[j];
-          return dot3(l, l) < R * R;
-        });
-  }
+void DemSystem::reset_contacts_first() {
+  // At a build every entry starts in the first part (the list's order): the next branchy step
+  // finds each row whose entries do not all touch stale and orders it there, with the loop's
+  // own geometry (force_block). partner_ keeps the list's order, which fixes the order of a
+  // row's sums.
+  partner_first_ = partner_;
+  first_end_.assign(list_.offset.begin() + 1, list_.offset.end());
 }
 
 // The pair forces of the rows of block b: partner shares go to the partner's accumulator or to

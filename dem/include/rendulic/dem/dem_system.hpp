@@ -159,7 +159,7 @@ class DemSystem {
   void pack_positions();
   void note_list_built();  // after every build: blocks, targets, packed positions
   void make_blocks();
-  void order_contacts_first();  // partner_first_ and first_end_ (frictionless)
+  void reset_contacts_first();  // partner_first_ and first_end_ (frictionless)
   // Team size of the next step; *adaptive: the controller chose it (the step is timed).
   int choose_team(bool* adaptive);
   // Forces at the current positions from the velocities in va8_; then, if half_kick != 0,
@@ -217,7 +217,7 @@ class DemSystem {
   std::vector<std::size_t> block_lo_, slot_lo_;
   std::vector<std::int32_t> slot_particle_, partner_;
   // Frictionless: each row of partner_ with its entries in contact first, then the others, each
-  // part in the list's order (ordered at every build, and again by force_block when the row's
+  // part in the list's order (reset at every build, ordered by force_block when the row's
   // contacts change); first_end_[i]: the end of row i's first part.
   std::vector<std::int32_t> partner_first_;
   std::vector<std::int64_t> first_end_;
