@@ -84,5 +84,24 @@ BENCHMARK(BM_Step)
     ->Unit(benchmark::kMicrosecond)
     ->UseRealTime();
 
+// The stress of a state (DemSystem::contacts, then the sum): what the isotropic stage's servo
+// asks for every 20 steps. Args: volume fraction (percent), threads (the team of the last
+// step, which contacts() uses), particles.
+void BM_Stress(benchmark::State& state) {
+  const double nu = state.range(0) / 100.0;
+  const int threads = static_cast<int>(state.range(1));
+  const std::size_t n = static_cast<std::size_t>(state.range(2));
+  DemSystem s = packing(n, nu);
+  omp_set_num_threads(threads);
+  s.set_fixed_team(threads);
+  s.step(Eigen::Vector3d::Zero());
+  for (auto _ : state) benchmark::DoNotOptimize(s.stress());
+  state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(n));
+}
+BENCHMARK(BM_Stress)
+    ->ArgsProduct({{64, 82}, {1, 2}, {1000, 9261}})
+    ->Unit(benchmark::kMicrosecond)
+    ->UseRealTime();
+
 }  // namespace
 }  // namespace rendulic::dem
