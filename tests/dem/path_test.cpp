@@ -2,7 +2,7 @@
 // number of the imposed rate at that sample's pressure, I = rate 2<r> sqrt(rho / P), also on
 // the steps shortened to land on samples and snapshots; the loading's snapshots land exactly
 // on their volume fractions without changing the loading; window means and their batch-means
-// standard errors; a path that holds an inertial number.
+// standard errors; a path and the isotropic loading that hold an inertial number.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -92,6 +92,36 @@ TEST(PathRecords, AHeldInertialNumberTakesItsRateFromThePressure) {
     run_path(again, b, [&](const Measures& x) { r.push_back(x); });
     for (std::size_t k = 1; k < r.size(); ++k) EXPECT_EQ(r[k].strain_rate, want) << target;
   }
+}
+
+// The isotropic loading holds its inertial number the same way, from the pressure that the
+// step before each rate update summed in its own force loop (step_measuring_stress): at every
+// sample the recorded rate gives the target at the sample's pressure, to the pressure's change
+// over those few steps. A pressure not measured there (the engine's last sum, from long ago,
+// or none: 0) would leave the rate at rate_min.
+TEST(PathRecords, TheIsotropicLoadingTakesItsRateFromThePressureOfItsOwnSteps) {
+  DemSystem sys = jammed(0.70);
+  const Material& m = sys.material();
+  const double P0 = sys.stress().trace() / 3.0;
+  CompressOptions o;
+  o.target_nu = 0.705;
+  o.rate_max = 6000.0;
+  o.rate_min = 100.0;
+  o.samples = 5;
+  o.inertial_number = expected_inertial(m, 2000.0, P0);  // 2000 1/s at the start
+  std::vector<Measures> rows;
+  const CompressSummary s =
+      compress_isotropic(sys, o, [&](const Measures& r) { rows.push_back(r); });
+  ASSERT_EQ(rows.size(), 5u);
+  EXPECT_GT(s.steps, 100);                             // several rate updates
+  for (std::size_t k = 1; k + 1 < rows.size(); ++k) {  // the last step is shortened to land
+    EXPECT_GT(rows[k].strain_rate, o.rate_min) << k;
+    EXPECT_LT(rows[k].strain_rate, o.rate_max) << k;
+    EXPECT_NEAR(rows[k].inertial_number, o.inertial_number, 0.01 * o.inertial_number) << k;
+  }
+  EXPECT_GT(rows[rows.size() - 2].pressure, 1.01 * P0);  // the pressure, and the rate, moved
+  EXPECT_NE(rows[1].strain_rate, rows[rows.size() - 2].strain_rate);
+  EXPECT_NEAR(sys.volume_fraction(), 0.705, 1e-12);
 }
 
 TEST(PathRecords, LoadingSnapshotsLandOnTheirVolumeFractions) {
