@@ -300,6 +300,28 @@ RelaxSummary relax_at_pressure(DemSystem& sys, double target, const RelaxOptions
       [&] { return std::abs(stress_diag.sum() / 3.0 - target) / target < kPressureHold; });
 }
 
+namespace {
+// A rate that holds an inertial number (isotropic.inertial_number, path.inertial_number):
+// clamp(I sqrt(P / rho) / (2 <r>), lo, hi), recomputed every kSteps steps from the pressure that
+// the step before summed in its own force loop (step_measuring_stress; the first time, before
+// any step, from stress()). stress() lists every contact on one thread: every 20 steps it cost
+// the isotropic stage two fifths of its time at N = 9261 (docs/performance.md "The isotropic
+// stage's pressure").
+struct HeldRate {
+  static constexpr int kSteps = 20;
+  double inertial = 0, lo = 0, hi = 0;
+  bool held() const { return inertial > 0; }
+  // Before step `it` (from 0): the rate of the coming steps, if it is due for an update.
+  void update(std::int64_t it, const DemSystem& sys, double* rate) const {
+    if (!held() || it % kSteps != 0) return;
+    const double P = it == 0 ? pressure(sys.stress()) : sys.last_stress_diag().sum() / 3.0;
+    *rate = std::clamp(rate_for_inertial_number(sys.material(), inertial, P), lo, hi);
+  }
+  // Step `it` sums the stress for the update after it.
+  bool measures(std::int64_t it) const { return held() && (it + 1) % kSteps == 0; }
+};
+}  // namespace
+
 double path_strain(const PathType& type, const Eigen::Matrix3d& strain) {
   return type.mixed() ? std::abs(strain(0, 0)) : strain.norm();
 }
@@ -333,7 +355,8 @@ CompressSummary compress_isotropic(DemSystem& sys, const CompressOptions& o, con
     next_sample = 1;
   }
   loading = true;
-  constexpr int kRateUpdate = 20;  // steps between rate updates from the pressure
+  const HeldRate held{o.inertial_number, o.rate_min, o.rate_max};
+  constexpr int kRateUpdate = HeldRate::kSteps;  // the pressure target is checked as often
   // Snapshots at the requested volume fractions leave the loading itself untouched (a run with
   // snapshots is the same run as one without): the system is copied after the step that
   // reaches or passes one, and the copy alone takes the fraction of a step back onto it.
@@ -352,19 +375,11 @@ CompressSummary compress_isotropic(DemSystem& sys, const CompressOptions& o, con
   for (std::int64_t it = 0;; ++it) {
     const double done = std::log(sys.volume_fraction()) - ln_start;
     const double remaining = sign * (total - done);
-    if (o.inertial_number > 0 && it % kRateUpdate == 0) {
-      // The pressure of the step before, summed by its own force evaluation
-      // (step_measuring_stress): DemSystem::stress() lists every contact on one thread, which
-      // took a fifth of this stage at N = 1000 and two fifths at N = 9261 (docs/performance.md
-      // "The isotropic stage's pressure").
-      const double P = it == 0 ? pressure(sys.stress()) : sys.last_stress_diag().sum() / 3.0;
-      rate =
-          std::clamp(rate_for_inertial_number(mat, o.inertial_number, P), o.rate_min, o.rate_max);
-    }
+    held.update(it, sys, &rate);
     const bool last = remaining <= 3.0 * rate * dt;
     // d ln(nu) / dt = -tr(D) = 3 * rate for D = -rate I.
     const double r = last ? std::max(remaining, 0.0) / (3.0 * dt) : rate;
-    if (o.inertial_number > 0 && (it + 1) % kRateUpdate == 0)
+    if (held.measures(it))
       sys.step_measuring_stress(Eigen::Vector3d::Constant(-sign * r));
     else
       sys.step(Eigen::Vector3d::Constant(-sign * r));
@@ -442,16 +457,11 @@ PathSummary run_path(DemSystem& sys, const PathOptions& o, const SampleFn& sampl
   const double kFactor = mixed ? 1.0 : std::sqrt(shape.squaredNorm());
   const double dt = sys.dt();
   // The rate of the coming steps: o.rate, or the one that holds o.inertial_number at the
-  // pressure (as the isotropic loading does), refreshed every kRateUpdate steps.
-  const bool held = o.inertial_number > 0;
+  // pressure (as the isotropic loading does).
+  const HeldRate held_rate{o.inertial_number, o.rate_min, o.rate};
+  const bool held = held_rate.held();
   const Material& mat = sys.material();
-  constexpr int kRateUpdate = 20;
   double rate = o.rate;
-  auto update_rate = [&] {
-    rate = std::clamp(rate_for_inertial_number(mat, o.inertial_number, pressure(sys.stress())),
-                      o.rate_min, o.rate);
-  };
-  if (held) update_rate();
   auto path_strain = [&] { return kFactor * std::abs(sys.strain_E()[axis]); };
   std::vector<std::size_t> snap_order(o.snapshot_eps_dev.size());
   std::iota(snap_order.begin(), snap_order.end(), 0);
@@ -510,7 +520,7 @@ PathSummary run_path(DemSystem& sys, const PathOptions& o, const SampleFn& sampl
                                                    (kFactor * (held ? o.rate_min : o.rate) * dt)) +
                          10 * (o.samples + 10);
   for (std::int64_t it = 0;; ++it) {
-    if (held && it > 0 && it % kRateUpdate == 0) update_rate();
+    held_rate.update(it, sys, &rate);
     const double inc = kFactor * rate * dt;
     if (it > max_steps)
       throw InputError("path: " + o.type + " did not reach s = " + std::to_string(o.eps_dev_max) +
@@ -526,6 +536,8 @@ PathSummary run_path(DemSystem& sys, const PathOptions& o, const SampleFn& sampl
       for (int a = 1; a < 3; ++a) control.axis[a].target_stress = lateral_target(stress_diag);
       sys.step_measuring_stress(control.velocity_gradient(stress_diag, mat.k_star(), dt, integral));
       stress_diag = sys.last_stress_diag();
+    } else if (held_rate.measures(it)) {
+      sys.step_measuring_stress(rate * std::max(f, 0.0) * shape);
     } else {
       sys.step(rate * std::max(f, 0.0) * shape);
     }
