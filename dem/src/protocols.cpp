@@ -356,7 +356,9 @@ CompressSummary compress_isotropic(DemSystem& sys, const CompressOptions& o, con
   }
   loading = true;
   const HeldRate held{o.inertial_number, o.rate_min, o.rate_max};
-  constexpr int kRateUpdate = HeldRate::kSteps;  // the pressure target is checked as often
+  // The pressure target is checked as often as the rate is updated, on the pressure of the
+  // same measured steps.
+  constexpr int kRateUpdate = HeldRate::kSteps;
   // Snapshots at the requested volume fractions leave the loading itself untouched (a run with
   // snapshots is the same run as one without): the system is copied after the step that
   // reaches or passes one, and the copy alone takes the fraction of a step back onto it.
@@ -379,7 +381,8 @@ CompressSummary compress_isotropic(DemSystem& sys, const CompressOptions& o, con
     const bool last = remaining <= 3.0 * rate * dt;
     // d ln(nu) / dt = -tr(D) = 3 * rate for D = -rate I.
     const double r = last ? std::max(remaining, 0.0) / (3.0 * dt) : rate;
-    if (held.measures(it))
+    const bool check = to_pressure && (it + 1) % kRateUpdate == 0;
+    if (held.measures(it) || check)
       sys.step_measuring_stress(Eigen::Vector3d::Constant(-sign * r));
     else
       sys.step(Eigen::Vector3d::Constant(-sign * r));
@@ -398,15 +401,15 @@ CompressSummary compress_isotropic(DemSystem& sys, const CompressOptions& o, con
       record(sys.measure());
       ++next_sample;
     }
-    if (to_pressure && it % kRateUpdate == 0) {
-      const double p_star = pressure(sys.stress()) / mat.k_star();
+    if (check) {
+      const double p_star = sys.last_stress_diag().sum() / 3.0 / mat.k_star();
       if (progress) progress(std::clamp(p_star / o.target_pressure_star, 0.0, 1.0));
       if (p_star >= o.target_pressure_star) {
         if (o.samples >= 2) record(sys.measure());
         reached = true;
         break;
       }
-    } else if (progress && it % 256 == 0) {
+    } else if (!to_pressure && progress && it % 256 == 0) {
       progress(std::abs(total) > 0 ? now / std::abs(total) : 1.0);
     }
     if (last) break;
