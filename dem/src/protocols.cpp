@@ -307,18 +307,24 @@ namespace {
 // any step, from stress()). stress() lists every contact on one thread: every 20 steps it cost
 // the isotropic stage two fifths of its time at N = 9261 (docs/performance.md "The isotropic
 // stage's pressure").
+// Loading to a pressure checks its target on the same measured steps (compress_isotropic).
 struct HeldRate {
   static constexpr int kSteps = 20;
   double inertial = 0, lo = 0, hi = 0;
   bool held() const { return inertial > 0; }
-  // Before step `it` (from 0): the rate of the coming steps, if it is due for an update.
+  // Step `it` (from 0) is one that sums the stress: the step before each update.
+  static bool due(std::int64_t it) { return (it + 1) % kSteps == 0; }
+  // The pressure of the last measured step.
+  static double measured_pressure(const DemSystem& sys) {
+    return sys.last_stress_diag().sum() / 3.0;
+  }
+  // Before step `it`: the rate of the coming steps, if it is due for an update.
   void update(std::int64_t it, const DemSystem& sys, double* rate) const {
     if (!held() || it % kSteps != 0) return;
-    const double P = it == 0 ? pressure(sys.stress()) : sys.last_stress_diag().sum() / 3.0;
+    const double P = it == 0 ? pressure(sys.stress()) : measured_pressure(sys);
     *rate = std::clamp(rate_for_inertial_number(sys.material(), inertial, P), lo, hi);
   }
-  // Step `it` sums the stress for the update after it.
-  bool measures(std::int64_t it) const { return held() && (it + 1) % kSteps == 0; }
+  bool measures(std::int64_t it) const { return held() && due(it); }
 };
 }  // namespace
 
@@ -356,9 +362,6 @@ CompressSummary compress_isotropic(DemSystem& sys, const CompressOptions& o, con
   }
   loading = true;
   const HeldRate held{o.inertial_number, o.rate_min, o.rate_max};
-  // The pressure target is checked as often as the rate is updated, on the pressure of the
-  // same measured steps.
-  constexpr int kRateUpdate = HeldRate::kSteps;
   // Snapshots at the requested volume fractions leave the loading itself untouched (a run with
   // snapshots is the same run as one without): the system is copied after the step that
   // reaches or passes one, and the copy alone takes the fraction of a step back onto it.
@@ -381,7 +384,7 @@ CompressSummary compress_isotropic(DemSystem& sys, const CompressOptions& o, con
     const bool last = remaining <= 3.0 * rate * dt;
     // d ln(nu) / dt = -tr(D) = 3 * rate for D = -rate I.
     const double r = last ? std::max(remaining, 0.0) / (3.0 * dt) : rate;
-    const bool check = to_pressure && (it + 1) % kRateUpdate == 0;
+    const bool check = to_pressure && HeldRate::due(it);
     if (held.measures(it) || check)
       sys.step_measuring_stress(Eigen::Vector3d::Constant(-sign * r));
     else
@@ -402,7 +405,7 @@ CompressSummary compress_isotropic(DemSystem& sys, const CompressOptions& o, con
       ++next_sample;
     }
     if (check) {
-      const double p_star = sys.last_stress_diag().sum() / 3.0 / mat.k_star();
+      const double p_star = HeldRate::measured_pressure(sys) / mat.k_star();
       if (progress) progress(std::clamp(p_star / o.target_pressure_star, 0.0, 1.0));
       if (p_star >= o.target_pressure_star) {
         if (o.samples >= 2) record(sys.measure());
