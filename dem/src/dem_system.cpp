@@ -417,6 +417,28 @@ inline void records(V4 x, V4 y, V4 z, V4 w, double* a, double* b, double* c, dou
   store_halves(__builtin_shuffle(z, w, Mask4{1, 5, 3, 7}), b + 2, d + 2);
 }
 
+// Lanes 0-2 of a, lane 3 of b (one blend).
+inline V4 fourth_of(V4 a, V4 b) { return __builtin_shuffle(a, b, Mask4{0, 1, 2, 7}); }
+// The three doubles at p, the fourth lane 0: one masked load, which reads nothing past p[2].
+inline V4 load3(const double* p) {
+#if defined(__AVX__)
+  return _mm256_maskload_pd(p, _mm256_set_epi64x(0, -1, -1, -1));
+#else
+  return V4{p[0], p[1], p[2], 0.0};
+#endif
+}
+// Whether any bit of v is set (a spring of -0.0 counts, as a stored spring).
+inline bool any_bits(V4 v) {
+#if defined(__AVX__)
+  const __m256i b = _mm256_castpd_si256(v);
+  return !_mm256_testz_si256(b, b);
+#else
+  std::uint64_t bits[4];
+  std::memcpy(bits, &v, sizeof bits);
+  return (bits[0] | bits[1] | bits[2] | bits[3]) != 0;
+#endif
+}
+
 // TangentialContact's arithmetic on four contacts at once (contact.hpp, ScalarMath): a value
 // is a V4 of four lanes, a condition a mask of lanes, and select a blend.
 struct LaneMath {
@@ -623,55 +645,48 @@ void DemSystem::force_block_friction(std::size_t b) {
     }
     count = 0;
   };
-  // Pass (1). A touching partner is four cache lines (position, velocity with accumulator,
-  // rot16_), not two as in the frictionless loop, so the records of the entry kAhead places
-  // on are requested while this one is handled. Every entry's records are
-  // written to the next free place and only a touching one advances it: no branch on the
-  // touching test, which a loop over 2.6 touching entries of 4.4 (nu = 0.64) would mispredict
-  // at every third entry; the partner's records are fetched for the prefetch anyway.
-  constexpr std::int64_t kAhead = 6;
-  const std::int64_t last_entry = off[hi] - 1;
+  // Pass (1). Every entry's records are written to the next free place and only a touching
+  // one advances it: no branch on the touching test, which a loop over 2.6 touching entries
+  // of 4.4 (nu = 0.64) would mispredict at every third entry. Each record is one vector
+  // (a blend supplies its fourth lane; the radii come with the position records) and the
+  // spring one masked load, tested for any bit with one instruction: ~50 instructions per
+  // entry where GCC's code for the per-component form was ~75 (docs/performance.md
+  // "Friction"). No software prefetch of the partners' records: on this loop they cost more
+  // than they saved.
   for (std::size_t i = lo; i < hi; ++i) {
     const V4 pi = load4(P + 4 * i), vi = load4(W + 8 * i);
     const V4 vmi = load4(Q + 16 * i);
-    const double ri = P[4 * i + 3];
+    const double ri = pi[3];
+    const std::int32_t row = static_cast<std::int32_t>(i);
     const std::int64_t end = off[i + 1];
     for (std::int64_t e = off[i]; e < end; ++e) {
-      const std::size_t j = static_cast<std::size_t>(idx[e]);
-      const std::size_t ahead = static_cast<std::size_t>(idx[std::min(e + kAhead, last_entry)]);
-      __builtin_prefetch(P + 4 * ahead);
-      __builtin_prefetch(W + 8 * ahead);
-      __builtin_prefetch(Q + 16 * ahead);
-      __builtin_prefetch(Q + 16 * ahead + 8);
-      double* xi = H + 3 * e;
-      V4 l = pi - load4(P + 4 * j);
-      l[3] = 0.0;
-      const double r2 = dot3(l, l);
-      const double rj = P[4 * j + 3];
+      const std::int32_t partner = idx[e];
+      const std::size_t j = static_cast<std::size_t>(partner);
+      const V4 pj = load4(P + 4 * j);
+      const V4 l = pi - pj;  // fourth lane r_i - r_j, which D (0 there) and the blends drop
+      // |l|^2 rounded as dot3 (vec4.hpp) rounds it where GCC contracts it: the same bits.
+      const double r2 = std::fma(l[2], l[2], std::fma(l[0], l[0], l[1] * l[1]));
+      const double rj = pj[3];
       const bool touching = r2 < (ri + rj) * (ri + rj);
-      const double* qj = Q + 16 * j;
-      const V4 ve = vi - load4(W + 8 * j) + D * l;
-      const V4 vm = vmi - load4(qj) + D * l;
       double(*rec)[4] = lanes.in[count];
-      store4(rec[F::kL], V4{l[0], l[1], l[2], r2});
-      store4(rec[F::kVe], V4{ve[0], ve[1], ve[2], ri});
-      store4(rec[F::kVm], V4{vm[0], vm[1], vm[2], rj});
-      store4(rec[F::kXi], V4{xi[0], xi[1], xi[2], 0.0});
-      std::uint64_t bits[3];
-      std::memcpy(bits, xi, sizeof bits);
-      std::uint64_t any = bits[0] | bits[1] | bits[2];
+      store4(rec[F::kL], fourth_of(l, V4{r2, r2, r2, r2}));
+      store4(rec[F::kVe], fourth_of(vi - load4(W + 8 * j) + D * l, pi));
+      store4(rec[F::kVm], fourth_of(vmi - load4(Q + 16 * j) + D * l, pj));
+      double* xi = H + 3 * e;
+      const V4 spring = load3(xi);
+      store4(rec[F::kXi], spring);
+      bool any = any_bits(spring);
       if constexpr (kRolling) {
-        const double* xr = HR + 3 * e;
-        store4(rec[F::kXr], V4{xr[0], xr[1], xr[2], 0.0});
-        std::memcpy(bits, xr, sizeof bits);
-        any |= bits[0] | bits[1] | bits[2];
+        const V4 xr = load3(HR + 3 * e);
+        store4(rec[F::kXr], xr);
+        any |= any_bits(xr);
       }
       lanes.entry[count] = e;
-      lanes.row[count] = static_cast<std::int32_t>(i);
-      lanes.partner[count] = static_cast<std::int32_t>(j);
+      lanes.row[count] = row;
+      lanes.partner[count] = partner;
       // Contact lost: so is its history (stored only if there was one: most entries of the
       // list never touch). A rare branch, well predicted.
-      if (advance & !touching & (any != 0)) {
+      if (advance & !touching & any) {
         xi[0] = xi[1] = xi[2] = 0.0;
         if constexpr (kRolling) HR[3 * e] = HR[3 * e + 1] = HR[3 * e + 2] = 0.0;
       }
