@@ -103,5 +103,24 @@ BENCHMARK(BM_Stress)
     ->Unit(benchmark::kMicrosecond)
     ->UseRealTime();
 
+// The elastic energy (DemSystem::elastic_energy), which relax() asks for every check_every
+// steps: args volume fraction (percent), particles, friction mu in hundredths.
+void BM_ElasticEnergy(benchmark::State& state) {
+  const double nu = state.range(0) / 100.0;
+  const std::size_t n = static_cast<std::size_t>(state.range(1));
+  SystemOptions o;
+  o.material.mu = state.range(2) / 100.0;
+  DemSystem s = DemSystem::restore(packing(n, nu).save(), o);
+  omp_set_num_threads(1);
+  s.set_fixed_team(1);
+  for (int k = 0; k < 20; ++k) s.step(Eigen::Vector3d(400, -200, -200));
+  for (auto _ : state) benchmark::DoNotOptimize(s.elastic_energy());
+  state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(n));
+}
+BENCHMARK(BM_ElasticEnergy)
+    ->ArgsProduct({{64, 82}, {1000, 9261}, {0, 50}})
+    ->Unit(benchmark::kMicrosecond)
+    ->UseRealTime();
+
 }  // namespace
 }  // namespace rendulic::dem

@@ -160,6 +160,9 @@ class DemSystem {
   void note_list_built();  // after every build: blocks, targets, packed positions
   void make_blocks();
   void reset_contacts_first();  // partner_first_ and first_end_ (frictionless)
+  // r_i - r_j of list entry e of row i, with its periodic image (cell lengths L): the one
+  // expression of contacts() and elastic_energy().
+  Eigen::Vector3d branch(std::size_t i, std::int64_t e, const Eigen::Vector3d& L) const;
   // Team size of the next step; *adaptive: the controller chose it (the step is timed).
   int choose_team(bool* adaptive);
   // Forces at the current positions from the velocities in va8_; then, if half_kick != 0,
