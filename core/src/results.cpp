@@ -612,20 +612,32 @@ bool ResultsWriter::save_partial(const std::string& completed) {
     m.partial_new = with_suffix(m.tmp_path, ".partial-new");
     m.partial_new_handle = cleanup::remove_on_death(m.partial_new);
   }
+  const fs::path kept = with_suffix(m.final_path, ".partial");
+  const std::string message =
+      "rendulic: stopped by a signal; " + completed + " kept in " + kept.string();
+  // The first copy is registered before it is renamed into place: registered after, a signal
+  // in between left it behind as a temporary (it happened in CI). Before the rename the
+  // entry finds no file and keeps nothing, as a signal before this save would. A later copy
+  // replaces one that is registered: in that window the older entry keeps the new copy with
+  // the older message, one stage short; the data are whole either way.
+  const bool first = m.partial_handle < 0;
+  const int early = first ? cleanup::rename_on_death(m.partial_copy, kept, message) : -1;
   std::error_code ec;
   if (!copy_whole_file(m.tmp_path, m.partial_new).empty())
     ec = std::make_error_code(std::errc::io_error);
   if (!ec) fs::rename(m.partial_new, m.partial_copy, ec);
   if (ec) {
+    cleanup::forget(early);
     fs::remove(m.partial_new, ec);
     return false;
   }
   m.partial_completed = completed;
-  cleanup::forget(m.partial_handle);
-  const fs::path kept = with_suffix(m.final_path, ".partial");
-  m.partial_handle = cleanup::rename_on_death(
-      m.partial_copy, kept,
-      "rendulic: stopped by a signal; " + completed + " kept in " + kept.string());
+  if (first) {
+    m.partial_handle = early;
+  } else {
+    cleanup::forget(m.partial_handle);
+    m.partial_handle = cleanup::rename_on_death(m.partial_copy, kept, message);
+  }
   return true;
 }
 
