@@ -14,7 +14,8 @@
 namespace rendulic::dem {
 namespace {
 
-TEST(Energy, ConservedWithoutDampingOver1e5Steps) {
+// 120 particles compressed to nu = 0.70: jammed, springs loaded, so the tests exercise them.
+DemSystem jammed_packing() {
   omp_set_num_threads(1);
   SystemOptions prep;
   prep.material.gamma_b = 10.0;
@@ -23,9 +24,14 @@ TEST(Energy, ConservedWithoutDampingOver1e5Steps) {
   g.velocity = 0.0;
   DemSystem s = make_gas(prep, g, 9);
   CompressOptions c;
-  c.target_nu = 0.70;  // jammed: springs loaded, so the test exercises them
+  c.target_nu = 0.70;
   c.rate_max = c.rate_min = 3000;
   compress_isotropic(s, c);
+  return s;
+}
+
+TEST(Energy, ConservedWithoutDampingOver1e5Steps) {
+  DemSystem s = jammed_packing();
   SystemOptions cons;
   cons.material.gamma = 0;
   cons.material.gamma_b = 0;
@@ -64,17 +70,7 @@ TEST(Energy, ConservedWithoutDampingOver1e5Steps) {
 // k_t/2 |xi|^2, k_r/2 |xi_r|^2): frictionless, with friction and with rolling resistance,
 // on a small jammed packing (many periodic images) sheared until its springs are loaded.
 TEST(Energy, TheElasticEnergyIsTheSumOverTheContactRecords) {
-  omp_set_num_threads(1);
-  SystemOptions prep;
-  prep.material.gamma_b = 10.0;
-  GasOptions g;
-  g.n_particles = 120;
-  g.velocity = 0.0;
-  DemSystem packed = make_gas(prep, g, 9);
-  CompressOptions c;
-  c.target_nu = 0.70;
-  c.rate_max = c.rate_min = 3000;
-  compress_isotropic(packed, c);
+  const DemSystem packed = jammed_packing();
   for (const double mu_r : {-1.0, 0.0, 0.1}) {  // -1: frictionless
     SystemOptions o;
     o.material.mu = mu_r < 0 ? 0.0 : 0.5;
