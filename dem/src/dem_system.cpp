@@ -649,10 +649,10 @@ void DemSystem::force_block_friction(std::size_t b) {
   // one advances it: no branch on the touching test, which a loop over 2.6 touching entries
   // of 4.4 (nu = 0.64) would mispredict at every third entry. Each record is one vector
   // (a blend supplies its fourth lane; the radii come with the position records) and the
-  // spring one masked load, tested for any bit with one instruction: ~50 instructions per
+  // spring one masked load, tested for any bit with one instruction: ~55 instructions per
   // entry where GCC's code for the per-component form was ~75 (docs/performance.md
-  // "Friction"). No software prefetch of the partners' records: on this loop they cost more
-  // than they saved.
+  // "Issue #17, pass (1) without prefetches"). No software prefetch of the partners' records: on
+  // this loop they cost more than they saved.
   for (std::size_t i = lo; i < hi; ++i) {
     const V4 pi = load4(P + 4 * i), vi = load4(W + 8 * i);
     const V4 vmi = load4(Q + 16 * i);
@@ -664,7 +664,7 @@ void DemSystem::force_block_friction(std::size_t b) {
       const std::size_t j = static_cast<std::size_t>(partner);
       const V4 pj = load4(P + 4 * j);
       const V4 l = pi - pj;  // fourth lane r_i - r_j, which D (0 there) and the blends drop
-      // |l|^2 rounded as dot3 (vec4.hpp) rounds it where GCC contracts it: the same bits.
+      // |l|^2 with the FMAs GCC had made of l0 l0 + l1 l1 + l2 l2 before: the same bits.
       const double r2 = std::fma(l[2], l[2], std::fma(l[0], l[0], l[1] * l[1]));
       const double rj = pj[3];
       const bool touching = r2 < (ri + rj) * (ri + rj);
@@ -1100,8 +1100,8 @@ double rolling_energy(const std::vector<Contact>& contacts, const TangentialCont
 double DemSystem::elastic_energy() const {
   // The sums of the contacts() records (in their order: normal and tangential springs per
   // contact, the rolling springs apart), taken from the list without building the records,
-  // which cost three quarters of the call: relax() asks for this every check_every steps
-  // (docs/performance.md "Friction", 2026-11-25).
+  // which cost half (frictionless) to three quarters (friction) of the call: relax() asks
+  // for this every check_every steps (docs/performance.md "The relaxation's elastic energy").
   const std::size_t n = p_.size();
   const Eigen::Vector3d L = cell_.lengths();
   const NormalContact law = options_.material.contact();

@@ -21,7 +21,6 @@ namespace rendulic::dem::vec4 {
 typedef double V4 __attribute__((vector_size(32)));
 inline V4 load4(const double* p) { return *reinterpret_cast<const V4*>(p); }
 inline void store4(double* p, V4 v) { *reinterpret_cast<V4*>(p) = v; }
-inline double dot3(V4 a, V4 b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 inline V4 cross3(V4 a, V4 b) {
   return V4{a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0], 0.0};
 }
