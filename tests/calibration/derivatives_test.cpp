@@ -86,10 +86,7 @@ TEST(Derivatives, HypoplasticExactMatchesCentralDifferences) {
 }
 
 TEST(Derivatives, ElastoplasticExactMatchesCentralDifferences) {
-  const std::vector<std::pair<std::string, double>> truth = {
-      {"B", 2.2e10}, {"G", 3e9},     {"beta_A", 0.8},  {"c_F", 4.0},     {"p_ref", 2e9},
-      {"m_e", 2e-3}, {"M_ss", 0.45}, {"beta_s", 40.0}, {"beta_F", 25.0}, {"F_dev_max", 0.6}};
-  const auto law = law_with("elastoplastic_fabric", truth);
+  const auto law = law_with("elastoplastic_fabric", testing::kElastoplasticTruth);
   testing::SyntheticSpec spec;
   spec.states.erase(spec.states.begin(), spec.states.begin() + 2);  // two anisotropic states
   spec.directions = 6;

@@ -112,6 +112,12 @@ inline CalibrationData synthetic_data(const models::Law& law, const SyntheticSpe
   return d;
 }
 
+// The elasto-plastic law's parameters behind the synthetic data of several tests: an
+// anisotropic elastic part, yield near 2e-3, and a steady state reached within the path.
+inline const std::vector<std::pair<std::string, double>> kElastoplasticTruth = {
+    {"B", 2.2e10}, {"G", 3e9},     {"beta_A", 0.8},  {"c_F", 4.0},     {"p_ref", 2e9},
+    {"m_e", 2e-3}, {"M_ss", 0.45}, {"beta_s", 40.0}, {"beta_F", 25.0}, {"F_dev_max", 0.6}};
+
 inline std::unique_ptr<models::Law> law_with(const std::string& name,
                                              const std::vector<std::pair<std::string, double>>& p) {
   auto law = models::make_law(name);
