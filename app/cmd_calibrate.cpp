@@ -41,6 +41,7 @@ struct CalibrateArgs {
   std::string results, out;
   std::vector<std::string> states, holdout, free, values;
   bool no_path = false, no_write = false, progress = false;
+  int threads = 0;
 };
 
 std::vector<std::string> split_commas(const std::vector<std::string>& in) {
@@ -110,6 +111,7 @@ int run_calibrate(const CalibrateArgs& a) {
   CalibrationPlan plan = calibration_plan(settings);
   CalibrationOptions& opt = plan.options;
   opt.solver.progress = a.progress;
+  opt.solver.threads = a.threads;
   opt.free = split_commas(a.free);
   // A UMAT's props are also named by their 1-based PROPS index (docs/umat.md).
   if (settings.model == "umat")
@@ -217,6 +219,10 @@ Subcommand add_calibrate(CLI::App& parent) {
   add_key_option(sub, "--driver-tolerance", args->settings.driver_tolerance,
                  keys.key("calibration.driver_tolerance"));
   sub->add_flag("--progress", args->progress, "Print Ceres's iterations (cost, step) to stdout");
+  sub->add_option("--threads", args->threads,
+                  "Threads (0, the default: all cores): the likelihood's two starts side by side "
+                  "and the exact Jacobians on a free core; results do not depend on it")
+      ->check(CLI::NonNegativeNumber);
   sub->add_flag("--no-write", args->no_write,
                 "Do not store /calibration/<model> in the results file");
   return {sub, [args]() -> int { return run_calibrate(*args); }};

@@ -21,6 +21,7 @@ void run_calibration_stage(const Scenario& scenario, ResultsWriter& out, const R
   using namespace rendulic::calibration;
   CalibrationPlan plan = calibration_plan(calibration_settings_from(scenario));
   CalibrationOptions& opt = plan.options;
+  opt.solver.threads = ctx.threads;  // --threads: the fits' threads too (docs/calibration.md)
   const CalibrationData data = load_calibration_data(out.temporary_path(), plan.load);
   const std::vector<std::string>& models = plan.models;
   std::vector<ModelScore> scores;

@@ -4,9 +4,13 @@
 #include "rendulic/calibration/objective.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <exception>
 #include <set>
+#include <thread>
 
+#include "cores.hpp"
 #include "law_dispatch.hpp"
 #include "rendulic/core/affine_map.hpp"
 #include "rendulic/core/conventions.hpp"
@@ -189,10 +193,9 @@ class Kernel final : public KernelBase {
   explicit Kernel(const Objective::Impl* o) : o_(o) {}
 
   // Residuals for any scalar: double for values, Jets for the exact Jacobian (integrated
-  // predictions go through the driver with Jets, driver_core.hpp). One thread: with exact
-  // derivatives a whole fit takes seconds, and threads spinning at the end of every short
-  // evaluation cost more than they gave on the shared 2-core machine (docs/calibration.md
-  // "Accuracy and cost").
+  // predictions go through the driver with Jets, driver_core.hpp). The values on the caller's
+  // thread: an evaluation takes milliseconds, too short for a team; the Jacobian's parts may
+  // take a second thread (JetCost below).
   template <typename T>
   bool eval(const T* z, T* r) const {
     T p[M::kCount];
@@ -205,6 +208,17 @@ class Kernel final : public KernelBase {
     for (int i = 0; i < o_->n_residuals; ++i)
       if (!std::isfinite(value_of(r[i]))) return false;
     return true;
+  }
+
+  // One part of the residuals: the path's (part -1) or envelope task `part`'s. The parts are
+  // independent, and each computes as it does inside eval(): the same bits.
+  template <typename T>
+  bool eval_part(const T* z, T* r, int part) const {
+    T p[M::kCount];
+    o_->space.full(z, p);
+    double pd[M::kCount];
+    for (int i = 0; i < M::kCount; ++i) pd[i] = value_of(p[i]);
+    return part < 0 ? path_residuals<T>(p, pd, r) : task_residuals<T>(part, p, pd, r);
   }
 
   // Residuals of one envelope task.
@@ -243,28 +257,85 @@ class Kernel final : public KernelBase {
 
   bool residuals(const double* z, double* r) const override { return eval<double>(z, r); }
 
-  struct AutoFunctor {
-    const Kernel* k;
-    template <typename T>
-    bool operator()(T const* const* z, T* r) const {
-      return k->eval<T>(z[0], r);
-    }
-  };
   struct NumericFunctor {
     const Kernel* k;
     bool operator()(double const* const* z, double* r) const { return k->eval<double>(z[0], r); }
   };
 
+  // The exact Jacobian by forward-mode Jets of 4 derivatives: the residuals evaluated once per
+  // 4 free parameters (each pass takes the same substeps: the driver's control uses the values
+  // only), as Ceres's DynamicAutoDiffCostFunction does and with its bits (the values of the
+  // last pass), but each pass cut into its parts (the path, each envelope task) and the
+  // passes x parts shared with a second thread while a core is free (cores.hpp): one Jacobian
+  // is ~25 ms of Jet arithmetic, long enough for a thread of its own, and the start of a
+  // likelihood fit that outlasts the other would otherwise leave the second core idle
+  // (docs/calibration.md "Threads").
+  class JetCost final : public ceres::CostFunction {
+   public:
+    explicit JetCost(const Kernel* k) : k_(k) {
+      set_num_residuals(k->o_->n_residuals);
+      mutable_parameter_block_sizes()->push_back(k->o_->space.size());
+    }
+    bool Evaluate(double const* const* z, double* r, double** jac) const override {
+      if (jac == nullptr || jac[0] == nullptr) return k_->eval<double>(z[0], r);
+      using J = ceres::Jet<double, 4>;
+      const int n = k_->o_->space.size(), m = k_->o_->n_residuals;
+      const int path = k_->o_->path_task.active ? 1 : 0;
+      const int parts = path + static_cast<int>(k_->o_->tasks.size());
+      const int passes = (n + 3) / 4, units = passes * parts;
+      std::vector<std::vector<J>> out(static_cast<std::size_t>(passes),
+                                      std::vector<J>(static_cast<std::size_t>(m)));
+      std::atomic<int> next{0};
+      std::atomic<bool> failed{false};
+      auto work = [&] {
+        std::vector<J> in(static_cast<std::size_t>(n));
+        for (int u = next++; u < units && !failed; u = next++) {
+          const int pass = u / parts, part = u % parts - path;
+          for (int i = 0; i < n; ++i) {
+            in[i] = J(z[0][i]);
+            if (i / 4 == pass) in[i].v[i % 4] = 1.0;
+          }
+          if (!k_->eval_part<J>(in.data(), out[pass].data(), part)) failed = true;
+        }
+      };
+      if (units > 1 && cores::core_free()) {
+        std::exception_ptr thrown;
+        std::thread helper([&] {
+          try {
+            work();
+          } catch (...) {
+            failed = true;
+            thrown = std::current_exception();
+          }
+        });
+        try {
+          work();
+        } catch (...) {
+          failed = true;
+          helper.join();
+          throw;
+        }
+        helper.join();
+        if (thrown) std::rethrow_exception(thrown);
+      } else {
+        work();
+      }
+      if (failed) return false;
+      for (int k = 0; k < m; ++k) {
+        r[k] = out.back()[k].a;
+        if (!std::isfinite(r[k])) return false;
+        for (int j = 0; j < n; ++j) jac[0][k * n + j] = out[j / 4][k].v[j % 4];
+      }
+      return true;
+    }
+
+   private:
+    const Kernel* k_;
+  };
+
   ceres::CostFunction* cost_function() const override {
     const int n = o_->space.size();
-    if (o_->options.derivatives == Derivatives::kExact) {
-      // Stride 4: Jets of 4 derivatives, the law evaluated ceil(n/4) times per Jacobian (each
-      // pass takes the same substeps: the driver's control uses the values only).
-      auto* f = new ceres::DynamicAutoDiffCostFunction<AutoFunctor, 4>(new AutoFunctor{this});
-      f->AddParameterBlock(n);
-      f->SetNumResiduals(o_->n_residuals);
-      return f;
-    }
+    if (o_->options.derivatives == Derivatives::kExact) return new JetCost(this);
     ceres::NumericDiffOptions nd;
     // Relative step 1e-6 in z: the integrated objective is smooth to about the driver's
     // tolerance, so keep that tolerance far below 1e-6 when comparing against these.

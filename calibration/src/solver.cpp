@@ -14,6 +14,7 @@
 #include <sstream>
 #include <thread>
 
+#include "cores.hpp"
 #include "rendulic/core/errors.hpp"
 
 namespace rendulic::calibration {
@@ -48,6 +49,7 @@ bool SolverOptions::IsValid(std::string* why) const {
     return fail("global_algorithm must be GN_CRS2_LM, GN_ISRES or GN_MLSL_LDS");
   if (global_evaluations < 10 || local_evaluations < 10) return fail("evaluations must be >= 10");
   if (starts < 1) return fail("starts must be >= 1");
+  if (threads < 0) return fail("threads must be >= 0");
   if (max_iterations < 1) return fail("max_iterations must be >= 1");
   if (!(function_tolerance > 0 && gradient_tolerance > 0 && parameter_tolerance > 0))
     return fail("tolerances must be > 0");
@@ -311,7 +313,10 @@ CeresRun run_ceres_once(const Objective& obj, std::vector<double> z, const Solve
   so.update_state_every_iteration = true;
   so.callbacks.push_back(&watch);
   ceres::Solver::Summary summary;
-  ceres::Solve(so, &problem, &summary);
+  {
+    const cores::FitSlot slot(o.threads);
+    ceres::Solve(so, &problem, &summary);
+  }
   *stopped_on_bound = watch.stopped();
   CeresRun run;
   run.z = z;
@@ -387,8 +392,9 @@ CeresRun run_ceres_model(const Objective& obj, std::vector<double> z, const Solv
 // kStartFunctionTolerance, far below the statistical resolution of the cost (a change of 0.5
 // in a cost of thousands). The two starts are independent and run on two threads for the
 // built-in laws (their evaluation is reentrant; a UMAT may keep state of its own, so its
-// starts run one after the other): the same results as in sequence, in about half the wall
-// time on an idle machine (docs/calibration.md "When to stop").
+// starts run one after the other; so do all with SolverOptions::threads = 1): the same results
+// as in sequence; once one start is done, the other's Jacobians take the free core
+// (docs/calibration.md "Threads").
 constexpr double kStartFunctionTolerance = 1e-6;
 
 CeresRun run_ceres(const Objective& obj, std::vector<double> z, const SolverOptions& o) {
@@ -411,7 +417,7 @@ CeresRun run_ceres(const Objective& obj, std::vector<double> z, const SolverOpti
   };
   CeresRun best, second;
   // With `progress` each Ceres run prints its iterations: one after the other, to be read.
-  if (obj.exact_derivatives() && !o.progress) {
+  if (obj.exact_derivatives() && !o.progress && cores::limit(o.threads) > 1) {
     std::exception_ptr failure;
     std::thread other([&] {
       try {

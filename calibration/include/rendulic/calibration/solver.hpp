@@ -61,6 +61,10 @@ struct SolverOptions {
   bool likelihood = false;
   bool polish = true;     // Ceres after the NLopt stages
   bool progress = false;  // Ceres prints one line per iteration (cost, step) to stdout
+  // Cores the fit may use (0: all): the likelihood's two starts side by side and the exact
+  // Jacobian's passes on a free core (docs/calibration.md "Threads"); 1 runs everything on the
+  // caller's thread. The results do not depend on it.
+  int threads = 0;
   IdentifiabilityOptions identifiability;
   bool IsValid(std::string* why) const;
 };
