@@ -266,10 +266,12 @@ class Kernel final : public KernelBase {
   // 4 free parameters (each pass takes the same substeps: the driver's control uses the values
   // only), as Ceres's DynamicAutoDiffCostFunction does and with its bits (the values of the
   // last pass), but each pass cut into its parts (the path, each envelope task) and the
-  // passes x parts shared with a second thread while a core is free (cores.hpp): one Jacobian
-  // is ~25 ms of Jet arithmetic, long enough for a thread of its own, and the start of a
-  // likelihood fit that outlasts the other would otherwise leave the second core idle
-  // (docs/calibration.md "Threads").
+  // passes x parts shared with a second thread while a core is free (cores.hpp): with
+  // integrated predictions one Jacobian is milliseconds of Jets through the driver (~25 ms on
+  // quick.toml), long enough for a thread of its own, and the start of a likelihood fit that
+  // outlasts the other would otherwise leave the second core idle (docs/calibration.md
+  // "Threads"). Rate predictions alone take tens of microseconds, about a thread's start: those
+  // stay on the caller's thread.
   class JetCost final : public ceres::CostFunction {
    public:
     explicit JetCost(const Kernel* k) : k_(k) {
@@ -298,7 +300,7 @@ class Kernel final : public KernelBase {
           if (!k_->eval_part<J>(in.data(), out[pass].data(), part)) failed = true;
         }
       };
-      if (units > 1 && cores::core_free()) {
+      if (units > 1 && k_->o_->any_integrated && cores::core_free()) {
         std::exception_ptr thrown;
         std::thread helper([&] {
           try {
