@@ -14,6 +14,24 @@
 
 namespace rendulic::app {
 
+// The check of --threads (0: every core) wherever a command runs work: a count, refused in
+// counts ("Value -1 not in range 0 to 4096"). CLI11's NonNegativeNumber printed the largest
+// double, 309 digits, as the upper end of its range.
+inline CLI::Validator thread_count() { return CLI::Range(0, 4096); }
+
+// The check of a number that must be positive (zero_allowed: not negative), for options with no
+// scenario key behind them; refused on a short line for the same reason as thread_count().
+inline CLI::Validator positive_number(bool zero_allowed = false) {
+  return CLI::Validator(
+      [zero_allowed](std::string& text) -> std::string {
+        double v = 0.0;
+        if (!CLI::detail::lexical_cast(text, v)) return "Value " + text + " is not a number";
+        if (v > 0.0 || (zero_allowed && v == 0.0)) return "";
+        return "Value " + text + (zero_allowed ? " is negative" : " is not positive");
+      },
+      zero_allowed ? "NONNEGATIVE" : "POSITIVE");
+}
+
 template <class T>
 CLI::Option* add_key_option(CLI::App* app, const std::string& flag, T& member, const KeySpec& key) {
   CLI::Option* o = app->add_option(flag, member, key.help);

@@ -222,7 +222,7 @@ Subcommand add_calibrate(CLI::App& parent) {
   sub->add_option("--threads", args->threads,
                   "Threads (0, the default: all cores): the likelihood's two starts side by side "
                   "and the exact Jacobians on a free core; results do not depend on it")
-      ->check(CLI::NonNegativeNumber);
+      ->check(thread_count());
   sub->add_flag("--no-write", args->no_write,
                 "Do not store /calibration/<model> in the results file");
   return {sub, [args]() -> int { return run_calibrate(*args); }};

@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "cli_options.hpp"
 #include "commands.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/probes/envelope_csv.hpp"
@@ -80,7 +81,7 @@ Subcommand add_fit(CLI::App& parent) {
   sub->add_option("--loss-scale", o->loss_scale,
                   "distance at which the robust loss starts to discount a point, in data units "
                   "(0: automatic, 1.345 or 2.385 robust sigmas)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(positive_number(true))
       ->capture_default_str();
   sub->add_flag("--ignore-theta", o->ignore_theta,
                 "do not use the theta_deg column (fit the points alone)");

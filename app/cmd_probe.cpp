@@ -22,6 +22,7 @@
 #include <memory>
 #include <optional>
 
+#include "cli_options.hpp"
 #include "commands.hpp"
 #include "packing_system.hpp"
 #include "pipeline.hpp"
@@ -312,13 +313,13 @@ Subcommand add_probe(CLI::App& parent) {
       ->check(CLI::IsMember({"dynamic", "minimisation", kLinear}));
   sub->add_option("--amplitudes", o->amplitudes, "probe strain amplitudes (probes.amplitudes)");
   sub->add_option("--directions", o->directions, "probe directions M (probes.directions)")
-      ->check(CLI::PositiveNumber);
+      ->check(positive_number());
   sub->add_option("--planes", o->planes,
                   "probe planes: rendulic, deviatoric, meridian_<Lode deg> (probes.planes)");
   sub->add_option("--set", o->sets, "override a scenario key by its dotted path: a.b=value")
       ->take_all();
   sub->add_option("--threads", o->threads, "OpenMP threads over the probes (0: all cores)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(thread_count());
   sub->add_flag("--quiet", o->quiet, "no progress; warnings and errors still print");
   sub->add_option("--progress-every", o->progress_every,
                   "seconds between progress lines when stderr is not a terminal")

@@ -13,6 +13,7 @@
 #include <memory>
 #include <optional>
 
+#include "cli_options.hpp"
 #include "commands.hpp"
 #include "pipeline.hpp"
 #include "rendulic/core/errors.hpp"
@@ -97,7 +98,7 @@ Subcommand add_run(CLI::App& parent) {
                   "OpenMP threads (0, the default: all cores). DEM steps use a team only where it "
                   "pays: never below N = 1000, and only while it measures faster than one thread "
                   "(a busy core makes it slower); results do not depend on it")
-      ->check(CLI::NonNegativeNumber);
+      ->check(thread_count());
   sub->add_flag("--resume", o->resume,
                 "continue an interrupted run from the stages it kept in DIR/results.h5.partial "
                 "(same scenario and --set values): the result is that of an uninterrupted run");

@@ -11,6 +11,7 @@
 #include <iostream>
 #include <memory>
 
+#include "cli_options.hpp"
 #include "commands.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/log.hpp"
@@ -43,8 +44,7 @@ Subcommand add_sweep(CLI::App& parent) {
   sub->add_option("--out", o->out, "output folder")->capture_default_str();
   sub->add_option("--set", o->sets, "override a scenario key by its dotted path: a.b=value")
       ->take_all();
-  sub->add_option("--threads", o->threads, "OpenMP threads (0: all cores)")
-      ->check(CLI::NonNegativeNumber);
+  sub->add_option("--threads", o->threads, "OpenMP threads (0: all cores)")->check(thread_count());
   sub->add_flag("--quick", o->quick, "small sweep (N 250, 8 directions; about a minute)");
   sub->add_option("--factors", o->factors,
                   "factors to sweep (dt_factor, n_particles, inertial_number, relax, "
@@ -58,7 +58,7 @@ Subcommand add_sweep(CLI::App& parent) {
       ->check(CLI::Range(1, 64));
   sub->add_option("--path-rates", o->path_rates, "path_rate: the rates to run (1/s, D_xx)")
       ->delimiter(',')
-      ->check(CLI::PositiveNumber);
+      ->check(positive_number());
   sub->add_option("--base-n", o->base_n,
                   "N of the base point and of the path_rate runs (default: 1000, --quick 250)")
       ->check(CLI::Range(50, 5000000));

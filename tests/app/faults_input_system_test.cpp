@@ -16,6 +16,8 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <utility>
+#include <vector>
 
 #include "cli_runner.hpp"
 #include "rendulic/core/results.hpp"
@@ -62,6 +64,39 @@ fs::path calibratable(const std::string& name) {
     w.write("/states/s" + std::to_string(s) + "/stress", Eigen::Matrix3d::Identity().eval());
   w.commit();
   return f;
+}
+
+// A thread count out of range is refused in counts, on a short line: CLI11's check of a
+// non-negative number printed the largest double (309 digits) as its upper end.
+TEST(Faults, AThreadCountOutOfRangeIsOneShortLine) {
+  const fs::path d = fresh_dir("threads");
+  const std::string scenario = write_file(d / "s.toml", "").string();
+  for (const std::string& command :
+       {"run " + scenario + " --out " + (d / "o").string(), "sweep " + scenario + " --quick",
+        "probe --packing " + scenario,
+        std::string("calibrate --results x.h5 --model isotropic_elastic")})
+    for (const char* value : {"-1", "5000", "two"}) {
+      const CliResult r = rendulic(command + " --threads " + value);
+      expect_refusal(r, "--threads");
+      EXPECT_LT(r.err.size(), 120u) << r.err;
+      EXPECT_FALSE(fs::exists(d / "o")) << command;
+    }
+}
+
+// The same for the numbers that must be positive without a scenario key behind them.
+TEST(Faults, ANonPositiveNumberIsOneShortLine) {
+  const fs::path d = fresh_dir("positive");
+  const std::string scenario = write_file(d / "s.toml", "").string();
+  const std::vector<std::pair<std::string, std::vector<std::string>>> cases = {
+      {"fit --in x.csv --loss-scale", {"-1", "nan"}},
+      {"sweep " + scenario + " --quick --path-rates", {"0", "-5"}},
+      {"probe " + scenario + " --directions", {"0", "-2"}}};
+  for (const auto& [command, values] : cases)
+    for (const std::string& value : values) {
+      const CliResult r = rendulic(command + " " + value);
+      expect_refusal(r, command.substr(command.rfind(' ') + 1));
+      EXPECT_LT(r.err.size(), 120u) << r.err;
+    }
 }
 
 TEST(Faults, StateLabelsHdf5CannotHoldAreRefusedBeforeAnythingIsWritten) {
