@@ -27,7 +27,7 @@ inline CLI::Validator positive_number(bool zero_allowed = false) {
         double v = 0.0;
         if (!CLI::detail::lexical_cast(text, v)) return "Value " + text + " is not a number";
         if (v > 0.0 || (zero_allowed && v == 0.0)) return "";
-        return "Value " + text + (zero_allowed ? " is negative" : " is not positive");
+        return "Value " + text + (zero_allowed ? " is not a number >= 0" : " is not a number > 0");
       },
       zero_allowed ? "NONNEGATIVE" : "POSITIVE");
 }
