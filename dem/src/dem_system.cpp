@@ -26,15 +26,6 @@
 
 namespace rendulic::dem {
 using namespace vec4;
-namespace {
-// e1 >= e2 stay the two largest values seen.
-inline void keep_two_largest(double e, double& e1, double& e2) {
-  if (e > e1)
-    e2 = e1, e1 = e;
-  else if (e > e2)
-    e2 = e;
-}
-}  // namespace
 
 bool SystemOptions::IsValid(std::string* why) const {
   if (!material.IsValid(why)) return false;
@@ -931,7 +922,7 @@ void DemSystem::step_impl(const Eigen::Vector3d& D) {
       P[4 * i + 2] = zi;
       const double* a = ref + 4 * i;
       const double ux = xi - rx * a[0], uy = yi - ry * a[1], uz = zi - rz * a[2];
-      keep_two_largest(std::sqrt(ux * ux + uy * uy + uz * uz) - s_min * a[3], e1, e2);
+      keep_two_largest_excess(ux * ux + uy * uy + uz * uz, s_min * a[3], e1, e2);
     }
     // The rotations' half kick, then the rows' records for the force loop.
     if (friction_) pack_rotations(lo, hi, h, true);

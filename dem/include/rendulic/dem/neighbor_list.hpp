@@ -22,12 +22,32 @@
 #pragma once
 
 #include <Eigen/Dense>
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
 #include "rendulic/dem/particles.hpp"
 
 namespace rendulic::dem {
+
+// The rebuild rule's two largest excesses: e1 >= e2 stay the two largest values seen.
+inline void keep_two_largest(double e, double& e1, double& e2) {
+  if (e > e1)
+    e2 = e1, e1 = e;
+  else if (e > e2)
+    e2 = e;
+}
+
+// keep_two_largest(sqrt(u2) - t, e1, e2) for an excess e_i = u_i - s_min h_i (u2 = u_i^2,
+// t = s_min h_i >= 0), without the square root where the value cannot reach e2, as for most
+// particles of a step: e1 and e2 come out the same bit for bit. The test is conservative by far
+// more than the roundings of e2 + t, b * b and the square root (a few units in the last place),
+// so a skipped value is below e2 as computed (docs/performance.md "A third host").
+inline void keep_two_largest_excess(double u2, double t, double& e1, double& e2) {
+  const double b = (e2 + t) - 1e-12 * (std::abs(e2) + t);
+  if (b > 0.0 && u2 < (1.0 - 1e-12) * (b * b)) return;
+  keep_two_largest(std::sqrt(u2) - t, e1, e2);
+}
 
 class NeighborList {
  public:
