@@ -73,8 +73,7 @@ TEST(Faults, AThreadCountOutOfRangeIsOneShortLine) {
   const std::string scenario = write_file(d / "s.toml", "").string();
   for (const std::string& command :
        {"run " + scenario + " --out " + (d / "o").string(), "sweep " + scenario + " --quick",
-        "probe --packing " + scenario,
-        std::string("calibrate --results x.h5 --model isotropic_elastic")})
+        "probe " + scenario, std::string("calibrate --results x.h5 --model isotropic_elastic")})
     for (const char* value : {"-1", "5000", "two"}) {
       const CliResult r = rendulic(command + " --threads " + value);
       expect_refusal(r, "--threads");
