@@ -27,6 +27,10 @@ bool CalibrationOptions::IsValid(std::string* why) const {
 
 namespace {
 
+// The share of the driver's substep cap above which calibrate() warns that the optimum sits
+// where the law is near-singular (DriverLoad).
+constexpr double kNearSubstepLimit = 0.5;
+
 double median(std::vector<double> v) {
   if (v.empty()) return 0.0;
   std::sort(v.begin(), v.end());
@@ -311,6 +315,19 @@ CalibrationSummary calibrate(const CalibrationData& data, const CalibrationOptio
                            "the elasto-plastic envelopes are outside what it can describe)");
   if (!out.fit.converged)
     out.warnings.push_back("the optimiser did not report convergence: " + out.fit.report);
+  if (out.fit.params.size() == out.param_names.size() && objective.integrated()) {
+    // An optimum where a prediction needs most of the driver's substeps is where the fit could
+    // no longer integrate the law nearby, not where the data put it (docs/calibration.md "When
+    // to stop"): the trial points beyond failed.
+    const DriverLoad load = objective.driver_load(out.fit.params);
+    if (load.substeps > 0 && load.substeps >= kNearSubstepLimit * load.limit)
+      out.warnings.push_back("at the optimum, " + load.where + " needs " +
+                             std::to_string(load.substeps) + " of the driver's " +
+                             std::to_string(load.limit) +
+                             " substeps: the law is near-singular there, and the fit may have "
+                             "stopped where it could no longer integrate it, not at the data's "
+                             "optimum");
+  }
 
   std::vector<double> r(objective.num_residuals(), 0.0);
   bool ok = objective.residuals(out.fit.z.data(), r.data());

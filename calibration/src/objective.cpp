@@ -139,6 +139,7 @@ struct KernelBase {
   virtual bool envelope(const double* p, const StateData& s, const EnvelopeRecord& probes,
                         bool integrated, EnvelopeRecord* out) const = 0;
   virtual bool path(const double* p, PathData* out) const = 0;
+  virtual DriverLoad driver_load(const double*) const { return {}; }
 
  protected:
   // A law's envelope over the data's probe set: the probes' name, amplitude, directions and
@@ -364,6 +365,36 @@ class Kernel final : public KernelBase {
     return true;
   }
 
+  DriverLoad driver_load(const double* p) const override {
+    DriverLoad load;
+    load.limit = o_->options.step.max_substeps;
+    const auto keep = [&load](const MostSubsteps& m, const std::string& where) {
+      if (m.count <= load.substeps) return;
+      load.substeps = m.count;
+      load.where = where;
+    };
+    if (o_->path_task.active) {
+      std::vector<models::MaterialState> states;
+      MostSubsteps m;
+      load.ok = run_path<double>(p, p, &states, &m) && load.ok;
+      keep(m, "increment " + std::to_string(m.index) + " of " +
+                  std::to_string(o_->path.eps_dev.size() - 1) + " of the path");
+    }
+    for (const EnvTask& t : o_->tasks) {
+      if (!t.integrated) continue;
+      std::vector<Eigen::Vector2d> ps, pf;
+      MostSubsteps m;
+      load.ok = predict<double>(p, p, o_->states[t.state], t.env, true, &ps, &pf, &m) && load.ok;
+      if (m.index < 0) continue;
+      const std::size_t i = static_cast<std::size_t>(m.index);
+      keep(m, (i < t.env.theta_deg.size()
+                   ? "the probe at theta = " + models::format_g(t.env.theta_deg[i]) + " deg"
+                   : "probe " + std::to_string(i) + " of " + std::to_string(t.env.size())) +
+                  " of state " + o_->states[t.state].label + "'s envelope " + t.env.name);
+    }
+    return load;
+  }
+
  private:
   static models::MaterialState start_state(const double* pd, const Eigen::Matrix3d& stress,
                                            const Eigen::Matrix3d& fabric, double volume_fraction) {
@@ -375,10 +406,21 @@ class Kernel final : public KernelBase {
     return st;
   }
 
+  // The prediction with the most substeps so far (driver_load): its count and index.
+  struct MostSubsteps {
+    int count = 0, index = -1;
+    template <class Result>
+    void see(const Result& res, int index_of) {
+      if (res.substeps + res.rejected <= count) return;
+      count = res.substeps + res.rejected;
+      index = index_of;
+    }
+  };
+
   template <typename T>
   bool predict(const T* p, const double* pd, const StateData& s, const EnvelopeRecord& env,
                bool integrated, std::vector<Eigen::Matrix<T, 2, 1>>* ps,
-               std::vector<Eigen::Matrix<T, 2, 1>>* pf) const {
+               std::vector<Eigen::Matrix<T, 2, 1>>* pf, MostSubsteps* most = nullptr) const {
     const int m = env.size();
     ps->resize(m);
     pf->resize(m);
@@ -390,6 +432,7 @@ class Kernel final : public KernelBase {
       for (int i = 0; i < m; ++i) {
         const auto res =
             models::integrate_adaptive(ops, st, env.strain_tensor(i), o_->options.step);
+        if (most) most->see(res, i);
         if (!res.success) return false;
         (*ps)[i] = pair_of<T>(models::Mat3<T>(res.end.stress - st.stress));
         (*pf)[i] = pair_of<T>(models::Mat3<T>(res.end.fabric - st.fabric));
@@ -409,7 +452,8 @@ class Kernel final : public KernelBase {
   // (the driver controls the error within each) along the data's strain increments, so that
   // the model is sampled exactly at the data's rows; one state per data row.
   template <typename T>
-  bool run_path(const T* p, const double* pd, std::vector<models::StateT<T>>* states) const {
+  bool run_path(const T* p, const double* pd, std::vector<models::StateT<T>>* states,
+                MostSubsteps* most = nullptr) const {
     const PathData& d = o_->path;
     const models::MaterialState sd = start_state(pd, d.stress[0], d.fabric[0], d.volume_fraction);
     if (!M::admissible(pd, sd, nullptr)) return false;
@@ -418,6 +462,7 @@ class Kernel final : public KernelBase {
     states->assign(1, y);
     for (std::size_t k = 1; k < d.eps_dev.size(); ++k) {
       const auto res = models::integrate_adaptive(ops, y, d.increment(k), o_->options.step);
+      if (most) most->see(res, static_cast<int>(k));
       if (!res.success) return false;
       y = res.end;
       states->push_back(y);
@@ -857,6 +902,10 @@ bool Objective::exact_derivatives() const {
   return impl_->options.derivatives == Derivatives::kExact && impl_->law_name != "umat";
 }
 bool Objective::integrated() const { return impl_->any_integrated; }
+
+DriverLoad Objective::driver_load(const std::vector<double>& p) const {
+  return impl_->kernel->driver_load(p.data());
+}
 
 bool Objective::predict_path(const std::vector<double>& p, PathData* out) const {
   if (impl_->path.empty()) return false;

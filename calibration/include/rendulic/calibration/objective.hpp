@@ -125,6 +125,17 @@ struct ObjectiveOptions {
   bool IsValid(std::string* why) const;
 };
 
+// The integrated prediction that takes the driver the most substeps at a parameter vector
+// (Objective::driver_load): a fit whose optimum sits where one needs nearly all of
+// ObjectiveOptions::step.max_substeps ends at the edge of the region where the law can be
+// integrated, not at the data's optimum (docs/calibration.md "When to stop").
+struct DriverLoad {
+  bool ok = true;     // false: some prediction could not be integrated
+  int substeps = 0;   // accepted + rejected substeps of that prediction (0: none integrated)
+  int limit = 0;      // the driver's cap, ObjectiveOptions::step.max_substeps
+  std::string where;  // "the probe at theta = 290.264 deg of state e's envelope dynamic_0.02"
+};
+
 // One block of the residual vector, for reports and for per-state errors.
 struct ResidualBlock {
   std::string state;  // label, or "path"
@@ -173,6 +184,9 @@ class Objective {
   // The law's undrained path from the data's first path row, at the data's eps_dev (signed);
   // false without a path or on a model failure.
   bool predict_path(const std::vector<double>& p, PathData* out) const;
+  // Over the fitted states' integrated predictions and the path, at full parameter vector p:
+  // the one that needs the driver's most substeps (a UMAT: substeps 0, not counted).
+  DriverLoad driver_load(const std::vector<double>& p) const;
 
   struct Impl;
 

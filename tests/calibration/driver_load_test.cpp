@@ -1,0 +1,95 @@
+// The driver's load at a parameter vector (Objective::driver_load, docs/calibration.md "When to
+// stop"): which integrated prediction takes the most substeps, checked against the public
+// driver (models::integrate) probe by probe, and calibrate()'s warning when the optimum needs
+// most of the substep cap, where a fit ends because it could no longer integrate the law.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+
+#include "rendulic/calibration/calibrate.hpp"
+#include "rendulic/calibration/objective.hpp"
+#include "rendulic/models/driver.hpp"
+#include "synthetic.hpp"
+
+namespace rendulic::calibration {
+namespace {
+
+using testing::law_with;
+
+CalibrationData plastic_data(const models::Law& law) {
+  testing::SyntheticSpec spec;
+  spec.directions = 8;
+  spec.plastic_amplitude = 2e-3;
+  return testing::synthetic_data(law, spec);
+}
+
+bool mentions_substeps(const std::vector<std::string>& warnings) {
+  return std::any_of(warnings.begin(), warnings.end(), [](const std::string& w) {
+    return w.find("substeps: the law is near-singular") != std::string::npos;
+  });
+}
+
+TEST(DriverLoad, IsTheMostSubstepsOfAnyIntegratedProbe) {
+  const auto law = law_with("elastoplastic_fabric", testing::kElastoplasticTruth);
+  const CalibrationData d = plastic_data(*law);
+  std::vector<std::string> labels;
+  for (const auto& s : d.states) labels.push_back(s.label);
+  ObjectiveOptions oo;
+  const Objective obj("elastoplastic_fabric", d, labels,
+                      ParameterSpace(*law, law->parameters(), {"M_ss"}), oo);
+  ASSERT_TRUE(obj.integrated());
+  const DriverLoad load = obj.driver_load(law->parameters());
+  ASSERT_TRUE(load.ok);
+  EXPECT_EQ(load.limit, oo.step.max_substeps);
+
+  // The same probes through the public driver, one by one.
+  int most = 0;
+  std::string where;
+  for (const auto& s : d.states) {
+    const models::MaterialState st = law->make_state(s.stress, s.fabric, s.volume_fraction);
+    for (const auto& env : s.envelopes) {
+      if (env.elastic()) continue;  // rate predictions: not integrated
+      for (std::size_t i = 0; i < env.size(); ++i) {
+        const models::StepResult r = models::integrate(*law, st, env.strain_tensor(i), oo.step);
+        ASSERT_TRUE(r.success) << r.reason;
+        if (r.substeps + r.rejected > most) {
+          most = r.substeps + r.rejected;
+          where = " of state " + s.label + "'s envelope " + env.name;
+        }
+      }
+    }
+  }
+  EXPECT_GT(most, 1);
+  EXPECT_EQ(load.substeps, most);
+  ASSERT_GE(load.where.size(), where.size());
+  EXPECT_EQ(load.where.substr(load.where.size() - where.size()), where) << load.where;
+}
+
+TEST(DriverLoad, CalibrateWarnsWhereTheOptimumNeedsMostOfTheCap) {
+  const auto law = law_with("elastoplastic_fabric", testing::kElastoplasticTruth);
+  const CalibrationData d = plastic_data(*law);
+  CalibrationOptions o;
+  o.model = "elastoplastic_fabric";
+  o.free = {"M_ss"};
+  for (const auto& [name, v] : testing::kElastoplasticTruth) o.values[name] = v;
+  o.level_one_start = false;
+  o.likelihood_weights = false;
+  o.global_start = false;
+  const CalibrationSummary quiet = calibrate(d, o);
+  ASSERT_TRUE(quiet.fit.converged) << quiet.fit.report;
+  std::vector<std::string> labels = quiet.fitted_states;
+  const DriverLoad load =
+      Objective(o.model, d, labels, ParameterSpace(*law, law->parameters(), {"M_ss"}), o.objective)
+          .driver_load(quiet.fit.params);
+  // The default cap is far above what these probes need: no warning.
+  ASSERT_LT(2 * load.substeps, o.objective.step.max_substeps);
+  EXPECT_FALSE(mentions_substeps(quiet.warnings)) << quiet.BriefReport();
+  // A cap just above the need: the same fit, now at the edge of what the driver may take.
+  o.objective.step.max_substeps = load.substeps + load.substeps / 2;
+  const CalibrationSummary tight = calibrate(d, o);
+  ASSERT_TRUE(tight.fit.converged) << tight.fit.report;
+  EXPECT_TRUE(mentions_substeps(tight.warnings)) << tight.BriefReport();
+}
+
+}  // namespace
+}  // namespace rendulic::calibration
