@@ -27,8 +27,8 @@ bool CalibrationOptions::IsValid(std::string* why) const {
 
 namespace {
 
-// The share of the driver's substep cap above which calibrate() warns that the optimum sits
-// where the law is near-singular (DriverLoad).
+// The share of the driver's substep cap above which calibrate() warns that the fit may have
+// ended on that cap (DriverLoad).
 constexpr double kNearSubstepLimit = 0.5;
 
 double median(std::vector<double> v) {
@@ -316,17 +316,17 @@ CalibrationSummary calibrate(const CalibrationData& data, const CalibrationOptio
   if (!out.fit.converged)
     out.warnings.push_back("the optimiser did not report convergence: " + out.fit.report);
   if (out.fit.params.size() == out.param_names.size() && objective.integrated()) {
-    // An optimum where a prediction needs most of the driver's substeps is where the fit could
-    // no longer integrate the law nearby, not where the data put it (docs/calibration.md "When
-    // to stop"): the trial points beyond failed.
+    // Where a prediction at the optimum needs most of the substeps a fit allows, trial points
+    // beyond may have failed on that limit alone, and the fit stopped there rather than where
+    // the data put it (docs/calibration.md "When to stop").
     const DriverLoad load = objective.driver_load(out.fit.params);
     if (load.substeps > 0 && load.substeps >= kNearSubstepLimit * load.limit)
-      out.warnings.push_back("at the optimum, " + load.where + " needs " +
-                             std::to_string(load.substeps) + " of the driver's " +
-                             std::to_string(load.limit) +
-                             " substeps: the law is near-singular there, and the fit may have "
-                             "stopped where it could no longer integrate it, not at the data's "
-                             "optimum");
+      out.warnings.push_back(
+          "at the optimum, " + load.where + " needs " + std::to_string(load.substeps) + " of the " +
+          std::to_string(load.limit) +
+          " driver substeps a prediction may take (calibration.max_substeps): trial points that "
+          "need more count as failed, so the fit may have stopped on that limit rather than at "
+          "the data's optimum");
   }
 
   std::vector<double> r(objective.num_residuals(), 0.0);

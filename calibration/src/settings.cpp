@@ -71,6 +71,14 @@ const OptionTable<CalibrationSettings>& calibration_option_table() {
              .min = 1e-10,
              .max = 1e-2},
             [](CalibrationSettings& s) -> double& { return s.driver_tolerance; }},
+        Row{{.path = "calibration.max_substeps",
+             .unit = "-",
+             .help = "Most driver substeps of one integrated prediction during a fit; a trial "
+                     "point that needs more counts as not evaluable. The calibration warns when "
+                     "its optimum needs half of it or more (docs/calibration.md 'When to stop').",
+             .min = 10,
+             .max = 10000000},
+            [](CalibrationSettings& s) -> int& { return s.max_substeps; }},
         Row{{.path = "calibration.umat",
              .unit = "-",
              .help = "Shared library of an Abaqus UMAT (entry umat_ or umat) for model umat "
@@ -126,6 +134,7 @@ CalibrationPlan calibration_plan(const CalibrationSettings& s) {
   opt.objective.path = s.path;
   opt.objective.envelope_features = s.features;
   opt.objective.step.tolerance = s.driver_tolerance;
+  opt.objective.step.max_substeps = s.max_substeps;
   p.load.states = s.states;
   // Held-out states are predicted, so their data must be loaded too.
   if (!p.load.states.empty())

@@ -25,7 +25,7 @@ CalibrationData plastic_data(const models::Law& law) {
 
 bool mentions_substeps(const std::vector<std::string>& warnings) {
   return std::any_of(warnings.begin(), warnings.end(), [](const std::string& w) {
-    return w.find("substeps: the law is near-singular") != std::string::npos;
+    return w.find("driver substeps a prediction may take") != std::string::npos;
   });
 }
 

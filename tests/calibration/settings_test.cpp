@@ -21,6 +21,7 @@ TEST(CalibrationSettings, KeysCarryTheStructsDefaults) {
   EXPECT_EQ(s.max_iterations, d.max_iterations);
   EXPECT_EQ(s.function_tolerance, kDemFunctionTolerance);
   EXPECT_EQ(s.driver_tolerance, 1e-6);  // the driver's own default (docs/models.md "Tolerance")
+  EXPECT_EQ(s.max_substeps, ObjectiveOptions{}.step.max_substeps);
   EXPECT_EQ(std::get<double>(schema.find("calibration.function_tolerance")->default_value),
             kDemFunctionTolerance);
 }
@@ -33,8 +34,10 @@ TEST(CalibrationSettings, PlanTranslatesOnce) {
   s.features = true;
   s.max_iterations = 17;
   s.driver_tolerance = 1e-4;
+  s.max_substeps = 5000;
   CalibrationPlan p = calibration_plan(s);
   EXPECT_EQ(p.options.objective.step.tolerance, 1e-4);
+  EXPECT_EQ(p.options.objective.step.max_substeps, 5000);
   EXPECT_EQ(p.models, models::law_names());
   EXPECT_TRUE(p.options.holdout.empty());
   EXPECT_FALSE(p.options.objective.path);
@@ -66,6 +69,9 @@ TEST(CalibrationSettings, OutOfRangeIsRefusedNamingTheKey) {
   }
   s = {};
   s.max_iterations = 0;
+  EXPECT_THROW(calibration_plan(s), InputError);
+  s = {};
+  s.max_substeps = 1;
   EXPECT_THROW(calibration_plan(s), InputError);
 }
 

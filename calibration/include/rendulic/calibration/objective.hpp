@@ -114,8 +114,9 @@ struct ObjectiveOptions {
   // to the stress) puts the error of a 2e-3 probe response near 1e-5 of the response, far
   // below the noise of DEM envelopes (docs/calibration.md "Predictions and derivatives"); with
   // central differences use 1e-10, which their relative step 1e-6 needs.
-  // A probe that needs more than 1000 substeps is at parameters where the law is pathologically
-  // stiff; failing it fast (an infinite cost) is what the optimiser needs.
+  // A prediction that needs more than 1000 substeps fails (an infinite cost), which keeps trial
+  // points where the law is stiff cheap. A fit may end on that limit: calibrate() warns when its
+  // optimum needs half of it or more (DriverLoad), and calibration.max_substeps sets it.
   models::StepOptions step = [] {
     models::StepOptions s;
     s.tolerance = 1e-6;
@@ -127,8 +128,8 @@ struct ObjectiveOptions {
 
 // The integrated prediction that takes the driver the most substeps at a parameter vector
 // (Objective::driver_load): a fit whose optimum sits where one needs nearly all of
-// ObjectiveOptions::step.max_substeps ends at the edge of the region where the law can be
-// integrated, not at the data's optimum (docs/calibration.md "When to stop").
+// ObjectiveOptions::step.max_substeps may have ended on that limit (trial points beyond fail),
+// not at the data's optimum (docs/calibration.md "When to stop").
 struct DriverLoad {
   bool ok = true;     // false: some prediction could not be integrated
   int substeps = 0;   // accepted + rejected substeps of that prediction (0: none integrated)
