@@ -351,6 +351,9 @@ CalibrationSummary calibrate(const CalibrationData& data, const CalibrationOptio
   if (!out.held_out_states.empty()) {
     ObjectiveOptions ho = oo;
     ho.path = false;
+    // A measurement at the fitted parameters, as the misfit on the fitted data above: the
+    // driver's own substep budget, not the fit's cap (which only keeps trial points cheap).
+    ho.step = yardstick_options(oo.step, false).step;
     const Objective held(options.model, data, out.held_out_states, space, ho);
     hb = held.blocks();
     rh.assign(held.num_residuals(), 0.0);

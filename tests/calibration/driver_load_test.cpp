@@ -1,7 +1,8 @@
 // The driver's load at a parameter vector (Objective::driver_load, docs/calibration.md "When to
 // stop"): which integrated prediction takes the most substeps, checked against the public
-// driver (models::integrate) probe by probe, and calibrate()'s warning when the optimum needs
-// most of the substep cap, where a fit ends because it could no longer integrate the law.
+// driver (models::integrate) probe by probe; calibrate()'s warning when the optimum needs most
+// of the fit's substep cap, where trial points beyond fail on the cap alone; and held-out states
+// predicted with the driver's own budget, not that cap.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -89,6 +90,51 @@ TEST(DriverLoad, CalibrateWarnsWhereTheOptimumNeedsMostOfTheCap) {
   const CalibrationSummary tight = calibrate(d, o);
   ASSERT_TRUE(tight.fit.converged) << tight.fit.report;
   EXPECT_TRUE(mentions_substeps(tight.warnings)) << tight.BriefReport();
+}
+
+// Held-out states are a measurement at the fitted parameters: a probe there that needs more
+// substeps than the fit's cap allows trial points is still predicted, not reported as "cannot
+// be evaluated".
+TEST(DriverLoad, HeldOutStatesTakeTheDriversOwnBudget) {
+  const auto law = law_with("elastoplastic_fabric", testing::kElastoplasticTruth);
+  const CalibrationData d = plastic_data(*law);
+  const ParameterSpace space(*law, law->parameters(), {"M_ss"});
+  std::string held;
+  int held_need = 0, fitted_need = 0;
+  for (const auto& s : d.states) {
+    const int need = Objective("elastoplastic_fabric", d, {s.label}, space, ObjectiveOptions{})
+                         .driver_load(law->parameters())
+                         .substeps;
+    if (need > held_need) {
+      fitted_need = std::max(fitted_need, held_need);
+      held_need = need;
+      held = s.label;
+    } else {
+      fitted_need = std::max(fitted_need, need);
+    }
+  }
+  ASSERT_GT(held_need, fitted_need + 2) << "the synthetic states need the same substeps";
+  CalibrationOptions o;
+  o.model = "elastoplastic_fabric";
+  o.free = {"M_ss"};
+  for (const auto& [name, v] : testing::kElastoplasticTruth) o.values[name] = v;
+  o.level_one_start = false;
+  o.likelihood_weights = false;
+  o.global_start = false;
+  o.holdout = {held};
+  o.objective.step.max_substeps = (held_need + fitted_need) / 2;  // the fitted states' need fits
+  const CalibrationSummary s = calibrate(d, o);
+  ASSERT_TRUE(s.fit.converged) << s.fit.report;
+  for (const auto& w : s.warnings)
+    EXPECT_EQ(w.find("cannot be evaluated at the held-out states"), std::string::npos) << w;
+  bool seen = false;
+  for (const auto& st : s.states)
+    if (st.label == held) {
+      seen = true;
+      EXPECT_TRUE(st.held_out);
+      EXPECT_GE(st.misfit, 0.0) << "the held-out state was not predicted";
+    }
+  EXPECT_TRUE(seen);
 }
 
 }  // namespace
