@@ -24,6 +24,19 @@ CalibrationData plastic_data(const models::Law& law) {
   return testing::synthetic_data(law, spec);
 }
 
+// M_ss fitted from the truth (the other parameters held there), least squares, no global
+// start: the optimum is the truth, and so are the substeps its probes need.
+CalibrationOptions m_ss_from_the_truth() {
+  CalibrationOptions o;
+  o.model = "elastoplastic_fabric";
+  o.free = {"M_ss"};
+  for (const auto& [name, v] : testing::kElastoplasticTruth) o.values[name] = v;
+  o.level_one_start = false;
+  o.likelihood_weights = false;
+  o.global_start = false;
+  return o;
+}
+
 bool mentions_substeps(const std::vector<std::string>& warnings) {
   return std::any_of(warnings.begin(), warnings.end(), [](const std::string& w) {
     return w.find("driver substeps a prediction may take") != std::string::npos;
@@ -69,13 +82,7 @@ TEST(DriverLoad, IsTheMostSubstepsOfAnyIntegratedProbe) {
 TEST(DriverLoad, CalibrateWarnsWhereTheOptimumNeedsMostOfTheCap) {
   const auto law = law_with("elastoplastic_fabric", testing::kElastoplasticTruth);
   const CalibrationData d = plastic_data(*law);
-  CalibrationOptions o;
-  o.model = "elastoplastic_fabric";
-  o.free = {"M_ss"};
-  for (const auto& [name, v] : testing::kElastoplasticTruth) o.values[name] = v;
-  o.level_one_start = false;
-  o.likelihood_weights = false;
-  o.global_start = false;
+  CalibrationOptions o = m_ss_from_the_truth();
   const CalibrationSummary quiet = calibrate(d, o);
   ASSERT_TRUE(quiet.fit.converged) << quiet.fit.report;
   std::vector<std::string> labels = quiet.fitted_states;
@@ -114,13 +121,7 @@ TEST(DriverLoad, HeldOutStatesTakeTheDriversOwnBudget) {
     }
   }
   ASSERT_GT(held_need, fitted_need + 2) << "the synthetic states need the same substeps";
-  CalibrationOptions o;
-  o.model = "elastoplastic_fabric";
-  o.free = {"M_ss"};
-  for (const auto& [name, v] : testing::kElastoplasticTruth) o.values[name] = v;
-  o.level_one_start = false;
-  o.likelihood_weights = false;
-  o.global_start = false;
+  CalibrationOptions o = m_ss_from_the_truth();
   o.holdout = {held};
   o.objective.step.max_substeps = (held_need + fitted_need) / 2;  // the fitted states' need fits
   const CalibrationSummary s = calibrate(d, o);
