@@ -329,13 +329,15 @@ CalibrationSummary calibrate(const CalibrationData& data, const CalibrationOptio
           "the data's optimum");
   }
 
+  // The fit's substep budget fails stiff probes fast (what the optimiser needs); the misfits at
+  // the result, on the fitted and on the held-out states, are measurements and take the
+  // driver's own budget, as the yardstick does.
+  const models::StepOptions measure_step = yardstick_options(oo.step, use_path).step;
   std::vector<double> r(objective.num_residuals(), 0.0);
   bool ok = objective.residuals(out.fit.z.data(), r.data());
   if (!ok) {
-    // The fit's substep budget fails stiff probes fast (what the optimiser needs); the misfit
-    // at the result is a measurement and takes the driver's own budget, as the yardstick does.
     ObjectiveOptions measure = oo;
-    measure.step = yardstick_options(oo.step, use_path).step;
+    measure.step = measure_step;
     ok = Objective(options.model, data, out.fitted_states, space, measure)
              .residuals(out.fit.z.data(), r.data());
   }
@@ -351,9 +353,7 @@ CalibrationSummary calibrate(const CalibrationData& data, const CalibrationOptio
   if (!out.held_out_states.empty()) {
     ObjectiveOptions ho = oo;
     ho.path = false;
-    // A measurement at the fitted parameters, as the misfit on the fitted data above: the
-    // driver's own substep budget, not the fit's cap (which only keeps trial points cheap).
-    ho.step = yardstick_options(oo.step, false).step;
+    ho.step = measure_step;
     const Objective held(options.model, data, out.held_out_states, space, ho);
     hb = held.blocks();
     rh.assign(held.num_residuals(), 0.0);
