@@ -408,6 +408,11 @@ inline void records(V4 x, V4 y, V4 z, V4 w, double* a, double* b, double* c, dou
   store_halves(__builtin_shuffle(z, w, Mask4{1, 5, 3, 7}), b + 2, d + 2);
 }
 
+// Four consecutive doubles of a particle array (std::vector, 8-byte aligned).
+typedef double V4u __attribute__((vector_size(32), aligned(8)));
+inline V4 loadu4(const double* p) { return *reinterpret_cast<const V4u*>(p); }
+inline void storeu4(double* p, V4 v) { *reinterpret_cast<V4u*>(p) = v; }
+
 // Lanes 0-2 of a, lane 3 of b (one blend).
 inline V4 fourth_of(V4 a, V4 b) { return __builtin_shuffle(a, b, Mask4{0, 1, 2, 7}); }
 // The three doubles at p, the fourth lane 0: one masked load, which reads nothing past p[2].
@@ -541,6 +546,94 @@ void friction_law(FrictionLanes<kRolling>& c, std::size_t count, const double* Q
         n[0] * ft[1] - n[1] * ft[0], aj);
     out(F::kXiWork, x[0], x[1], x[2], work);
   }
+}
+
+// The opening half kick and the drift of particles [lo, hi) (dem_system.hpp, the step), the
+// rows' records for the force loop, and the rebuild rule's two largest excesses e1 >= e2
+// (neighbor_list.hpp), carried in and out. Four particles at a time in the lanes of a V4, each
+// lane the scalar arithmetic of one particle (the same bits): as scalar code this pass was
+// 12 % of a frictionless step (docs/performance.md "The kick and drift in lanes"). A function
+// of its own, with its pointers and constants as locals: inside the step's parallel region GCC
+// read them from the region's shared block at every particle.
+struct KickDrift {
+  double *x, *y, *z, *vx, *vy, *vz;
+  const double *fx, *fy, *fz, *im, *ref, *radius;
+  double *W, *P;
+  double h, dt, sx, sy, sz, rx, ry, rz, s_min;
+};
+
+void kick_drift(const KickDrift& k, std::size_t lo, std::size_t hi, double& e1_io, double& e2_io) {
+  double* __restrict x = k.x;
+  double* __restrict y = k.y;
+  double* __restrict z = k.z;
+  double* __restrict vx = k.vx;
+  double* __restrict vy = k.vy;
+  double* __restrict vz = k.vz;
+  const double* __restrict fx = k.fx;
+  const double* __restrict fy = k.fy;
+  const double* __restrict fz = k.fz;
+  const double* __restrict im = k.im;
+  const double* __restrict ref = k.ref;
+  const double* __restrict radius = k.radius;
+  double* __restrict W = k.W;
+  double* __restrict P = k.P;
+  const double h = k.h, dt = k.dt, sx = k.sx, sy = k.sy, sz = k.sz, rx = k.rx, ry = k.ry, rz = k.rz,
+               s_min = k.s_min;
+  double e1 = e1_io, e2 = e2_io;
+  std::size_t i = lo;
+  for (; i + 4 <= hi; i += 4) {
+    const V4 hm = h * loadu4(im + i);
+    const V4 fxi = loadu4(fx + i), fyi = loadu4(fy + i), fzi = loadu4(fz + i);
+    const V4 vxi = loadu4(vx + i) + hm * fxi, vyi = loadu4(vy + i) + hm * fyi,
+             vzi = loadu4(vz + i) + hm * fzi;
+    storeu4(vx + i, vxi);
+    storeu4(vy + i, vyi);
+    storeu4(vz + i, vzi);
+    // Predicted v(t+dt) = v(t) + dt a(t), second-order accurate, for the dissipative forces.
+    // The records' fourth lanes: 0 for the velocity, the radius for the position.
+    records(vxi + hm * fxi, vyi + hm * fyi, vzi + hm * fzi, V4{}, W + 8 * i, W + 8 * i + 8,
+            W + 8 * i + 16, W + 8 * i + 24);
+    const V4 xi = sx * (loadu4(x + i) + dt * vxi), yi = sy * (loadu4(y + i) + dt * vyi),
+             zi = sz * (loadu4(z + i) + dt * vzi);
+    storeu4(x + i, xi);
+    storeu4(y + i, yi);
+    storeu4(z + i, zi);
+    records(xi, yi, zi, loadu4(radius + i), P + 4 * i, P + 4 * i + 4, P + 4 * i + 8,
+            P + 4 * i + 12);
+    const auto a = components(ref + 4 * i, ref + 4 * i + 4, ref + 4 * i + 8, ref + 4 * i + 12);
+    const V4 ux = xi - rx * a[0], uy = yi - ry * a[1], uz = zi - rz * a[2];
+    const V4 u2 = ux * ux + uy * uy + uz * uz, th = s_min * a[3];
+    // keep_two_largest_excess's own test against the e2 before these four: e2 only grows over
+    // them, so a lane skipped here would be skipped there too, and the others go through it in
+    // order (the same e1 and e2).
+    const V4 b = (e2 + th) - 1e-12 * (std::abs(e2) + th);
+    const auto reach = ~((b > 0.0) & (u2 < (1.0 - 1e-12) * (b * b)));
+    if (any_bits(reinterpret_cast<V4>(reach))) [[unlikely]]
+      for (int q = 0; q < 4; ++q)
+        if (reach[q]) keep_two_largest_excess(u2[q], th[q], e1, e2);
+  }
+  for (; i < hi; ++i) {
+    const double hm = h * im[i];
+    const double vxi = vx[i] + hm * fx[i], vyi = vy[i] + hm * fy[i], vzi = vz[i] + hm * fz[i];
+    vx[i] = vxi;
+    vy[i] = vyi;
+    vz[i] = vzi;
+    W[8 * i] = vxi + hm * fx[i];
+    W[8 * i + 1] = vyi + hm * fy[i];
+    W[8 * i + 2] = vzi + hm * fz[i];
+    const double xi = sx * (x[i] + dt * vxi), yi = sy * (y[i] + dt * vyi),
+                 zi = sz * (z[i] + dt * vzi);
+    x[i] = xi;
+    y[i] = yi;
+    z[i] = zi;
+    P[4 * i] = xi;
+    P[4 * i + 1] = yi;
+    P[4 * i + 2] = zi;
+    const double* a = ref + 4 * i;
+    const double ux = xi - rx * a[0], uy = yi - ry * a[1], uz = zi - rz * a[2];
+    keep_two_largest_excess(ux * ux + uy * uy + uz * uz, s_min * a[3], e1, e2);
+  }
+  e1_io = e1, e2_io = e2;
 }
 }  // namespace
 
@@ -707,7 +800,35 @@ void DemSystem::pack_rotations(std::size_t lo, std::size_t hi, double half_kick,
   const double* __restrict tx = p_.tx.data();
   const double* __restrict ty = p_.ty.data();
   const double* __restrict tz = p_.tz.data();
-  for (std::size_t i = lo; i < hi; ++i) {
+  const double* __restrict vx = p_.vx.data();
+  const double* __restrict vy = p_.vy.data();
+  const double* __restrict vz = p_.vz.data();
+  const double* __restrict ii = inv_inertia_.data();
+  // Four rows at a time, the records written from one vector per component (the same
+  // arithmetic per lane as the scalar rest below; their fourth lanes 0, which no reader uses).
+  std::size_t i = lo;
+  for (; i + 4 <= hi; i += 4) {
+    const V4 hi_ = half_kick * loadu4(ii + i);
+    const V4 txi = loadu4(tx + i), tyi = loadu4(ty + i), tzi = loadu4(tz + i);
+    V4 wxi = loadu4(wx + i), wyi = loadu4(wy + i), wzi = loadu4(wz + i);
+    if (opening_kick) {
+      wxi += hi_ * txi;
+      wyi += hi_ * tyi;
+      wzi += hi_ * tzi;
+      storeu4(wx + i, wxi);
+      storeu4(wy + i, wyi);
+      storeu4(wz + i, wzi);
+    }
+    double* q = Q + 16 * i;
+    for (int k = 0; k < 4; ++k) {
+      store4(A + 8 * (i + k), V4{});
+      store4(q + 16 * k + 12, V4{});
+    }
+    records(loadu4(vx + i), loadu4(vy + i), loadu4(vz + i), V4{}, q, q + 16, q + 32, q + 48);
+    records(wxi, wyi, wzi, V4{}, q + 4, q + 20, q + 36, q + 52);
+    records(wxi + hi_ * txi, wyi + hi_ * tyi, wzi + hi_ * tzi, V4{}, q + 8, q + 24, q + 40, q + 56);
+  }
+  for (; i < hi; ++i) {
     const double hi_ = half_kick * inv_inertia_[i];
     if (opening_kick) {
       wx[i] += hi_ * tx[i];
@@ -717,7 +838,7 @@ void DemSystem::pack_rotations(std::size_t lo, std::size_t hi, double half_kick,
     double* q = Q + 16 * i;
     store4(A + 8 * i, V4{});
     store4(q + 12, V4{});
-    q[0] = p_.vx[i], q[1] = p_.vy[i], q[2] = p_.vz[i];
+    q[0] = vx[i], q[1] = vy[i], q[2] = vz[i];
     q[4] = wx[i], q[5] = wy[i], q[6] = wz[i];
     q[8] = wx[i] + hi_ * tx[i];
     q[9] = wy[i] + hi_ * ty[i];
@@ -775,31 +896,68 @@ void DemSystem::forces_of_thread(std::size_t t, std::size_t T, double half_kick)
       }
     }
   }
-  if (friction_)  // no background damping on the rotations
-    for (std::size_t i = lo; i < hi; ++i) {
-      const double* q = rot16_.data() + 16 * i + 12;
-      p_.tx[i] = q[0], p_.ty[i] = q[1], p_.tz[i] = q[2];
+  if (friction_) {  // no background damping on the rotations
+    // The torques and the rotations' closing half kick, four rows at a time as below.
+    const double* __restrict Q = rot16_.data() + 12;
+    double* __restrict txo = p_.tx.data();
+    double* __restrict tyo = p_.ty.data();
+    double* __restrict tzo = p_.tz.data();
+    double* __restrict wxo = p_.wx.data();
+    double* __restrict wyo = p_.wy.data();
+    double* __restrict wzo = p_.wz.data();
+    const double* __restrict ii = inv_inertia_.data();
+    std::size_t i = lo;
+    for (; i + 4 <= hi; i += 4) {
+      const auto t = components(Q + 16 * i, Q + 16 * i + 16, Q + 16 * i + 32, Q + 16 * i + 48);
+      storeu4(txo + i, t[0]);
+      storeu4(tyo + i, t[1]);
+      storeu4(tzo + i, t[2]);
       if (half_kick != 0) {
-        const double hi_ = half_kick * inv_inertia_[i];
-        p_.wx[i] += hi_ * q[0];
-        p_.wy[i] += hi_ * q[1];
-        p_.wz[i] += hi_ * q[2];
+        const V4 hi_ = half_kick * loadu4(ii + i);
+        storeu4(wxo + i, loadu4(wxo + i) + hi_ * t[0]);
+        storeu4(wyo + i, loadu4(wyo + i) + hi_ * t[1]);
+        storeu4(wzo + i, loadu4(wzo + i) + hi_ * t[2]);
       }
     }
-  if (half_kick != 0)
-    for (std::size_t i = lo; i < hi; ++i) {
-      const V4 f = load4(A + 8 * i) - gamma_b * load4(W + 8 * i);
+    for (; i < hi; ++i) {
+      const double* q = Q + 16 * i;
+      txo[i] = q[0], tyo[i] = q[1], tzo[i] = q[2];
+      if (half_kick != 0) {
+        const double hi_ = half_kick * ii[i];
+        wxo[i] += hi_ * q[0];
+        wyo[i] += hi_ * q[1];
+        wzo[i] += hi_ * q[2];
+      }
+    }
+  }
+  // The forces with the background damping, and the closing half kick: four rows at a time,
+  // their records transposed into one vector per component (the same arithmetic per lane as
+  // the scalar rest below; 7 % of a frictionless step as scalar code).
+  std::size_t i = lo;
+  for (; i + 4 <= hi; i += 4) {
+    const auto a = components(A + 8 * i, A + 8 * i + 8, A + 8 * i + 16, A + 8 * i + 24);
+    const auto w = components(W + 8 * i, W + 8 * i + 8, W + 8 * i + 16, W + 8 * i + 24);
+    const V4 fx = a[0] - gamma_b * w[0], fy = a[1] - gamma_b * w[1], fz = a[2] - gamma_b * w[2];
+    storeu4(fxo + i, fx);
+    storeu4(fyo + i, fy);
+    storeu4(fzo + i, fz);
+    if (half_kick != 0) {
+      const V4 hm = half_kick * loadu4(im + i);
+      storeu4(vxo + i, loadu4(vxo + i) + hm * fx);
+      storeu4(vyo + i, loadu4(vyo + i) + hm * fy);
+      storeu4(vzo + i, loadu4(vzo + i) + hm * fz);
+    }
+  }
+  for (; i < hi; ++i) {
+    const V4 f = load4(A + 8 * i) - gamma_b * load4(W + 8 * i);
+    fxo[i] = f[0], fyo[i] = f[1], fzo[i] = f[2];
+    if (half_kick != 0) {
       const double hm = half_kick * im[i];
-      fxo[i] = f[0], fyo[i] = f[1], fzo[i] = f[2];
       vxo[i] += hm * f[0];
       vyo[i] += hm * f[1];
       vzo[i] += hm * f[2];
     }
-  else
-    for (std::size_t i = lo; i < hi; ++i) {
-      const V4 f = load4(A + 8 * i) - gamma_b * load4(W + 8 * i);
-      fxo[i] = f[0], fyo[i] = f[1], fzo[i] = f[2];
-    }
+  }
 }
 
 void DemSystem::sum_stress() {
@@ -879,6 +1037,7 @@ void DemSystem::step_impl(const Eigen::Vector3d& D) {
   const double* __restrict fz = p_.fz.data();
   const double* __restrict im = p_.inv_mass.data();
   const double* __restrict ref = ref4_.data();
+  const double* __restrict radius = p_.radius.data();
   if (blocks_builds_ != list_.builds()) make_blocks();
   double* __restrict W = va8_.data();
   double* __restrict P = pos4_.data();
@@ -902,28 +1061,9 @@ void DemSystem::step_impl(const Eigen::Vector3d& D) {
     const std::size_t T = static_cast<std::size_t>(omp_get_num_threads());
     double e1 = -1e300, e2 = -1e300;
     const std::size_t lo = block_lo_[blocks * t / T], hi = block_lo_[blocks * (t + 1) / T];
-    for (std::size_t i = lo; i < hi; ++i) {
-      const double hm = h * im[i];
-      const double vxi = vx[i] + hm * fx[i], vyi = vy[i] + hm * fy[i], vzi = vz[i] + hm * fz[i];
-      vx[i] = vxi;
-      vy[i] = vyi;
-      vz[i] = vzi;
-      // Predicted v(t+dt) = v(t) + dt a(t), second-order accurate, for the dissipative forces.
-      W[8 * i] = vxi + hm * fx[i];
-      W[8 * i + 1] = vyi + hm * fy[i];
-      W[8 * i + 2] = vzi + hm * fz[i];
-      const double xi = sx * (x[i] + dt * vxi), yi = sy * (y[i] + dt * vyi),
-                   zi = sz * (z[i] + dt * vzi);
-      x[i] = xi;
-      y[i] = yi;
-      z[i] = zi;
-      P[4 * i] = xi;
-      P[4 * i + 1] = yi;
-      P[4 * i + 2] = zi;
-      const double* a = ref + 4 * i;
-      const double ux = xi - rx * a[0], uy = yi - ry * a[1], uz = zi - rz * a[2];
-      keep_two_largest_excess(ux * ux + uy * uy + uz * uz, s_min * a[3], e1, e2);
-    }
+    kick_drift(KickDrift{x, y, z, vx, vy, vz, fx, fy, fz, im, ref,  radius,
+                         W, P, h, dt, sx, sy, sz, rx, ry, rz, s_min},
+               lo, hi, e1, e2);
     // The rotations' half kick, then the rows' records for the force loop.
     if (friction_) pack_rotations(lo, hi, h, true);
     tops_[t] = {e1, e2};
