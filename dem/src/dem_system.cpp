@@ -635,6 +635,64 @@ void kick_drift(const KickDrift& k, std::size_t lo, std::size_t hi, double& e1_i
   }
   e1_io = e1, e2_io = e2;
 }
+
+// Rows [lo, hi) finished from their accumulator records (a stride apart): out = the record's
+// sum, minus gamma times the damping record (the velocity) with kDamped, and, if half_kick != 0,
+// the closing half kick vel += half_kick inv out. Four rows at a time, their records transposed
+// into one vector per component, each lane the scalar arithmetic of the rest below (the same
+// bits; as scalar code the forces' finish was 7 % of a frictionless step).
+struct FinishRows {
+  const double* record;
+  std::size_t stride;
+  const double* damping;
+  double gamma;
+  double* out[3];
+  double* vel[3];
+  const double* inv;
+};
+
+template <bool kDamped>
+void finish_rows(const FinishRows& r, double half_kick, std::size_t lo, std::size_t hi) {
+  const double* __restrict R = r.record;
+  const double* __restrict D = r.damping;
+  const std::size_t m = r.stride;
+  const double gamma = r.gamma;
+  double* __restrict ox = r.out[0];
+  double* __restrict oy = r.out[1];
+  double* __restrict oz = r.out[2];
+  double* __restrict vx = r.vel[0];
+  double* __restrict vy = r.vel[1];
+  double* __restrict vz = r.vel[2];
+  const double* __restrict inv = r.inv;
+  std::size_t i = lo;
+  for (; i + 4 <= hi; i += 4) {
+    auto f = components(R + m * i, R + m * (i + 1), R + m * (i + 2), R + m * (i + 3));
+    if constexpr (kDamped) {
+      const auto w = components(D + m * i, D + m * (i + 1), D + m * (i + 2), D + m * (i + 3));
+      for (int c = 0; c < 3; ++c) f[c] = f[c] - gamma * w[c];
+    }
+    storeu4(ox + i, f[0]);
+    storeu4(oy + i, f[1]);
+    storeu4(oz + i, f[2]);
+    if (half_kick != 0) {
+      const V4 h = half_kick * loadu4(inv + i);
+      storeu4(vx + i, loadu4(vx + i) + h * f[0]);
+      storeu4(vy + i, loadu4(vy + i) + h * f[1]);
+      storeu4(vz + i, loadu4(vz + i) + h * f[2]);
+    }
+  }
+  for (; i < hi; ++i) {
+    V4 f = load4(R + m * i);
+    if constexpr (kDamped) f = f - gamma * load4(D + m * i);
+    ox[i] = f[0], oy[i] = f[1], oz[i] = f[2];
+    if (half_kick != 0) {
+      const double h = half_kick * inv[i];
+      vx[i] += h * f[0];
+      vy[i] += h * f[1];
+      vz[i] += h * f[2];
+    }
+  }
+}
 }  // namespace
 
 template <bool kStress, bool kRolling>
@@ -871,13 +929,6 @@ void DemSystem::forces_of_thread(std::size_t t, std::size_t T, double half_kick)
   const double* __restrict W = va8_.data();
   double* __restrict A = va8_.data() + 4;
   const std::int32_t* __restrict sp = slot_particle_.data();
-  double* __restrict fxo = p_.fx.data();
-  double* __restrict fyo = p_.fy.data();
-  double* __restrict fzo = p_.fz.data();
-  double* __restrict vxo = p_.vx.data();
-  double* __restrict vyo = p_.vy.data();
-  double* __restrict vzo = p_.vz.data();
-  const double* __restrict im = p_.inv_mass.data();
   const std::size_t lo = block_lo_[b0], hi = block_lo_[b1];
   for (std::size_t c = 0; c < blocks; ++c) {
     // The slots of block c are sorted by particle: those of rows [lo, hi) form one run.
@@ -896,68 +947,25 @@ void DemSystem::forces_of_thread(std::size_t t, std::size_t T, double half_kick)
       }
     }
   }
-  if (friction_) {  // no background damping on the rotations
-    // The torques and the rotations' closing half kick, four rows at a time as below.
-    const double* __restrict Q = rot16_.data() + 12;
-    double* __restrict txo = p_.tx.data();
-    double* __restrict tyo = p_.ty.data();
-    double* __restrict tzo = p_.tz.data();
-    double* __restrict wxo = p_.wx.data();
-    double* __restrict wyo = p_.wy.data();
-    double* __restrict wzo = p_.wz.data();
-    const double* __restrict ii = inv_inertia_.data();
-    std::size_t i = lo;
-    for (; i + 4 <= hi; i += 4) {
-      const auto t = components(Q + 16 * i, Q + 16 * i + 16, Q + 16 * i + 32, Q + 16 * i + 48);
-      storeu4(txo + i, t[0]);
-      storeu4(tyo + i, t[1]);
-      storeu4(tzo + i, t[2]);
-      if (half_kick != 0) {
-        const V4 hi_ = half_kick * loadu4(ii + i);
-        storeu4(wxo + i, loadu4(wxo + i) + hi_ * t[0]);
-        storeu4(wyo + i, loadu4(wyo + i) + hi_ * t[1]);
-        storeu4(wzo + i, loadu4(wzo + i) + hi_ * t[2]);
-      }
-    }
-    for (; i < hi; ++i) {
-      const double* q = Q + 16 * i;
-      txo[i] = q[0], tyo[i] = q[1], tzo[i] = q[2];
-      if (half_kick != 0) {
-        const double hi_ = half_kick * ii[i];
-        wxo[i] += hi_ * q[0];
-        wyo[i] += hi_ * q[1];
-        wzo[i] += hi_ * q[2];
-      }
-    }
-  }
-  // The forces with the background damping, and the closing half kick: four rows at a time,
-  // their records transposed into one vector per component (the same arithmetic per lane as
-  // the scalar rest below; 7 % of a frictionless step as scalar code).
-  std::size_t i = lo;
-  for (; i + 4 <= hi; i += 4) {
-    const auto a = components(A + 8 * i, A + 8 * i + 8, A + 8 * i + 16, A + 8 * i + 24);
-    const auto w = components(W + 8 * i, W + 8 * i + 8, W + 8 * i + 16, W + 8 * i + 24);
-    const V4 fx = a[0] - gamma_b * w[0], fy = a[1] - gamma_b * w[1], fz = a[2] - gamma_b * w[2];
-    storeu4(fxo + i, fx);
-    storeu4(fyo + i, fy);
-    storeu4(fzo + i, fz);
-    if (half_kick != 0) {
-      const V4 hm = half_kick * loadu4(im + i);
-      storeu4(vxo + i, loadu4(vxo + i) + hm * fx);
-      storeu4(vyo + i, loadu4(vyo + i) + hm * fy);
-      storeu4(vzo + i, loadu4(vzo + i) + hm * fz);
-    }
-  }
-  for (; i < hi; ++i) {
-    const V4 f = load4(A + 8 * i) - gamma_b * load4(W + 8 * i);
-    fxo[i] = f[0], fyo[i] = f[1], fzo[i] = f[2];
-    if (half_kick != 0) {
-      const double hm = half_kick * im[i];
-      vxo[i] += hm * f[0];
-      vyo[i] += hm * f[1];
-      vzo[i] += hm * f[2];
-    }
-  }
+  // The torques, without background damping, and the rotations' closing half kick; the forces
+  // with it, and the translations' closing half kick.
+  if (friction_)
+    finish_rows<false>(FinishRows{rot16_.data() + 12,
+                                  16,
+                                  nullptr,
+                                  0.0,
+                                  {p_.tx.data(), p_.ty.data(), p_.tz.data()},
+                                  {p_.wx.data(), p_.wy.data(), p_.wz.data()},
+                                  inv_inertia_.data()},
+                       half_kick, lo, hi);
+  finish_rows<true>(FinishRows{A,
+                               8,
+                               W,
+                               gamma_b,
+                               {p_.fx.data(), p_.fy.data(), p_.fz.data()},
+                               {p_.vx.data(), p_.vy.data(), p_.vz.data()},
+                               p_.inv_mass.data()},
+                    half_kick, lo, hi);
 }
 
 void DemSystem::sum_stress() {
