@@ -556,29 +556,33 @@ void friction_law(FrictionLanes<kRolling>& c, std::size_t count, const double* Q
 // of its own, with its pointers and constants as locals: inside the step's parallel region GCC
 // read them from the region's shared block at every particle.
 struct KickDrift {
-  double *x, *y, *z, *vx, *vy, *vz;
-  const double *fx, *fy, *fz, *im, *ref, *radius;
-  double *W, *P;
-  double h, dt, sx, sy, sz, rx, ry, rz, s_min;
+  double* x[3];        // positions, SoA
+  double* v[3];        // velocities
+  const double* f[3];  // forces
+  const double *im, *ref, *radius;
+  double *W, *P;  // the velocity and position records
+  double h, dt;
+  double s[3], sref[3];  // the cell's stretch over the step, and since the list's reference
+  double s_min;
 };
 
 void kick_drift(const KickDrift& k, std::size_t lo, std::size_t hi, double& e1_io, double& e2_io) {
-  double* __restrict x = k.x;
-  double* __restrict y = k.y;
-  double* __restrict z = k.z;
-  double* __restrict vx = k.vx;
-  double* __restrict vy = k.vy;
-  double* __restrict vz = k.vz;
-  const double* __restrict fx = k.fx;
-  const double* __restrict fy = k.fy;
-  const double* __restrict fz = k.fz;
+  double* __restrict x = k.x[0];
+  double* __restrict y = k.x[1];
+  double* __restrict z = k.x[2];
+  double* __restrict vx = k.v[0];
+  double* __restrict vy = k.v[1];
+  double* __restrict vz = k.v[2];
+  const double* __restrict fx = k.f[0];
+  const double* __restrict fy = k.f[1];
+  const double* __restrict fz = k.f[2];
   const double* __restrict im = k.im;
   const double* __restrict ref = k.ref;
   const double* __restrict radius = k.radius;
   double* __restrict W = k.W;
   double* __restrict P = k.P;
-  const double h = k.h, dt = k.dt, sx = k.sx, sy = k.sy, sz = k.sz, rx = k.rx, ry = k.ry, rz = k.rz,
-               s_min = k.s_min;
+  const double h = k.h, dt = k.dt, sx = k.s[0], sy = k.s[1], sz = k.s[2], rx = k.sref[0],
+               ry = k.sref[1], rz = k.sref[2], s_min = k.s_min;
   double e1 = e1_io, e2 = e2_io;
   std::size_t i = lo;
   for (; i + 4 <= hi; i += 4) {
@@ -1031,24 +1035,21 @@ void DemSystem::step_impl(const Eigen::Vector3d& D) {
   const Eigen::Vector3d s = (D * dt).array().exp();
   const Eigen::Vector3d L = cell_.lengths().cwiseProduct(s);
   const Eigen::Vector3d sref = L.cwiseQuotient(list_.ref_lengths());
-  const double s_min = list_.s_min(L);
-  const double sx = s[0], sy = s[1], sz = s[2];
-  const double rx = sref[0], ry = sref[1], rz = sref[2];
-  double* __restrict x = p_.x.data();
-  double* __restrict y = p_.y.data();
-  double* __restrict z = p_.z.data();
-  double* __restrict vx = p_.vx.data();
-  double* __restrict vy = p_.vy.data();
-  double* __restrict vz = p_.vz.data();
-  const double* __restrict fx = p_.fx.data();
-  const double* __restrict fy = p_.fy.data();
-  const double* __restrict fz = p_.fz.data();
-  const double* __restrict im = p_.inv_mass.data();
-  const double* __restrict ref = ref4_.data();
-  const double* __restrict radius = p_.radius.data();
   if (blocks_builds_ != list_.builds()) make_blocks();
-  double* __restrict W = va8_.data();
-  double* __restrict P = pos4_.data();
+  // After make_blocks, which may grow the records.
+  const KickDrift kick{{p_.x.data(), p_.y.data(), p_.z.data()},
+                       {p_.vx.data(), p_.vy.data(), p_.vz.data()},
+                       {p_.fx.data(), p_.fy.data(), p_.fz.data()},
+                       p_.inv_mass.data(),
+                       ref4_.data(),
+                       p_.radius.data(),
+                       va8_.data(),
+                       pos4_.data(),
+                       h,
+                       dt,
+                       {s[0], s[1], s[2]},
+                       {sref[0], sref[1], sref[2]},
+                       list_.s_min(L)};
   cell_.h.diagonal() = L;
   strain_E_ += D * dt;
   time_ += dt;
@@ -1069,9 +1070,7 @@ void DemSystem::step_impl(const Eigen::Vector3d& D) {
     const std::size_t T = static_cast<std::size_t>(omp_get_num_threads());
     double e1 = -1e300, e2 = -1e300;
     const std::size_t lo = block_lo_[blocks * t / T], hi = block_lo_[blocks * (t + 1) / T];
-    kick_drift(KickDrift{x, y, z, vx, vy, vz, fx, fy, fz, im, ref,  radius,
-                         W, P, h, dt, sx, sy, sz, rx, ry, rz, s_min},
-               lo, hi, e1, e2);
+    kick_drift(kick, lo, hi, e1, e2);
     // The rotations' half kick, then the rows' records for the force loop.
     if (friction_) pack_rotations(lo, hi, h, true);
     tops_[t] = {e1, e2};
