@@ -122,5 +122,31 @@ BENCHMARK(BM_ElasticEnergy)
     ->Unit(benchmark::kMicrosecond)
     ->UseRealTime();
 
+// One build of the neighbour list (NeighborList::build, the part of a rebuild that searches
+// the bins) of a packing after 20 steps of the extension, at the common skin: args volume
+// fraction (percent), threads, particles. The engine rebuilds every ~100 steps at nu = 0.82
+// (docs/performance.md "The list build in lanes").
+void BM_ListBuild(benchmark::State& state) {
+  const double nu = state.range(0) / 100.0;
+  const int threads = static_cast<int>(state.range(1));
+  const std::size_t n = static_cast<std::size_t>(state.range(2));
+  DemSystem s = packing(n, nu);
+  omp_set_num_threads(1);
+  s.set_fixed_team(1);
+  for (int k = 0; k < 20; ++k) s.step(Eigen::Vector3d(400, -200, -200));
+  const double skin = s.options().skin * s.options().material.r_mean;
+  const Eigen::Vector3d L = s.cell().lengths();
+  NeighborList list;
+  for (auto _ : state) {
+    list.build(s.particles(), L, skin, std::vector<double>(n, 0.5 * skin), threads);
+    benchmark::DoNotOptimize(list.index.data());
+  }
+  state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(n));
+}
+BENCHMARK(BM_ListBuild)
+    ->ArgsProduct({{64, 82}, {1, 2}, {9261}})
+    ->Unit(benchmark::kMicrosecond)
+    ->UseRealTime();
+
 }  // namespace
 }  // namespace rendulic::dem

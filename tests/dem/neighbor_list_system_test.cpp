@@ -7,6 +7,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <map>
 #include <utility>
 
 #include "rendulic/dem/neighbor_list.hpp"
@@ -77,6 +78,67 @@ TEST(NeighborList, NeverMissesAContactInAHotDeformingPacking) {
   EXPECT_GT(checked, 1500u * 300u);          // a dense packing, not a gas
   EXPECT_GT(s.list_builds() - builds0, 10);  // the rule was exercised many times
   EXPECT_TRUE(skins_differ);                 // per-particle skins were in play
+}
+
+// The binned search (a stencil row's bins as one run of candidates, split where it wraps
+// around the cell, tested in lanes where the build has them) against every pair and every
+// image: each pair within reach, r_i + h_i + r_j + h_j, listed once and with its image; none
+// beyond it; rows ascending. Pairs within 1e-9 of the reach are left to rounding.
+TEST(NeighborList, TheBinnedSearchListsEveryPairWithinReachOnce) {
+  omp_set_num_threads(1);
+  GasOptions g;
+  g.n_particles = 400;
+  DemSystem s = make_gas(SystemOptions{}, g, 5);
+  CompressOptions c;
+  c.target_nu = 0.7;
+  c.rate_max = c.rate_min = 3000.0;
+  compress_isotropic(s, c);
+  const Particles& p = s.particles();
+  const Eigen::Vector3d L = s.cell().lengths();
+  const std::size_t n = p.size();
+  const double skin = 0.3 * SystemOptions{}.material.r_mean;
+  Rng rng(2);
+  std::vector<double> h(n);
+  const double r_max = *std::max_element(p.radius.begin(), p.radius.end());
+  for (std::size_t i = 0; i < n; ++i)  // the bounds of choose_half_skins
+    h[i] = std::min(0.5 * skin * rng.uniform(1.0, kMaxSkinRatio), r_max + 0.5 * skin - p.radius[i]);
+  for (int threads : {1, 2}) {
+    NeighborList list;
+    list.build(p, L, skin, h, threads);
+    ASSERT_GE(L.minCoeff(), 3 * (2 * r_max + skin));  // binned, not the all-pairs search
+    // (i, j) with i < j -> the image of j seen from i, l = x_i - x_j + s L.
+    std::map<std::pair<int, int>, Eigen::Vector3d> listed;
+    for (std::size_t r = 0; r < n; ++r)
+      for (std::int64_t e = list.offset[r]; e < list.offset[r + 1]; ++e) {
+        const int row = static_cast<int>(r), j = list.index[e];
+        if (e > list.offset[r]) {
+          EXPECT_LT(list.index[e - 1], j) << "row " << r;
+        }
+        const Eigen::Vector3d s_row = NeighborList::shift(list.shift_code[e]);
+        const bool fresh = row < j
+                               ? listed.emplace(std::pair{row, j}, s_row).second
+                               : listed.emplace(std::pair{j, row}, Eigen::Vector3d(-s_row)).second;
+        EXPECT_TRUE(fresh) << "listed twice: " << r << " " << j;
+      }
+    std::size_t within = 0;
+    for (std::size_t i = 0; i < n; ++i)
+      for (std::size_t j = i + 1; j < n; ++j)
+        for (std::uint8_t code = 0; code < 27; ++code) {
+          const Eigen::Vector3d sh = NeighborList::shift(code);
+          const Eigen::Vector3d l = p.position(i) - p.position(j) + sh.cwiseProduct(L);
+          const double reach = p.radius[i] + h[i] + p.radius[j] + h[j], d = l.norm();
+          const auto it = listed.find({static_cast<int>(i), static_cast<int>(j)});
+          const bool as_listed = it != listed.end() && it->second == sh;
+          if (d < reach * (1 - 1e-9)) {
+            ++within;
+            EXPECT_TRUE(as_listed) << "missing: " << i << " " << j << " image " << int(code);
+          } else if (d > reach * (1 + 1e-9)) {
+            EXPECT_FALSE(as_listed) << "beyond reach: " << i << " " << j;
+          }
+        }
+    EXPECT_EQ(within, listed.size());  // nothing listed beyond reach either
+    EXPECT_GT(within, 4 * n);
+  }
 }
 
 TEST(NeighborList, HalfSkinsStayWithinTheirBounds) {
