@@ -900,7 +900,7 @@ void DemSystem::pack_rotations(std::size_t lo, std::size_t hi, double half_kick,
     records(wxi + hi_ * txi, wyi + hi_ * tyi, wzi + hi_ * tzi, V4{}, q + 8, q + 24, q + 40, q + 56);
   }
   for (; i < hi; ++i) {
-    const double hi_ = half_kick * inv_inertia_[i];
+    const double hi_ = half_kick * ii[i];
     if (opening_kick) {
       wx[i] += hi_ * tx[i];
       wy[i] += hi_ * ty[i];
