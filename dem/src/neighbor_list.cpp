@@ -122,15 +122,20 @@ void NeighborList::build(const Particles& p, const Eigen::Vector3d& L, double sk
 
   // One pass: each thread appends its (contiguous, static) range of particles to its own
   // arrays, which are then concatenated in thread order.
-  std::vector<std::vector<std::int32_t>> tj(threads);
-  std::vector<std::vector<std::uint8_t>> tc(threads);
+  // A cache line per thread: the vectors grow at every row, and headers of two threads in one
+  // line moved that line between the cores at every row (as `first` below).
+  struct alignas(64) Rows {
+    std::vector<std::int32_t> J;
+    std::vector<std::uint8_t> C;
+  };
+  std::vector<Rows> rows(threads);
   std::vector<std::size_t> first(threads, n);
   std::vector<std::int64_t> count(n + 1, 0);
 #pragma omp parallel num_threads(threads) if (threads > 1)
   {
     const int t = omp_get_thread_num();
-    auto& J = tj[t];
-    auto& C = tc[t];
+    auto& J = rows[t].J;
+    auto& C = rows[t].C;
     J.reserve(8 * n / threads + 16);
     C.reserve(8 * n / threads + 16);
     // Eight places of slack: the lanes below write whole vectors past the last hit.
@@ -175,10 +180,15 @@ void NeighborList::build(const Particles& p, const Eigen::Vector3d& L, double sk
 #endif
       return hits;
     };
-#pragma omp for schedule(static)
+    // The thread's first row in a register: stored to first[t] at every row, the team's entries
+    // of `first` share a cache line that went back and forth between the cores, which made
+    // each thread's rows ~1.6x slower on two threads than on one (docs/performance.md).
+    std::size_t mine = n;
+#pragma omp for schedule(static) nowait
     for (std::size_t i = 0; i < n; ++i) {
-      first[t] = std::min(first[t], i);
+      mine = std::min(mine, i);
       const std::size_t s = J.size();
+      bool in_order = brute;  // brute force meets the partners in index order
       const double xi = p.x[i], yi = p.y[i], zi = p.z[i], ci = p.radius[i] + half_skin_[i];
       if (brute) {
         for_later_images(
@@ -245,6 +255,7 @@ void NeighborList::build(const Particles& p, const Eigen::Vector3d& L, double sk
             J[s + rank] = js[h];
             C[s + rank] = hit_code[h];
           }
+          in_order = true;
         } else
 #endif
         {
@@ -255,22 +266,24 @@ void NeighborList::build(const Particles& p, const Eigen::Vector3d& L, double sk
         }
       }
       // Ascending partner index: friendlier memory access in the force loop.
-      for (std::size_t a = s + 1; a < J.size(); ++a)
-        for (std::size_t c = a; c > s && J[c - 1] > J[c]; --c) {
-          std::swap(J[c - 1], J[c]);
-          std::swap(C[c - 1], C[c]);
-        }
+      if (!in_order)
+        for (std::size_t a = s + 1; a < J.size(); ++a)
+          for (std::size_t c = a; c > s && J[c - 1] > J[c]; --c) {
+            std::swap(J[c - 1], J[c]);
+            std::swap(C[c - 1], C[c]);
+          }
       count[i + 1] = static_cast<std::int64_t>(J.size() - s);
     }
+    first[t] = mine;
   }
   offset.assign(n + 1, 0);
   std::partial_sum(count.begin(), count.end(), offset.begin());
   index.resize(offset[n]);
   shift_code.resize(offset[n]);
   for (int t = 0; t < threads; ++t) {
-    if (tj[t].empty()) continue;
-    std::copy(tj[t].begin(), tj[t].end(), index.begin() + offset[first[t]]);
-    std::copy(tc[t].begin(), tc[t].end(), shift_code.begin() + offset[first[t]]);
+    if (rows[t].J.empty()) continue;
+    std::copy(rows[t].J.begin(), rows[t].J.end(), index.begin() + offset[first[t]]);
+    std::copy(rows[t].C.begin(), rows[t].C.end(), shift_code.begin() + offset[first[t]]);
   }
   ++builds_;
 }
