@@ -272,47 +272,65 @@ void DemSystem::make_blocks() {
   constexpr std::uint8_t kNoShift = 13;  // NeighborList's code of s = (0, 0, 0)
   partner_.resize(list_.index.size());
   slot_lo_.assign(blocks + 1, 0);
-  slot_particle_.clear();
-  slot_code_.clear();
-  std::vector<std::int64_t> keys;  // 27 j + code
-  first_slot_of_.resize(n);
-  for (std::size_t b = 0; b < blocks; ++b) {
-    const std::size_t lo = block_lo_[b], hi = block_lo_[b + 1];
-    auto inside = [&](std::int64_t e) {
-      const std::size_t j = static_cast<std::size_t>(list_.index[e]);
-      return j >= lo && j < hi && list_.shift_code[e] == kNoShift;
-    };
-    auto key = [&](std::int64_t e) {
+  block_keys_.resize(blocks);
+  // On the step's team, each thread the blocks whose rows it kicks: the blocks' slots are
+  // independent but for where they start, so one barrier (the sizes' prefix) splits the work.
+  // On one thread this was ~3 % of a two-thread step at nu = 0.82 (docs/performance.md).
+  const int team = static_cast<int>(
+      std::min<std::size_t>(static_cast<std::size_t>(std::max(last_team_, 1)), blocks));
+  first_slot_of_.resize(static_cast<std::size_t>(team) * n);
+#pragma omp parallel num_threads(team) if (team > 1)
+  {
+    const std::size_t t = static_cast<std::size_t>(omp_get_thread_num());
+    const std::size_t T = static_cast<std::size_t>(omp_get_num_threads());
+    const std::size_t b0 = blocks * t / T, b1 = blocks * (t + 1) / T;
+    std::int32_t* first_slot_of = first_slot_of_.data() + t * n;
+    const auto key = [&](std::int64_t e) {
       return 27 * static_cast<std::int64_t>(list_.index[e]) + list_.shift_code[e];
     };
-    keys.clear();
-    for (std::int64_t e = list_.offset[lo]; e < list_.offset[hi]; ++e)
-      if (!inside(e)) keys.push_back(key(e));
-    std::sort(keys.begin(), keys.end());
-    keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
-    const std::size_t first = slot_particle_.size();
-    slot_lo_[b] = first;
-    for (const std::int64_t k : keys) {
-      slot_particle_.push_back(static_cast<std::int32_t>(k / 27));
-      slot_code_.push_back(static_cast<std::uint8_t>(k % 27));
-    }
-    // An entry's slot by the first slot of its partner (a particle has a slot per image, and
-    // those of one particle are adjacent): a binary search per entry took half of this
-    // function's time, on branches no predictor can learn.
-    for (std::size_t k = keys.size(); k-- > 0;)
-      first_slot_of_[static_cast<std::size_t>(keys[k] / 27)] = static_cast<std::int32_t>(k);
-    for (std::int64_t e = list_.offset[lo]; e < list_.offset[hi]; ++e) {
-      if (inside(e)) {
-        partner_[e] = list_.index[e];
-        continue;
+    for (std::size_t b = b0; b < b1; ++b) {
+      const std::size_t lo = block_lo_[b], hi = block_lo_[b + 1];
+      auto& keys = block_keys_[b];  // 27 j + code
+      keys.clear();
+      for (std::int64_t e = list_.offset[lo]; e < list_.offset[hi]; ++e) {
+        const std::size_t j = static_cast<std::size_t>(list_.index[e]);
+        if (!(j >= lo && j < hi && list_.shift_code[e] == kNoShift)) keys.push_back(key(e));
       }
-      std::size_t k =
-          static_cast<std::size_t>(first_slot_of_[static_cast<std::size_t>(list_.index[e])]);
-      while (keys[k] != key(e)) ++k;
-      partner_[e] = static_cast<std::int32_t>(n + first + k);
+      std::sort(keys.begin(), keys.end());
+      keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+    }
+#pragma omp barrier
+#pragma omp single
+    {
+      for (std::size_t b = 0; b < blocks; ++b)
+        slot_lo_[b + 1] = slot_lo_[b] + block_keys_[b].size();
+      slot_particle_.resize(slot_lo_[blocks]);
+      slot_code_.resize(slot_lo_[blocks]);
+    }
+    for (std::size_t b = b0; b < b1; ++b) {
+      const std::size_t lo = block_lo_[b], hi = block_lo_[b + 1], first = slot_lo_[b];
+      const auto& keys = block_keys_[b];
+      for (std::size_t k = 0; k < keys.size(); ++k) {
+        slot_particle_[first + k] = static_cast<std::int32_t>(keys[k] / 27);
+        slot_code_[first + k] = static_cast<std::uint8_t>(keys[k] % 27);
+      }
+      // An entry's slot by the first slot of its partner (a particle has a slot per image, and
+      // those of one particle are adjacent): a binary search per entry took half of this
+      // function's time, on branches no predictor can learn.
+      for (std::size_t k = keys.size(); k-- > 0;)
+        first_slot_of[static_cast<std::size_t>(keys[k] / 27)] = static_cast<std::int32_t>(k);
+      for (std::int64_t e = list_.offset[lo]; e < list_.offset[hi]; ++e) {
+        const std::size_t j = static_cast<std::size_t>(list_.index[e]);
+        if (j >= lo && j < hi && list_.shift_code[e] == kNoShift) {
+          partner_[e] = list_.index[e];
+          continue;
+        }
+        std::size_t k = static_cast<std::size_t>(first_slot_of[j]);
+        while (keys[k] != key(e)) ++k;
+        partner_[e] = static_cast<std::int32_t>(n + first + k);
+      }
     }
   }
-  slot_lo_[blocks] = slot_particle_.size();
   if (!friction_) reset_contacts_first();
   const std::size_t rows = n + slot_particle_.size();
   if (pos4_.size() < 4 * rows) pos4_.resize(4 * rows, 0.0);

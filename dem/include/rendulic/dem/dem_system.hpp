@@ -224,9 +224,12 @@ class DemSystem {
   // contacts change); first_end_[i]: the end of row i's first part.
   std::vector<std::int32_t> partner_first_;
   std::vector<std::int64_t> first_end_;
-  std::vector<std::uint8_t> slot_code_;      // the periodic image of each slot (NeighborList code)
-  std::vector<std::int32_t> first_slot_of_;  // make_blocks' scratch: a partner's first slot
-  std::int64_t blocks_builds_ = -1;          // list build the blocks belong to
+  std::vector<std::uint8_t> slot_code_;  // the periodic image of each slot (NeighborList code)
+  // make_blocks' scratch: per block its slots' keys (27 j + code, ascending), per thread of
+  // its team a partner's first slot.
+  std::vector<std::vector<std::int64_t>> block_keys_;
+  std::vector<std::int32_t> first_slot_of_;
+  std::int64_t blocks_builds_ = -1;  // list build the blocks belong to
   // Per-thread partial results of a step (two largest excesses), padded to a cache line.
   struct alignas(64) Top {
     double e1 = -1e300, e2 = -1e300;
