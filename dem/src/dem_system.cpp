@@ -275,7 +275,8 @@ void DemSystem::make_blocks() {
   block_keys_.resize(blocks);
   // On the step's team, each thread the blocks whose rows it kicks: the blocks' slots are
   // independent but for where they start, so one barrier (the sizes' prefix) splits the work.
-  // On one thread this was ~3 % of a two-thread step at nu = 0.82 (docs/performance.md).
+  // On one thread, while the other waited, it took 1.5 M cycles per rebuild at nu = 0.82,
+  // N = 9261 (docs/performance.md "Two threads on one list").
   const int team = static_cast<int>(
       std::min<std::size_t>(static_cast<std::size_t>(std::max(last_team_, 1)), blocks));
   first_slot_of_.resize(static_cast<std::size_t>(team) * n);
@@ -288,14 +289,16 @@ void DemSystem::make_blocks() {
     const auto key = [&](std::int64_t e) {
       return 27 * static_cast<std::int64_t>(list_.index[e]) + list_.shift_code[e];
     };
+    const auto inside = [&](std::int64_t e, std::size_t lo, std::size_t hi) {
+      const std::size_t j = static_cast<std::size_t>(list_.index[e]);
+      return j >= lo && j < hi && list_.shift_code[e] == kNoShift;
+    };
     for (std::size_t b = b0; b < b1; ++b) {
       const std::size_t lo = block_lo_[b], hi = block_lo_[b + 1];
       auto& keys = block_keys_[b];  // 27 j + code
       keys.clear();
-      for (std::int64_t e = list_.offset[lo]; e < list_.offset[hi]; ++e) {
-        const std::size_t j = static_cast<std::size_t>(list_.index[e]);
-        if (!(j >= lo && j < hi && list_.shift_code[e] == kNoShift)) keys.push_back(key(e));
-      }
+      for (std::int64_t e = list_.offset[lo]; e < list_.offset[hi]; ++e)
+        if (!inside(e, lo, hi)) keys.push_back(key(e));
       std::sort(keys.begin(), keys.end());
       keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
     }
@@ -320,12 +323,11 @@ void DemSystem::make_blocks() {
       for (std::size_t k = keys.size(); k-- > 0;)
         first_slot_of[static_cast<std::size_t>(keys[k] / 27)] = static_cast<std::int32_t>(k);
       for (std::int64_t e = list_.offset[lo]; e < list_.offset[hi]; ++e) {
-        const std::size_t j = static_cast<std::size_t>(list_.index[e]);
-        if (j >= lo && j < hi && list_.shift_code[e] == kNoShift) {
+        if (inside(e, lo, hi)) {
           partner_[e] = list_.index[e];
           continue;
         }
-        std::size_t k = static_cast<std::size_t>(first_slot_of[j]);
+        std::size_t k = static_cast<std::size_t>(first_slot_of[list_.index[e]]);
         while (keys[k] != key(e)) ++k;
         partner_[e] = static_cast<std::int32_t>(n + first + k);
       }

@@ -188,7 +188,6 @@ void NeighborList::build(const Particles& p, const Eigen::Vector3d& L, double sk
     for (std::size_t i = 0; i < n; ++i) {
       mine = std::min(mine, i);
       const std::size_t s = J.size();
-      bool in_order = brute;  // brute force meets the partners in index order
       const double xi = p.x[i], yi = p.y[i], zi = p.z[i], ci = p.radius[i] + half_skin_[i];
       if (brute) {
         for_later_images(
@@ -255,7 +254,6 @@ void NeighborList::build(const Particles& p, const Eigen::Vector3d& L, double sk
             J[s + rank] = js[h];
             C[s + rank] = hit_code[h];
           }
-          in_order = true;
         } else
 #endif
         {
@@ -263,15 +261,15 @@ void NeighborList::build(const Particles& p, const Eigen::Vector3d& L, double sk
             J.push_back(bin_members[hit_k[h]]);
             C.push_back(hit_code[h]);
           }
+          // Ascending partner index (friendlier memory access in the force loop); the brute
+          // search meets the partners in that order already.
+          for (std::size_t a = s + 1; a < J.size(); ++a)
+            for (std::size_t c = a; c > s && J[c - 1] > J[c]; --c) {
+              std::swap(J[c - 1], J[c]);
+              std::swap(C[c - 1], C[c]);
+            }
         }
       }
-      // Ascending partner index: friendlier memory access in the force loop.
-      if (!in_order)
-        for (std::size_t a = s + 1; a < J.size(); ++a)
-          for (std::size_t c = a; c > s && J[c - 1] > J[c]; --c) {
-            std::swap(J[c - 1], J[c]);
-            std::swap(C[c - 1], C[c]);
-          }
       count[i + 1] = static_cast<std::int64_t>(J.size() - s);
     }
     first[t] = mine;
