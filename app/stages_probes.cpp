@@ -111,9 +111,14 @@ void stage_elastic_range(const Scenario& sc, ResultsWriter& out, const RunContex
   count_probes(o, progress, done,
                static_cast<long>(states.size() * eo.amplitudes.size() *
                                  dem::elastic_range_directions().size()));
+  // Every state's ladder at once: their probes share one pool of tasks (dem::elastic_ranges).
+  std::vector<const dem::DemSystem*> systems;
+  for (const auto& [label, state] : states) systems.push_back(&state);
+  progress.start_task("probe");
+  const std::vector<dem::ElasticRange> ranges = dem::elastic_ranges(systems, eo, o);
+  std::size_t k = 0;
   for (const auto& [label, state] : states) {
-    progress.start_task("state " + label + ", probe");
-    const dem::ElasticRange r = dem::elastic_range(state, eo, o);
+    const dem::ElasticRange& r = ranges[k++];
     write_elastic_range(out, paths::elastic_range(paths::state(label)), r, eo);
     log::info("state ", label, ": yield strain ", r.yield_strain,
               r.yielded ? "" : " (no departure within the ladder: a lower bound)");

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -235,6 +236,29 @@ void io(A& a, MinimisationProbe& r) {
   a(r.outcome), a(r.summary);
 }
 
+// Probes 0..n-1 over the options' OpenMP team, one per task, taken in that order by whichever
+// thread is free: run(q) computes probe q and keeps its record. A stop asked for skips the
+// probes not yet begun (returns true); each probe's error is kept in errors[q].
+template <class Run>
+bool run_probe_tasks(const ProbeOptions& options, int n, std::vector<std::string>& errors,
+                     Run&& run) {
+  std::atomic<bool> stopped{false};
+#pragma omp parallel for schedule(dynamic, 1) num_threads(team_size(options))
+  for (int q = 0; q < n; ++q) {
+    if (stopped.load(std::memory_order_relaxed) || (options.stop && options.stop())) {
+      stopped.store(true, std::memory_order_relaxed);
+      continue;
+    }
+    try {
+      run(q);
+    } catch (const std::exception& e) {
+      errors[static_cast<std::size_t>(q)] = e.what();
+    }
+    if (options.probe_done) options.probe_done();
+  }
+  return stopped;
+}
+
 // The probes of one envelope: this process's share of them (all of them on a single
 // process, see probe_mpi.hpp) over its OpenMP team, one probe per task, each with
 // compute(p). With MPI ranks the workers' records are sent to rank 0, which then holds every
@@ -248,22 +272,10 @@ bool compute_probes(detail::ProbeTaskScope& scope, const ProbeOptions& options,
   for (int p = 0; p < m; ++p)
     if (share.owns(p)) mine.push_back(p);
   const int n = static_cast<int>(mine.size());
-  std::vector<std::string> errors(m);
-  std::atomic<bool> stopped{false};
-#pragma omp parallel for schedule(dynamic, 1) num_threads(team_size(options))
-  for (int q = 0; q < n; ++q) {
-    const int p = mine[q];
-    if (stopped.load(std::memory_order_relaxed) || (options.stop && options.stop())) {
-      stopped.store(true, std::memory_order_relaxed);
-      continue;
-    }
-    try {
-      records[p] = compute(p);
-    } catch (const std::exception& e) {
-      errors[p] = e.what();
-    }
-    if (options.probe_done) options.probe_done();
-  }
+  std::vector<std::string> errors(m), mine_errors(n);
+  const bool stopped =
+      run_probe_tasks(options, n, mine_errors, [&](int q) { records[mine[q]] = compute(mine[q]); });
+  for (int q = 0; q < n; ++q) errors[mine[q]] = std::move(mine_errors[q]);
   if (share.size > 1) {
     detail::ByteWriter w;
     for (int p : mine) w(p), w(errors[p]), w(records[p]);
@@ -461,20 +473,34 @@ PackingData packing_of(const DemSystem& state) {
   return geometry_of(state);
 }
 
-Envelope minimisation_envelope(const DemSystem& state, double amplitude,
-                               const std::vector<double>& theta_deg, const ProbeOptions& options,
-                               const ProbePlane& plane) {
-  check(options, amplitude, theta_deg);
-  detail::ProbeTaskScope scope("minimisation", plane.name, state, amplitude, theta_deg, options);
-  MinimiseOptions mo = options.minimise;
-  mo.k = state.material().k;
-  PackingData ref = packing_of(state);
-  const MinimiseSummary ref_summary = minimise_energy(ref, mo);
-  if (!ref_summary.converged) {
+namespace {
+
+// What every minimisation probe of a state starts from: the state's packing at its energy
+// minimum, its stress, fabric and contacts there.
+struct MinimisationBasis {
+  MinimiseOptions mo;
+  PackingData ref;
+  MinimiseSummary summary;
+  double min_overlap = 0;
+  StressFabric before;
+  std::vector<std::uint64_t> keys_before;
+  std::vector<std::pair<int, int>> pairs_before;
+  std::vector<bool> backbone;
+  double k_star = 0;
+};
+
+MinimisationBasis minimisation_basis(const DemSystem& state, const ProbeOptions& options) {
+  MinimisationBasis b;
+  b.mo = options.minimise;
+  b.mo.k = state.material().k;
+  b.k_star = state.material().k_star();
+  b.ref = packing_of(state);
+  b.summary = minimise_energy(b.ref, b.mo);
+  if (!b.summary.converged) {
     // Bad input, not a bug: the scenario chose a state without a contact network to probe.
     std::ostringstream why;
     why << "minimisation probes: the state reaches no force equilibrium at probes.force_tolerance "
-        << mo.force_tolerance << " (" << ref_summary.message
+        << b.mo.force_tolerance << " (" << b.summary.message
         << "); an unjammed or barely jammed state has none to probe: choose a jammed state (a "
            "larger isotropic.nu_max), a looser tolerance, or drop minimisation from "
            "probes.methods";
@@ -484,47 +510,115 @@ Envelope minimisation_envelope(const DemSystem& state, double amplitude,
   // force_tolerance * mean contact force / k. A particle pushed by the relaxation of its
   // neighbours stops FIRE once its force is below the tolerance, still touching; counting
   // such force-free touches would make eq. 2 jump by a whole contact.
-  const double min_overlap = mo.force_tolerance * ref_summary.mean_contact_force / mo.k;
-  const StressFabric before = measure_stress_fabric(ref, mo.k, nullptr, min_overlap);
-  const std::vector<std::uint64_t> keys_before = contact_keys(find_pairs(ref, 0.0), min_overlap);
-  const std::vector<std::pair<int, int>> pairs_before = pairs_of(keys_before);
-  std::vector<bool> backbone(ref.size(), true);
-  {
-    std::vector<Contact> cs;
-    for (const PairGeometry& c : find_pairs(ref, 0.0)) {
-      if (c.overlap > min_overlap)
-        cs.push_back({c.i, c.j, c.l, c.overlap, 0.0});  // non_rattlers: pairs only
-    }
-    backbone = non_rattlers(ref.size(), cs);
+  b.min_overlap = b.mo.force_tolerance * b.summary.mean_contact_force / b.mo.k;
+  b.before = measure_stress_fabric(b.ref, b.mo.k, nullptr, b.min_overlap);
+  b.keys_before = contact_keys(find_pairs(b.ref, 0.0), b.min_overlap);
+  b.pairs_before = pairs_of(b.keys_before);
+  std::vector<Contact> cs;
+  for (const PairGeometry& c : find_pairs(b.ref, 0.0)) {
+    if (c.overlap > b.min_overlap)
+      cs.push_back({c.i, c.j, c.l, c.overlap, 0.0});  // non_rattlers: pairs only
   }
-  const int m = static_cast<int>(theta_deg.size());
-  std::vector<MinimisationProbe> probes(m);
-  const bool assemble = compute_probes(scope, options, "minimisation", probes, [&](int p) {
-    MinimisationProbe r;
-    PackingData probe = ref;
-    probe.deform(exp_sym(-plane_strain(plane, theta_deg[p], amplitude)));
-    r.summary = minimise_energy(probe, mo);
-    const StressFabric after = measure_stress_fabric(probe, mo.k, nullptr, min_overlap);
-    const std::vector<std::uint64_t> keys_after = contact_keys(find_pairs(probe, 0.0), min_overlap);
-    const FabricSplit split =
-        split_fabric_change(ref, probe, pairs_before, before.fabric, after.fabric);
-    r.outcome = outcome_of(after.stress - before.stress, after.fabric - before.fabric, keys_before,
-                           keys_after, backbone, split);
-    return r;
-  });
-  if (!assemble) return {};
-  Envelope env = assemble_envelope("minimisation", plane, amplitude, state.material().k_star(),
-                                   theta_deg, probes);
+  b.backbone = non_rattlers(b.ref.size(), cs);
+  return b;
+}
+
+MinimisationProbe minimisation_probe(const MinimisationBasis& b, const ProbePlane& plane,
+                                     double theta_deg, double amplitude) {
+  MinimisationProbe r;
+  PackingData probe = b.ref;
+  probe.deform(exp_sym(-plane_strain(plane, theta_deg, amplitude)));
+  r.summary = minimise_energy(probe, b.mo);
+  const StressFabric after = measure_stress_fabric(probe, b.mo.k, nullptr, b.min_overlap);
+  const std::vector<std::uint64_t> keys_after = contact_keys(find_pairs(probe, 0.0), b.min_overlap);
+  const FabricSplit split =
+      split_fabric_change(b.ref, probe, b.pairs_before, b.before.fabric, after.fabric);
+  r.outcome = outcome_of(after.stress - b.before.stress, after.fabric - b.before.fabric,
+                         b.keys_before, keys_after, b.backbone, split);
+  return r;
+}
+
+Envelope minimisation_envelope_of(const MinimisationBasis& b, const ProbePlane& plane,
+                                  double amplitude, const std::vector<double>& theta_deg,
+                                  const std::vector<MinimisationProbe>& probes) {
+  Envelope env = assemble_envelope("minimisation", plane, amplitude, b.k_star, theta_deg, probes);
   auto& diag = env.diagnostics;
   for (const MinimisationProbe& r : probes) {
     diag["iterations"].push_back(static_cast<double>(r.summary.iterations));
     diag["max_force"].push_back(r.summary.max_force);
     diag["converged"].push_back(r.summary.converged ? 1.0 : 0.0);
   }
-  env.attributes["force_tolerance"] = mo.force_tolerance;
-  env.attributes["min_overlap"] = min_overlap;
-  env.attributes["reference_iterations"] = static_cast<double>(ref_summary.iterations);
+  env.attributes["force_tolerance"] = b.mo.force_tolerance;
+  env.attributes["min_overlap"] = b.min_overlap;
+  env.attributes["reference_iterations"] = static_cast<double>(b.summary.iterations);
   return env;
+}
+
+}  // namespace
+
+Envelope minimisation_envelope(const DemSystem& state, double amplitude,
+                               const std::vector<double>& theta_deg, const ProbeOptions& options,
+                               const ProbePlane& plane) {
+  check(options, amplitude, theta_deg);
+  // The workers are sent the task before this process finds the common minimum.
+  detail::ProbeTaskScope scope("minimisation", plane.name, state, amplitude, theta_deg, options);
+  const MinimisationBasis b = minimisation_basis(state, options);
+  std::vector<MinimisationProbe> probes(theta_deg.size());
+  const bool assemble = compute_probes(scope, options, "minimisation", probes, [&](int p) {
+    return minimisation_probe(b, plane, theta_deg[static_cast<std::size_t>(p)], amplitude);
+  });
+  if (!assemble) return {};
+  return minimisation_envelope_of(b, plane, amplitude, theta_deg, probes);
+}
+
+std::vector<std::vector<Envelope>> minimisation_envelopes(
+    const std::vector<const DemSystem*>& states, const std::vector<double>& amplitudes,
+    const std::vector<double>& theta_deg, const ProbeOptions& options, const ProbePlane& plane,
+    std::vector<std::vector<double>>* seconds) {
+  const std::size_t S = states.size(), A = amplitudes.size(), D = theta_deg.size();
+  std::vector<std::vector<Envelope>> out(S, std::vector<Envelope>(A));
+  std::vector<std::vector<double>> took(S, std::vector<double>(A, 0.0));
+  using Clock = std::chrono::steady_clock;
+  if (detail::probe_ranks() > 1) {
+    // MPI ranks share each envelope's probes (probe_mpi.hpp): envelope by envelope.
+    for (std::size_t s = 0; s < S; ++s)
+      for (std::size_t a = 0; a < A; ++a) {
+        const auto t0 = Clock::now();
+        out[s][a] = minimisation_envelope(*states[s], amplitudes[a], theta_deg, options, plane);
+        took[s][a] = std::chrono::duration<double>(Clock::now() - t0).count();
+      }
+    if (seconds) *seconds = std::move(took);
+    return out;
+  }
+  for (const double a : amplitudes) check(options, a, theta_deg);
+  std::vector<MinimisationBasis> basis;
+  basis.reserve(S);
+  for (const DemSystem* state : states) basis.push_back(minimisation_basis(*state, options));
+  // Every probe of every envelope one task, the largest amplitudes (the longest minimisations)
+  // first, so that the last tasks to start are short ones. Each probe keeps its record in its
+  // envelope's place, so the envelopes are those of minimisation_envelope, bit for bit.
+  std::vector<std::vector<std::vector<MinimisationProbe>>> probes(
+      S, std::vector<std::vector<MinimisationProbe>>(A, std::vector<MinimisationProbe>(D)));
+  std::vector<std::vector<std::vector<double>>> wall(
+      S, std::vector<std::vector<double>>(A, std::vector<double>(D, 0.0)));
+  const int n = static_cast<int>(S * A * D);
+  std::vector<std::string> errors(static_cast<std::size_t>(n));
+  const bool stopped = run_probe_tasks(options, n, errors, [&](int q) {
+    const std::size_t k = static_cast<std::size_t>(q);
+    const std::size_t a = A - 1 - k / (S * D), s = k / D % S, d = k % D;
+    const auto t0 = Clock::now();
+    probes[s][a][d] = minimisation_probe(basis[s], plane, theta_deg[d], amplitudes[a]);
+    wall[s][a][d] = std::chrono::duration<double>(Clock::now() - t0).count();
+  });
+  if (stopped) throw Cancelled("minimisation probes: stopped on request");
+  rethrow_first(errors, "minimisation");
+  for (std::size_t s = 0; s < S; ++s)
+    for (std::size_t a = 0; a < A; ++a) {
+      out[s][a] = minimisation_envelope_of(basis[s], plane, amplitudes[a], theta_deg, probes[s][a]);
+      for (const double t : wall[s][a]) took[s][a] += t;
+    }
+  if (seconds) *seconds = std::move(took);
+  return out;
 }
 
 Envelope linear_response_envelope(const DemSystem& state, double amplitude,

@@ -69,27 +69,20 @@ void locate_yield(ElasticRange& r, double tolerance) {
   }
 }
 
-ElasticRange elastic_range(const DemSystem& state, const ElasticRangeOptions& options,
-                           const ProbeOptions& probe) {
+std::vector<ElasticRange> elastic_ranges(const std::vector<const DemSystem*>& states,
+                                         const ElasticRangeOptions& options,
+                                         const ProbeOptions& probe) {
   std::string why;
   if (!options.IsValid(&why)) throw InputError(why);
   const std::vector<double> theta = elastic_range_directions();
-  ElasticRange r;
   const std::size_t i_continue = index_of(theta, kDevExtensionDeg);
   const std::size_t i_reverse = index_of(theta, kDevCompressionDeg);
+  const std::size_t S = states.size(), A = options.amplitudes.size();
+  std::vector<ElasticRange> ranges(S);
   // The elastic reference: the linear response's map per unit strain (Pa). A network with no
   // linear response (unstable even at its minimum: the linear_response stage records why)
   // is referred to its ladder's first rung instead, and the attribute says so.
-  Eigen::Matrix2d map = Eigen::Matrix2d::Zero();
-  try {
-    LinearResponse lr;
-    linear_response_envelope(state, options.amplitudes.front(), theta, probe, &lr);
-    map = rendulic_map_of(lr.stiffness);
-  } catch (const std::runtime_error& e) {
-    r.elastic_reference = "first_rung";
-    r.elastic_reference_note = e.what();
-  }
-  auto set_reference = [&](const Eigen::Matrix2d& m) {
+  const auto set_reference = [](ElasticRange& r, const Eigen::Matrix2d& m) {
     const RendulicMap el = ellipse_of(m, 1.0);
     r.elastic_major = el.semi_major;
     r.elastic_minor = el.semi_minor;
@@ -97,30 +90,63 @@ ElasticRange elastic_range(const DemSystem& state, const ElasticRangeOptions& op
     const Eigen::Vector2d u(std::cos(t), std::sin(t));
     r.elastic_k = u.dot(m * u);
   };
-  if (r.elastic_reference == "linear_response") set_reference(map);
-  for (double a : options.amplitudes) {
-    const auto t0 = std::chrono::steady_clock::now();
-    Envelope env = options.method == "dynamic" ? dynamic_envelope(state, a, theta, probe)
-                                               : minimisation_envelope(state, a, theta, probe);
-    if (env.size() == 0) continue;  // an MPI worker: rank 0 assembles
-    std::vector<Eigen::Vector2d> stress(env.size());
-    for (std::size_t p = 0; p < env.size(); ++p) stress[p] = rendulic_pair(env.d_stress[p]);
-    const RendulicMap m = fit_rendulic_map(env.strain, stress);
-    if (r.amplitude.empty() && r.elastic_reference != "linear_response") {
-      set_reference(m.map);  // the map is per unit strain (pair to pair)
+  for (std::size_t s = 0; s < S; ++s) {
+    try {
+      LinearResponse lr;
+      linear_response_envelope(*states[s], options.amplitudes.front(), theta, probe, &lr);
+      set_reference(ranges[s], rendulic_map_of(lr.stiffness));
+    } catch (const std::runtime_error& e) {
+      ranges[s].elastic_reference = "first_rung";
+      ranges[s].elastic_reference_note = e.what();
     }
-    r.amplitude.push_back(a);
-    r.minor_over_elastic.push_back(m.semi_minor / a / r.elastic_minor);
-    r.major_over_elastic.push_back(m.semi_major / a / r.elastic_major);
-    r.center_over_a.push_back(m.center.norm() / m.semi_major);
-    r.k_continue.push_back(directional_stiffness(env, i_continue));
-    r.k_reverse.push_back(directional_stiffness(env, i_reverse));
-    r.envelopes.push_back(std::move(env));
-    r.seconds.push_back(
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
   }
-  if (!r.amplitude.empty()) locate_yield(r, options.tolerance);
-  return r;
+  // Every rung of every state: minimisation probes in one pool of tasks (a rung's four probes
+  // alone left a thread idle at the end of each rung: 12-14 % of the ladder's time on two
+  // threads, docs/performance.md "The two-thread kick, located"); dynamic probes rung by rung.
+  std::vector<std::vector<Envelope>> envelopes;
+  std::vector<std::vector<double>> seconds(S, std::vector<double>(A, 0.0));
+  if (options.method == "dynamic") {
+    envelopes.assign(S, std::vector<Envelope>(A));
+    for (std::size_t s = 0; s < S; ++s)
+      for (std::size_t a = 0; a < A; ++a) {
+        const auto t0 = std::chrono::steady_clock::now();
+        envelopes[s][a] = dynamic_envelope(*states[s], options.amplitudes[a], theta, probe);
+        seconds[s][a] =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      }
+  } else {
+    envelopes = minimisation_envelopes(states, options.amplitudes, theta, probe, rendulic_plane(),
+                                       &seconds);
+  }
+  for (std::size_t s = 0; s < S; ++s) {
+    ElasticRange& r = ranges[s];
+    for (std::size_t k = 0; k < A; ++k) {
+      Envelope& env = envelopes[s][k];
+      if (env.size() == 0) continue;  // an MPI worker: rank 0 assembles
+      const double a = options.amplitudes[k];
+      std::vector<Eigen::Vector2d> stress(env.size());
+      for (std::size_t p = 0; p < env.size(); ++p) stress[p] = rendulic_pair(env.d_stress[p]);
+      const RendulicMap m = fit_rendulic_map(env.strain, stress);
+      if (r.amplitude.empty() && r.elastic_reference != "linear_response") {
+        set_reference(r, m.map);  // the map is per unit strain (pair to pair)
+      }
+      r.amplitude.push_back(a);
+      r.minor_over_elastic.push_back(m.semi_minor / a / r.elastic_minor);
+      r.major_over_elastic.push_back(m.semi_major / a / r.elastic_major);
+      r.center_over_a.push_back(m.center.norm() / m.semi_major);
+      r.k_continue.push_back(directional_stiffness(env, i_continue));
+      r.k_reverse.push_back(directional_stiffness(env, i_reverse));
+      r.envelopes.push_back(std::move(env));
+      r.seconds.push_back(seconds[s][k]);
+    }
+    if (!r.amplitude.empty()) locate_yield(r, options.tolerance);
+  }
+  return ranges;
+}
+
+ElasticRange elastic_range(const DemSystem& state, const ElasticRangeOptions& options,
+                           const ProbeOptions& probe) {
+  return elastic_ranges({&state}, options, probe).front();
 }
 
 const OptionTable<ElasticRangeOptions>& elastic_range_option_table() {

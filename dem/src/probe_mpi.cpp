@@ -232,6 +232,15 @@ void MpiSession::serve(const ShareFn& compute) {
 
 namespace detail {
 
+int probe_ranks() {
+  if (g_serving.active) return g_serving.share.size;
+#ifdef RENDULIC_WITH_MPI
+  return g_size;
+#else
+  return 1;
+#endif
+}
+
 ProbeTaskScope::ProbeTaskScope(const std::string& method, const std::string& plane,
                                const DemSystem& state, double amplitude,
                                const std::vector<double>& theta_deg, const ProbeOptions& options) {

@@ -22,8 +22,8 @@ namespace {
 constexpr double kR = 1e-3, kR0 = 1.99e-3, kK = 1e8;
 constexpr int kCells = 3;
 
-DemSystem fcc_state() {
-  const double a = kR0 * std::numbers::sqrt2;
+DemSystem fcc_state(double r0 = kR0) {
+  const double a = r0 * std::numbers::sqrt2;
   const Eigen::Vector3d basis[4] = {{0, 0, 0}, {0.5, 0.5, 0}, {0.5, 0, 0.5}, {0, 0.5, 0.5}};
   const int n = 4 * kCells * kCells * kCells;
   Eigen::MatrixXd x(n, 3);
@@ -130,6 +130,39 @@ TEST_P(ElasticRangeFcc, MatchesTheAffineLatticeAndItsYield) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Methods, ElasticRangeFcc, ::testing::Values("dynamic", "minimisation"));
+
+// Several states' ladders in one pool of probes (elastic_ranges, the run's stage) give each
+// state the ladder elastic_range gives it alone, bit for bit, on one thread and on two: every
+// probe lands in its own state's and rung's place. Two lattices compressed differently, so
+// that a probe in the wrong place would change the numbers.
+TEST(ElasticRanges, SeveralStatesInOnePoolAreEachStatesOwnLadder) {
+  const DemSystem a = fcc_state(), b = fcc_state(1.985e-3);
+  ElasticRangeOptions eo;
+  eo.amplitudes = {1e-4, 3e-3, 1.25e-2};
+  for (const int threads : {1, 2}) {
+    ProbeOptions po;
+    po.threads = threads;
+    const std::vector<ElasticRange> both = elastic_ranges({&a, &b}, eo, po);
+    ASSERT_EQ(both.size(), 2u);
+    const ElasticRange alone[2] = {elastic_range(a, eo, po), elastic_range(b, eo, po)};
+    for (int s = 0; s < 2; ++s) {
+      const ElasticRange& got = both[static_cast<std::size_t>(s)];
+      const ElasticRange& want = alone[s];
+      ASSERT_EQ(got.envelopes.size(), eo.amplitudes.size()) << threads;
+      EXPECT_EQ(got.minor_over_elastic, want.minor_over_elastic) << threads << " " << s;
+      EXPECT_EQ(got.k_continue, want.k_continue) << threads << " " << s;
+      EXPECT_EQ(got.k_reverse, want.k_reverse) << threads << " " << s;
+      EXPECT_EQ(got.departure, want.departure) << threads << " " << s;
+      for (std::size_t k = 0; k < want.envelopes.size(); ++k)
+        for (std::size_t p = 0; p < want.envelopes[k].size(); ++p)
+          EXPECT_EQ(got.envelopes[k].d_stress[p], want.envelopes[k].d_stress[p])
+              << threads << " " << s << " " << k << " " << p;
+      EXPECT_EQ(got.seconds.size(), eo.amplitudes.size());
+    }
+    // The two lattices differ, so the test can tell them apart.
+    EXPECT_NE(both[0].envelopes.back().d_stress[1], both[1].envelopes.back().d_stress[1]);
+  }
+}
 
 TEST(LocateYield, TheFirstRungThatDepartsAndTheRungBelow) {
   ElasticRange r;

@@ -54,6 +54,17 @@ Envelope dynamic_envelope(const DemSystem& state, double amplitude,
 Envelope minimisation_envelope(const DemSystem& state, double amplitude,
                                const std::vector<double>& theta_deg, const ProbeOptions& options,
                                const ProbePlane& plane = rendulic_plane());
+// envelopes[s][a]: the minimisation envelope of *states[s] at amplitudes[a], the same bits as
+// minimisation_envelope, with the probes of all of them in one pool of tasks (the largest
+// amplitudes first) instead of envelope by envelope: no thread idles at the end of each
+// envelope's few probes (the elastic range's ladder, four directions per rung). With MPI
+// ranks, envelope by envelope, as they share each envelope's probes. seconds[s][a], if
+// given: the summed wall time of that envelope's probes.
+std::vector<std::vector<Envelope>> minimisation_envelopes(
+    const std::vector<const DemSystem*>& states, const std::vector<double>& amplitudes,
+    const std::vector<double>& theta_deg, const ProbeOptions& options,
+    const ProbePlane& plane = rendulic_plane(),
+    std::vector<std::vector<double>>* seconds = nullptr);
 // The packing of a frictionless state for the energy-based static tools (minimisation, force
 // balance at rest); InputError naming dem.friction for a frictional one.
 PackingData packing_of(const DemSystem& state);

@@ -59,7 +59,10 @@ struct ElasticRange {
   // "linear_response", or "first_rung" when the state has none (the note says why).
   std::string elastic_reference = "linear_response", elastic_reference_note;
   std::vector<Envelope> envelopes;  // one per amplitude, the 4 directions each
-  std::vector<double> seconds;      // wall time of each amplitude's probes
+  // Time of each amplitude's probes: with minimisation probes (the default) the sum of their
+  // own wall times (they share a pool with the other rungs, see elastic_ranges); with dynamic
+  // probes the wall time of the rung.
+  std::vector<double> seconds;
 };
 
 // Departure of each rung and the yield strain by the rule above (pure: tested on its own).
@@ -71,6 +74,11 @@ void locate_yield(ElasticRange& range, double tolerance);
 // ladder's first rung if the state has none.
 ElasticRange elastic_range(const DemSystem& state, const ElasticRangeOptions& options,
                            const ProbeOptions& probe);
+// The ladders of several states, the same as elastic_range state by state, with the
+// minimisation probes of every rung of every state in one pool of tasks.
+std::vector<ElasticRange> elastic_ranges(const std::vector<const DemSystem*>& states,
+                                         const ElasticRangeOptions& options,
+                                         const ProbeOptions& probe);
 
 // The keys of ElasticRangeOptions (section [elastic_range]), defaults ElasticRangeOptions{}'s.
 const OptionTable<ElasticRangeOptions>& elastic_range_option_table();

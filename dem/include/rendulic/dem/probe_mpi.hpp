@@ -176,6 +176,10 @@ class ByteReader {
 // packed results to rank 0, or on rank 0 receives every worker's (in rank order). If rank 0
 // leaves early (an exception), the destructor still receives the workers' replies, so the
 // ranks stay in step for the next task.
+// The processes an envelope's probes are shared over: the MPI session's ranks (1 without
+// one). Callers that batch several envelopes into one pool of tasks need 1.
+int probe_ranks();
+
 class ProbeTaskScope {
  public:
   ProbeTaskScope(const std::string& method, const std::string& plane, const DemSystem& state,
