@@ -512,10 +512,11 @@ MinimisationBasis minimisation_basis(const DemSystem& state, const ProbeOptions&
   // such force-free touches would make eq. 2 jump by a whole contact.
   b.min_overlap = b.mo.force_tolerance * b.summary.mean_contact_force / b.mo.k;
   b.before = measure_stress_fabric(b.ref, b.mo.k, nullptr, b.min_overlap);
-  b.keys_before = contact_keys(find_pairs(b.ref, 0.0), b.min_overlap);
+  const std::vector<PairGeometry> pairs = find_pairs(b.ref, 0.0);
+  b.keys_before = contact_keys(pairs, b.min_overlap);
   b.pairs_before = pairs_of(b.keys_before);
   std::vector<Contact> cs;
-  for (const PairGeometry& c : find_pairs(b.ref, 0.0)) {
+  for (const PairGeometry& c : pairs) {
     if (c.overlap > b.min_overlap)
       cs.push_back({c.i, c.j, c.l, c.overlap, 0.0});  // non_rattlers: pairs only
   }
@@ -571,25 +572,58 @@ Envelope minimisation_envelope(const DemSystem& state, double amplitude,
   return minimisation_envelope_of(b, plane, amplitude, theta_deg, probes);
 }
 
+namespace {
+// envelope(state, amplitude) for every state and amplitude in turn, each timed.
+template <class EnvelopeOf>
+std::vector<std::vector<Envelope>> envelope_by_envelope(const std::vector<const DemSystem*>& states,
+                                                        const std::vector<double>& amplitudes,
+                                                        const EnvelopeOf& envelope,
+                                                        std::vector<std::vector<double>>* seconds) {
+  const std::size_t S = states.size(), A = amplitudes.size();
+  std::vector<std::vector<Envelope>> out(S, std::vector<Envelope>(A));
+  std::vector<std::vector<double>> took(S, std::vector<double>(A, 0.0));
+  for (std::size_t s = 0; s < S; ++s)
+    for (std::size_t a = 0; a < A; ++a) {
+      const auto t0 = std::chrono::steady_clock::now();
+      out[s][a] = envelope(*states[s], amplitudes[a]);
+      took[s][a] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    }
+  if (seconds) *seconds = std::move(took);
+  return out;
+}
+}  // namespace
+
+std::vector<std::vector<Envelope>> dynamic_envelopes(const std::vector<const DemSystem*>& states,
+                                                     const std::vector<double>& amplitudes,
+                                                     const std::vector<double>& theta_deg,
+                                                     const ProbeOptions& options,
+                                                     const ProbePlane& plane,
+                                                     std::vector<std::vector<double>>* seconds) {
+  return envelope_by_envelope(
+      states, amplitudes,
+      [&](const DemSystem& state, double a) {
+        return dynamic_envelope(state, a, theta_deg, options, plane);
+      },
+      seconds);
+}
+
 std::vector<std::vector<Envelope>> minimisation_envelopes(
     const std::vector<const DemSystem*>& states, const std::vector<double>& amplitudes,
     const std::vector<double>& theta_deg, const ProbeOptions& options, const ProbePlane& plane,
     std::vector<std::vector<double>>* seconds) {
+  if (detail::probe_ranks() > 1) {
+    // MPI ranks share each envelope's probes (probe_mpi.hpp): envelope by envelope.
+    return envelope_by_envelope(
+        states, amplitudes,
+        [&](const DemSystem& state, double a) {
+          return minimisation_envelope(state, a, theta_deg, options, plane);
+        },
+        seconds);
+  }
   const std::size_t S = states.size(), A = amplitudes.size(), D = theta_deg.size();
   std::vector<std::vector<Envelope>> out(S, std::vector<Envelope>(A));
   std::vector<std::vector<double>> took(S, std::vector<double>(A, 0.0));
   using Clock = std::chrono::steady_clock;
-  if (detail::probe_ranks() > 1) {
-    // MPI ranks share each envelope's probes (probe_mpi.hpp): envelope by envelope.
-    for (std::size_t s = 0; s < S; ++s)
-      for (std::size_t a = 0; a < A; ++a) {
-        const auto t0 = Clock::now();
-        out[s][a] = minimisation_envelope(*states[s], amplitudes[a], theta_deg, options, plane);
-        took[s][a] = std::chrono::duration<double>(Clock::now() - t0).count();
-      }
-    if (seconds) *seconds = std::move(took);
-    return out;
-  }
   for (const double a : amplitudes) check(options, a, theta_deg);
   std::vector<MinimisationBasis> basis;
   basis.reserve(S);

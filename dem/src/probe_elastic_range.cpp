@@ -3,7 +3,6 @@
 #include "rendulic/dem/probe_elastic_range.hpp"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <map>
 #include <stdexcept>
@@ -102,22 +101,13 @@ std::vector<ElasticRange> elastic_ranges(const std::vector<const DemSystem*>& st
   }
   // Every rung of every state: minimisation probes in one pool of tasks (a rung's four probes
   // alone left a thread idle at the end of each rung: 12-14 % of the ladder's time on two
-  // threads, docs/performance.md "The two-thread kick, located"); dynamic probes rung by rung.
-  std::vector<std::vector<Envelope>> envelopes;
-  std::vector<std::vector<double>> seconds(S, std::vector<double>(A, 0.0));
-  if (options.method == "dynamic") {
-    envelopes.assign(S, std::vector<Envelope>(A));
-    for (std::size_t s = 0; s < S; ++s)
-      for (std::size_t a = 0; a < A; ++a) {
-        const auto t0 = std::chrono::steady_clock::now();
-        envelopes[s][a] = dynamic_envelope(*states[s], options.amplitudes[a], theta, probe);
-        seconds[s][a] =
-            std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-      }
-  } else {
-    envelopes = minimisation_envelopes(states, options.amplitudes, theta, probe, rendulic_plane(),
-                                       &seconds);
-  }
+  // threads, docs/probes.md "Elastic range"); dynamic probes rung by rung.
+  std::vector<std::vector<double>> seconds;
+  std::vector<std::vector<Envelope>> envelopes =
+      options.method == "dynamic"
+          ? dynamic_envelopes(states, options.amplitudes, theta, probe, rendulic_plane(), &seconds)
+          : minimisation_envelopes(states, options.amplitudes, theta, probe, rendulic_plane(),
+                                   &seconds);
   for (std::size_t s = 0; s < S; ++s) {
     ElasticRange& r = ranges[s];
     for (std::size_t k = 0; k < A; ++k) {

@@ -132,9 +132,10 @@ TEST_P(ElasticRangeFcc, MatchesTheAffineLatticeAndItsYield) {
 INSTANTIATE_TEST_SUITE_P(Methods, ElasticRangeFcc, ::testing::Values("dynamic", "minimisation"));
 
 // Several states' ladders in one pool of probes (elastic_ranges, the run's stage) give each
-// state the ladder elastic_range gives it alone, bit for bit, on one thread and on two: every
-// probe lands in its own state's and rung's place. Two lattices compressed differently, so
-// that a probe in the wrong place would change the numbers.
+// state the ladder elastic_range gives it alone, bit for bit, on one thread and on two, and
+// each rung is the envelope minimisation_envelope gives alone (its own pool): every probe
+// lands in its own state's and rung's place. Two lattices compressed differently, so that a
+// probe in the wrong place would change the numbers.
 TEST(ElasticRanges, SeveralStatesInOnePoolAreEachStatesOwnLadder) {
   const DemSystem a = fcc_state(), b = fcc_state(1.985e-3);
   ElasticRangeOptions eo;
@@ -153,10 +154,19 @@ TEST(ElasticRanges, SeveralStatesInOnePoolAreEachStatesOwnLadder) {
       EXPECT_EQ(got.k_continue, want.k_continue) << threads << " " << s;
       EXPECT_EQ(got.k_reverse, want.k_reverse) << threads << " " << s;
       EXPECT_EQ(got.departure, want.departure) << threads << " " << s;
-      for (std::size_t k = 0; k < want.envelopes.size(); ++k)
-        for (std::size_t p = 0; p < want.envelopes[k].size(); ++p)
+      for (std::size_t k = 0; k < want.envelopes.size(); ++k) {
+        const Envelope rung =
+            minimisation_envelope(s == 0 ? a : b, eo.amplitudes[k], elastic_range_directions(), po);
+        ASSERT_EQ(got.envelopes[k].size(), rung.size());
+        for (std::size_t p = 0; p < want.envelopes[k].size(); ++p) {
           EXPECT_EQ(got.envelopes[k].d_stress[p], want.envelopes[k].d_stress[p])
               << threads << " " << s << " " << k << " " << p;
+          EXPECT_EQ(got.envelopes[k].d_stress[p], rung.d_stress[p])
+              << threads << " " << s << " " << k << " " << p;
+          EXPECT_EQ(got.envelopes[k].d_fabric[p], rung.d_fabric[p])
+              << threads << " " << s << " " << k << " " << p;
+        }
+      }
       EXPECT_EQ(got.seconds.size(), eo.amplitudes.size());
     }
     // The two lattices differ, so the test can tell them apart.
