@@ -194,9 +194,8 @@ class Kernel final : public KernelBase {
   explicit Kernel(const Objective::Impl* o) : o_(o) {}
 
   // Residuals for any scalar: double for values, Jets for the exact Jacobian (integrated
-  // predictions go through the driver with Jets, driver_core.hpp). The values on the caller's
-  // thread: an evaluation takes milliseconds, too short for a team; the Jacobian's parts may
-  // take a second thread (JetCost below).
+  // predictions go through the driver with Jets, driver_core.hpp). Ceres's evaluations cut
+  // these into parts that may take a second thread (JetCost below).
   template <typename T>
   bool eval(const T* z, T* r) const {
     T p[M::kCount];
@@ -271,8 +270,9 @@ class Kernel final : public KernelBase {
   // integrated predictions one Jacobian is milliseconds of Jets through the driver (~25 ms on
   // quick.toml), long enough for a thread of its own, and the start of a likelihood fit that
   // outlasts the other would otherwise leave the second core idle (docs/calibration.md
-  // "Threads"). Rate predictions alone take tens of microseconds, about a thread's start: those
-  // stay on the caller's thread.
+  // "Threads"). The values alone (Ceres's trial points) are cut into the same parts: with
+  // integrated predictions they are ~20 ms of substeps on quick.toml. Rate predictions alone
+  // take tens of microseconds, about a thread's start: those stay on the caller's thread.
   class JetCost final : public ceres::CostFunction {
    public:
     explicit JetCost(const Kernel* k) : k_(k) {
@@ -280,26 +280,51 @@ class Kernel final : public KernelBase {
       mutable_parameter_block_sizes()->push_back(k->o_->space.size());
     }
     bool Evaluate(double const* const* z, double* r, double** jac) const override {
-      if (jac == nullptr || jac[0] == nullptr) return k_->eval<double>(z[0], r);
-      using J = ceres::Jet<double, 4>;
       const int n = k_->o_->space.size(), m = k_->o_->n_residuals;
       const int path = k_->o_->path_task.active ? 1 : 0;
       const int parts = path + static_cast<int>(k_->o_->tasks.size());
-      const int passes = (n + 3) / 4, units = passes * parts;
+      if (jac == nullptr || jac[0] == nullptr) {
+        // The values alone, part by part: a trial point of a fit with integrated predictions
+        // is tens of milliseconds of substeps, worth the free core as much as a Jacobian is.
+        if (!share_units(parts, [&](int u) { return k_->eval_part<double>(z[0], r, u - path); }))
+          return false;
+        for (int k = 0; k < m; ++k)
+          if (!std::isfinite(r[k])) return false;
+        return true;
+      }
+      using J = ceres::Jet<double, 4>;
+      const int passes = (n + 3) / 4;
       std::vector<std::vector<J>> out(static_cast<std::size_t>(passes),
                                       std::vector<J>(static_cast<std::size_t>(m)));
+      const bool ok = share_units(passes * parts, [&](int u) {
+        const int pass = u / parts, part = u % parts - path;
+        std::vector<J> in(static_cast<std::size_t>(n));
+        for (int i = 0; i < n; ++i) {
+          in[i] = J(z[0][i]);
+          if (i / 4 == pass) in[i].v[i % 4] = 1.0;
+        }
+        return k_->eval_part<J>(in.data(), out[pass].data(), part);
+      });
+      if (!ok) return false;
+      for (int k = 0; k < m; ++k) {
+        r[k] = out.back()[k].a;
+        if (!std::isfinite(r[k])) return false;
+        for (int j = 0; j < n; ++j) jac[0][k * n + j] = out[j / 4][k].v[j % 4];
+      }
+      return true;
+    }
+
+   private:
+    // unit(0) .. unit(units - 1), each independent, on the caller's thread and, where the
+    // objective integrates and a core is free (cores.hpp), on a helper thread taking units
+    // from the same counter; no unit starts after one has failed. false if any failed.
+    template <class Unit>
+    bool share_units(int units, const Unit& unit) const {
       std::atomic<int> next{0};
       std::atomic<bool> failed{false};
       auto work = [&] {
-        std::vector<J> in(static_cast<std::size_t>(n));
-        for (int u = next++; u < units && !failed; u = next++) {
-          const int pass = u / parts, part = u % parts - path;
-          for (int i = 0; i < n; ++i) {
-            in[i] = J(z[0][i]);
-            if (i / 4 == pass) in[i].v[i % 4] = 1.0;
-          }
-          if (!k_->eval_part<J>(in.data(), out[pass].data(), part)) failed = true;
-        }
+        for (int u = next++; u < units && !failed; u = next++)
+          if (!unit(u)) failed = true;
       };
       if (units > 1 && k_->o_->any_integrated && cores::core_free()) {
         std::exception_ptr thrown;
@@ -323,16 +348,9 @@ class Kernel final : public KernelBase {
       } else {
         work();
       }
-      if (failed) return false;
-      for (int k = 0; k < m; ++k) {
-        r[k] = out.back()[k].a;
-        if (!std::isfinite(r[k])) return false;
-        for (int j = 0; j < n; ++j) jac[0][k * n + j] = out[j / 4][k].v[j % 4];
-      }
-      return true;
+      return !failed;
     }
 
-   private:
     const Kernel* k_;
   };
 
