@@ -282,13 +282,19 @@ CeresRun run_ceres_once(const Objective& obj, std::vector<double> z, const Solve
   // into regions where the law cannot be evaluated; this damps it like a column of norm 0.03.
   so.min_lm_diagonal = 1e-3;
   so.max_num_iterations = o.max_iterations;
-  // On a bounded problem Ceres follows a rejected or non-descent projected step with an Armijo
-  // search along it, each trial point a full evaluation with derivatives. For the integrated
-  // laws such a step lands where the law is stiff (hundreds of substeps a probe), and the
-  // default 20 trials were half of elastoplastic_fabric's fit; after 3 the step is given up and
-  // the trust region shrinks instead (docs/calibration.md "When to stop": 7.0 -> 4.7 s idle
-  // wall on quick, the same fit within 0.3 standard errors; 2 trials lose the basin).
+  // On a bounded problem Ceres judges every projected step by an Armijo search along it, from
+  // the full step down. For the integrated laws a step that fails lands where the law is stiff
+  // (hundreds of substeps a probe), and the default 20 trials were half of
+  // elastoplastic_fabric's fit; after 3 the step is given up and the trust region shrinks
+  // instead (docs/calibration.md "When to stop": 7.0 -> 4.7 s idle wall on quick, the same fit
+  // within 0.3 standard errors; 2 trials lose the basin).
   so.max_num_line_search_step_size_iterations = kLineSearchTrials;
+  // Ceres's default cubic interpolation asks for the slope at each trial point, i.e. a whole
+  // Jacobian (passes of Jets through the driver) at points that then fail or are rejected; the
+  // quadratic one needs only their cost (the slope at the start is known). Half the Jacobians
+  // of elastoplastic_fabric's fit on quick.toml, the fit within 0.15 standard errors
+  // (docs/calibration.md "When to stop").
+  so.line_search_interpolation_type = ceres::QUADRATIC;
   so.function_tolerance = o.function_tolerance;
   // Relative to the cost at the start, so that the criterion does not depend on the units
   // and weights of the residuals (Ceres's own is absolute).
