@@ -59,7 +59,7 @@ TEST(Threads, AFitIsTheSameBitsOnOneThreadAndOnTwo) {
   // The values alone, as Ceres asks for them at a trial point: after a fit on two threads a
   // core is free, so the parts go to a helper; the residuals are those of one pass on this
   // thread, bit for bit, and points where the law cannot be evaluated (some corners of the
-  // box: a probe needs more substeps than the driver allows) fail in both.
+  // box) fail in both; the test counts that there are some.
   const std::unique_ptr<ceres::CostFunction> cost(objective.make_cost_function());
   const int n = objective.num_residuals();
   std::vector<std::vector<double>> points = {z0, {two.z.begin(), two.z.end()}};

@@ -65,9 +65,8 @@ std::vector<std::vector<Envelope>> minimisation_envelopes(
     const std::vector<double>& theta_deg, const ProbeOptions& options,
     const ProbePlane& plane = rendulic_plane(),
     std::vector<std::vector<double>>* seconds = nullptr);
-// The same for dynamic probes, envelope by envelope (each envelope's probes are one pool, and
-// a dynamic probe runs long enough that its pool's end costs little); seconds[s][a]: each
-// envelope's wall time.
+// The same for dynamic probes, envelope by envelope: each envelope's probes are a pool of
+// their own (dynamic_envelope); seconds[s][a]: each envelope's wall time.
 std::vector<std::vector<Envelope>> dynamic_envelopes(
     const std::vector<const DemSystem*>& states, const std::vector<double>& amplitudes,
     const std::vector<double>& theta_deg, const ProbeOptions& options,
