@@ -5,6 +5,7 @@
 // ResultsReader.
 #pragma once
 
+#include <map>
 #include <optional>
 #include <string>
 #include <utility>
@@ -24,6 +25,9 @@ struct DemRunSession {
   std::optional<dem::DemSystem> system;                         // after prepare / isotropic / path
   std::vector<dem::DemSystem> snapshots;                        // on the path, states.labels order
   std::vector<std::pair<std::string, dem::DemSystem>> relaxed;  // after states
+  // The relaxed states' linear responses by label, kept by elastic_range (its references) for
+  // the linear_response stage: the same scenario's probe options, so the same responses.
+  std::map<std::string, dem::LinearResponse> linear_responses;
   std::optional<dem::DemRunOptions> options;
   // The loading's snapshots at pressure.volume_fractions (after isotropic): (nu, system).
   std::vector<std::pair<double, dem::DemSystem>> branches;
@@ -65,11 +69,13 @@ void stage_pressure(const Scenario&, ResultsWriter&, const RunContext&, DemRunSe
 // (docs/results.md), e.g. /states/<label> or a pressure branch's /pressure/nu0.7/states/<label>;
 // the linear-response envelopes also store the 6x6 Mandel stiffness [Pa] and fabric stiffness as
 // datasets `stiffness` and `fabric_stiffness`. Each envelope is written as soon as it is made.
+// `known`: the state's linear response if the elastic range already computed it (probe_campaign).
 std::vector<dem::Envelope> write_probe_campaign(const dem::DemSystem& state,
                                                 const std::string& state_group,
                                                 const std::vector<std::string>& methods,
                                                 const dem::ProbeOptions& options,
-                                                ResultsWriter& out);
+                                                ResultsWriter& out,
+                                                const dem::LinearResponse* known = nullptr);
 // /states/<label>/elastic_range (docs/results.md): datasets amplitude, minor_over_elastic,
 // major_over_elastic, center_over_a, k_continue, k_reverse, departure, seconds, theta_deg[4],
 // d_stress[n*4,3,3], d_fabric[n*4,3,3], the fabric split and the per-probe diagnostics of the

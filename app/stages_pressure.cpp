@@ -60,16 +60,18 @@ void stage_pressure(const Scenario& sc, ResultsWriter& out, const RunContext& ct
       const std::string sg = paths::state(label, G);
       const dem::DemSystem& state = rested[k].first;
       write_state(out, sg, state, rested[k].second, o.state_rest.minimise.force_tolerance, false);
+      dem::LinearResponse linear;  // the elastic range's reference, for the linear response
       if (with_range) {
         const dem::ElasticRangeOptions eo = dem::elastic_range_options_from(sc);
-        const dem::ElasticRange er = dem::elastic_range(state, eo, po);
+        dem::ElasticRange er = dem::elastic_range(state, eo, po);
         write_elastic_range(out, paths::elastic_range(sg), er, eo);
         log::info("[pressure] nu ", nu, " state ", label, ": yield strain ", er.yield_strain);
+        linear = std::move(er.linear);
       }
       if (with_probes) write_probe_campaign(state, sg, dem::probe_methods_from(sc), po, out);
       if (with_lr) {
         try {
-          write_probe_campaign(state, sg, {"linear_response"}, po, out);
+          write_probe_campaign(state, sg, {"linear_response"}, po, out, &linear);
         } catch (const std::runtime_error& e) {
           log::warning("no linear response for nu ", nu, " state ", label, ": ", e.what());
         }

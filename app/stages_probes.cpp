@@ -82,7 +82,9 @@ void stage_linear_response(const Scenario& sc, ResultsWriter& out, const RunCont
     progress.start_task("state " + label);
     progress.count(done++, static_cast<long>(states.size()));
     try {
-      write_probe_campaign(state, paths::state(label), {"linear_response"}, o, out);
+      const auto known = session.linear_responses.find(label);
+      write_probe_campaign(state, paths::state(label), {"linear_response"}, o, out,
+                           known == session.linear_responses.end() ? nullptr : &known->second);
     } catch (const std::runtime_error& e) {
       // A network with no elastic response (unstable even at its energy minimum) is a
       // finding about that state, not a failure of the run: record it, say it, go on.
@@ -120,6 +122,7 @@ void stage_elastic_range(const Scenario& sc, ResultsWriter& out, const RunContex
   for (const auto& [label, state] : states) {
     const dem::ElasticRange& r = ranges[k++];
     write_elastic_range(out, paths::elastic_range(paths::state(label)), r, eo);
+    if (r.linear.ok) session.linear_responses[label] = r.linear;
     log::info("state ", label, ": yield strain ", r.yield_strain,
               r.yielded ? "" : " (no departure within the ladder: a lower bound)");
   }
@@ -129,7 +132,8 @@ std::vector<dem::Envelope> write_probe_campaign(const dem::DemSystem& state,
                                                 const std::string& state_group,
                                                 const std::vector<std::string>& methods,
                                                 const dem::ProbeOptions& options,
-                                                ResultsWriter& out) {
+                                                ResultsWriter& out,
+                                                const dem::LinearResponse* known) {
   return dem::probe_campaign(
       state, methods, options,
       [&](const std::string& method, double amplitude, const dem::Envelope& env,
@@ -149,7 +153,8 @@ std::vector<dem::Envelope> write_probe_campaign(const dem::DemSystem& state,
           out.write(group + datasets::kStiffness, Eigen::MatrixXd(lr->stiffness));
           out.write(group + datasets::kFabricStiffness, Eigen::MatrixXd(lr->fabric_stiffness));
         }
-      });
+      },
+      known);
 }
 
 void write_elastic_range(ResultsWriter& out, const std::string& g, const dem::ElasticRange& r,

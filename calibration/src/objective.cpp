@@ -188,6 +188,15 @@ struct Objective::Impl {
 
 namespace {
 
+// Whether every residual is finite: an evaluation with a NaN or an infinity fails (Ceres then
+// tries a shorter step) instead of handing it on.
+template <typename T>
+bool all_finite(const T* r, int n) {
+  for (int i = 0; i < n; ++i)
+    if (!std::isfinite(value_of(r[i]))) return false;
+  return true;
+}
+
 template <class M>
 class Kernel final : public KernelBase {
  public:
@@ -205,9 +214,7 @@ class Kernel final : public KernelBase {
     if (o_->path_task.active && !path_residuals<T>(p, pd, r)) return false;
     for (int t = 0; t < static_cast<int>(o_->tasks.size()); ++t)
       if (!task_residuals<T>(t, p, pd, r)) return false;
-    for (int i = 0; i < o_->n_residuals; ++i)
-      if (!std::isfinite(value_of(r[i]))) return false;
-    return true;
+    return all_finite(r, o_->n_residuals);
   }
 
   // One part of the residuals: the path's (part -1) or envelope task `part`'s. The parts are
@@ -286,11 +293,9 @@ class Kernel final : public KernelBase {
       if (jac == nullptr || jac[0] == nullptr) {
         // The values alone, part by part: a trial point of a fit with integrated predictions
         // is tens of milliseconds of substeps, worth the free core as much as a Jacobian is.
-        if (!share_units(parts, [&](int u) { return k_->eval_part<double>(z[0], r, u - path); }))
-          return false;
-        for (int k = 0; k < m; ++k)
-          if (!std::isfinite(r[k])) return false;
-        return true;
+        return share_units(parts,
+                           [&](int u) { return k_->eval_part<double>(z[0], r, u - path); }) &&
+               all_finite(r, m);
       }
       using J = ceres::Jet<double, 4>;
       const int passes = (n + 3) / 4;
@@ -308,10 +313,9 @@ class Kernel final : public KernelBase {
       if (!ok) return false;
       for (int k = 0; k < m; ++k) {
         r[k] = out.back()[k].a;
-        if (!std::isfinite(r[k])) return false;
         for (int j = 0; j < n; ++j) jac[0][k * n + j] = out[j / 4][k].v[j % 4];
       }
-      return true;
+      return all_finite(r, m);
     }
 
    private:
@@ -553,9 +557,7 @@ class UmatKernel final : public KernelBase {
             r[t.features_offset + 3 * c + k] = t.features_w * (f - t.data_features(k, c));
           }
     }
-    for (int i = 0; i < o_->n_residuals; ++i)
-      if (!std::isfinite(r[i])) return false;
-    return true;
+    return all_finite(r, o_->n_residuals);
   }
 
   bool residuals(const double* z, double* r) const override { return eval(z, r, nullptr, false); }

@@ -655,10 +655,7 @@ std::vector<std::vector<Envelope>> minimisation_envelopes(
   return out;
 }
 
-Envelope linear_response_envelope(const DemSystem& state, double amplitude,
-                                  const std::vector<double>& theta_deg, const ProbeOptions& options,
-                                  LinearResponse* response, const ProbePlane& plane) {
-  check(options, amplitude, theta_deg);
+LinearResponse state_linear_response(const DemSystem& state, const ProbeOptions& options) {
   LinearResponseOptions lo = options.linear;
   lo.k = state.material().k;
   if (state.material().frictional()) {
@@ -676,16 +673,10 @@ Envelope linear_response_envelope(const DemSystem& state, double amplitude,
       if (c.rolling_spring != Eigen::Vector3d::Zero())
         friction.rolling_springs.push_back({c.i, c.j, c.rolling_spring});
     }
-    LinearResponse lr = linear_response(geometry_of(state), lo, friction);
-    if (response) *response = lr;
-    if (!lr.ok) throw std::runtime_error(lr.message);
-    Envelope env = linear_response_envelope(lr, theta_deg, amplitude, m.k_star(), plane);
-    env.attributes["minimised_first"] = 0.0;
-    return env;
+    return linear_response(geometry_of(state), lo, friction);
   }
   PackingData packing = packing_of(state);
   LinearResponse lr = linear_response(packing, lo);
-  bool minimised_first = false;
   if (!lr.ok) {
     // A dynamically relaxed state (E_kin / E_el below a threshold) is near, not at, its
     // energy minimum; the residual forces enter the geometric term and can make the Hessian
@@ -698,19 +689,46 @@ Envelope linear_response_envelope(const DemSystem& state, double amplitude,
       throw std::runtime_error(lr.message + "; minimising first did not converge (" + ms.message +
                                ")");
     lr = linear_response(packing, lo);
-    minimised_first = true;
+    lr.minimised_first = true;
   }
+  return lr;
+}
+
+std::vector<LinearResponse> state_linear_responses(const std::vector<const DemSystem*>& states,
+                                                   const ProbeOptions& options) {
+  const int n = static_cast<int>(states.size());
+  std::vector<LinearResponse> out(states.size());
+  std::vector<std::string> errors(states.size());
+  // A task per state: each response is a serial assembly and factorisation (~3 s at N = 9261).
+  ProbeOptions tasks = options;
+  tasks.probe_done = nullptr;  // these are not probes
+  if (run_probe_tasks(tasks, n, errors, [&](int s) {
+        out[static_cast<std::size_t>(s)] =
+            state_linear_response(*states[static_cast<std::size_t>(s)], options);
+      }))
+    throw Cancelled("linear responses: stopped on request");
+  for (std::size_t s = 0; s < out.size(); ++s)
+    if (!errors[s].empty()) {
+      out[s] = LinearResponse{};
+      out[s].message = errors[s];
+    }
+  return out;
+}
+
+Envelope linear_response_envelope(const DemSystem& state, double amplitude,
+                                  const std::vector<double>& theta_deg, const ProbeOptions& options,
+                                  LinearResponse* response, const ProbePlane& plane) {
+  check(options, amplitude, theta_deg);
+  const LinearResponse lr = state_linear_response(state, options);
   if (response) *response = lr;
   if (!lr.ok) throw std::runtime_error(lr.message);
-  Envelope env =
-      linear_response_envelope(lr, theta_deg, amplitude, state.material().k_star(), plane);
-  env.attributes["minimised_first"] = minimised_first ? 1.0 : 0.0;
-  return env;
+  return linear_response_envelope(lr, theta_deg, amplitude, state.material().k_star(), plane);
 }
 
 std::vector<Envelope> probe_campaign(const DemSystem& state,
                                      const std::vector<std::string>& methods,
-                                     const ProbeOptions& options, const EnvelopeSink& sink) {
+                                     const ProbeOptions& options, const EnvelopeSink& sink,
+                                     const LinearResponse* known) {
   std::string why;
   if (!options.IsValid(&why)) throw InputError(why);
   std::vector<Envelope> envelopes;
@@ -718,7 +736,7 @@ std::vector<Envelope> probe_campaign(const DemSystem& state,
     if (method != "dynamic" && method != "minimisation" && method != "linear_response") {
       throw InputError("probes.methods: unknown method '" + method + "'");
     }
-    LinearResponse lr;
+    LinearResponse lr = known && method == "linear_response" ? *known : LinearResponse{};
     for (const std::string& name : options.planes) {
       const ProbePlane plane = *probe_plane_named(name);  // IsValid checked the names
       const std::vector<double> theta = probe_directions(options.directions, plane);

@@ -89,15 +89,15 @@ std::vector<ElasticRange> elastic_ranges(const std::vector<const DemSystem*>& st
     const Eigen::Vector2d u(std::cos(t), std::sin(t));
     r.elastic_k = u.dot(m * u);
   };
+  std::vector<LinearResponse> linear = state_linear_responses(states, probe);
   for (std::size_t s = 0; s < S; ++s) {
-    try {
-      LinearResponse lr;
-      linear_response_envelope(*states[s], options.amplitudes.front(), theta, probe, &lr);
-      set_reference(ranges[s], rendulic_map_of(lr.stiffness));
-    } catch (const std::runtime_error& e) {
+    if (linear[s].ok) {
+      set_reference(ranges[s], rendulic_map_of(linear[s].stiffness));
+    } else {
       ranges[s].elastic_reference = "first_rung";
-      ranges[s].elastic_reference_note = e.what();
+      ranges[s].elastic_reference_note = linear[s].message;
     }
+    ranges[s].linear = std::move(linear[s]);
   }
   // Every rung of every state: minimisation probes in one pool of tasks (a rung's four probes
   // alone left a thread idle at the end of each rung: 12-14 % of the ladder's time on two

@@ -36,6 +36,7 @@ Envelope linear_response_envelope(const LinearResponse& response,
   env.attributes["n_backbone_contacts"] = response.n_backbone_contacts;
   env.attributes["residual_force_ratio"] = response.residual_force_ratio;
   env.attributes["seconds"] = response.seconds_total;
+  env.attributes["minimised_first"] = response.minimised_first ? 1.0 : 0.0;
   if (response.frictional) {
     // docs/probes.md "Linear response of a frictional packing": with contacts at the Coulomb
     // limit the response depends on the direction and this envelope is not elastic.

@@ -168,9 +168,16 @@ TEST(ElasticRanges, SeveralStatesInOnePoolAreEachStatesOwnLadder) {
         }
       }
       EXPECT_EQ(got.seconds.size(), eo.amplitudes.size());
+      // The reference, computed as a task of its own, is the state's linear response.
+      const LinearResponse lr = state_linear_response(s == 0 ? a : b, po);
+      ASSERT_TRUE(got.linear.ok) << got.linear.message;
+      EXPECT_EQ(got.elastic_reference, "linear_response");
+      EXPECT_EQ(got.linear.stiffness, lr.stiffness) << threads << " " << s;
+      EXPECT_EQ(got.linear.fabric_stiffness, lr.fabric_stiffness) << threads << " " << s;
     }
     // The two lattices differ, so the test can tell them apart.
     EXPECT_NE(both[0].envelopes.back().d_stress[1], both[1].envelopes.back().d_stress[1]);
+    EXPECT_NE(both[0].linear.stiffness, both[1].linear.stiffness);
   }
 }
 

@@ -192,6 +192,39 @@ TEST_F(ProbeCampaign, CampaignProbesEveryPlaneAndRefusesAnUnknownOne) {
   }
 }
 
+// A linear response the run already has (the elastic range's reference) is used as it is:
+// the campaign with it writes the envelopes it computes without it, bit for bit, every one with
+// minimised_first; a doctored response shows in the envelopes (so it is not computed again),
+// and one that is not ok is computed anew.
+TEST_F(ProbeCampaign, AKnownLinearResponseIsUsedNotComputedAgain) {
+  ProbeOptions opt;
+  opt.directions = 8;
+  opt.amplitudes = {5e-5, 2e-2};
+  const LinearResponse known = state_linear_response(*state_, opt);
+  ASSERT_TRUE(known.ok) << known.message;
+  const std::vector<Envelope> fresh = probe_campaign(*state_, {"linear_response"}, opt);
+  const std::vector<Envelope> reused =
+      probe_campaign(*state_, {"linear_response"}, opt, {}, &known);
+  LinearResponse doctored = known;
+  doctored.stiffness *= 2.0;
+  const std::vector<Envelope> twice =
+      probe_campaign(*state_, {"linear_response"}, opt, {}, &doctored);
+  const LinearResponse none;  // ok == false
+  const std::vector<Envelope> anew = probe_campaign(*state_, {"linear_response"}, opt, {}, &none);
+  ASSERT_EQ(fresh.size(), 2u);
+  for (std::size_t e = 0; e < fresh.size(); ++e) {
+    ASSERT_EQ(reused[e].size(), fresh[e].size());
+    EXPECT_EQ(fresh[e].attributes.count("minimised_first"), 1u) << e;
+    EXPECT_EQ(reused[e].attributes.at("minimised_first"), 0.0) << e;
+    for (std::size_t p = 0; p < fresh[e].size(); ++p) {
+      EXPECT_EQ(reused[e].d_stress[p], fresh[e].d_stress[p]) << e << " " << p;
+      EXPECT_EQ(reused[e].d_fabric[p], fresh[e].d_fabric[p]) << e << " " << p;
+      EXPECT_EQ(anew[e].d_stress[p], fresh[e].d_stress[p]) << e << " " << p;
+      EXPECT_EQ(twice[e].d_stress[p], 2.0 * fresh[e].d_stress[p]) << e << " " << p;
+    }
+  }
+}
+
 // probes.dt_factor: the dynamic probes at 0.1 t_c (5x the engine's default step, below the
 // stability bound 0.18) land on the same relaxed states, so the envelope keeps the 1 % of the
 // linear response; a factor beyond the bound is refused, naming the key.

@@ -109,6 +109,9 @@ struct LinearResponse {
   double seconds_assembly = 0.0;
   double seconds_factorisation = 0.0;
   double seconds_total = 0.0;
+  // Taken at the state's energy minimum, the state as given having none (a DEM state's residual
+  // forces made the Hessian indefinite; probe_campaign.hpp, state_linear_response).
+  bool minimised_first = false;
   // Frictional response only (LinearFriction given): contacts of the backbone whose tangential
   // force is at the Coulomb limit (|f_t| >= (1 - coulomb_tolerance) mu f_n), treated as
   // sticking. Where there is one, the true response depends on the loading direction and

@@ -78,8 +78,16 @@ PackingData packing_of(const DemSystem& state);
 // Positions, radii and cell alone, with or without friction: for the geometry of contacts
 // (the fabric split of a dynamic probe), never for a contact law.
 PackingData geometry_of(const DemSystem& state);
-// The linear response of the state and its envelope; a frictional state's takes its
-// tangential springs too (sticking contacts, docs/probes.md).
+// The linear response of a state at rest: a frictional state's with its tangential springs
+// (sticking contacts, docs/probes.md); a frictionless state's at its energy minimum, found
+// first (minimised_first) where the state as given makes the Hessian indefinite. ok == false
+// with the reason for a network that has none; throws when that minimisation fails.
+LinearResponse state_linear_response(const DemSystem& state, const ProbeOptions& options);
+// The same for several states, a task each over the options' team (the elastic range's
+// references). A state whose response throws gets ok == false and the error as its message.
+std::vector<LinearResponse> state_linear_responses(const std::vector<const DemSystem*>& states,
+                                                   const ProbeOptions& options);
+// The linear response of the state and its envelope (throws where it has none).
 Envelope linear_response_envelope(const DemSystem& state, double amplitude,
                                   const std::vector<double>& theta_deg, const ProbeOptions& options,
                                   LinearResponse* response = nullptr,
@@ -92,9 +100,12 @@ using EnvelopeSink = std::function<void(const std::string& method, double amplit
                                         const Envelope& envelope, const LinearResponse* response)>;
 // The whole campaign of one state: every method x plane x amplitude, in that order, each handed to
 // `sink` (the run's stages write it, app/stages_probes.cpp) and returned in the same order.
+// `known`, if given and ok: the state's state_linear_response with these options, already
+// computed (the run's elastic range keeps its references), used instead of a new one.
 std::vector<Envelope> probe_campaign(const DemSystem& state,
                                      const std::vector<std::string>& methods,
-                                     const ProbeOptions& options, const EnvelopeSink& sink = {});
+                                     const ProbeOptions& options, const EnvelopeSink& sink = {},
+                                     const LinearResponse* known = nullptr);
 
 // Scenario keys of the probe campaigns (the table, probes.methods and the elastic range's) and
 // the options they give. Throws InputError naming the key, also for a probes.dt_factor beyond

@@ -27,6 +27,7 @@
 #include "rendulic/core/option_table.hpp"
 #include "rendulic/core/scenario.hpp"
 #include "rendulic/dem/dem_system.hpp"
+#include "rendulic/dem/linear_response.hpp"
 #include "rendulic/dem/probe_envelope.hpp"
 
 namespace rendulic::dem {
@@ -58,6 +59,9 @@ struct ElasticRange {
   double elastic_major = 0.0, elastic_minor = 0.0, elastic_k = 0.0;
   // "linear_response", or "first_rung" when the state has none (the note says why).
   std::string elastic_reference = "linear_response", elastic_reference_note;
+  // The state's linear response (state_linear_response, probe_campaign.hpp): the reference
+  // where it is ok, kept so that a run need not compute it again (app/stages_probes.cpp).
+  LinearResponse linear;
   std::vector<Envelope> envelopes;  // one per amplitude, the 4 directions each
   // Time of each amplitude's probes: with minimisation probes (the default) the sum of their
   // own wall times (they share a pool with the other rungs, see elastic_ranges); with dynamic
