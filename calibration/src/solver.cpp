@@ -66,18 +66,16 @@ double objective_cost(const Objective& objective, const std::vector<double>& z) 
 
 namespace {
 
-// The likelihood of selection.hpp as a Ceres loss on one block: with s = |r_b|^2 = w m_b^2
-// (the block's weighted relative misfit) and x = s / (w nu_b^2),
+// The likelihood of selection.hpp on one block: with s = |r_b|^2 = w m_b^2 (the block's weighted
+// relative misfit) and x = s / (w nu_b^2),
 //   rho(s) = N_b x             for x < 1   (the data's noise sets sigma_b),
 //   rho(s) = N_b (ln x + 1)    for x >= 1  (sigma_b = m_b, profiled),
 // i.e. -2 ln L_b up to a constant that depends on the data only; continuous with its first
-// derivative at x = 1. Ceres's corrector, seeing rho'' <= 0, rescales the block by sqrt(rho')
-// at every iteration (the block weights N_b / sigma_b^2 of the likelihood, updated as the fit
-// moves), while it judges steps by the true sum of rho.
-class BlockLikelihoodLoss final : public ceres::LossFunction {
+// derivative at x = 1. Levenberg-Marquardt sees it through likelihood_block_model (solver.hpp).
+class BlockLikelihood {
  public:
-  BlockLikelihoodLoss(double components, double floor2) : n_(components), c_(floor2) {}
-  void Evaluate(double s, double rho[3]) const override {
+  BlockLikelihood(double components, double floor2) : n_(components), c_(floor2) {}
+  void Evaluate(double s, double rho[3]) const {
     const double x = s / c_;
     if (x < 1.0) {
       rho[0] = n_ * x;
@@ -94,6 +92,36 @@ class BlockLikelihoodLoss final : public ceres::LossFunction {
   double n_, c_;
 };
 
+}  // namespace
+
+void likelihood_block_model(double n, double floor2, int m, int p, double* r, double* J) {
+  double s = 0.0;
+  for (int i = 0; i < m; ++i) s += r[i] * r[i];
+  double rho[3];
+  BlockLikelihood(n, floor2).Evaluate(s, rho);
+  const double root1 = std::sqrt(rho[1]);
+  if (rho[2] == 0.0) {  // below the floor: rho is linear in s, a plain scaling
+    for (int i = 0; i < m; ++i) r[i] *= root1;
+    if (J)
+      for (int k = 0; k < m * p; ++k) J[k] *= root1;
+    return;
+  }
+  const double norm = std::sqrt(s);
+  const double beta = std::sqrt(rho[1] * s / rho[0]);  // 1 / sqrt(ln x + 1)
+  if (J) {
+    std::vector<double> rt_j(static_cast<std::size_t>(p), 0.0);  // rhat^T J
+    for (int i = 0; i < m; ++i)
+      for (int k = 0; k < p; ++k) rt_j[k] += r[i] / norm * J[i * p + k];
+    for (int i = 0; i < m; ++i)
+      for (int k = 0; k < p; ++k)
+        J[i * p + k] = root1 * (J[i * p + k] - (1.0 - beta) * r[i] / norm * rt_j[k]);
+  }
+  const double stretch = std::sqrt(rho[0]) / norm;
+  for (int i = 0; i < m; ++i) r[i] *= stretch;
+}
+
+namespace {
+
 double block_floor2(const ResidualBlock& b) {
   return b.weight * std::max(b.noise * b.noise, 1e-24);
 }
@@ -106,7 +134,7 @@ double likelihood_sum(const Objective& obj, const double* r, std::vector<double>
     double s = 0.0;
     for (int i = 0; i < b.size; ++i) s += r[b.offset + i] * r[b.offset + i];
     double rho[3];
-    BlockLikelihoodLoss(b.size, block_floor2(b)).Evaluate(s, rho);
+    BlockLikelihood(b.size, block_floor2(b)).Evaluate(s, rho);
     sum += rho[0];
     if (rho1) rho1->push_back(rho[1]);
   }
@@ -151,10 +179,16 @@ class SharedEvaluation {
   bool has_j_ = false, ok_ = false;
 };
 
+// Block b of the shared evaluation; with `likelihood`, as likelihood_block_model presents it.
 class BlockSlice final : public ceres::CostFunction {
  public:
-  BlockSlice(SharedEvaluation* shared, const ResidualBlock& b, int p)
-      : shared_(shared), offset_(b.offset), size_(b.size), p_(p) {
+  BlockSlice(SharedEvaluation* shared, const ResidualBlock& b, int p, bool likelihood)
+      : shared_(shared),
+        offset_(b.offset),
+        size_(b.size),
+        p_(p),
+        likelihood_(likelihood),
+        floor2_(block_floor2(b)) {
     set_num_residuals(b.size);
     mutable_parameter_block_sizes()->push_back(p);
   }
@@ -167,12 +201,16 @@ class BlockSlice final : public ceres::CostFunction {
     if (jac)
       std::copy(j + static_cast<std::size_t>(offset_) * p_,
                 j + static_cast<std::size_t>(offset_ + size_) * p_, jacobians[0]);
+    if (likelihood_)
+      likelihood_block_model(size_, floor2_, size_, p_, residuals, jac ? jacobians[0] : nullptr);
     return true;
   }
 
  private:
   SharedEvaluation* shared_;
   int offset_, size_, p_;
+  bool likelihood_;
+  double floor2_;
 };
 
 struct CeresRun {
@@ -257,11 +295,13 @@ CeresRun run_ceres_once(const Objective& obj, std::vector<double> z, const Solve
   if (cm.likelihood || cm.frozen) {
     for (std::size_t i = 0; i < obj.blocks().size(); ++i) {
       const ResidualBlock& b = obj.blocks()[i];
-      ceres::LossFunction* loss = cm.frozen
-                                      ? static_cast<ceres::LossFunction*>(new ceres::ScaledLoss(
-                                            nullptr, (*cm.frozen)[i], ceres::TAKE_OWNERSHIP))
-                                      : new BlockLikelihoodLoss(b.size, block_floor2(b));
-      problem.AddResidualBlock(new BlockSlice(&shared, b, sp.size()), loss, z.data());
+      // Fixed weights are a plain scaled least-squares block; the likelihood is presented by
+      // the block itself (likelihood_block_model), not as a Ceres loss, whose corrector leaves
+      // out a concave loss's curvature entirely.
+      ceres::LossFunction* loss =
+          cm.frozen ? new ceres::ScaledLoss(nullptr, (*cm.frozen)[i], ceres::TAKE_OWNERSHIP)
+                    : nullptr;
+      problem.AddResidualBlock(new BlockSlice(&shared, b, sp.size(), !cm.frozen), loss, z.data());
     }
   } else {
     problem.AddResidualBlock(obj.make_cost_function(), nullptr, z.data());

@@ -97,6 +97,17 @@ struct FitResult {
 FitResult solve(const Objective& objective, const std::vector<double>& z0,
                 const SolverOptions& options = {});
 
+// One block of the likelihood (SolverOptions::likelihood) as Levenberg-Marquardt sees it: the
+// block's m residuals r and its m x p Jacobian J (row-major; may be null) become, in place,
+// residuals of norm sqrt(rho(s)) along r, s = |r|^2, and the Jacobian
+// sqrt(rho') [J - (1 - beta) rhat (rhat^T J)], beta = sqrt(rho' s / rho). The cost rho / 2 and
+// its gradient rho' J^T r are exact; the model's curvature along the block's own residual is
+// rho' beta^2 (beta^2 = 1 / (ln x + 1) where the block's sigma is profiled, x = s / floor2),
+// the least a sum of squares with that cost and gradient can have. Below the noise floor
+// (x < 1, rho linear in s) a plain scaling by sqrt(rho'). n: the block's components N_b;
+// floor2: its weighted noise floor w nu_b^2 (docs/calibration.md "The likelihood's curvature").
+void likelihood_block_model(double n, double floor2, int m, int p, double* r, double* J);
+
 // 0.5 |r|^2 at z (+inf where the model fails).
 double objective_cost(const Objective& objective, const std::vector<double>& z);
 
