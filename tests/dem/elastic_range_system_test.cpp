@@ -168,7 +168,7 @@ TEST(ElasticRanges, SeveralStatesInOnePoolAreEachStatesOwnLadder) {
         }
       }
       EXPECT_EQ(got.seconds.size(), eo.amplitudes.size());
-      // The reference, computed as a task of its own, is the state's linear response.
+      // The reference is the state's linear response, kept for the run.
       const LinearResponse lr = state_linear_response(s == 0 ? a : b, po);
       ASSERT_TRUE(got.linear.ok) << got.linear.message;
       EXPECT_EQ(got.elastic_reference, "linear_response");
