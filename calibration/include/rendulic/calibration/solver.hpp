@@ -56,8 +56,9 @@ struct SolverOptions {
   double gradient_tolerance = 1e-15;
   double parameter_tolerance = 1e-8;
   // Minimise -2 ln L of selection.hpp (each block's variance profiled, never below the data's
-  // noise) instead of 0.5 |r|^2: per-block Ceres losses, the block weights updated at every
-  // iteration; the standard errors are those of the block-weighted problem at the optimum.
+  // noise) instead of 0.5 |r|^2: one Ceres block per block (likelihood_block_model), the block
+  // weights updated at every iteration; the standard errors are those of the block-weighted
+  // problem at the optimum.
   bool likelihood = false;
   bool polish = true;     // Ceres after the NLopt stages
   bool progress = false;  // Ceres prints one line per iteration (cost, step) to stdout
