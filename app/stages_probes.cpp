@@ -117,12 +117,14 @@ void stage_elastic_range(const Scenario& sc, ResultsWriter& out, const RunContex
   std::vector<const dem::DemSystem*> systems;
   for (const auto& [label, state] : states) systems.push_back(&state);
   progress.start_task("probe");
-  const std::vector<dem::ElasticRange> ranges = dem::elastic_ranges(systems, eo, o);
+  std::vector<dem::ElasticRange> ranges = dem::elastic_ranges(systems, eo, o);
   std::size_t k = 0;
   for (const auto& [label, state] : states) {
-    const dem::ElasticRange& r = ranges[k++];
+    dem::ElasticRange& r = ranges[k++];
     write_elastic_range(out, paths::elastic_range(paths::state(label)), r, eo);
-    if (r.linear.ok) session.linear_responses[label] = r.linear;
+    // Kept for the linear_response stage; moved, not copied (it holds per-particle arrays),
+    // now that the range is written.
+    if (r.linear.ok) session.linear_responses[label] = std::move(r.linear);
     log::info("state ", label, ": yield strain ", r.yield_strain,
               r.yielded ? "" : " (no departure within the ladder: a lower bound)");
   }

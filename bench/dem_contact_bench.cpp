@@ -7,6 +7,8 @@
 #include <map>
 #include <vector>
 
+#include "rendulic/dem/probe_campaign.hpp"
+#include "rendulic/dem/probe_minimise.hpp"
 #include "rendulic/dem/protocols.hpp"
 
 namespace rendulic::dem {
@@ -146,6 +148,50 @@ void BM_ListBuild(benchmark::State& state) {
 BENCHMARK(BM_ListBuild)
     ->ArgsProduct({{64, 82}, {1, 2}, {9261}})
     ->Unit(benchmark::kMicrosecond)
+    ->UseRealTime();
+
+// FIRE at fixed cell (minimise_energy), as the probes' relaxation tail, the minimisation probes
+// and the states at rest run it: a packing after 20 steps of the extension brought to its
+// minimum, an affine strain of `amplitude` (ppm, along the extension), then a fixed number of
+// iterations (a minimisation probe). Args:
+// volume fraction (percent), particles, amplitude in ppm. items = particle-iterations.
+void BM_Minimise(benchmark::State& state) {
+  const double nu = state.range(0) / 100.0;
+  const std::size_t n = static_cast<std::size_t>(state.range(1));
+  const double amplitude = static_cast<double>(state.range(2)) * 1e-6;
+  static std::map<std::pair<std::size_t, int>, PackingData> cache;
+  const auto key = std::pair{n, static_cast<int>(state.range(0))};
+  MinimiseOptions o;
+  o.k = SystemOptions{}.material.k;
+  if (!cache.count(key)) {
+    DemSystem s = packing(n, nu);
+    omp_set_num_threads(1);
+    s.set_fixed_team(1);
+    for (int k = 0; k < 20; ++k) s.step(Eigen::Vector3d(400, -200, -200));
+    PackingData at_rest = packing_of(s);
+    minimise_energy(at_rest, o);  // the probes' start: a state at its minimum
+    cache.emplace(key, std::move(at_rest));
+  }
+  PackingData start = cache.at(key);
+  const Eigen::Matrix3d eps = (amplitude * Eigen::Vector3d(1.0, -0.5, -0.5)).asDiagonal();
+  apply_affine_strain(start, eps);
+  o.force_tolerance = 1e-12;  // not reached: every run takes max_iterations
+  o.max_iterations = 400;
+  std::int64_t iterations = 0, rebuilds = 0;
+  for (auto _ : state) {
+    PackingData p = start;
+    const MinimiseSummary m = minimise_energy(p, o);
+    iterations += m.iterations;
+    rebuilds += m.pair_rebuilds;
+    benchmark::DoNotOptimize(p.positions.data());
+  }
+  state.SetItemsProcessed(iterations * static_cast<std::int64_t>(n));
+  state.counters["iterations_per_rebuild"] =
+      static_cast<double>(iterations) / static_cast<double>(std::max<std::int64_t>(rebuilds, 1));
+}
+BENCHMARK(BM_Minimise)
+    ->ArgsProduct({{64, 82}, {1000, 9261}, {50, 20000}})
+    ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
 }  // namespace

@@ -100,7 +100,7 @@ void likelihood_block_model(double n, double floor2, int m, int p, double* r, do
   double rho[3];
   BlockLikelihood(n, floor2).Evaluate(s, rho);
   const double root1 = std::sqrt(rho[1]);
-  if (rho[2] == 0.0) {  // below the floor: rho is linear in s, a plain scaling
+  if (s / floor2 < 1.0) {  // below the floor (BlockLikelihood's test): rho is linear in s
     for (int i = 0; i < m; ++i) r[i] *= root1;
     if (J)
       for (int k = 0; k < m * p; ++k) J[k] *= root1;

@@ -694,25 +694,6 @@ LinearResponse state_linear_response(const DemSystem& state, const ProbeOptions&
   return lr;
 }
 
-std::vector<LinearResponse> state_linear_responses(const std::vector<const DemSystem*>& states,
-                                                   const ProbeOptions& options) {
-  // One after the other on the calling thread, not as tasks of the team: in a pool thread the
-  // factorisation of a large state (N = 9261) rounds differently, by 1e-15 of the stiffness (the
-  // libraries' kernels follow where its buffers land), and then which thread took which state
-  // would change the run's results.
-  std::vector<LinearResponse> out;
-  for (const DemSystem* state : states) {
-    if (options.stop && options.stop()) throw Cancelled("linear responses: stopped on request");
-    try {
-      out.push_back(state_linear_response(*state, options));
-    } catch (const std::runtime_error& e) {
-      out.emplace_back();
-      out.back().message = e.what();
-    }
-  }
-  return out;
-}
-
 Envelope linear_response_envelope(const DemSystem& state, double amplitude,
                                   const std::vector<double>& theta_deg, const ProbeOptions& options,
                                   LinearResponse* response, const ProbePlane& plane) {

@@ -43,11 +43,12 @@ void check_packing(const PackingData& packing) {
 
 }  // namespace
 
-std::vector<PairGeometry> find_pairs(const PackingData& packing, double skin) {
+void find_pairs_unordered(const PackingData& packing, double skin,
+                          std::vector<PairGeometry>& pairs) {
   check_packing(packing);
   const int n = packing.size();
-  std::vector<PairGeometry> pairs;
-  if (n < 2) return pairs;
+  pairs.clear();
+  if (n < 2) return;
   const Eigen::Matrix3d& h = packing.cell.h;
   const Eigen::Matrix3d h_inv = h.inverse();
   const double cutoff = 2.0 * packing.radii.maxCoeff() + skin;
@@ -68,14 +69,17 @@ std::vector<PairGeometry> find_pairs(const PackingData& packing, double skin) {
   const int n_bins = bins[0] * bins[1] * bins[2];
   // Bin of each particle from its wrapped fractional coordinates; counting sort into cells.
   std::vector<int> bin_of(n);
+  std::vector<Eigen::Vector3d> wrapped(n);  // h f, f the wrapped fractional coordinates
   for (int p = 0; p < n; ++p) {
     Eigen::Vector3d s = h_inv * packing.positions.row(p).transpose();
     int b[3];
     for (int a = 0; a < 3; ++a) {
       double f = s(a) - std::floor(s(a));
       b[a] = std::min(bins[a] - 1, static_cast<int>(f * bins[a]));
+      s(a) = f;
     }
     bin_of[p] = (b[0] * bins[1] + b[1]) * bins[2] + b[2];
+    wrapped[p] = h * s;
   }
   std::vector<int> start(n_bins + 1, 0), members(n);
   for (int p = 0; p < n; ++p) ++start[bin_of[p] + 1];
@@ -84,9 +88,10 @@ std::vector<PairGeometry> find_pairs(const PackingData& packing, double skin) {
     std::vector<int> fill(start.begin(), start.end() - 1);
     for (int p = 0; p < n; ++p) members[fill[bin_of[p]]++] = p;
   }
-  // Neighbouring bins of each bin along each axis, without repeats (fewer than 3 bins along an
-  // axis would otherwise visit a bin twice and count its pairs twice); made once, not per
-  // particle (the FIRE probes rebuild their pairs often).
+  // With three or more bins along every axis, each neighbouring bin is one image of a bin
+  // (below). With fewer, the neighbours of each bin along each axis without repeats (they would
+  // otherwise visit a bin twice and count its pairs twice), made once, not per particle.
+  const bool imaged = bins[0] >= 3 && bins[1] >= 3 && bins[2] >= 3;
   std::array<std::vector<std::vector<int>>, 3> neighbours;
   for (int a = 0; a < 3; ++a) {
     neighbours[a].resize(bins[a]);
@@ -99,38 +104,97 @@ std::vector<PairGeometry> find_pairs(const PackingData& packing, double skin) {
   }
   const bool orthorhombic = packing.cell.is_orthorhombic();
   const Eigen::Vector3d h_diagonal = h.diagonal(), h_inv_diagonal = h_inv.diagonal();
-  for (int p = 0; p < n; ++p) {
-    const int b = bin_of[p];
-    const int bx = b / (bins[1] * bins[2]), by = (b / bins[2]) % bins[1], bz = b % bins[2];
-    const Eigen::Vector3d xp = packing.positions.row(p).transpose();
-    const double rp = packing.radii(p);
-    for (int nx : neighbours[0][bx]) {
-      for (int ny : neighbours[1][by]) {
-        for (int nz : neighbours[2][bz]) {
-          const int nb = (nx * bins[1] + ny) * bins[2] + nz;
-          for (int m = start[nb]; m < start[nb + 1]; ++m) {
-            const int q = members[m];
-            if (q <= p) continue;
-            const Eigen::Vector3d dx = xp - packing.positions.row(q).transpose();
-            const Eigen::Vector3d l =
-                orthorhombic ? minimum_image_orthorhombic(h_diagonal, h_inv_diagonal, dx)
-                             : minimum_image(packing.cell, h_inv, dx);
-            // Most candidates are far apart: skip them on |l|^2 with a margin that can only
-            // keep a pair the exact test below then decides (so the set is the same).
-            const double reach = rp + packing.radii(q) + skin;
-            if (l.squaredNorm() > reach * reach * (1.0 + 1e-9)) continue;
-            const double r = l.norm();
-            const double overlap = rp + packing.radii(q) - r;
-            if (overlap > -skin) pairs.push_back({p, q, l, r, overlap});
+  // Pair (i, j), i < j, with l = x_i - x_j by the minimum image, if r_i + r_j - |l| > -skin.
+  // Most candidates are far apart: `far` (|l|^2 above reach^2 with a margin that can only keep
+  // a pair the exact test then decides) skips them first.
+  auto consider = [&](int i, int j, double reach) {
+    const Eigen::Vector3d dx = (packing.positions.row(i) - packing.positions.row(j)).transpose();
+    const Eigen::Vector3d l = orthorhombic
+                                  ? minimum_image_orthorhombic(h_diagonal, h_inv_diagonal, dx)
+                                  : minimum_image(packing.cell, h_inv, dx);
+    if (l.squaredNorm() > reach * reach * (1.0 + 1e-9)) return;
+    const double r = l.norm();
+    const double overlap = packing.radii(i) + packing.radii(j) - r;
+    if (overlap > -skin) pairs.push_back({i, j, l, r, overlap});
+  };
+  if (imaged) {
+    // The members' wrapped positions and radii in bin order, 4 doubles each: a bin's
+    // candidates are read in sequence.
+    std::vector<double> binned(4 * static_cast<std::size_t>(n));
+    for (int m = 0; m < n; ++m) {
+      const int p = members[m];
+      for (int a = 0; a < 3; ++a) binned[4 * m + a] = wrapped[p](a);
+      binned[4 * m + 3] = packing.radii(p);
+    }
+    // Bin by bin with half of the neighbouring bins (itself and 13 ahead), each unordered pair
+    // of bins, and so each pair of particles, once; a candidate is first tested on
+    // h f_p - (h f_q + h n) through the neighbour's image n, without the minimum image's
+    // roundings. That differs from the minimum image by roundings (1e-16 of the cell), far
+    // inside the margin of 2e-9: a pair it skips has |l| > reach, which consider() would not
+    // keep either, so the set is the same.
+    for (int bx = 0; bx < bins[0]; ++bx)
+      for (int by = 0; by < bins[1]; ++by)
+        for (int bz = 0; bz < bins[2]; ++bz) {
+          const int b = (bx * bins[1] + by) * bins[2] + bz;
+          for (int o = 13; o < 27; ++o) {  // offsets (0,0,0) and the 13 after it
+            const int d[3] = {o / 9 - 1, (o / 3) % 3 - 1, o % 3 - 1};
+            const int c[3] = {bx + d[0], by + d[1], bz + d[2]};
+            Eigen::Vector3d image;
+            int wrapped_bin[3];
+            for (int a = 0; a < 3; ++a) {
+              image(a) = c[a] < 0 ? -1.0 : (c[a] >= bins[a] ? 1.0 : 0.0);
+              wrapped_bin[a] = c[a] - static_cast<int>(image(a)) * bins[a];
+            }
+            const int nb = (wrapped_bin[0] * bins[1] + wrapped_bin[1]) * bins[2] + wrapped_bin[2];
+            const Eigen::Vector3d shift = h * image;
+            for (int m = start[b]; m < start[b + 1]; ++m) {
+              const double* wp = binned.data() + 4 * m;
+              const double px = wp[0] - shift(0), py = wp[1] - shift(1), pz = wp[2] - shift(2);
+              for (int k = o == 13 ? m + 1 : start[nb]; k < start[nb + 1]; ++k) {
+                const double* wq = binned.data() + 4 * k;
+                const double reach = wp[3] + wq[3] + skin;
+                const double lx = px - wq[0], ly = py - wq[1], lz = pz - wq[2];
+                if (lx * lx + ly * ly + lz * lz > reach * reach * (1.0 + 2e-9)) continue;
+                const int p = members[m], q = members[k];
+                consider(std::min(p, q), std::max(p, q), reach);
+              }
+            }
           }
         }
-      }
+  } else {
+    for (int p = 0; p < n; ++p) {
+      const int b = bin_of[p];
+      const int bx = b / (bins[1] * bins[2]), by = (b / bins[2]) % bins[1], bz = b % bins[2];
+      for (int nx : neighbours[0][bx])
+        for (int ny : neighbours[1][by])
+          for (int nz : neighbours[2][bz]) {
+            const int nb = (nx * bins[1] + ny) * bins[2] + nz;
+            for (int m = start[nb]; m < start[nb + 1]; ++m) {
+              const int q = members[m];
+              if (q > p) consider(p, q, packing.radii(p) + packing.radii(q) + skin);
+            }
+          }
     }
   }
-  std::sort(pairs.begin(), pairs.end(), [](const PairGeometry& a, const PairGeometry& b) {
-    return a.i != b.i ? a.i < b.i : a.j < b.j;
-  });
-  return pairs;
+}
+
+std::vector<PairGeometry> find_pairs(const PackingData& packing, double skin) {
+  std::vector<PairGeometry> pairs;
+  find_pairs_unordered(packing, skin, pairs);
+  // In the order (i, j): counted into rows by i, each row then sorted by j (a few pairs).
+  const int n = packing.size();
+  std::vector<int> row_start(static_cast<std::size_t>(n) + 1, 0);
+  for (const PairGeometry& c : pairs) ++row_start[c.i + 1];
+  for (int i = 0; i < n; ++i) row_start[i + 1] += row_start[i];
+  std::vector<PairGeometry> sorted(pairs.size());
+  {
+    std::vector<int> fill(row_start.begin(), row_start.end() - 1);
+    for (const PairGeometry& c : pairs) sorted[fill[c.i]++] = c;
+  }
+  for (int i = 0; i < n; ++i)
+    std::sort(sorted.begin() + row_start[i], sorted.begin() + row_start[i + 1],
+              [](const PairGeometry& a, const PairGeometry& b) { return a.j < b.j; });
+  return sorted;
 }
 
 StressFabric measure_stress_fabric(const PackingData& packing, double k,

@@ -9,6 +9,7 @@
 #include <random>
 #include <sstream>
 
+#include "fire_forces.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/dem/contact.hpp"
 
@@ -42,51 +43,21 @@ bool GeneratedPackingOptions::IsValid(std::string* why) const {
 
 namespace {
 
-// A candidate pair as the force loop reads it: its indices alone (find_pairs' geometry is that
-// of the configuration the list was built at; 8 bytes per pair streamed, not 48).
-struct PairIndex {
-  std::int32_t i, j;
-};
-
-std::vector<PairIndex> pair_indices(const std::vector<PairGeometry>& pairs) {
-  std::vector<PairIndex> out(pairs.size());
-  for (std::size_t q = 0; q < pairs.size(); ++q) out[q] = {pairs[q].i, pairs[q].j};
-  return out;
-}
-
-// Net contact forces on every particle from a candidate pair list; returns the elastic energy.
-// kOrthorhombic: the cell is, and the minimum image takes its cheaper, identical form.
-template <bool kOrthorhombic>
-double contact_forces(const PackingData& packing, const Eigen::Matrix3d& h_inv,
-                      const std::vector<PairIndex>& pairs, const NormalContact& law,
-                      Eigen::MatrixX3d& force, double* sum_contact_force, int* n_contacts) {
-  force.setZero();
-  double energy = 0.0, sum_f = 0.0;
-  int contacts = 0;
-  const Eigen::Vector3d h_diag = packing.cell.h.diagonal(), h_inv_diag = h_inv.diagonal();
-  for (const PairIndex& c : pairs) {
-    const Eigen::Vector3d dx =
-        (packing.positions.row(c.i) - packing.positions.row(c.j)).transpose();
-    Eigen::Vector3d l;
-    if constexpr (kOrthorhombic) {
-      l = minimum_image_orthorhombic(h_diag, h_inv_diag, dx);
-    } else {
-      l = minimum_image(packing.cell, h_inv, dx);
-    }
-    const double r = l.norm();
-    const double delta = packing.radii(c.i) + packing.radii(c.j) - r;
-    if (delta <= 0.0) continue;
-    const double f = law.elastic_force(delta);
-    const Eigen::RowVector3d fv = (f / r) * l.transpose();
-    force.row(c.i) += fv;
-    force.row(c.j) -= fv;
-    energy += law.energy(delta);
-    sum_f += f;
-    ++contacts;
-  }
-  *sum_contact_force = sum_f;
-  *n_contacts = contacts;
-  return energy;
+// The candidate pairs of `packing` (find_pairs' set) into `pairs`, in find_pairs' order (i, j);
+// `found` holds the search's unordered pairs (kept, with its capacity, across rebuilds).
+void pair_indices(const PackingData& packing, double skin, std::vector<PairGeometry>& found,
+                  std::vector<FirePair>& pairs) {
+  find_pairs_unordered(packing, skin, found);
+  const int n = packing.size();
+  std::vector<std::int32_t> offset(static_cast<std::size_t>(n) + 1, 0);
+  for (const PairGeometry& c : found) ++offset[static_cast<std::size_t>(c.i) + 1];
+  for (int i = 0; i < n; ++i) offset[i + 1] += offset[i];
+  pairs.resize(found.size());
+  for (const PairGeometry& c : found) pairs[offset[c.i]++] = {c.i, c.j};
+  // offset[i] is now where row i + 1 starts
+  for (int i = 0, begin = 0; i < n; begin = offset[i++])
+    std::sort(pairs.begin() + begin, pairs.begin() + offset[i],
+              [](const FirePair& a, const FirePair& b) { return a.j < b.j; });
 }
 
 }  // namespace
@@ -116,8 +87,10 @@ MinimiseSummary minimise_energy(PackingData& packing, const MinimiseOptions& opt
   const int n_delay = 20, n_negative_max = 2000;
   const double f_inc = 1.1, f_dec = 0.5, alpha_start = 0.25, f_alpha = 0.99;
 
-  std::vector<PairIndex> pairs = pair_indices(find_pairs(packing, skin));
-  const bool orthorhombic = packing.cell.is_orthorhombic();
+  std::vector<FirePair> pairs;
+  std::vector<PairGeometry> found;
+  pair_indices(packing, skin, found, pairs);
+  FireScratch scratch;
   Eigen::MatrixX3d reference = packing.positions;
   summary.pair_rebuilds = 1;
   Eigen::MatrixX3d force(n, 3), velocity = Eigen::MatrixX3d::Zero(n, 3);
@@ -125,8 +98,7 @@ MinimiseSummary minimise_energy(PackingData& packing, const MinimiseOptions& opt
   int contacts = 0;
   auto evaluate = [&]() {
     summary.elastic_energy =
-        orthorhombic ? contact_forces<true>(packing, h_inv, pairs, law, force, &sum_f, &contacts)
-                     : contact_forces<false>(packing, h_inv, pairs, law, force, &sum_f, &contacts);
+        fire_contact_forces(packing, h_inv, pairs, law, scratch, force, &sum_f, &contacts);
     summary.max_force = force.rowwise().norm().maxCoeff();
     summary.mean_contact_force = contacts > 0 ? sum_f / contacts : 0.0;
   };
@@ -175,7 +147,7 @@ MinimiseSummary minimise_energy(PackingData& packing, const MinimiseOptions& opt
     packing.positions += dt * velocity;
     // Rebuild the candidate pairs once any particle may have closed the skin.
     if ((packing.positions - reference).rowwise().norm().maxCoeff() > 0.5 * skin) {
-      pairs = pair_indices(find_pairs(packing, skin));
+      pair_indices(packing, skin, found, pairs);
       reference = packing.positions;
       ++summary.pair_rebuilds;
     }

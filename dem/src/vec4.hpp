@@ -3,7 +3,12 @@
 // speed"). Internal to the dem module's sources.
 #pragma once
 
+#if defined(__AVX__)
+#include <immintrin.h>
+#endif
+
 #include <Eigen/Core>
+#include <array>
 #include <cstdint>
 
 #include "rendulic/dem/neighbor_list.hpp"
@@ -23,6 +28,49 @@ inline V4 load4(const double* p) { return *reinterpret_cast<const V4*>(p); }
 inline void store4(double* p, V4 v) { *reinterpret_cast<V4*>(p) = v; }
 inline V4 cross3(V4 a, V4 b) {
   return V4{a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0], 0.0};
+}
+
+// The 4 x 4 transpositions between records (rows: x, y, z, fourth lane) of four entries and
+// their components (one vector each). Built from the records' halves (loads into and stores
+// from either half of a vector, then one in-lane interleave per component), not from whole
+// records: a lane-crossing shuffle (vshuff64x2) per component made pass (2) 40 % slower.
+typedef double V2 __attribute__((vector_size(16)));
+inline V2 load2(const double* p) { return *reinterpret_cast<const V2*>(p); }
+inline void store2(double* p, V2 v) { *reinterpret_cast<V2*>(p) = v; }
+using Mask4 = long long __attribute__((vector_size(32)));
+// A record's half (x, y or z, fourth lane) of a and of c in the halves of one vector: one load
+// and one load-and-insert (GCC writes the generic form as a load and a lane-crossing shuffle).
+inline V4 halves(const double* a, const double* c) {
+#if defined(__AVX__)
+  return _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_load_pd(a)), _mm_load_pd(c), 1);
+#else
+  return __builtin_shufflevector(load2(a), load2(c), 0, 1, 2, 3);
+#endif
+}
+inline std::array<V4, 4> components(const double* a, const double* b, const double* c,
+                                    const double* d) {
+  const V4 ac0 = halves(a, c), bd0 = halves(b, d), ac1 = halves(a + 2, c + 2),
+           bd1 = halves(b + 2, d + 2);
+  return {__builtin_shuffle(ac0, bd0, Mask4{0, 4, 2, 6}),
+          __builtin_shuffle(ac0, bd0, Mask4{1, 5, 3, 7}),
+          __builtin_shuffle(ac1, bd1, Mask4{0, 4, 2, 6}),
+          __builtin_shuffle(ac1, bd1, Mask4{1, 5, 3, 7})};
+}
+// The halves of v into a and c (a store and an extract-and-store).
+inline void store_halves(V4 v, double* a, double* c) {
+#if defined(__AVX__)
+  _mm_store_pd(a, _mm256_castpd256_pd128(v));
+  _mm_store_pd(c, _mm256_extractf128_pd(v, 1));
+#else
+  store2(a, __builtin_shufflevector(v, v, 0, 1));
+  store2(c, __builtin_shufflevector(v, v, 2, 3));
+#endif
+}
+inline void records(V4 x, V4 y, V4 z, V4 w, double* a, double* b, double* c, double* d) {
+  store_halves(__builtin_shuffle(x, y, Mask4{0, 4, 2, 6}), a, c);
+  store_halves(__builtin_shuffle(x, y, Mask4{1, 5, 3, 7}), b, d);
+  store_halves(__builtin_shuffle(z, w, Mask4{0, 4, 2, 6}), a + 2, c + 2);
+  store_halves(__builtin_shuffle(z, w, Mask4{1, 5, 3, 7}), b + 2, d + 2);
 }
 
 // The 27 periodic image shifts of the cell as 4-double records (fourth lane 0), by image code.

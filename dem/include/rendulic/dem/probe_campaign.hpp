@@ -83,10 +83,6 @@ PackingData geometry_of(const DemSystem& state);
 // first (minimised_first) where the state as given makes the Hessian indefinite. ok == false
 // with the reason for a network that has none; throws when that minimisation fails.
 LinearResponse state_linear_response(const DemSystem& state, const ProbeOptions& options);
-// The same for several states (the elastic range's references), in order on the calling
-// thread. A state whose response throws gets ok == false and the error as its message.
-std::vector<LinearResponse> state_linear_responses(const std::vector<const DemSystem*>& states,
-                                                   const ProbeOptions& options);
 // The linear response of the state and its envelope (throws where it has none).
 Envelope linear_response_envelope(const DemSystem& state, double amplitude,
                                   const std::vector<double>& theta_deg, const ProbeOptions& options,

@@ -46,6 +46,10 @@ struct PairGeometry {
 // (sorted by (i, j)). Throws InputError if the cell is too thin for a unique minimum image
 // (perpendicular width < 2 (2 r_max + skin)) or the data are inconsistent.
 std::vector<PairGeometry> find_pairs(const PackingData& packing, double skin);
+// The same pairs in no particular order, into `pairs` (cleared first; a caller that searches
+// often keeps its capacity: the FIRE minimiser's rebuilds).
+void find_pairs_unordered(const PackingData& packing, double skin,
+                          std::vector<PairGeometry>& pairs);
 
 // Static stress (compression positive, Pa) and fabric of the contacts with overlap > 0:
 // sigma = (1/V) sum l (x) f, F = (1/V) sum_p V_p sum_{c in p} n n. Particles with
