@@ -1,6 +1,7 @@
-// Four-double records of the DEM engine's force loops (dem_system.cpp, pair_loop.cpp): one
-// vector operation per record instead of three scalar ones (docs/performance.md "Engine
-// speed"). Internal to the dem module's sources.
+// Four-double records of the DEM force loops (dem_system.cpp, pair_loop.cpp, and FIRE's
+// fire_forces.cpp): one vector operation per record instead of three scalar ones
+// (docs/performance.md "Engine speed"), and the transpositions between the records of four
+// particles and one vector per component. Internal to the dem module's sources.
 #pragma once
 
 #if defined(__AVX__)
