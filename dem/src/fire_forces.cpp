@@ -24,25 +24,6 @@ namespace rendulic::dem {
 using namespace vec4;
 namespace {
 
-// a * b + c, rounded once where the hardware fuses; c - a * b likewise with kNegate.
-template <bool kNegate = false>
-inline double fused(double a, double b, double c) {
-#if defined(__FMA__)
-  return kNegate ? std::fma(-a, b, c) : std::fma(a, b, c);
-#else
-  return kNegate ? c - a * b : a * b + c;
-#endif
-}
-
-inline V4 fused4(V4 a, V4 b, V4 c) {
-#if defined(__FMA__)
-  return reinterpret_cast<V4>(_mm256_fmadd_pd(
-      reinterpret_cast<__m256d>(a), reinterpret_cast<__m256d>(b), reinterpret_cast<__m256d>(c)));
-#else
-  return a * b + c;
-#endif
-}
-
 // Rounded to an integer in the current rounding mode (std::nearbyint of each lane).
 inline V4 nearby4(V4 x) {
 #if defined(__AVX__)
@@ -64,7 +45,7 @@ inline V4 sqrt4(V4 x) {
 // |l| of a branch vector: (l_x^2 + l_y^2) then l_z^2 added with one rounding, as GCC had
 // contracted Eigen's squaredNorm.
 inline double length(const Eigen::Vector3d& l) {
-  return std::sqrt(fused(l(2), l(2), l(0) * l(0) + l(1) * l(1)));
+  return std::sqrt(fused_multiply_add(l(2), l(2), l(0) * l(0) + l(1) * l(1)));
 }
 
 }  // namespace
@@ -118,7 +99,7 @@ double fire_contact_forces(const PackingData& packing, const Eigen::Matrix3d& h_
         V4 sx = (pi[0] - pj[0]) * hi_x, sy = (pi[1] - pj[1]) * hi_y, sz = (pi[2] - pj[2]) * hi_z;
         const V4 lx = (sx - nearby4(sx)) * h_x, ly = (sy - nearby4(sy)) * h_y,
                  lz = (sz - nearby4(sz)) * h_z;
-        const V4 r = sqrt4(fused4(lz, lz, lx * lx + ly * ly));
+        const V4 r = sqrt4(fused_multiply_add(lz, lz, lx * lx + ly * ly));
         const V4 delta = (pi[3] + pj[3]) - r;
         // The force over |l| for all four lanes (one vector division, which is what the divider
         // takes longest over, instead of one per touching pair).
@@ -167,9 +148,10 @@ double fire_contact_forces(const PackingData& packing, const Eigen::Matrix3d& h_
       double* fi = F + 4 * c.i;
       double* fj = F + 4 * c.j;
       const V4 a = load4(fi), b = load4(fj);
-      store4(fi, __builtin_shuffle(a + sl, fused4(s, l, a), Mask4{0, 1, 6, 3}));
-      store4(fj, __builtin_shuffle(b - sl, fused4(-s, l, b), Mask4{0, 1, 6, 3}));
-      energy = fused(half_k * delta, delta, energy);  // k delta^2 / 2 (NormalContact::energy)
+      store4(fi, __builtin_shuffle(a + sl, fused_multiply_add(s, l, a), Mask4{0, 1, 6, 3}));
+      store4(fj, __builtin_shuffle(b - sl, fused_multiply_add<true>(s, l, b), Mask4{0, 1, 6, 3}));
+      energy = fused_multiply_add(half_k * delta, delta,
+                                  energy);  // k delta^2 / 2 (NormalContact::energy)
       sum_f += f;
       ++contacts;
     }

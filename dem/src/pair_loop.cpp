@@ -21,22 +21,6 @@ namespace rendulic::dem {
 using namespace vec4;
 namespace {
 
-// a * b + c (kNegate: c - a * b), rounded once where the hardware fuses (FMA) and never fused
-// otherwise: this file is compiled without implicit contraction (-ffp-contract=off,
-// dem/CMakeLists.txt), so a sum's rounding is fixed by the source, not by what the compiler
-// fuses around it in each context: the loop's forms and a row's two ways of taking its sums
-// give the same bits. (c - a * b as (-a) * b + c costs an extra negation: 3 % of the step.)
-template <bool kNegate = false>
-inline V4 fused_multiply_add(V4 a, V4 b, V4 c) {
-#if defined(__FMA__)
-  const __m256d x = reinterpret_cast<__m256d>(a), y = reinterpret_cast<__m256d>(b),
-                z = reinterpret_cast<__m256d>(c);
-  return reinterpret_cast<V4>(kNegate ? _mm256_fnmadd_pd(x, y, z) : _mm256_fmadd_pd(x, y, z));
-#else
-  return kNegate ? c - a * b : a * b + c;
-#endif
-}
-
 // Row [begin, end) of the list (partners in the list's order) written to `first`: the
 // entries e with touches(e) first, then the others, each part in the list's order. Returns the
 // end of the first part.

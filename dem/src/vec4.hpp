@@ -10,6 +10,7 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <cmath>
 #include <cstdint>
 
 #include "rendulic/dem/neighbor_list.hpp"
@@ -29,6 +30,31 @@ inline V4 load4(const double* p) { return *reinterpret_cast<const V4*>(p); }
 inline void store4(double* p, V4 v) { *reinterpret_cast<V4*>(p) = v; }
 inline V4 cross3(V4 a, V4 b) {
   return V4{a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0], 0.0};
+}
+
+// a * b + c (kNegate: c - a * b), rounded once where the hardware fuses (FMA) and never fused
+// otherwise. The files that use them are compiled without implicit contraction
+// (-ffp-contract=off, dem/CMakeLists.txt: pair_loop.cpp, fire_forces.cpp), so a sum's rounding
+// is fixed by the source, not by what the compiler fuses around it in each context: the pair
+// loop's forms and a row's two ways of taking its sums give the same bits. (c - a * b as
+// (-a) * b + c costs an extra negation: 3 % of the engine's step.)
+template <bool kNegate = false>
+inline V4 fused_multiply_add(V4 a, V4 b, V4 c) {
+#if defined(__FMA__)
+  const __m256d x = reinterpret_cast<__m256d>(a), y = reinterpret_cast<__m256d>(b),
+                z = reinterpret_cast<__m256d>(c);
+  return reinterpret_cast<V4>(kNegate ? _mm256_fnmadd_pd(x, y, z) : _mm256_fmadd_pd(x, y, z));
+#else
+  return kNegate ? c - a * b : a * b + c;
+#endif
+}
+template <bool kNegate = false>
+inline double fused_multiply_add(double a, double b, double c) {
+#if defined(__FMA__)
+  return kNegate ? std::fma(-a, b, c) : std::fma(a, b, c);
+#else
+  return kNegate ? c - a * b : a * b + c;
+#endif
 }
 
 // The 4 x 4 transpositions between records (rows: x, y, z, fourth lane) of four entries and
