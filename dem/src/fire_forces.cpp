@@ -68,13 +68,8 @@ double fire_contact_forces(const PackingData& packing, const Eigen::Matrix3d& h_
   // l = x_i - x_j by the minimum image (cell.hpp), in its orthorhombic form where it applies.
   const auto branch = [&](const double* pi, const double* pj) -> Eigen::Vector3d {
     const Eigen::Vector3d dx(pi[0] - pj[0], pi[1] - pj[1], pi[2] - pj[2]);
-    if (!orthorhombic) return minimum_image(packing.cell, h_inv, dx);
-    Eigen::Vector3d s;
-    for (int a = 0; a < 3; ++a) {
-      const double f = dx(a) * h_inv_diag(a);
-      s(a) = (f - std::nearbyint(f)) * h_diag(a);
-    }
-    return s;
+    return orthorhombic ? minimum_image_orthorhombic(h_diag, h_inv_diag, dx)
+                        : minimum_image(packing.cell, h_inv, dx);
   };
   double energy = 0.0, sum_f = 0.0;
   int contacts = 0;

@@ -104,9 +104,9 @@ void find_pairs_unordered(const PackingData& packing, double skin,
   }
   const bool orthorhombic = packing.cell.is_orthorhombic();
   const Eigen::Vector3d h_diagonal = h.diagonal(), h_inv_diagonal = h_inv.diagonal();
-  // Pair (i, j), i < j, with l = x_i - x_j by the minimum image, if r_i + r_j - |l| > -skin.
-  // Most candidates are far apart: `far` (|l|^2 above reach^2 with a margin that can only keep
-  // a pair the exact test then decides) skips them first.
+  // Pair (i, j), i < j, with l = x_i - x_j by the minimum image, if r_i + r_j - |l| > -skin
+  // (reach = r_i + r_j + skin). The test on |l|^2 first, with a margin that can only keep a pair
+  // the exact test then decides.
   auto consider = [&](int i, int j, double reach) {
     const Eigen::Vector3d dx = (packing.positions.row(i) - packing.positions.row(j)).transpose();
     const Eigen::Vector3d l = orthorhombic
