@@ -181,19 +181,8 @@ void find_pairs_unordered(const PackingData& packing, double skin,
 std::vector<PairGeometry> find_pairs(const PackingData& packing, double skin) {
   std::vector<PairGeometry> pairs;
   find_pairs_unordered(packing, skin, pairs);
-  // In the order (i, j): counted into rows by i, each row then sorted by j (a few pairs).
-  const int n = packing.size();
-  std::vector<int> row_start(static_cast<std::size_t>(n) + 1, 0);
-  for (const PairGeometry& c : pairs) ++row_start[c.i + 1];
-  for (int i = 0; i < n; ++i) row_start[i + 1] += row_start[i];
-  std::vector<PairGeometry> sorted(pairs.size());
-  {
-    std::vector<int> fill(row_start.begin(), row_start.end() - 1);
-    for (const PairGeometry& c : pairs) sorted[fill[c.i]++] = c;
-  }
-  for (int i = 0; i < n; ++i)
-    std::sort(sorted.begin() + row_start[i], sorted.begin() + row_start[i + 1],
-              [](const PairGeometry& a, const PairGeometry& b) { return a.j < b.j; });
+  std::vector<PairGeometry> sorted;
+  order_pairs(pairs, packing.size(), sorted, [](const PairGeometry& c) { return c; });
   return sorted;
 }
 

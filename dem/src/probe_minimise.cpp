@@ -48,16 +48,9 @@ namespace {
 void pair_indices(const PackingData& packing, double skin, std::vector<PairGeometry>& found,
                   std::vector<FirePair>& pairs) {
   find_pairs_unordered(packing, skin, found);
-  const int n = packing.size();
-  std::vector<std::int32_t> offset(static_cast<std::size_t>(n) + 1, 0);
-  for (const PairGeometry& c : found) ++offset[static_cast<std::size_t>(c.i) + 1];
-  for (int i = 0; i < n; ++i) offset[i + 1] += offset[i];
-  pairs.resize(found.size());
-  for (const PairGeometry& c : found) pairs[offset[c.i]++] = {c.i, c.j};
-  // offset[i] is now where row i + 1 starts
-  for (int i = 0, begin = 0; i < n; begin = offset[i++])
-    std::sort(pairs.begin() + begin, pairs.begin() + offset[i],
-              [](const FirePair& a, const FirePair& b) { return a.j < b.j; });
+  order_pairs(found, packing.size(), pairs, [](const PairGeometry& c) {
+    return FirePair{c.i, c.j};
+  });
 }
 
 }  // namespace
