@@ -30,6 +30,7 @@ void TeamController::reset(int max_size) {
   win_steps_ = 0;
   spacing_ = 1;
   since_ = 0;
+  verdict_cost_ = 0;
   explore_up_ = true;
 }
 
@@ -73,6 +74,7 @@ void TeamController::close_window() {
     if (cost < (1.0 - kMargin) * cost_[cur_]) {
       cur_ = win_;
       spacing_ = 1;
+      verdict_cost_ = 0;
       ++switches_;
       start_exploration(up);
       if (win_ != cur_) return;
@@ -84,6 +86,7 @@ void TeamController::close_window() {
       const double due = waste / (kOverhead * kWindowSeconds);
       spacing_ = std::max(std::min(2 * spacing_, kMaxSpacing),
                           static_cast<int>(std::min(due, static_cast<double>(kMaxWasteSpacing))));
+      if (up) verdict_cost_ = cost_[cur_];
     }
     win_ = cur_;
     return;
@@ -94,6 +97,16 @@ void TeamController::close_window() {
     since_ = 0;
     spacing_ = 1;
     start_exploration(false);
+    return;
+  }
+  // The verdict of the last exploration upwards was taken on cheaper steps: the spacing it set
+  // (up to kMaxWasteSpacing windows, seconds) no longer says what a try would waste. A try that
+  // loses again sets a new verdict and spacing from its own cost.
+  if (verdict_cost_ > 0 && cost > kDearer * verdict_cost_ && cur_ + 1 < sizes_) {
+    since_ = 0;
+    spacing_ = 1;
+    verdict_cost_ = 0;
+    start_exploration(true);
     return;
   }
   if (since_ < spacing_ || sizes_ < 2) return;

@@ -180,6 +180,24 @@ TEST(TeamController, FollowsTheLoadWhenItComesAndGoes) {
   EXPECT_GE(c.switches(), 3);
 }
 
+TEST(TeamController, TriesTheTeamAgainWhenTheStepsGetDearer) {
+  TeamController c;
+  // A gas (N = 1000, few contacts): 5 us serial, 8 us with the team, which loses and is not
+  // tried again for tens of windows. Then the gas is compressed into contacts: 40 us serial,
+  // 24 us with the team (quick.toml's preparation).
+  auto gas = [](int size, std::int64_t) { return size > 1 ? 8e-6 : 5e-6; };
+  auto dense = [](int size, std::int64_t) { return size > 1 ? 24e-6 : 40e-6; };
+  run_model(c, 2, 0, 20000, gas);
+  EXPECT_EQ(c.current(), 1);
+  const std::int64_t tried = c.explorations();
+  EXPECT_GE(tried, 1);
+  // Within a window of the dearer steps the team is tried, and kept: 4000 steps cost about
+  // two windows more than on the team, not what one thread needs (160 ms).
+  const double t = run_model(c, 2, 20000, 4000, dense);
+  EXPECT_EQ(c.current(), 2);
+  EXPECT_LT(t, 0.75 * 4000 * 40e-6);
+}
+
 TEST(TeamController, ClimbsTheLadderToTheBestSize) {
   TeamController c;
   // Eight cores, three of them busy: five threads would be best; of the ladder 1, 2, 4, 8 the
