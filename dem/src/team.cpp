@@ -86,7 +86,9 @@ void TeamController::close_window() {
       const double due = waste / (kOverhead * kWindowSeconds);
       spacing_ = std::max(std::min(2 * spacing_, kMaxSpacing),
                           static_cast<int>(std::min(due, static_cast<double>(kMaxWasteSpacing))));
-      if (up) verdict_cost_ = cost_[cur_];
+      // A narrow loss (under twice the current size's cost; a team stalled by load loses by
+      // more, and record() cuts it short there) may turn into a win when the steps get dearer.
+      if (up) verdict_cost_ = cost < 2.0 * cost_[cur_] ? cost_[cur_] : 0.0;
     }
     win_ = cur_;
     return;
@@ -99,14 +101,17 @@ void TeamController::close_window() {
     start_exploration(false);
     return;
   }
-  // The verdict of the last exploration upwards was taken on cheaper steps: the spacing it set
-  // (up to kMaxWasteSpacing windows, seconds) no longer says what a try would waste. A try that
+  // The steps got kJump dearer since a larger team lost narrowly (a gas compressed into
+  // contacts: the team's share of a step's work grew, its synchronisations did not): the
+  // spacing that verdict set (up to kMaxWasteSpacing windows, seconds) no longer says what a
+  // try would waste: the larger team is tried after the next window, which gives the try a
+  // baseline of the dearer steps alone (this one may have begun on cheap ones). A try that
   // loses again sets a new verdict and spacing from its own cost.
-  if (verdict_cost_ > 0 && cost > kDearer * verdict_cost_ && cur_ + 1 < sizes_) {
+  if (verdict_cost_ > 0 && cost > kJump * verdict_cost_ && cur_ + 1 < sizes_) {
     since_ = 0;
     spacing_ = 1;
     verdict_cost_ = 0;
-    start_exploration(true);
+    explore_up_ = false;  // the next exploration alternates, upwards
     return;
   }
   if (since_ < spacing_ || sizes_ < 2) return;

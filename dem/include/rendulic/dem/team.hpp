@@ -44,9 +44,9 @@ int max_team(std::size_t n, int threads);
 // twice what the current size needs for a minimal window plus kSlackSeconds, so a check of the
 // team on a loaded machine costs about one descheduled step (a time slice). When a team gets
 // markedly slower than in its previous window (load appeared) the next window explores
-// downwards at once; when the current size's steps have got kDearer dearer than when an
-// exploration upwards last lost to it (the system changed: a gas compressed into contacts, where
-// the team that lost on cheap steps may now pay), the next window explores upwards at once.
+// downwards at once; when the current size's steps have got kJump dearer since an
+// exploration upwards lost narrowly (by less than 2x: not a team stalled by load), as when a
+// gas is compressed into contacts, the next window explores upwards at once.
 class TeamController {
  public:
   static constexpr double kWindowSeconds = 0.02;
@@ -55,10 +55,7 @@ class TeamController {
   static constexpr int kMaxSpacing = 64;
   static constexpr double kOverhead = 0.01;
   static constexpr int kMaxWasteSpacing = 1024;
-  static constexpr double kJump = 1.5;  // a team slower than this factor: explore now
-  // Steps this factor dearer than when a larger team last lost: try it again now (at most one
-  // try per doubling of the step's cost: each costs a descheduled step on a loaded machine).
-  static constexpr double kDearer = 2.0;
+  static constexpr double kJump = 1.5;           // a team slower than this factor: explore now
   static constexpr double kSlackSeconds = 1e-3;  // waking a sleeping team costs far less
 
   // Team size for the next step, given the largest allowed (>= 1).
@@ -86,7 +83,7 @@ class TeamController {
   int win_steps_ = 0;
   int spacing_ = 1;          // windows of the current size between explorations
   int since_ = 0;            // windows of the current size since the last exploration
-  double verdict_cost_ = 0;  // the current size's cost when an exploration last lost to it
+  double verdict_cost_ = 0;  // the current size's cost when an exploration upwards lost narrowly
   bool explore_up_ = true;
   std::int64_t explorations_ = 0;
   std::int64_t switches_ = 0;
