@@ -55,6 +55,10 @@ inline CliResult run_rendulic(const std::string& args, bool merge_stderr = true)
   return run_command(std::string(RENDULIC_EXE) + " " + args, merge_stderr);
 }
 
+// Whether Debian's LAMMPS (`lmp`, installed by .ci/setup.sh) is on the PATH: the checks that run
+// our packings in LAMMPS skip without it.
+inline bool have_lammps() { return run_command("command -v lmp > /dev/null").code == 0; }
+
 // An empty folder RENDULIC_TEST_TMP/name (removed and recreated).
 inline std::filesystem::path fresh_dir(const std::string& name) {
   const std::filesystem::path d = std::filesystem::path(RENDULIC_TEST_TMP) / name;

@@ -18,12 +18,11 @@
 
 namespace {
 namespace fs = std::filesystem;
+using rendulic::testing::have_lammps;
 using rendulic::testing::run_command;
 using rendulic::testing::run_rendulic;
 
 const fs::path kRoot = fs::path(RENDULIC_TEST_TMP) / "app_export";
-
-bool have_lammps() { return run_command("command -v lmp > /dev/null").code == 0; }
 
 // The LAMMPS input of docs/interop.md "Checking a state in LAMMPS": read the data file, the pair
 // settings `rendulic export` printed, the virial stress after `run 0`, printed in full.

@@ -30,6 +30,7 @@
 
 namespace {
 namespace fs = std::filesystem;
+using rendulic::testing::have_lammps;
 using rendulic::testing::run_command;
 namespace dem = rendulic::dem;
 
@@ -133,8 +134,6 @@ History run_lammps(const dem::DemSystem& a, const dem::Material& m, const std::s
   }
   return theirs;
 }
-
-bool have_lammps() { return run_command("command -v lmp > /dev/null").code == 0; }
 
 void print(const std::string& what, const History& ours, const History& theirs) {
   for (std::size_t k = 0; k < std::min(ours.size(), theirs.size()); k += 5)

@@ -107,7 +107,7 @@ TEST(Probe, ExportedDataFileAndDumpsGiveTheSamePackingAndEnvelopes) {
             0);
   write_dump(rendulic::read_lammps_data(data), dump);
   std::vector<fs::path> inputs = {data, dump};
-  if (run_command("command -v lmp > /dev/null").code == 0) {
+  if (rendulic::testing::have_lammps()) {
     std::ofstream(dir / "in.dump") << "units si\natom_style sphere\nboundary p p p\n"
                                       "read_data a.data\nwrite_dump all custom lammps.dump id "
                                       "diameter x y z modify sort id format float %.17g\n";
