@@ -102,9 +102,9 @@ void TeamController::close_window() {
     return;
   }
   // The steps got kJump dearer since a larger team lost narrowly (a gas compressed into
-  // contacts: the team's share of a step's work grew, its synchronisations did not): the
+  // contacts: the team's share of a step's work grew, its synchronisations did not), so the
   // spacing that verdict set (up to kMaxWasteSpacing windows, seconds) no longer says what a
-  // try would waste: the larger team is tried after the next window, which gives the try a
+  // try would waste. The larger team is tried after the next window, which gives the try a
   // baseline of the dearer steps alone (this one may have begun on cheap ones). A try that
   // loses again sets a new verdict and spacing from its own cost.
   if (verdict_cost_ > 0 && cost > kJump * verdict_cost_ && cur_ + 1 < sizes_) {

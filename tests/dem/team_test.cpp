@@ -191,7 +191,7 @@ TEST(TeamController, TriesTheTeamAgainWhenTheStepsGetDearer) {
   EXPECT_EQ(c.current(), 1);
   const std::int64_t tried = c.explorations();
   EXPECT_GE(tried, 1);
-  // Within a window of the dearer steps the team is tried, and kept: 4000 steps cost about
+  // After a window or two of the dearer steps the team is tried, and kept: 4000 steps cost about
   // two windows more than on the team, not what one thread needs (160 ms).
   const double t = run_model(c, 2, 20000, 4000, dense);
   EXPECT_EQ(c.current(), 2);

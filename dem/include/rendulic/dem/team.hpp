@@ -46,7 +46,7 @@ int max_team(std::size_t n, int threads);
 // markedly slower than in its previous window (load appeared) the next window explores
 // downwards at once; when the current size's steps have got kJump dearer since an
 // exploration upwards lost narrowly (by less than 2x: not a team stalled by load), as when a
-// gas is compressed into contacts, the next window explores upwards at once.
+// gas is compressed into contacts, the larger team is tried after one more window.
 class TeamController {
  public:
   static constexpr double kWindowSeconds = 0.02;
