@@ -45,10 +45,10 @@ void TeamController::record(int size, double seconds) {
   win_seconds_ += seconds;
   ++win_steps_;
   const bool full = win_seconds_ >= kWindowSeconds && win_steps_ >= kMinWindowSteps;
-  // An exploration that already cost twice a minimal window of the current size has lost.
+  // An exploration that already cost kLost times a minimal window of the current size has lost.
   const bool lost =
       win_ != cur_ && cost_[cur_] > 0 &&
-      win_seconds_ > 2.0 * cost_[cur_] * std::max(win_steps_, kMinWindowSteps) + kSlackSeconds;
+      win_seconds_ > kLost * cost_[cur_] * std::max(win_steps_, kMinWindowSteps) + kSlackSeconds;
   if (full || lost) close_window();
 }
 
@@ -86,9 +86,9 @@ void TeamController::close_window() {
       const double due = waste / (kOverhead * kWindowSeconds);
       spacing_ = std::max(std::min(2 * spacing_, kMaxSpacing),
                           static_cast<int>(std::min(due, static_cast<double>(kMaxWasteSpacing))));
-      // A narrow loss (under twice the current size's cost; a team stalled by load loses by
-      // more, and record() cuts it short there) may turn into a win when the steps get dearer.
-      if (up) verdict_cost_ = cost < 2.0 * cost_[cur_] ? cost_[cur_] : 0.0;
+      // A narrow loss (under kLost times the current size's cost; a team stalled by load loses
+      // by more, and record() cuts it short there) may turn into a win when the steps get dearer.
+      if (up) verdict_cost_ = cost < kLost * cost_[cur_] ? cost_[cur_] : 0.0;
     }
     win_ = cur_;
     return;

@@ -55,7 +55,10 @@ class TeamController {
   static constexpr int kMaxSpacing = 64;
   static constexpr double kOverhead = 0.01;
   static constexpr int kMaxWasteSpacing = 1024;
-  static constexpr double kJump = 1.5;           // a team slower than this factor: explore now
+  static constexpr double kJump = 1.5;  // a team slower than this factor: explore now
+  // A try that has cost this factor of the current size is cut short; one that lost by less
+  // lost narrowly (not stalled by load) and may win once the steps get dearer.
+  static constexpr double kLost = 2.0;
   static constexpr double kSlackSeconds = 1e-3;  // waking a sleeping team costs far less
 
   // Team size for the next step, given the largest allowed (>= 1).
