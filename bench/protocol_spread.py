@@ -4,7 +4,8 @@
 # the mean and its standard error over the seeds of the isotropic branch (P* and coordination at
 # a few volume fractions), the undrained path's steady state (q/P = sqrt(3 J2)/P,
 # coordination and fabric deviator averaged over the last 37.5 % of eps_dev, dem.md "Paths"),
-# the states' P*, coordination and linear-response envelope extent, and the stages' wall times;
+# the states' P*, coordination and linear-response envelope extent, and the stages' wall times
+# (frictional packings: also the path's sliding fraction; a loading to a pressure: its end);
 # then each group against the first: the relative difference of the means and how many
 # standard errors it is. A single packing of 1000 particles scatters by several per cent in its
 # steady state, so a difference means something only in standard errors.
@@ -29,9 +30,14 @@ def metrics(path):
             iso = f["isotropic"]
             nu = iso["volume_fraction"][()]
             for target in NU:
+                if not nu.min() - 0.005 <= target <= nu.max() + 0.005:
+                    continue  # a loading to a pressure may end below these volume fractions
                 i = int(np.argmin(abs(nu - target)))
                 out[f"isotropic P* at nu {target}"] = iso["pressure_star"][i]
                 out[f"isotropic C at nu {target}"] = iso["coordination"][i]
+            out["isotropic end nu"] = nu[-1]
+            out["isotropic end P*"] = iso["pressure_star"][-1]
+            out["isotropic end C"] = iso["coordination"][-1]
         if "path" in f:
             p = f["path"]
             e = np.abs(p["eps_dev"][()])
@@ -45,6 +51,9 @@ def metrics(path):
             out["path steady C"] = p["coordination"][()][w].mean()
             out["path steady fabric F_xx - F_lateral"] = (
                 F[:, 0, 0] - 0.5 * (F[:, 1, 1] + F[:, 2, 2]))[w].mean()
+            out["path p_end / p0"] = P[-1] / P[0]
+            if "sliding_fraction" in p:  # frictional packings
+                out["path steady sliding fraction"] = p["sliding_fraction"][()][w].mean()
         for label in f["states"] if "states" in f else []:
             g = f["states"][label]
             out[f"state {label} P*"] = g.attrs["pressure_star"]
