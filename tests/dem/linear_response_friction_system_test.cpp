@@ -9,6 +9,8 @@
 //    directions equals the linear response's (its two-contact struts kept, their spin held),
 //    and the frictionless response of the same
 //    geometry is nowhere near it (it has no tangential springs: floppy, or far off);
+//  - the same with the dynamic probes at t_c / 10 (probes.dt_factor = 0.1), as frictional.toml
+//    probes;
 //  - the same with rolling resistance (mu_r = 0.1): the rolling springs and couples in the
 //    Jacobian, against the dynamic probes and against the response without them;
 //  - the stage's path: the campaign gives a frictional envelope with its Coulomb attributes,
@@ -115,10 +117,12 @@ struct Probed {
     return (odd - expected).norm() / size;
   }
 };
-Probed probe_both(const DemSystem& state, double amplitude) {
+// dt_factor: the dynamic probes' time step (probes.dt_factor; 0 keeps the state's own).
+Probed probe_both(const DemSystem& state, double amplitude, double dt_factor = 0.0) {
   Probed out;
   out.options.relax = RelaxOptions{1e-12, 0.5, 200};
   out.options.threads = 1;
+  out.options.dt_factor = dt_factor;
   out.lin = linear_response_envelope(state, amplitude, out.theta, out.options, &out.lr);
   if (out.lr.ok) out.dyn = dynamic_envelope(state, amplitude, out.theta, out.options);
   return out;
@@ -169,6 +173,34 @@ TEST(LinearResponseFriction, MatchesTheEnginesDynamicProbes) {
     }
   }
   std::cout << lr.message << "; frictionless: " << frictionless.message << "\n";
+}
+
+// The dynamic probes at t_c / 10 (probes.dt_factor = 0.1, frictional.toml's probes,
+// docs/frictional.md "Time steps"), a fifth of the state's own step (t_c / 50), against the
+// same independent reference and with the same stated tolerance as above. At 3e-6, as in the
+// rolling test below (the probes' residue is a fixed stress, so it weighs less as the
+// amplitude grows): measured 0.31 % and 0.60 % (at 1e-6: 0.41 % and 1.27 %). The steps of one
+// probe at both steps (34608 and 7402, measured) show that the key took effect.
+TEST(LinearResponseFriction, DynamicProbesAtATenthOfTheContactTimeMatchToo) {
+  const DemSystem state = frictional_packing();
+  const double amplitude = 3e-6;
+  const Probed probed = probe_both(state, amplitude, 0.1);
+  ASSERT_TRUE(probed.lr.ok) << probed.lr.message;
+  ASSERT_EQ(probed.dyn.d_stress.size(), probed.theta.size());
+  constexpr double kTol = 0.015;
+  const std::size_t half = probed.theta.size() / 2;
+  for (std::size_t p = 0; p < half; ++p)
+    std::cout << "theta " << probed.theta[p] << ": |dynamic (t_c / 10) - linear| / |linear| = "
+              << probed.misfit(p, amplitude, kTol) << "\n";
+  ProbeOptions own = probed.options;
+  own.dt_factor = 0.0;
+  const Envelope one = dynamic_envelope(state, amplitude, {probed.theta[0]}, own);
+  auto steps = [](const Envelope& e) {
+    return e.diagnostics.at("load_steps")[0] + e.diagnostics.at("relax_steps")[0];
+  };
+  std::cout << "steps of the first probe: " << steps(one) << " at t_c / 50, " << steps(probed.dyn)
+            << " at t_c / 10\n";
+  EXPECT_GT(steps(one), 3 * steps(probed.dyn));
 }
 
 // With rolling resistance (docs/physics.md): the same comparison with the engine's dynamic

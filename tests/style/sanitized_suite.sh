@@ -20,13 +20,13 @@
 # stopped and resumed: the same stages as the tiny run of every stage, not measured sanitized);
 # and the frictional linear response against the engine's dynamic probes (495 s sanitized,
 # 68-98 s unsanitized: four probes relaxed to E_kin/E_el < 1e-12; CI 2026-11-23, where it made
-# the sanitized suite 601 s of the 10-minute budget), and its twin with rolling resistance
-# (7-8 s unsanitized: the same probes).
+# the sanitized suite 601 s of the 10-minute budget), its twin with rolling resistance
+# (7-8 s unsanitized: the same probes) and the same at t_c / 10 (22 s unsanitized).
 set -uo pipefail
 dir=${1:?sanitizer build folder}
 src=${2:?source folder}
 scope=${3:-default}
-heavy='Selection\.PicksTheGeneratingLaw|Derivatives\.ElastoplasticExactMatchesCentralDifferences|Derivatives\.HypoplasticExactMatchesCentralDifferences|ElastoplasticCalibration\.RecoversEvolutionParametersFromPathAndEnvelopes|GlobalStart\.RescuesAPoorStartWhereLocalFails|RunStages\.TinyScenarioWritesTheInterfacesSchema|Overlay\.FiguresAndReportShowEveryCalibratedLaw|RunStages\.PressureBranchRepeatsThePathAndStatesAtALowerVolumeFraction|Jamming\.SlowlyCompressedW3PackingJams|FaultsSystem\.EverySubcommandRefusesDamagedResultsFilesInOneLine|Sweep\.QuickRunWritesFilesAndItsNumbersHold|Resume\.AfterSigtermGivesTheUninterruptedRunsFile|ResumeRefusal\.|LinearResponseFriction\.MatchesTheEnginesDynamicProbes|LinearResponseFriction\.WithRollingResistanceMatchesTheEnginesDynamicProbes'
+heavy='Selection\.PicksTheGeneratingLaw|Derivatives\.ElastoplasticExactMatchesCentralDifferences|Derivatives\.HypoplasticExactMatchesCentralDifferences|ElastoplasticCalibration\.RecoversEvolutionParametersFromPathAndEnvelopes|GlobalStart\.RescuesAPoorStartWhereLocalFails|RunStages\.TinyScenarioWritesTheInterfacesSchema|Overlay\.FiguresAndReportShowEveryCalibratedLaw|RunStages\.PressureBranchRepeatsThePathAndStatesAtALowerVolumeFraction|Jamming\.SlowlyCompressedW3PackingJams|FaultsSystem\.EverySubcommandRefusesDamagedResultsFilesInOneLine|Sweep\.QuickRunWritesFilesAndItsNumbersHold|Resume\.AfterSigtermGivesTheUninterruptedRunsFile|ResumeRefusal\.|LinearResponseFriction\.MatchesTheEnginesDynamicProbes|LinearResponseFriction\.WithRollingResistanceMatchesTheEnginesDynamicProbes|LinearResponseFriction\.DynamicProbesAtATenthOfTheContactTimeMatchToo'
 if [ ! -f "$dir/CTestTestfile.cmake" ]; then
   echo "no sanitizer build in $dir: not run (bash .ci/sanitizers.sh builds and runs it)"
   exit 77
