@@ -1117,6 +1117,35 @@ Eigen::Vector3d DemSystem::branch(std::size_t i, std::int64_t e, const Eigen::Ve
          NeighborList::shift(list_.shift_code[e]).cwiseProduct(L);
 }
 
+// Whether the last force evaluation held contact (i, j) at the Coulomb limit: the law again
+// with that evaluation's own inputs, the predicted velocities, which the step leaves in the
+// rows' records (va8_, rot16_ at +8; a refresh puts the current ones there). With the final
+// velocities instead, the dashpots' share of their difference moved sliding contacts off the
+// limit by more than kSlidingTolerance, and the count missed a sixth to a half of them
+// (docs/frictional.md "The sliding fraction"). A function of its own, outside contacts(): the
+// reported forces keep the bits they had before it existed (an ulp there changes where the
+// isotropic loading stops, and so the trajectory after it).
+bool DemSystem::held_at_limit(std::size_t i, std::size_t j, const Eigen::Vector3d& l,
+                              const Eigen::Vector3d& nrm, double overlap,
+                              const Eigen::Vector3d& spring) const {
+  const auto record = [](const AlignedVector& r, std::size_t at) {
+    return Eigen::Vector3d(r[at], r[at + 1], r[at + 2]);
+  };
+  const NormalContact law = options_.material.contact();
+  const TangentialContact tan = options_.material.tangential();
+  const Eigen::Vector3d u = record(va8_, 8 * i) - record(va8_, 8 * j) + last_D_.cwiseProduct(l);
+  const double f_n = std::fma(law.gamma, -nrm.dot(u), law.k * overlap);
+  const double ai = p_.radius[i] - 0.5 * overlap, aj = p_.radius[j] - 0.5 * overlap;
+  Eigen::Vector3d vc =
+      u - (ai * record(rot16_, 16 * i + 8) + aj * record(rot16_, 16 * j + 8)).cross(nrm);
+  vc -= vc.dot(nrm) * nrm;
+  Eigen::Vector3d xi = spring, ft;
+  double unused = 0;
+  tan.force(xi, Eigen::Vector3d(Eigen::Vector3d::Zero()), vc, 0.0, f_n, &unused, ft);
+  const double limit = tan.mu * std::abs(f_n);
+  return limit > 0 && ft.norm() >= (1.0 - kSlidingTolerance) * limit;
+}
+
 std::vector<Contact> DemSystem::contacts() const {
   const std::size_t n = p_.size();
   const Eigen::Vector3d L = cell_.lengths();
@@ -1147,41 +1176,21 @@ std::vector<Contact> DemSystem::contacts() const {
       // stage turns that into another trajectory.
       c.force = std::fma(law.gamma, -nrm.dot(vrel), law.k * c.overlap);
       if (friction_) {
-        // The stored spring (already in this tangent plane) held at the Coulomb limit as the
-        // force loop holds it, for the velocities u (relative, with the affine part) and the
-        // angular velocities wi, wj; nothing advances here.
+        // The stored spring (already in this tangent plane) and the current velocities, held
+        // at the Coulomb limit as the force loop holds them; nothing advances here.
         const TangentialContact tan = options_.material.tangential();
         const double ai = p_.radius[i] - 0.5 * c.overlap, aj = p_.radius[j] - 0.5 * c.overlap;
-        const Eigen::Vector3d xi(hist_[3 * e], hist_[3 * e + 1], hist_[3 * e + 2]);
-        auto tangential = [&](const Eigen::Vector3d& u, const Eigen::Vector3d& wi,
-                              const Eigen::Vector3d& wj, double f_n) {
-          Eigen::Vector3d vc = u - (ai * wi + aj * wj).cross(nrm);
-          vc -= vc.dot(nrm) * nrm;
-          Eigen::Vector3d x = xi, ft;
-          double unused = 0;
-          tan.force(x, Eigen::Vector3d(Eigen::Vector3d::Zero()), vc, 0.0, f_n, &unused, ft);
-          return ft;
-        };
         const Eigen::Vector3d wi(p_.wx[i], p_.wy[i], p_.wz[i]), wj(p_.wx[j], p_.wy[j], p_.wz[j]);
-        const Eigen::Vector3d ft = tangential(vrel, wi, wj, c.force);
+        Eigen::Vector3d vc = vrel - (ai * wi + aj * wj).cross(nrm);
+        vc -= vc.dot(nrm) * nrm;
+        Eigen::Vector3d xi(hist_[3 * e], hist_[3 * e + 1], hist_[3 * e + 2]);
+        double unused = 0;
+        Eigen::Vector3d ft;
+        tan.force(xi, Eigen::Vector3d(Eigen::Vector3d::Zero()), vc, 0.0, c.force, &unused, ft);
         c.tangential = swap ? Eigen::Vector3d(-ft) : ft;
-        // Whether the last force evaluation held the contact at the limit: with its own inputs,
-        // the predicted velocities, which the step leaves in the rows' records (va8_, rot16_
-        // at +8; a refresh puts the current ones there). With the final velocities instead,
-        // the dashpots' share of the difference moved sliding contacts off the limit by more
-        // than kSlidingTolerance, and the count missed a sixth to a half of them
-        // (docs/frictional.md "The sliding fraction").
-        const auto row = [](const AlignedVector& r, std::size_t at) {
-          return Eigen::Vector3d(r[at], r[at + 1], r[at + 2]);
-        };
-        const std::size_t jj = static_cast<std::size_t>(j);
-        const Eigen::Vector3d up = row(va8_, 8 * i) - row(va8_, 8 * jj) + last_D_.cwiseProduct(l);
-        const double fn_p = std::fma(law.gamma, -nrm.dot(up), law.k * c.overlap);
-        const Eigen::Vector3d ft_p =
-            tangential(up, row(rot16_, 16 * i + 8), row(rot16_, 16 * jj + 8), fn_p);
-        const double limit = tan.mu * std::abs(fn_p);
-        c.sliding = limit > 0 && ft_p.norm() >= (1.0 - kSlidingTolerance) * limit;
-        c.spring = swap ? Eigen::Vector3d(-xi) : xi;
+        const Eigen::Vector3d spring(hist_[3 * e], hist_[3 * e + 1], hist_[3 * e + 2]);
+        c.spring = swap ? Eigen::Vector3d(-spring) : spring;
+        c.sliding = held_at_limit(i, static_cast<std::size_t>(j), l, nrm, c.overlap, spring);
         if (rolling_) {
           // The rolling law as the force loop states it (friction_law): v_r = -a' n x (w_i -
           // w_j), its spring held at its limit, the torque a' n x f_r on the row's i. v_r and
@@ -1192,7 +1201,6 @@ std::vector<Contact> DemSystem::contacts() const {
               Eigen::Vector3d(hist_r_[3 * e], hist_r_[3 * e + 1], hist_r_[3 * e + 2]);
           Eigen::Vector3d xr = c.rolling_spring;
           Eigen::Vector3d fr;
-          double unused = 0;
           options_.material.rolling_contact().force(xr, Eigen::Vector3d(Eigen::Vector3d::Zero()),
                                                     vr, 0.0, c.force, &unused, fr);
           const Eigen::Vector3d q = ar * nrm.cross(fr);

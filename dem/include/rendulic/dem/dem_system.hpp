@@ -163,6 +163,11 @@ class DemSystem {
   // r_i - r_j of list entry e of row i, with its periodic image (cell lengths L): the one
   // expression of contacts() and elastic_energy().
   Eigen::Vector3d branch(std::size_t i, std::int64_t e, const Eigen::Vector3d& L) const;
+  // Whether the last force evaluation held contact (i, j) (branch l, normal nrm) with the
+  // stored spring at the Coulomb limit (contacts(): the sliding flag).
+  bool held_at_limit(std::size_t i, std::size_t j, const Eigen::Vector3d& l,
+                     const Eigen::Vector3d& nrm, double overlap,
+                     const Eigen::Vector3d& spring) const;
   // Team size of the next step; *adaptive: the controller chose it (the step is timed).
   int choose_team(bool* adaptive);
   // Forces at the current positions from the velocities in va8_; then, if half_kick != 0,
