@@ -60,7 +60,7 @@ struct Contact {
 
 // A contact slides when the last force evaluation held it at the Coulomb limit: |f_t| >= (1 -
 // kSlidingTolerance) mu |f_n|, both from that evaluation's own inputs (the predicted
-// velocities, DemSystem::contacts). The limit is applied by rescaling, so a sliding contact
+// velocities, DemSystem::held_at_limit). The limit is applied by rescaling, so a sliding contact
 // sits on it to round-off; the tolerance only takes in sticking contacts within 1e-6 of it
 // (1 in 74 000 contacts of a sheared packing, tests/dem/friction_system_test.cpp).
 inline constexpr double kSlidingTolerance = 1e-6;
