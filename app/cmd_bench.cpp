@@ -8,7 +8,8 @@
 // every figure is taken a second time beside a busy loop in a child process (a browser, another
 // job or a second MPI rank on a user's machine); loaded figures are the mean over the
 // repetitions, since the waits for a descheduled thread are what they measure. --lammps writes
-// the same states as LAMMPS data files for bench/lammps_compare.sh.
+// the same states as LAMMPS data files, and the timed contact laws as LAMMPS pair lines, for
+// bench/lammps_compare.sh.
 #include <omp.h>
 #include <signal.h>
 #include <sys/prctl.h>
@@ -20,6 +21,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <iomanip>
 #include <iostream>
 #include <memory>
@@ -30,6 +32,7 @@
 #include "packing_system.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/packing_file.hpp"
+#include "rendulic/dem/contact.hpp"
 #include "rendulic/dem/protocols.hpp"
 
 namespace rendulic::app {
@@ -163,6 +166,21 @@ void write_lammps(const dem::DemSystem& s, const std::filesystem::path& file) {
   write_lammps_data(file, packing_of_system(s), s.material().density, title.str());
 }
 
+// The contact law of a timed system as LAMMPS pair lines (dem::lammps_pair_lines, the one
+// statement of the mapping), which bench/lammps_compare.sh includes beside the data file.
+void write_lammps_pair(const dem::DemSystem& s, const std::filesystem::path& file) {
+  std::ofstream out(file);
+  out << dem::lammps_pair_lines(s.material());
+  out.flush();
+  if (!out) throw InputError(file.string() + ": cannot write the LAMMPS pair lines");
+}
+
+std::filesystem::path lammps_file(const BenchOptions& o, double nu, const char* suffix) {
+  std::ostringstream name;
+  name << "nu" << std::lround(100 * nu) << suffix;
+  return std::filesystem::path(o.lammps_dir) / name.str();
+}
+
 }  // namespace
 
 Subcommand add_bench(CLI::App& parent) {
@@ -177,8 +195,9 @@ Subcommand add_bench(CLI::App& parent) {
   sub->add_flag("--load", o->load,
                 "also time every figure beside a busy loop (a child process), side by side");
   sub->add_option("--lammps", o->lammps_dir,
-                  "write the prepared states as LAMMPS data files into DIR "
-                  "(bench/lammps_compare.sh)");
+                  "write the prepared states as LAMMPS data files (nuNN.data) and the timed "
+                  "contact laws as LAMMPS pair lines (nuNN.pair; with --friction also "
+                  "nuNN-friction.pair) into DIR (bench/lammps_compare.sh)");
   sub->add_option("--particles", o->n_particles, "number of particles")
       ->capture_default_str()
       ->check(CLI::Range(std::int64_t{100}, std::int64_t{10000000}));
@@ -218,9 +237,8 @@ Subcommand add_bench(CLI::App& parent) {
           if (!o->json) std::cerr << "bench: preparing nu = " << nu << " ...\n";
           const dem::DemSystem state = prepared_state(*o, nu);
           if (!o->lammps_dir.empty()) {
-            std::ostringstream name;
-            name << "nu" << std::lround(100 * nu) << ".data";
-            write_lammps(state, std::filesystem::path(o->lammps_dir) / name.str());
+            write_lammps(state, lammps_file(*o, nu, ".data"));
+            write_lammps_pair(state, lammps_file(*o, nu, ".pair"));
           }
           std::vector<Figure> idle, loaded;
           for (int t : settings) idle.push_back(time_steps(state, t, all_cores, *o));
@@ -251,6 +269,8 @@ Subcommand add_bench(CLI::App& parent) {
             dem::SystemOptions f;
             f.material.mu = o->friction;
             const dem::DemSystem rough = dem::DemSystem::restore(state.save(), f);
+            if (!o->lammps_dir.empty())
+              write_lammps_pair(rough, lammps_file(*o, nu, "-friction.pair"));
             const Figure smooth_1 = time_steps(state, 1, all_cores, *o);
             const Figure rough_1 = time_steps(rough, 1, all_cores, *o);
             // And with rolling resistance (its springs from zero too).

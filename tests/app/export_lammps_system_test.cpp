@@ -129,4 +129,45 @@ TEST(Export, PrintsTheFrictionAndRollingSettingsOfTheStoredMaterial) {
   EXPECT_NE(l.out.find("STRESS "), std::string::npos) << l.out;
 }
 
+// `rendulic bench --lammps DIR --friction MU` (docs/performance.md "Against LAMMPS"): each
+// timed state as a data file and each timed contact law as pair lines, those `rendulic export`
+// prints for the same material, and LAMMPS reads every state with both laws.
+TEST(BenchLammps, WritesTheStatesAndTheTimedContactLawsForLammps) {
+  const fs::path dir = rendulic::testing::fresh_dir("app_export/bench");
+  const auto r = run_rendulic(
+      "bench --particles 200 --threads 1 --repetitions 1 --seconds 0.01 "
+      "--friction 0.5 --lammps " +
+          dir.string(),
+      false);
+  ASSERT_EQ(r.code, 0) << r.err;
+  auto text = [](const fs::path& f) {
+    std::ostringstream s;
+    s << std::ifstream(f).rdbuf();
+    return s.str();
+  };
+  for (const char* nu : {"nu64", "nu82"}) {
+    const fs::path data = dir / (std::string(nu) + ".data");
+    ASSERT_TRUE(fs::exists(data)) << data;
+    const std::string smooth = text(dir / (std::string(nu) + ".pair"));
+    const std::string rough = text(dir / (std::string(nu) + "-friction.pair"));
+    EXPECT_EQ(smooth,
+              "pair_style granular\npair_coeff * * hooke 100000000 1 damping velocity "
+              "tangential linear_nohistory 0 0\n");
+    // k_t = 2/7 k and x_gamma_t = 2/7 (the defaults), mu as asked.
+    EXPECT_EQ(rough,
+              "pair_style granular\npair_coeff * * hooke 100000000 1 damping velocity "
+              "tangential linear_history 28571428.571428571 0.2857142857142857 0.5\n");
+    if (!have_lammps()) continue;
+    for (const std::string& pair : {smooth, rough}) {
+      std::ofstream(dir / "in.stress") << lammps_input(pair);
+      const auto l =
+          run_command("cd " + dir.string() + " && lmp -nocite -log none -echo none -var data " +
+                      data.string() + " -in in.stress");
+      EXPECT_EQ(l.code, 0) << l.out;
+      EXPECT_NE(l.out.find("STRESS "), std::string::npos) << l.out;
+    }
+  }
+  if (!have_lammps()) GTEST_SKIP() << "lmp not installed: the LAMMPS check is skipped";
+}
+
 }  // namespace
