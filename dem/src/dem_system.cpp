@@ -912,9 +912,7 @@ void DemSystem::forces_of_thread(std::size_t t, std::size_t T, double half_kick)
     for (std::size_t b = b0; b < b1; ++b) force_block<kStress, true>(b);
   else
     for (std::size_t b = b0; b < b1; ++b) force_block<kStress, false>(b);
-  if (T > 1) {
-#pragma omp barrier
-  }
+  if (T > 1) barrier_.arrive_and_wait(T);
   const double gamma_b = options_.material.gamma_b;
   const double* __restrict W = va8_.data();
   double* __restrict A = va8_.data() + 4;
@@ -1060,9 +1058,7 @@ void DemSystem::step_impl(const Eigen::Vector3d& D) {
     // The rotations' half kick, then the rows' records for the force loop.
     if (friction_) pack_rotations(lo, hi, h, true);
     tops_[t] = {e1, e2};
-    if (T > 1) {
-#pragma omp barrier
-    }
+    if (T > 1) barrier_.arrive_and_wait(T);
     e1 = e2 = -1e300;
     for (std::size_t u = 0; u < T; ++u) {
       keep_two_largest(tops_[u].e1, e1, e2);

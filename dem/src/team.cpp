@@ -1,8 +1,18 @@
 // The team-size rule and controller of DEM steps (team.hpp; docs/performance.md).
 #include "rendulic/dem/team.hpp"
 
+#if defined(__linux__)
+#include <linux/futex.h>
+#include <sys/syscall.h>
+#include <unistd.h>
+
+#include <climits>
+#endif
+
 #include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <thread>
 
 namespace rendulic::dem {
 
@@ -123,6 +133,59 @@ void TeamController::close_window() {
     start_exploration(false);
   else
     start_exploration(!explore_up_);
+}
+
+namespace {
+// Sleep while *word == expected / wake every sleeper on word: the futex itself on Linux (whose
+// kernel rechecks the word, so a wake between our check and the sleep is not lost), C++20's
+// atomic wait elsewhere.
+void sleep_while_equal(std::atomic<std::uint32_t>& word, std::uint32_t expected) {
+#if defined(__linux__)
+  syscall(SYS_futex, reinterpret_cast<std::uint32_t*>(&word), FUTEX_WAIT_PRIVATE, expected, nullptr,
+          nullptr, 0);
+#else
+  word.wait(expected, std::memory_order_acquire);
+#endif
+}
+void wake_all(std::atomic<std::uint32_t>& word) {
+#if defined(__linux__)
+  syscall(SYS_futex, reinterpret_cast<std::uint32_t*>(&word), FUTEX_WAKE_PRIVATE, INT_MAX, nullptr,
+          nullptr, 0);
+#else
+  word.notify_all();
+#endif
+}
+}  // namespace
+
+void TeamBarrier::arrive_and_wait(std::size_t team) {
+  const std::uint32_t g = generation_.load(std::memory_order_acquire);
+  if (arrived_.fetch_add(1, std::memory_order_acq_rel) + 1 == team) {
+    arrived_.store(0, std::memory_order_relaxed);
+    // seq_cst store then load, against the sleeper's increment then wait (a Dekker pair): either
+    // this sees the sleeper, or the sleeper's wait sees the new generation and returns.
+    generation_.store(g + 1, std::memory_order_seq_cst);
+    if (sleepers_.load(std::memory_order_seq_cst) > 0) wake_all(generation_);
+    return;
+  }
+  // Spin; read the clock only every 64 pauses (a pause is tens of cycles).
+  const auto start = std::chrono::steady_clock::now();
+  for (;;) {
+    for (int k = 0; k < 64; ++k) {
+      if (generation_.load(std::memory_order_acquire) != g) return;
+#if defined(__x86_64__) || defined(__i386__)
+      __builtin_ia32_pause();  // spin politely: the sibling hyperthread keeps its issue slots
+#else
+      std::this_thread::yield();
+#endif
+    }
+    if (std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() >
+        spin_seconds_)
+      break;
+  }
+  sleepers_.fetch_add(1, std::memory_order_seq_cst);
+  sleeps_.fetch_add(1, std::memory_order_relaxed);
+  while (generation_.load(std::memory_order_seq_cst) == g) sleep_while_equal(generation_, g);
+  sleepers_.fetch_sub(1, std::memory_order_relaxed);
 }
 
 }  // namespace rendulic::dem

@@ -3,13 +3,17 @@
 // a model machine where a team is faster (idle), slower by a descheduled member's time slice
 // per step (loaded), or one turning into the other. No wall clock is read. The pair loop's form
 // (DemSystem::set_fixed_loop), chosen by a controller of the same kind, is checked on a real
-// system: the default tries both forms, a fixed form and a frictional system never switch.
+// system: the default tries both forms, a fixed form and a frictional system never switch. The
+// step's barrier is checked with real threads: its memory order, and a late member waited for.
 #include "rendulic/dem/team.hpp"
 
 #include <gtest/gtest.h>
 #include <omp.h>
 
+#include <chrono>
 #include <functional>
+#include <thread>
+#include <vector>
 
 #include "dem_helpers.hpp"
 
@@ -235,6 +239,55 @@ TEST(TeamController, OneThreadAvailableMeansNoChoice) {
   c.record(1, 1.0);
   EXPECT_EQ(c.current(), 1);
   EXPECT_EQ(c.explorations(), 0);
+}
+
+// The step's barrier (TeamBarrier): what each member wrote before it, every member reads after
+// it, round after round, for teams of 2 to 5 threads, more than this machine's cores, so that
+// members are descheduled; a spin of 50 us (not the default's milliseconds) makes waits go to
+// sleep as well as spin, and keeps the oversubscribed teams quick.
+TEST(TeamBarrier, EveryMemberSeesWhatAllWroteBeforeIt) {
+  for (std::size_t team = 2; team <= 5; ++team) {
+    TeamBarrier barrier(50e-6);
+    constexpr int kRounds = 3000;
+    std::vector<std::int64_t> slot(team * 16, -1);  // plain memory, a line per member
+    std::vector<int> wrong(team, 0);
+    std::vector<std::thread> members;
+    for (std::size_t t = 0; t < team; ++t)
+      members.emplace_back([&, t] {
+        for (int r = 0; r < kRounds; ++r) {
+          slot[16 * t] = static_cast<std::int64_t>(r) * 10 + static_cast<std::int64_t>(t);
+          barrier.arrive_and_wait(team);
+          for (std::size_t u = 0; u < team; ++u)
+            if (slot[16 * u] != static_cast<std::int64_t>(r) * 10 + static_cast<std::int64_t>(u))
+              ++wrong[t];
+          barrier.arrive_and_wait(team);  // nobody writes the next round before all have read
+        }
+      });
+    for (auto& m : members) m.join();
+    for (std::size_t t = 0; t < team; ++t) EXPECT_EQ(wrong[t], 0) << "team " << team << ", " << t;
+  }
+}
+
+// A member that arrives late (descheduled by another process, here asleep for 30 ms): the
+// others spin kSpinSeconds, then sleep, and leave only after it has arrived.
+TEST(TeamBarrier, WaitsAsleepForALateMember) {
+  TeamBarrier barrier;
+  using Clock = std::chrono::steady_clock;
+  for (int round = 0; round < 3; ++round) {
+    Clock::time_point late_arrival, early_leave;
+    std::thread late([&] {
+      std::this_thread::sleep_for(std::chrono::milliseconds(30));
+      late_arrival = Clock::now();
+      barrier.arrive_and_wait(2);
+    });
+    barrier.arrive_and_wait(2);
+    early_leave = Clock::now();
+    late.join();
+    EXPECT_GE(early_leave, late_arrival) << round;
+  }
+  // 30 ms is six times the spin: the early member went to sleep (in each round unless the
+  // scheduler delayed it past the late one's arrival).
+  EXPECT_GE(barrier.sleeps(), 1);
 }
 
 }  // namespace

@@ -240,6 +240,7 @@ class DemSystem {
     double e1 = -1e300, e2 = -1e300;
   };
   std::vector<Top> tops_;
+  TeamBarrier barrier_;  // the step region's two barriers (team.hpp: no system call per release)
   TeamController controller_;
   int fixed_team_ = 0;
   // The pair loop's form as a two-rung ladder: "size" 1 the branchy loop, 2 the compact one.
