@@ -37,6 +37,7 @@ void TeamController::reset(int max_size) {
   cost_.fill(0.0);
   cur_ = win_ = 0;
   win_seconds_ = 0;
+  win_longest_ = 0;
   win_steps_ = 0;
   spacing_ = 1;
   since_ = 0;
@@ -53,6 +54,7 @@ int TeamController::choose(int max_size) {
 void TeamController::record(int size, double seconds) {
   if (max_ <= 1 || size != ladder_[win_]) return;  // not a step of the running window
   win_seconds_ += seconds;
+  win_longest_ = std::max(win_longest_, seconds);
   ++win_steps_;
   const bool full = win_seconds_ >= kWindowSeconds && win_steps_ >= kMinWindowSteps;
   // An exploration that already cost kLost times a minimal window of the current size has lost.
@@ -75,7 +77,9 @@ void TeamController::close_window() {
   const double cost = win_seconds_ / steps;
   const double previous = cost_[win_];
   cost_[win_] = cost;
+  const bool stalled = win_longest_ >= kSlackSeconds;
   win_seconds_ = 0;
+  win_longest_ = 0;
   win_steps_ = 0;
   if (win_ != cur_) {
     // An exploration: keep the faster size, and after a success look further the same way.
@@ -97,8 +101,11 @@ void TeamController::close_window() {
       spacing_ = std::max(std::min(2 * spacing_, kMaxSpacing),
                           static_cast<int>(std::min(due, static_cast<double>(kMaxWasteSpacing))));
       // A narrow loss (under kLost times the current size's cost; a team stalled by load loses
-      // by more, and record() cuts it short there) may turn into a win when the steps get dearer.
-      if (up) verdict_cost_ = cost < kLost * cost_[cur_] ? cost_[cur_] : 0.0;
+      // by more, and record() cuts it short there) may turn into a win when the steps get dearer,
+      // and so may a loss by more without a stalled step: in a dilute gas, whose list is rebuilt
+      // every few steps, a team of two took 3x one thread's 8 us at every step (quick.toml,
+      // docs/performance.md "The controller after a gas is compressed").
+      if (up) verdict_cost_ = cost < kLost * cost_[cur_] || !stalled ? cost_[cur_] : 0.0;
     }
     win_ = cur_;
     return;

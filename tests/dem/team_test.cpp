@@ -202,6 +202,22 @@ TEST(TeamController, TriesTheTeamAgainWhenTheStepsGetDearer) {
   EXPECT_LT(t, 0.75 * 4000 * 40e-6);
 }
 
+TEST(TeamController, TriesAgainATeamThatLostByFarWithoutAStall) {
+  TeamController c;
+  // The gas as above, but the team takes 3x one thread at every step (its list rebuilt every few
+  // steps; no step is a descheduled member's time slice): a loss by far, not a stall.
+  auto gas = [](int size, std::int64_t) { return size > 1 ? 24e-6 : 8e-6; };
+  auto dense = [](int size, std::int64_t) { return size > 1 ? 9e-6 : 14e-6; };
+  run_model(c, 2, 0, 5000, gas);  // two windows: the team's try lost by 3x
+  EXPECT_EQ(c.current(), 1);
+  EXPECT_GE(c.explorations(), 1);
+  // Tried again after a window or two of the dearer steps, and kept; left to the try's spacing
+  // (about ten windows), the 12000 steps would all run on one thread.
+  const double t = run_model(c, 2, 5000, 12000, dense);
+  EXPECT_EQ(c.current(), 2);
+  EXPECT_LT(t, 0.85 * 12000 * 14e-6);
+}
+
 TEST(TeamController, DoesNotTryAStalledTeamAgainForAModestRise) {
   TeamController c;
   // The same compression beside a busy process: every 8th team step waits for a descheduled

@@ -248,6 +248,7 @@ class DemSystem {
   int fixed_loop_ = 0;
   bool compact_ = false;
   int last_team_ = 1;
+  bool team_started_ = false;  // a step has run on a team (the first one is not timed)
   // Friction (material().mu > 0): force_block_friction runs instead of force_block (its own
   // compaction and four-lane tangential law, dem_system.cpp).
   bool friction_ = false;

@@ -46,8 +46,9 @@ int max_team(std::size_t n, int threads);
 // team on a loaded machine costs about one descheduled step (a time slice). When a team gets
 // markedly slower than in its previous window (load appeared) the next window explores
 // downwards at once; when the current size's steps have got kJump dearer since an
-// exploration upwards lost narrowly (by less than 2x: not a team stalled by load), as when a
-// gas is compressed into contacts, the larger team is tried after one more window.
+// exploration upwards lost without being stalled by load (by less than 2x, or by more with no
+// step as long as kSlackSeconds: a descheduled member costs a time slice, milliseconds), as
+// when a gas is compressed into contacts, the larger team is tried after one more window.
 class TeamController {
  public:
   static constexpr double kWindowSeconds = 0.02;
@@ -58,7 +59,8 @@ class TeamController {
   static constexpr int kMaxWasteSpacing = 1024;
   static constexpr double kJump = 1.5;  // a team slower than this factor: explore now
   // A try that has cost this factor of the current size is cut short; one that lost by less
-  // lost narrowly (not stalled by load) and may win once the steps get dearer.
+  // lost narrowly (not stalled by load) and may win once the steps get dearer, as may one that
+  // lost by more without a step of kSlackSeconds (its team slow at every step, not stalled).
   static constexpr double kLost = 2.0;
   static constexpr double kSlackSeconds = 1e-3;  // waking a sleeping team costs far less
 
@@ -84,6 +86,7 @@ class TeamController {
   int cur_ = 0;                         // index of the current size
   int win_ = 0;                         // index of the size of the running window
   double win_seconds_ = 0;
+  double win_longest_ = 0;  // the running window's longest step
   int win_steps_ = 0;
   int spacing_ = 1;          // windows of the current size between explorations
   int since_ = 0;            // windows of the current size since the last exploration
