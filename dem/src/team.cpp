@@ -1,4 +1,5 @@
-// The team-size rule and controller of DEM steps (team.hpp; docs/performance.md).
+// The team-size rule and controller of DEM steps, and the barrier inside a step (team.hpp;
+// docs/performance.md).
 #include "rendulic/dem/team.hpp"
 
 #if defined(__linux__)
