@@ -105,7 +105,7 @@ void TeamController::close_window() {
       // by more, and record() cuts it short there) may turn into a win when the steps get dearer,
       // and so may a loss by more without a stalled step: in a dilute gas, whose list is rebuilt
       // every few steps, a team of two took 3x one thread's 8 us at every step (quick.toml,
-      // docs/performance.md "The controller after a gas is compressed").
+      // docs/performance.md "The team's first step").
       if (up) verdict_cost_ = cost < kLost * cost_[cur_] || !stalled ? cost_[cur_] : 0.0;
     }
     win_ = cur_;
