@@ -20,6 +20,7 @@
 #include <numbers>
 #include <stdexcept>
 
+#include "contacts_first.hpp"
 #include "rendulic/core/conventions.hpp"
 #include "rendulic/core/errors.hpp"
 #include "vec4.hpp"
@@ -333,7 +334,7 @@ void DemSystem::make_blocks() {
       }
     }
   }
-  if (!friction_) reset_contacts_first();
+  reset_contacts_first();
   const std::size_t rows = n + slot_particle_.size();
   if (pos4_.size() < 4 * rows) pos4_.resize(4 * rows, 0.0);
   if (va8_.size() < 8 * rows) va8_.resize(8 * rows, 0.0);
@@ -777,29 +778,44 @@ void DemSystem::force_block_friction(std::size_t b) {
     }
     count = 0;
   };
-  // Pass (1). Every entry's records are written to the next free place and only a touching
-  // one advances it: no branch on the touching test, which a loop over 2.6 touching entries
-  // of 4.4 (nu = 0.64) would mispredict at every third entry. Each record is one vector
-  // (a blend supplies its fourth lane; the radii come with the position records) and the
-  // spring one masked load, tested for any bit with one instruction: ~55 instructions per
-  // entry where GCC's code for the per-component form was ~75 (docs/performance.md
-  // "Issue #17, pass (1) without prefetches"). No software prefetch of the partners' records: on
-  // this loop they cost more than they saved.
+  // Pass (1). A row's entries that did not touch when the row was last ordered are skipped
+  // after one test (below). The others' records are written to the next free place and only a
+  // touching one advances it: no branch on the touching test, which a loop over 2.6 touching
+  // entries of 4.4 (nu = 0.64) would mispredict at every third entry. Each record is one vector (a
+  // blend supplies its fourth lane; the radii come with the position records) and the spring one
+  // masked load, tested for any bit with one instruction: ~55 instructions per entry where GCC's
+  // code for the per-component form was ~75 (docs/performance.md "Issue #17, pass (1) without
+  // prefetches"). No software prefetch of the partners' records: on this loop they cost more than
+  // they saved.
+  const bool listed = compact_;
+  std::int32_t* __restrict order = entry_first_.data();
+  std::int64_t* __restrict split_of = first_end_.data();
   for (std::size_t i = lo; i < hi; ++i) {
     const V4 pi = load4(P + 4 * i), vi = load4(W + 8 * i);
     const V4 vmi = load4(Q + 16 * i);
     const double ri = pi[3];
     const std::int32_t row = static_cast<std::int32_t>(i);
-    const std::int64_t end = off[i + 1];
-    for (std::int64_t e = off[i]; e < end; ++e) {
+    const std::int64_t begin = off[i], end = off[i + 1], split = split_of[i];
+    // Entry e's pair: partner record, branch vector (fourth lane r_i - r_j, which D, 0 there,
+    // and the blends drop), |l|^2 with the FMAs GCC had made of l0 l0 + l1 l1 + l2 l2 before
+    // (the same bits), and whether it touches.
+    struct Pair {
+      V4 pj, l;
+      double r2;
+      bool touching;
+    };
+    const auto pair = [&](std::int64_t e) {
+      const V4 pj = load4(P + 4 * static_cast<std::size_t>(idx[e]));
+      const V4 l = pi - pj;
+      const double r2 = std::fma(l[2], l[2], std::fma(l[0], l[0], l[1] * l[1]));
+      return Pair{pj, l, r2, r2 < (ri + pj[3]) * (ri + pj[3])};
+    };
+    const auto touches = [&](std::int64_t e) { return pair(e).touching; };
+    // Entry e's records; whether it touches.
+    const auto gather = [&](std::int64_t e) {
       const std::int32_t partner = idx[e];
       const std::size_t j = static_cast<std::size_t>(partner);
-      const V4 pj = load4(P + 4 * j);
-      const V4 l = pi - pj;  // fourth lane r_i - r_j, which D (0 there) and the blends drop
-      // |l|^2 with the FMAs GCC had made of l0 l0 + l1 l1 + l2 l2 before: the same bits.
-      const double r2 = std::fma(l[2], l[2], std::fma(l[0], l[0], l[1] * l[1]));
-      const double rj = pj[3];
-      const bool touching = r2 < (ri + rj) * (ri + rj);
+      const auto [pj, l, r2, touching] = pair(e);
       double(*rec)[4] = lanes.in[count];
       store4(rec[F::kL], fourth_of(l, V4{r2, r2, r2, r2}));
       store4(rec[F::kVe], fourth_of(vi - load4(W + 8 * j) + D * l, pi));
@@ -824,7 +840,27 @@ void DemSystem::force_block_friction(std::size_t b) {
       }
       count += touching;
       if (count == F::kLanes) run_chunk();
+      return touching;
+    };
+    // The row's contacts first (entry_first_, ordered at advancing steps only): an entry of the
+    // second part did not touch then, so its history was cleared in that step, and while it
+    // does not touch, gather would write nothing that counts: one test skips it. If one
+    // touches (late), the row goes through the list's order; a row with a late or a lost
+    // (stale) contact is ordered again. The records are the touching entries in the list's
+    // order either way: the same sums, the same bits.
+    // The compact form (set_fixed_loop(2), tests): every row in the list's order, unordered.
+    bool late = listed;
+    if (!listed)
+      for (std::int64_t k = split; k < end; ++k) late |= touches(order[k]);
+    bool stale = false;
+    if (!late) [[likely]] {
+      for (std::int64_t k = begin; k < split; ++k) stale |= !gather(order[k]);
+    } else {
+      for (std::int64_t e = begin; e < end; ++e) gather(e);
     }
+    if ((late | stale) & advance & !listed) [[unlikely]]
+      split_of[i] = contacts_first(
+          order, begin, end, [](std::int64_t e) { return static_cast<std::int32_t>(e); }, touches);
   }
   run_chunk();
   finish_row();

@@ -10,41 +10,35 @@
 #endif
 
 #include <algorithm>
+#include <climits>
 #include <cmath>
 #include <cstdint>
+#include <stdexcept>
 #include <vector>
 
+#include "contacts_first.hpp"
 #include "rendulic/dem/dem_system.hpp"
 #include "vec4.hpp"
 
 namespace rendulic::dem {
 using namespace vec4;
-namespace {
-
-// Row [begin, end) of the list (partners in the list's order) written to `first`: the
-// entries e with touches(e) first, then the others, each part in the list's order. Returns the
-// end of the first part.
-template <class Touches>
-std::int64_t contacts_first(const std::int32_t* list_order, std::int32_t* first, std::int64_t begin,
-                            std::int64_t end, Touches&& touches) {
-  std::int64_t w = begin;
-  for (std::int64_t e = begin; e < end; ++e)
-    if (touches(e)) first[w++] = list_order[e];
-  const std::int64_t split = w;
-  for (std::int64_t e = begin; e < end; ++e)
-    if (!touches(e)) first[w++] = list_order[e];
-  return split;
-}
-
-}  // namespace
 
 void DemSystem::reset_contacts_first() {
   // At a build every entry starts in the first part (the list's order): the next branchy step
   // finds each row whose entries do not all touch stale and orders it there, with the loop's
   // own geometry (force_block). partner_ keeps the list's order, which fixes the order of a
   // row's sums.
-  partner_first_ = partner_;
   first_end_.assign(list_.offset.begin() + 1, list_.offset.end());
+  if (!friction_) {
+    partner_first_ = partner_;
+    return;
+  }
+  // With friction the rows hold entries (the history is the entry's), int32 as the partners.
+  if (list_.index.size() > static_cast<std::size_t>(INT32_MAX))
+    throw std::length_error("DemSystem: more than 2^31 neighbour-list entries");
+  entry_first_.resize(list_.index.size());
+  for (std::size_t e = 0; e < entry_first_.size(); ++e)
+    entry_first_[e] = static_cast<std::int32_t>(e);
 }
 
 // The pair forces of the rows of block b: partner shares go to the partner's accumulator or to
@@ -177,10 +171,12 @@ void DemSystem::force_block(std::size_t b) {
             if (c.r2 < c.R * c.R) contact(c, discard);
           }
         }
-        first_end_[i] = contacts_first(idx, first, off[i], end, [&](std::int64_t e) {
-          const Pair c = entry(idx, e);
-          return c.r2 < c.R * c.R;
-        });
+        first_end_[i] = contacts_first(
+            first, off[i], end, [&](std::int64_t e) { return idx[e]; },
+            [&](std::int64_t e) {
+              const Pair c = entry(idx, e);
+              return c.r2 < c.R * c.R;
+            });
       }
     }
     store4(A + 8 * i, load4(A + 8 * i) + fi);

@@ -138,7 +138,8 @@ class DemSystem {
   void set_fixed_team(int threads) { fixed_team_ = threads; }
   const TeamController& team_controller() const { return controller_; }
   // The frictionless pair loop's form (force_block): 0 (the default) chosen while running by
-  // timing, 1 the branchy loop, 2 the compact one (tests, benchmarks). Results are the same.
+  // timing, 1 the branchy loop, 2 the compact one (tests, benchmarks). With friction: 0 and 1
+  // each row's contacts first, 2 every row in the list's order. Results are the same.
   void set_fixed_loop(int form) { fixed_loop_ = form; }
   bool compact_loop() const { return compact_; }  // the form of the last step
   const TeamController& loop_controller() const { return loop_controller_; }
@@ -159,7 +160,7 @@ class DemSystem {
   void pack_positions();
   void note_list_built();  // after every build: blocks, targets, packed positions
   void make_blocks();
-  void reset_contacts_first();  // partner_first_ and first_end_ (frictionless)
+  void reset_contacts_first();  // partner_first_ or entry_first_, and first_end_
   // r_i - r_j of list entry e of row i, with its periodic image (cell lengths L): the one
   // expression of contacts() and elastic_energy().
   Eigen::Vector3d branch(std::size_t i, std::int64_t e, const Eigen::Vector3d& L) const;
@@ -229,6 +230,9 @@ class DemSystem {
   // contacts change); first_end_[i]: the end of row i's first part.
   std::vector<std::int32_t> partner_first_;
   std::vector<std::int64_t> first_end_;
+  // With friction the same parts, of list entries (their history is the entry's): a row whose
+  // second part does not touch skips it after one test per entry (force_block_friction).
+  std::vector<std::int32_t> entry_first_;
   std::vector<std::uint8_t> slot_code_;  // the periodic image of each slot (NeighborList code)
   // make_blocks' scratch: per block its slots' keys (27 j + code, ascending), per thread of
   // its team a partner's first slot.
