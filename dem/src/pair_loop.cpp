@@ -26,8 +26,8 @@ using namespace vec4;
 void DemSystem::reset_contacts_first() {
   // At a build every entry starts in the first part (the list's order): the next branchy step
   // finds each row whose entries do not all touch stale and orders it there, with the loop's
-  // own geometry (force_block). partner_ keeps the list's order, which fixes the order of a
-  // row's sums.
+  // own geometry (force_block, or force_block_friction at an advancing step). partner_ keeps
+  // the list's order, which fixes the order of a row's sums.
   first_end_.assign(list_.offset.begin() + 1, list_.offset.end());
   if (!friction_) {
     partner_first_ = partner_;
