@@ -1,8 +1,8 @@
 // The DEM engine's step, forces and measures (docs/physics.md sections 1-3; scheme in
 // dem_system.hpp). The frictionless pair loop, the hot path, lives in pair_loop.cpp. With
 // friction a contact costs ~7x more, and there the touching entries are compacted and the
-// tangential law runs on four contacts at once (force_block_friction, docs/performance.md
-// "Friction").
+// tangential law runs on four contacts at once, eight with AVX-512 (force_block_friction,
+// docs/performance.md "Friction").
 #include "rendulic/dem/dem_system.hpp"
 
 #include <omp.h>
@@ -368,8 +368,9 @@ int DemSystem::choose_team(bool* adaptive) {
 // frictionless step, docs/performance.md "Friction"). So it runs in three passes over chunks
 // of up to FrictionLanes::kLanes touching entries: (1) per row, the touching test and a copy
 // of each touching entry's inputs into 4-double records; (2) the law across the chunk, four
-// contacts at a time in the lanes of a V4 (the records of four entries transposed into one
-// vector per component, the outputs transposed back), without branches (GCC does not
+// contacts at a time in the lanes of a V4, eight in those of a V8 with AVX-512 (the records of
+// the lanes' entries transposed into one vector per component, the outputs transposed back),
+// without branches (GCC does not
 // vectorise a loop with std::sqrt, which may set errno); (3) the sums in the list's order,
 // exactly as a per-entry loop would add them (the row's own sum kept across chunks, the
 // partners' shares added at once), so that the result is still a function of the list alone.
@@ -422,11 +423,14 @@ inline bool any_bits(V4 v) {
 #endif
 }
 
-// TangentialContact's arithmetic on four contacts at once (contact.hpp, ScalarMath): a value
-// is a V4 of four lanes, a condition a mask of lanes, and select a blend.
-struct LaneMath {
-  static V4 lanes(V4 a) { return a; }
-  static V4 lanes(double a) { return V4{a, a, a, a}; }
+// The lanes of the law (pass (2)): how many contacts at once, their square root, whether every
+// lane of a mask is set, and the transpositions between the contacts' records and one vector
+// per component.
+template <class V>
+struct Lanes;
+template <>
+struct Lanes<V4> {
+  static constexpr std::size_t kN = 4;
   static V4 sqrt(V4 x) {
 #if defined(__AVX__)
     return __builtin_ia32_sqrtpd256(x);
@@ -434,71 +438,151 @@ struct LaneMath {
     return V4{std::sqrt(x[0]), std::sqrt(x[1]), std::sqrt(x[2]), std::sqrt(x[3])};
 #endif
   }
-  static V4 abs(V4 x) { return x < 0.0 ? -x : x; }
+  template <class Mask>
+  static bool all(Mask c) {
+    return (c[0] & c[1] & c[2] & c[3]) != 0;
+  }
+  static std::array<V4, 4> gather(const double* const* p) {
+    return components(p[0], p[1], p[2], p[3]);
+  }
+  static void scatter(V4 x, V4 y, V4 z, V4 w, double* const* p) {
+    records(x, y, z, w, p[0], p[1], p[2], p[3]);
+  }
+};
+#if defined(__AVX512F__) && defined(__AVX512DQ__)
+// With AVX-512, eight contacts at once (one zmm register per value). On this host (Zen 4,
+// whose zmm operations take two passes through 256-bit units) the law's time is its latency
+// chain (square root, division, the turn's division) more than its operations; with twice
+// the contacts per instruction the out-of-order window covers twice as many of them
+// (docs/performance.md "The law on eight lanes"). Without AVX-512, GCC passes 64-byte vectors
+// through memory and the step took twice as long: four lanes there.
+typedef double V8 __attribute__((vector_size(64)));
+template <>
+struct Lanes<V8> {
+  static constexpr std::size_t kN = 8;
+  static V8 sqrt(V8 x) {
+    return reinterpret_cast<V8>(_mm512_sqrt_pd(reinterpret_cast<__m512d>(x)));
+  }
+  template <class Mask>
+  static bool all(Mask c) {
+    return _mm512_movepi64_mask(reinterpret_cast<__m512i>(c)) == 0xFF;
+  }
+  // The halves (x, y or z, fourth lane) of records first, first + 2, +4, +6 in the four
+  // 128-bit lanes of one vector; then one in-lane interleave per component, as components()
+  // does for four records.
+  static __m512d halves(const double* const* p, int first, int at) {
+    __m512d v = _mm512_castpd128_pd512(_mm_load_pd(p[first] + at));
+    v = _mm512_insertf64x2(v, _mm_load_pd(p[first + 2] + at), 1);
+    v = _mm512_insertf64x2(v, _mm_load_pd(p[first + 4] + at), 2);
+    return _mm512_insertf64x2(v, _mm_load_pd(p[first + 6] + at), 3);
+  }
+  static std::array<V8, 4> gather(const double* const* p) {
+    const __m512d e0 = halves(p, 0, 0), o0 = halves(p, 1, 0), e1 = halves(p, 0, 2),
+                  o1 = halves(p, 1, 2);
+    return {reinterpret_cast<V8>(_mm512_unpacklo_pd(e0, o0)),
+            reinterpret_cast<V8>(_mm512_unpackhi_pd(e0, o0)),
+            reinterpret_cast<V8>(_mm512_unpacklo_pd(e1, o1)),
+            reinterpret_cast<V8>(_mm512_unpackhi_pd(e1, o1))};
+  }
+  static void store_halves(__m512d v, double* const* p, int first, int at) {
+    _mm_store_pd(p[first] + at, _mm512_castpd512_pd128(v));
+    _mm_store_pd(p[first + 2] + at, _mm512_extractf64x2_pd(v, 1));
+    _mm_store_pd(p[first + 4] + at, _mm512_extractf64x2_pd(v, 2));
+    _mm_store_pd(p[first + 6] + at, _mm512_extractf64x2_pd(v, 3));
+  }
+  static void scatter(V8 x, V8 y, V8 z, V8 w, double* const* p) {
+    const auto v = [](V8 a) { return reinterpret_cast<__m512d>(a); };
+    store_halves(_mm512_unpacklo_pd(v(x), v(y)), p, 0, 0);
+    store_halves(_mm512_unpackhi_pd(v(x), v(y)), p, 1, 0);
+    store_halves(_mm512_unpacklo_pd(v(z), v(w)), p, 0, 2);
+    store_halves(_mm512_unpackhi_pd(v(z), v(w)), p, 1, 2);
+  }
+};
+using LawLanes = V8;
+#else
+using LawLanes = V4;
+#endif
+
+// TangentialContact's arithmetic on several contacts at once (contact.hpp, ScalarMath): a
+// value is a vector of lanes, a condition a mask of lanes, and select a blend.
+template <class V>
+struct LaneMath {
+  static V lanes(V a) { return a; }
+  static V lanes(double a) { return a - V{}; }  // a broadcast (a - 0 is a, even -0)
+  static V sqrt(V x) { return Lanes<V>::sqrt(x); }
+  static V abs(V x) { return x < 0.0 ? -x : x; }
   template <class Mask, class A, class B>
-  static V4 select(Mask c, A a, B b) {
+  static V select(Mask c, A a, B b) {
     return c ? lanes(a) : lanes(b);
   }
-  // The rare value only if some lane needs it (ScalarMath::unless): one branch per four
-  // contacts, rarely taken, instead of the value for all four every time; then for the four
-  // lanes at once (a: lanes, or one value for all). Lane by lane instead (a branch per lane,
-  // scalar divisions and square roots in series), the frictional step was 2 % slower; in
-  // the benchmark's states one quadruple in nine has a sliding lane (docs/performance.md
+  // The rare value only if some lane needs it (ScalarMath::unless): one branch per four (or
+  // eight) contacts, rarely taken, instead of the value for all of them every time; then for
+  // all lanes at once (a: lanes, or one value for all). Lane by lane instead (a branch per
+  // lane, scalar divisions and square roots in series), the frictional step was 2 % slower;
+  // in the benchmark's states one quadruple in nine has a sliding lane (docs/performance.md
   // "Friction").
   template <class Mask, class A, class F>
-  static V4 unless(Mask c, A a, F rare, V4 x, V4 y) {
-    if ((c[0] & c[1] & c[2] & c[3]) == 0) [[unlikely]]
+  static V unless(Mask c, A a, F rare, V x, V y) {
+    if (!Lanes<V>::all(c)) [[unlikely]]
       return select(c, a, rare(x, y));
     return lanes(a);
   }
 };
 
-// Pass (2): the contact law of the chunk, four lanes (contacts) at a time; the lanes past
-// `count` compute on stale inputs and are never read.
+// Pass (2): the contact law of the chunk, Lanes<V>::kN contacts at a time; the lanes past
+// `count` compute on stale inputs and are never read. Each lane is the scalar arithmetic of
+// one contact, so four lanes or eight give the same bits.
 // With kRolling, the rolling resistance too (docs/physics.md section 1b): the rolling velocity
 // v_r = -a' n x (w_i - w_j), a' = a_i a_j / (a_i + a_j), goes through the tangential law with
 // the rolling constants; its force f_r is no force but the torque a' n x f_r on i (-that on j).
-template <bool kRolling>
+template <bool kRolling, class V = LawLanes>
 void friction_law(FrictionLanes<kRolling>& c, std::size_t count, const double* Q,
                   const NormalContact& law, const TangentialContact& tangential,
                   const TangentialContact& rolling, double dt) {
   using F = FrictionLanes<kRolling>;
-  using A3 = std::array<V4, 3>;
-  for (std::size_t k = 0; k < count; k += 4) {
-    // The components of input record r of the four entries.
+  using A3 = std::array<V, 3>;
+  using M = LaneMath<V>;
+  constexpr std::size_t kN = Lanes<V>::kN;
+  for (std::size_t k = 0; k < count; k += kN) {
+    // The components of input record r of the lanes' entries.
     auto in = [&](int r) {
-      return components(c.in[k][r], c.in[k + 1][r], c.in[k + 2][r], c.in[k + 3][r]);
+      const double* p[kN];
+      for (std::size_t q = 0; q < kN; ++q) p[q] = c.in[k + q][r];
+      return Lanes<V>::gather(p);
     };
     auto in3 = [&](int r) {
       const auto t = in(r);
       return A3{t[0], t[1], t[2]};
     };
-    auto out = [&](int r, V4 x, V4 y, V4 z, V4 w) {
-      records(x, y, z, w, c.out[k][r], c.out[k + 1][r], c.out[k + 2][r], c.out[k + 3][r]);
+    auto out = [&](int r, V x, V y, V z, V w) {
+      double* p[kN];
+      for (std::size_t q = 0; q < kN; ++q) p[q] = c.out[k + q][r];
+      Lanes<V>::scatter(x, y, z, w, p);
     };
     const auto lr = in(F::kL), ve_ri = in(F::kVe), vm_rj = in(F::kVm);
     const A3 l = {lr[0], lr[1], lr[2]};
-    const V4 ri = ve_ri[3], rj = vm_rj[3];
-    const V4 d = LaneMath::sqrt(lr[3]);
-    const V4 inv = 1.0 / d;
-    const V4 delta = (ri + rj) - d;
+    const V ri = ve_ri[3], rj = vm_rj[3];
+    const V d = M::sqrt(lr[3]);
+    const V inv = 1.0 / d;
+    const V delta = (ri + rj) - d;
     const A3 n = {l[0] * inv, l[1] * inv, l[2] * inv};
     const A3 ve = {ve_ri[0], ve_ri[1], ve_ri[2]};
-    const V4 f_n = law.k * delta - law.gamma * (l[0] * ve[0] + l[1] * ve[1] + l[2] * ve[2]) * inv;
+    const V f_n = law.k * delta - law.gamma * (l[0] * ve[0] + l[1] * ve[1] + l[2] * ve[2]) * inv;
     // Contact-point velocities: v_rel - (a_i w_i + a_j w_j) x n, tangential part.
-    const V4 ai = ri - 0.5 * delta, aj = rj - 0.5 * delta;
+    const V ai = ri - 0.5 * delta, aj = rj - 0.5 * delta;
     auto contact_point = [&](const A3& u, const A3& wi, const A3& wj) {
       const A3 w = {ai * wi[0] + aj * wj[0], ai * wi[1] + aj * wj[1], ai * wi[2] + aj * wj[2]};
       A3 p = {u[0] - (w[1] * n[2] - w[2] * n[1]), u[1] - (w[2] * n[0] - w[0] * n[2]),
               u[2] - (w[0] * n[1] - w[1] * n[0])};
-      const V4 pn = p[0] * n[0] + p[1] * n[1] + p[2] * n[2];
+      const V pn = p[0] * n[0] + p[1] * n[1] + p[2] * n[2];
       for (int a = 0; a < 3; ++a) p[a] -= pn * n[a];
       return p;
     };
     // Angular velocities from rot16_: at +4 mid-step, at +8 predicted.
     auto rot = [&](const std::int32_t* who, int at) {
-      const auto t = components(Q + 16 * who[k] + at, Q + 16 * who[k + 1] + at,
-                                Q + 16 * who[k + 2] + at, Q + 16 * who[k + 3] + at);
+      const double* p[kN];
+      for (std::size_t q = 0; q < kN; ++q) p[q] = Q + 16 * who[k + q] + at;
+      const auto t = Lanes<V>::gather(p);
       return A3{t[0], t[1], t[2]};
     };
     const A3 wei = rot(c.row, 8), wej = rot(c.partner, 8), wmi = rot(c.row, 4),
@@ -507,12 +591,12 @@ void friction_law(FrictionLanes<kRolling>& c, std::size_t count, const double* Q
     const A3 c_mid = contact_point(A3{vm_rj[0], vm_rj[1], vm_rj[2]}, wmi, wmj);
     // The spring turned with the contact: back into the tangent plane, its length kept.
     A3 x = in3(F::kXi);
-    TangentialContact::turn<A3, LaneMath>(x, n);
+    TangentialContact::turn<A3, M>(x, n);
     A3 ft;
-    V4 work{};
-    tangential.force<A3, V4, LaneMath>(x, c_mid, c_end, dt, f_n, &work, ft);
+    V work{};
+    tangential.force<A3, V, M>(x, c_mid, c_end, dt, f_n, &work, ft);
     if constexpr (kRolling) {
-      const V4 ar = ai * aj / (ai + aj);
+      const V ar = ai * aj / (ai + aj);
       auto rolling_velocity = [&](const A3& wi, const A3& wj) {
         const A3 w = {wi[0] - wj[0], wi[1] - wj[1], wi[2] - wj[2]};
         return A3{-ar * (n[1] * w[2] - n[2] * w[1]), -ar * (n[2] * w[0] - n[0] * w[2]),
@@ -521,12 +605,12 @@ void friction_law(FrictionLanes<kRolling>& c, std::size_t count, const double* Q
       const A3 r_end = rolling_velocity(wei, wej);
       const A3 r_mid = rolling_velocity(wmi, wmj);
       A3 xr = in3(F::kXr);
-      TangentialContact::turn<A3, LaneMath>(xr, n);
+      TangentialContact::turn<A3, M>(xr, n);
       A3 fr;
-      rolling.force<A3, V4, LaneMath>(xr, r_mid, r_end, dt, f_n, &work, fr);
-      out(F::kXrOut, xr[0], xr[1], xr[2], V4{});
+      rolling.force<A3, V, M>(xr, r_mid, r_end, dt, f_n, &work, fr);
+      out(F::kXrOut, xr[0], xr[1], xr[2], V{});
       out(F::kQ, ar * (n[1] * fr[2] - n[2] * fr[1]), ar * (n[2] * fr[0] - n[0] * fr[2]),
-          ar * (n[0] * fr[1] - n[1] * fr[0]), V4{});
+          ar * (n[0] * fr[1] - n[1] * fr[0]), V{});
     }
     out(F::kF, f_n * n[0] + ft[0], f_n * n[1] + ft[1], f_n * n[2] + ft[2], ai);
     out(F::kNxf, n[1] * ft[2] - n[2] * ft[1], n[2] * ft[0] - n[0] * ft[2],
