@@ -19,6 +19,7 @@
 #include <limits>
 #include <numbers>
 #include <stdexcept>
+#include <type_traits>
 
 #include "contacts_first.hpp"
 #include "rendulic/core/conventions.hpp"
@@ -370,10 +371,10 @@ int DemSystem::choose_team(bool* adaptive) {
 // of each touching entry's inputs into 4-double records; (2) the law across the chunk, four
 // contacts at a time in the lanes of a V4, eight in those of a V8 with AVX-512 (the records of
 // the lanes' entries transposed into one vector per component, the outputs transposed back),
-// without branches (GCC does not
-// vectorise a loop with std::sqrt, which may set errno); (3) the sums in the list's order,
-// exactly as a per-entry loop would add them (the row's own sum kept across chunks, the
-// partners' shares added at once), so that the result is still a function of the list alone.
+// without branches (GCC does not vectorise a loop with std::sqrt, which may set errno);
+// (3) the sums in the list's order, exactly as a per-entry loop would add them (the row's own
+// sum kept across chunks, the partners' shares added at once), so that the result is still a
+// function of the list alone.
 namespace {
 // kRolling adds the rolling spring (input and output, in place) and the rolling torque on i.
 template <bool kRolling>
@@ -448,14 +449,21 @@ struct Lanes<V4> {
   static void scatter(V4 x, V4 y, V4 z, V4 w, double* const* p) {
     records(x, y, z, w, p[0], p[1], p[2], p[3]);
   }
+  static V4 loadu(const double* p) { return loadu4(p); }
+  static void storeu(double* p, V4 v) { storeu4(p, v); }
+  template <class Mask>
+  static bool any(Mask c) {
+    return any_bits(reinterpret_cast<V4>(c));
+  }
 };
 #if defined(__AVX512F__) && defined(__AVX512DQ__)
-// With AVX-512, eight contacts at once (one zmm register per value). On this host (Zen 4,
-// whose zmm operations take two passes through 256-bit units) the law's time is its latency
-// chain (square root, division, the turn's division) more than its operations; with twice
-// the contacts per instruction the out-of-order window covers twice as many of them
-// (docs/performance.md "The law on eight lanes"). Without AVX-512, GCC passes 64-byte vectors
-// through memory and the step took twice as long: four lanes there.
+// With AVX-512, eight contacts at once (one zmm register per value). On four lanes the law
+// waited on each quadruple's chain (square root, division, the turn's division); a Zen 4
+// core takes a zmm operation in two passes through its 256-bit units, so the operations cost
+// the same, but the out-of-order window now covers twice as many contacts' chains: the
+// frictional step 3-10 % shorter (docs/performance.md "The law on eight lanes"). Without
+// AVX-512, GCC passes 64-byte vectors through memory and the step took twice as long: four
+// lanes there.
 typedef double V8 __attribute__((vector_size(64)));
 template <>
 struct Lanes<V8> {
@@ -496,6 +504,13 @@ struct Lanes<V8> {
     store_halves(_mm512_unpackhi_pd(v(x), v(y)), p, 1, 0);
     store_halves(_mm512_unpacklo_pd(v(z), v(w)), p, 0, 2);
     store_halves(_mm512_unpackhi_pd(v(z), v(w)), p, 1, 2);
+  }
+  static V8 loadu(const double* p) { return reinterpret_cast<V8>(_mm512_loadu_pd(p)); }
+  static void storeu(double* p, V8 v) { _mm512_storeu_pd(p, reinterpret_cast<__m512d>(v)); }
+  template <class Mask>
+  static bool any(Mask c) {
+    const __m512i m = reinterpret_cast<__m512i>(c);
+    return _mm512_test_epi64_mask(m, m) != 0;
   }
 };
 using LawLanes = V8;
@@ -621,9 +636,10 @@ void friction_law(FrictionLanes<kRolling>& c, std::size_t count, const double* Q
 
 // The opening half kick and the drift of particles [lo, hi) (dem_system.hpp, the step), the
 // rows' records for the force loop, and the rebuild rule's two largest excesses e1 >= e2
-// (neighbor_list.hpp), carried in and out. Four particles at a time in the lanes of a V4, each
-// lane the scalar arithmetic of one particle (the same bits): as scalar code this pass was
-// 12 % of a frictionless step (docs/performance.md "The kick and drift in lanes"). A function
+// (neighbor_list.hpp), carried in and out. Four particles at a time in the lanes of a V4 (eight
+// in a V8 with AVX-512, as the frictional law), each lane the scalar arithmetic of one particle
+// (the same bits): as scalar code this pass was 12 % of a frictionless step (docs/performance.md
+// "The kick and drift in lanes"). A function
 // of its own, with its pointers and constants as locals: inside the step's parallel region GCC
 // read them from the region's shared block at every particle.
 struct KickDrift {
@@ -637,7 +653,13 @@ struct KickDrift {
   double s_min;
 };
 
-void kick_drift(const KickDrift& k, std::size_t lo, std::size_t hi, double& e1_io, double& e2_io) {
+// Particles [i, hi) in runs of Lanes<V>::kN while a whole run is left (i advances), each lane
+// the scalar arithmetic of one particle.
+template <class V>
+void kick_drift_lanes(const KickDrift& k, std::size_t& i_io, std::size_t hi, double& e1_io,
+                      double& e2_io) {
+  using L = Lanes<V>;
+  constexpr std::size_t kN = L::kN;
   double* __restrict x = k.x[0];
   double* __restrict y = k.x[1];
   double* __restrict z = k.x[2];
@@ -655,38 +677,65 @@ void kick_drift(const KickDrift& k, std::size_t lo, std::size_t hi, double& e1_i
   const double h = k.h, dt = k.dt, sx = k.s[0], sy = k.s[1], sz = k.s[2], rx = k.sref[0],
                ry = k.sref[1], rz = k.sref[2], s_min = k.s_min;
   double e1 = e1_io, e2 = e2_io;
-  std::size_t i = lo;
-  for (; i + 4 <= hi; i += 4) {
-    const V4 hm = h * loadu4(im + i);
-    const V4 fxi = loadu4(fx + i), fyi = loadu4(fy + i), fzi = loadu4(fz + i);
-    const V4 vxi = loadu4(vx + i) + hm * fxi, vyi = loadu4(vy + i) + hm * fyi,
-             vzi = loadu4(vz + i) + hm * fzi;
-    storeu4(vx + i, vxi);
-    storeu4(vy + i, vyi);
-    storeu4(vz + i, vzi);
+  std::size_t i = i_io;
+  for (; i + kN <= hi; i += kN) {
+    const V hm = h * L::loadu(im + i);
+    const V fxi = L::loadu(fx + i), fyi = L::loadu(fy + i), fzi = L::loadu(fz + i);
+    const V vxi = L::loadu(vx + i) + hm * fxi, vyi = L::loadu(vy + i) + hm * fyi,
+            vzi = L::loadu(vz + i) + hm * fzi;
+    L::storeu(vx + i, vxi);
+    L::storeu(vy + i, vyi);
+    L::storeu(vz + i, vzi);
     // Predicted v(t+dt) = v(t) + dt a(t), second-order accurate, for the dissipative forces.
     // The records' fourth lanes: 0 for the velocity, the radius for the position.
-    records(vxi + hm * fxi, vyi + hm * fyi, vzi + hm * fzi, V4{}, W + 8 * i, W + 8 * i + 8,
-            W + 8 * i + 16, W + 8 * i + 24);
-    const V4 xi = sx * (loadu4(x + i) + dt * vxi), yi = sy * (loadu4(y + i) + dt * vyi),
-             zi = sz * (loadu4(z + i) + dt * vzi);
-    storeu4(x + i, xi);
-    storeu4(y + i, yi);
-    storeu4(z + i, zi);
-    records(xi, yi, zi, loadu4(radius + i), P + 4 * i, P + 4 * i + 4, P + 4 * i + 8,
-            P + 4 * i + 12);
-    const auto a = components(ref + 4 * i, ref + 4 * i + 4, ref + 4 * i + 8, ref + 4 * i + 12);
-    const V4 ux = xi - rx * a[0], uy = yi - ry * a[1], uz = zi - rz * a[2];
-    const V4 u2 = ux * ux + uy * uy + uz * uz, th = s_min * a[3];
-    // keep_two_largest_excess's own test against the e2 before these four: e2 only grows over
+    double* w[kN];
+    double* p[kN];
+    const double* r[kN];
+    for (std::size_t q = 0; q < kN; ++q)
+      w[q] = W + 8 * (i + q), p[q] = P + 4 * (i + q), r[q] = ref + 4 * (i + q);
+    L::scatter(vxi + hm * fxi, vyi + hm * fyi, vzi + hm * fzi, V{}, w);
+    const V xi = sx * (L::loadu(x + i) + dt * vxi), yi = sy * (L::loadu(y + i) + dt * vyi),
+            zi = sz * (L::loadu(z + i) + dt * vzi);
+    L::storeu(x + i, xi);
+    L::storeu(y + i, yi);
+    L::storeu(z + i, zi);
+    L::scatter(xi, yi, zi, L::loadu(radius + i), p);
+    const auto a = L::gather(r);
+    const V ux = xi - rx * a[0], uy = yi - ry * a[1], uz = zi - rz * a[2];
+    const V u2 = ux * ux + uy * uy + uz * uz, th = s_min * a[3];
+    // keep_two_largest_excess's own test against the e2 before these lanes: e2 only grows over
     // them, so a lane skipped here would be skipped there too, and the others go through it in
     // order (the same e1 and e2).
-    const V4 b = (e2 + th) - 1e-12 * (std::abs(e2) + th);
+    const V b = (e2 + th) - 1e-12 * (std::abs(e2) + th);
     const auto reach = ~((b > 0.0) & (u2 < (1.0 - 1e-12) * (b * b)));
-    if (any_bits(reinterpret_cast<V4>(reach))) [[unlikely]]
-      for (int q = 0; q < 4; ++q)
+    if (L::any(reach)) [[unlikely]]
+      for (std::size_t q = 0; q < kN; ++q)
         if (reach[q]) keep_two_largest_excess(u2[q], th[q], e1, e2);
   }
+  i_io = i;
+  e1_io = e1, e2_io = e2;
+}
+
+void kick_drift(const KickDrift& k, std::size_t lo, std::size_t hi, double& e1_io, double& e2_io) {
+  std::size_t i = lo;
+  kick_drift_lanes<LawLanes>(k, i, hi, e1_io, e2_io);
+  if constexpr (!std::is_same_v<LawLanes, V4>) kick_drift_lanes<V4>(k, i, hi, e1_io, e2_io);
+  double* __restrict x = k.x[0];
+  double* __restrict y = k.x[1];
+  double* __restrict z = k.x[2];
+  double* __restrict vx = k.v[0];
+  double* __restrict vy = k.v[1];
+  double* __restrict vz = k.v[2];
+  const double* __restrict fx = k.f[0];
+  const double* __restrict fy = k.f[1];
+  const double* __restrict fz = k.f[2];
+  const double* __restrict im = k.im;
+  const double* __restrict ref = k.ref;
+  double* __restrict W = k.W;
+  double* __restrict P = k.P;
+  const double h = k.h, dt = k.dt, sx = k.s[0], sy = k.s[1], sz = k.s[2], rx = k.sref[0],
+               ry = k.sref[1], rz = k.sref[2], s_min = k.s_min;
+  double e1 = e1_io, e2 = e2_io;
   for (; i < hi; ++i) {
     const double hm = h * im[i];
     const double vxi = vx[i] + hm * fx[i], vyi = vy[i] + hm * fy[i], vzi = vz[i] + hm * fz[i];
