@@ -720,42 +720,25 @@ void kick_drift(const KickDrift& k, std::size_t lo, std::size_t hi, double& e1_i
   std::size_t i = lo;
   kick_drift_lanes<LawLanes>(k, i, hi, e1_io, e2_io);
   if constexpr (!std::is_same_v<LawLanes, V4>) kick_drift_lanes<V4>(k, i, hi, e1_io, e2_io);
-  double* __restrict x = k.x[0];
-  double* __restrict y = k.x[1];
-  double* __restrict z = k.x[2];
-  double* __restrict vx = k.v[0];
-  double* __restrict vy = k.v[1];
-  double* __restrict vz = k.v[2];
-  const double* __restrict fx = k.f[0];
-  const double* __restrict fy = k.f[1];
-  const double* __restrict fz = k.f[2];
-  const double* __restrict im = k.im;
-  const double* __restrict ref = k.ref;
-  double* __restrict W = k.W;
-  double* __restrict P = k.P;
-  const double h = k.h, dt = k.dt, sx = k.s[0], sy = k.s[1], sz = k.s[2], rx = k.sref[0],
-               ry = k.sref[1], rz = k.sref[2], s_min = k.s_min;
+  // The last particles, fewer than four, one by one with the same arithmetic.
   double e1 = e1_io, e2 = e2_io;
   for (; i < hi; ++i) {
-    const double hm = h * im[i];
-    const double vxi = vx[i] + hm * fx[i], vyi = vy[i] + hm * fy[i], vzi = vz[i] + hm * fz[i];
-    vx[i] = vxi;
-    vy[i] = vyi;
-    vz[i] = vzi;
-    W[8 * i] = vxi + hm * fx[i];
-    W[8 * i + 1] = vyi + hm * fy[i];
-    W[8 * i + 2] = vzi + hm * fz[i];
-    const double xi = sx * (x[i] + dt * vxi), yi = sy * (y[i] + dt * vyi),
-                 zi = sz * (z[i] + dt * vzi);
-    x[i] = xi;
-    y[i] = yi;
-    z[i] = zi;
-    P[4 * i] = xi;
-    P[4 * i + 1] = yi;
-    P[4 * i + 2] = zi;
-    const double* a = ref + 4 * i;
-    const double ux = xi - rx * a[0], uy = yi - ry * a[1], uz = zi - rz * a[2];
-    keep_two_largest_excess(ux * ux + uy * uy + uz * uz, s_min * a[3], e1, e2);
+    double v[3], x[3];
+    const double hm = k.h * k.im[i];
+    for (int c = 0; c < 3; ++c) {
+      v[c] = k.v[c][i] + hm * k.f[c][i];
+      k.v[c][i] = v[c];
+      k.W[8 * i + c] = v[c] + hm * k.f[c][i];
+    }
+    for (int c = 0; c < 3; ++c) {
+      x[c] = k.s[c] * (k.x[c][i] + k.dt * v[c]);
+      k.x[c][i] = x[c];
+      k.P[4 * i + c] = x[c];
+    }
+    const double* a = k.ref + 4 * i;
+    const double ux = x[0] - k.sref[0] * a[0], uy = x[1] - k.sref[1] * a[1],
+                 uz = x[2] - k.sref[2] * a[2];
+    keep_two_largest_excess(ux * ux + uy * uy + uz * uz, k.s_min * a[3], e1, e2);
   }
   e1_io = e1, e2_io = e2;
 }
