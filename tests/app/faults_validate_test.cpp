@@ -3,12 +3,15 @@
 // equilibrium at the asked tolerance used to end with "internal error" (exit 1) and throw
 // away every stage before them. Now: exit 2, one line that says why and what to change, and
 // the four completed stages kept in results.h5.partial (docs/usage.md "Results are atomic").
+// And the damaged-file walk (damage_walk.hpp) with every subcommand on every damage (2400 runs
+// of the binary, minutes on 2 cores): the default suite walks each damage with one command.
 #include <gtest/gtest.h>
 
 #include <filesystem>
 #include <fstream>
 
 #include "cli_runner.hpp"
+#include "damage_walk.hpp"
 #include "rendulic/core/results.hpp"
 #include "tiny_run.hpp"
 
@@ -38,6 +41,13 @@ TEST(FaultsValidate, MinimisationProbesWithoutEquilibriumExitTwoAndKeepTheStages
       << r.err;
   EXPECT_TRUE(rendulic::ResultsReader(out / "results.h5.partial").has_attr("/timings", "states"));
   EXPECT_FALSE(fs::exists(out / "results.h5"));
+}
+
+TEST(FaultsValidate, EveryDamageWithEverySubcommand) {
+  const fs::path root = fs::path(RENDULIC_TEST_TMP) / "app_faults_validate" / "walk";
+  rendulic::testing::walk_damaged_copies(rendulic::testing::tiny_results(root.parent_path()), root,
+                                         root.parent_path() / "walk-outcomes.txt",
+                                         rendulic::testing::Coverage::every_command);
 }
 
 }  // namespace
