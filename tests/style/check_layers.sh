@@ -21,7 +21,8 @@ for module in "${!allowed[@]}"; do
   [ -d "$module" ] || continue
   while IFS= read -r hit; do
     file=${hit%%:*}
-    used=$(sed -E 's|.*#include "rendulic/([a-z_]+)/.*|\1|' <<<"${hit#*:}")
+    used=${hit#*#include \"rendulic/}  # the module: a parameter expansion, not a sed per line
+    used=${used%%/*}
     if [[ " ${allowed[$module]} " != *" $used "* ]]; then
       echo "$file includes rendulic/$used/ (module $module may include: ${allowed[$module]})"
       bad=1
