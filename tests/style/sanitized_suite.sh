@@ -23,7 +23,7 @@
 # the sanitized suite 601 s of the 10-minute budget), its twin with rolling resistance
 # (7-8 s unsanitized: the same probes) and the same at t_c / 10 (22 s unsanitized); and, since
 # the default suite took 13.4 min on a slower host (a Zen 5 VM, 2026-11-30: the sanitized
-# scope 698 s of it), the system tests of 13 s and more sanitized there (384 s alone on 2
+# scope 698 s of it), the system tests of 12 s and more sanitized there (384 s alone on 2
 # idle cores, 766 s of test time): the frictional states through a results file (85 s, 55 s),
 # sheared frictional packings run for thousands of steps (20, 19, 16, 16, 13 s: the frictional
 # engine's code runs sanitized in the shorter friction tests, ContactsFirst... and
