@@ -240,14 +240,13 @@ inline std::size_t pick_of(const std::string& what, std::size_t n) {
   return static_cast<std::size_t>(h % n);
 }
 
-// Walks the damaged copies of `base` in `root` (made afresh, removed at the end) and writes
-// every outcome to `outcomes_file`.
-inline void walk_damaged_copies(const fs::path& base, const fs::path& root,
+// Walks the damaged copies of `base` in the test folder `name` (fresh_dir: made afresh,
+// removed at the end) and writes every outcome to `outcomes_file`.
+inline void walk_damaged_copies(const fs::path& base, const std::string& name,
                                 const fs::path& outcomes_file, Coverage coverage) {
   ASSERT_TRUE(fs::exists(base));
   const std::vector<Damage> damages = damages_of(base);
-  fs::remove_all(root);
-  fs::create_directories(root);
+  const fs::path root = fresh_dir(name);
   struct Run {
     std::size_t damage;
     std::string command;
@@ -263,17 +262,17 @@ inline void walk_damaged_copies(const fs::path& base, const fs::path& root,
       H5::H5File h(f.string(), H5F_ACC_RDWR);
       damages[i].apply(h);
     }
-    // calibrate last: it changes the file the others read.
     static const char* const commands[] = {
         "inspect", "report --no-figures",
         "calibrate --model isotropic_elastic --max-iterations 5 --results"};
     const bool all = coverage == Coverage::every_command || every_command_needs(damages[i].what);
     const std::size_t pick = pick_of(damages[i].what, std::size(commands));
-    for (std::size_t c = 0; c < std::size(commands); ++c) {
-      if (c == std::size(commands) - 1 && plot_walks.count(damages[i].what))
-        runs.push_back({i, "plot"}), ++plots;
+    auto add = [&](std::size_t c) {
       if (all || c == pick) runs.push_back({i, commands[c]});
-    }
+    };
+    add(0), add(1);
+    if (plot_walks.count(damages[i].what)) runs.push_back({i, "plot"}), ++plots;
+    add(2);  // calibrate last: it changes the file the others read
   }
   EXPECT_EQ(plots, static_cast<int>(plot_walks.size()));
   for (const auto& w : plot_walks)

@@ -55,7 +55,7 @@ fs::path base_results() { return rendulic::testing::tiny_results(kRoot); }
 TEST(FaultsSystem, EverySubcommandRefusesDamagedResultsFilesInOneLine) {
   // Each damage with one command (800 runs of the binary); every damage with every command is
   // FaultsValidate.EveryDamageWithEverySubcommand (label validate).
-  rendulic::testing::walk_damaged_copies(base_results(), kRoot / "walk",
+  rendulic::testing::walk_damaged_copies(base_results(), "app_faults_system/walk",
                                          kRoot / "walk-outcomes.txt",
                                          rendulic::testing::Coverage::one_command_each);
 }

@@ -44,9 +44,9 @@ TEST(FaultsValidate, MinimisationProbesWithoutEquilibriumExitTwoAndKeepTheStages
 }
 
 TEST(FaultsValidate, EveryDamageWithEverySubcommand) {
-  const fs::path root = fs::path(RENDULIC_TEST_TMP) / "app_faults_validate" / "walk";
-  rendulic::testing::walk_damaged_copies(rendulic::testing::tiny_results(root.parent_path()), root,
-                                         root.parent_path() / "walk-outcomes.txt",
+  const fs::path dir = fs::path(RENDULIC_TEST_TMP) / "app_faults_validate";
+  rendulic::testing::walk_damaged_copies(rendulic::testing::tiny_results(dir),
+                                         "app_faults_validate/walk", dir / "walk-outcomes.txt",
                                          rendulic::testing::Coverage::every_command);
 }
 
