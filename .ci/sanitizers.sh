@@ -3,8 +3,9 @@
 # UndefinedBehaviorSanitizer in its own folder and runs the default test suite (unit and
 # system tests, ctest -LE validate) under them. Any report of either sanitizer fails the job:
 # UBSan stops at its first finding, ASan at every finding (including leaks at exit).
-# Optimised lightly (-O1) with debug information: fast enough for the system tests, exact
-# enough for the stack traces. MPI and the benchmarks are off (the MPI tests skip without it),
+# Optimised lightly (-O1) with line tables only (-g1): fast enough for the system tests, and the
+# stack traces still name each frame's file and line, inlined frames included; full debug
+# information (-g) made each object 1.4x slower to compile (docs/install.md). MPI and the benchmarks are off (the MPI tests skip without it),
 # -march=native is off so that the binary runs wherever the job does. The Python module and its
 # tests are off: an ASan runtime cannot be loaded into a Python interpreter started without it.
 # Run after .ci/setup.sh (same Debian packages). Environment: BUILD_DIR (default build-asan),
@@ -19,7 +20,7 @@ sanitize="-fsanitize=address,undefined -fno-sanitize-recover=undefined -fno-omit
 
 start=$(date +%s)
 cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-      -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g" -DCMAKE_CXX_FLAGS="$sanitize" \
+      -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1" -DCMAKE_CXX_FLAGS="$sanitize" \
       -DCMAKE_EXE_LINKER_FLAGS="$sanitize" -DCMAKE_SHARED_LINKER_FLAGS="$sanitize" \
       -DRENDULIC_MPI=OFF -DRENDULIC_BENCH=OFF -DRENDULIC_NATIVE=OFF -DRENDULIC_PYTHON=OFF \
       -DRENDULIC_SANITIZER_BUILD= >/dev/null
