@@ -1,13 +1,15 @@
 #!/usr/bin/env bash
-# The sanitizer job (docs/install.md "Sanitizers"): builds rendulic with AddressSanitizer and
-# UndefinedBehaviorSanitizer in its own folder and runs the default test suite (unit and
-# system tests, ctest -LE validate) under them. Any report of either sanitizer fails the job:
-# UBSan stops at its first finding, ASan at every finding (including leaks at exit).
+# The sanitizer job (docs/install.md "Style and sanitizers"): builds rendulic with
+# AddressSanitizer and UndefinedBehaviorSanitizer in its own folder and runs the default test
+# suite (unit and system tests, ctest -LE validate) under them. Any report of either sanitizer
+# fails the job: UBSan stops at its first finding, ASan at every finding (including leaks at
+# exit).
 # Optimised lightly (-O1) with line tables only (-g1): fast enough for the system tests, and the
 # stack traces still name each frame's file and line, inlined frames included; full debug
-# information (-g) made each object 1.4x slower to compile (docs/install.md). MPI and the benchmarks are off (the MPI tests skip without it),
-# -march=native is off so that the binary runs wherever the job does. The Python module and its
-# tests are off: an ASan runtime cannot be loaded into a Python interpreter started without it.
+# information (-g) made the build 1.55x longer (docs/install.md). MPI and the benchmarks are
+# off (the MPI tests skip without it), -march=native is off so that the binary runs wherever
+# the job does. The Python module and its tests are off: an ASan runtime cannot be loaded into
+# a Python interpreter started without it.
 # Run after .ci/setup.sh (same Debian packages). Environment: BUILD_DIR (default build-asan),
 # JOBS (default: all cores), SANITIZERS_BUILD_ONLY (set: build, run nothing; .ci/setup.sh
 # does that under CI, and the default suite's ci.SanitizedTests runs its tests).
