@@ -64,7 +64,7 @@ std::filesystem::path run_scenario(const RunRequest& r) {
       plan += (plan.empty() ? "" : ", ") + st;
     log::info(r.scenario, ": N = ", scenario.get_int("dem.n_particles"), ", stages ", plan,
               "; writing ", (out_dir / "results.h5").string(),
-              " (on 2 idle cores quick.toml takes under a minute, paper.toml 8-14 min by host)");
+              " (on 2 idle cores quick.toml takes under a minute, paper.toml about 10 min)");
   }
   if (r.mpi_ranks > 1) log::info(r.mpi_ranks, " MPI ranks share the probe campaigns");
   try {
