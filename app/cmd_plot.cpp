@@ -34,14 +34,13 @@ namespace {
 
 struct Spawned {
   int code = -1;    // exit code, -1 if it did not exit normally
-  std::string err;  // its stderr, when captured
+  std::string err;  // its stderr
 };
 
-// Runs argv without a shell (no quoting issues with odd file names). With `capture`, its
-// stderr is collected; with `silence`, its output goes to /dev/null. `env` is added to the
-// environment (built here: the child of a threaded process must not allocate before exec).
-Spawned spawn(const std::vector<std::string>& args, bool silence, bool capture = false,
-              const std::vector<std::string>& env = {}) {
+// Runs argv without a shell (no quoting issues with odd file names) and collects its stderr.
+// `env` is added to the environment (built here: the child of a threaded process must not
+// allocate before exec).
+Spawned spawn(const std::vector<std::string>& args, const std::vector<std::string>& env) {
   std::vector<char*> argv;
   for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
   argv.push_back(nullptr);
@@ -50,35 +49,31 @@ Spawned spawn(const std::vector<std::string>& args, bool silence, bool capture =
   for (const auto& e : env) envp.push_back(const_cast<char*>(e.c_str()));
   envp.push_back(nullptr);
   int pipefd[2] = {-1, -1};
-  if (capture && ::pipe(pipefd) != 0) throw std::runtime_error("plot: cannot create a pipe");
+  if (::pipe(pipefd) != 0) throw std::runtime_error("plot: cannot create a pipe");
   const pid_t pid = fork();
-  if (pid < 0) throw std::runtime_error("plot: cannot start a process");
+  if (pid < 0) {
+    ::close(pipefd[0]);
+    ::close(pipefd[1]);
+    throw std::runtime_error("plot: cannot start a process");
+  }
   if (pid == 0) {
-    if (silence) {
-      std::freopen("/dev/null", "w", stdout);
-      std::freopen("/dev/null", "w", stderr);
-    }
-    if (capture) {
-      ::dup2(pipefd[1], STDERR_FILENO);
-      ::close(pipefd[0]);
-      ::close(pipefd[1]);
-    }
+    ::dup2(pipefd[1], STDERR_FILENO);
+    ::close(pipefd[0]);
+    ::close(pipefd[1]);
     execvpe(argv[0], argv.data(), envp.data());
     _exit(127);
   }
   const int handle = cleanup::kill_on_death(pid);
   Spawned r;
-  if (capture) {
-    ::close(pipefd[1]);
-    char buf[4096];
-    for (;;) {
-      const ssize_t n = ::read(pipefd[0], buf, sizeof buf);
-      if (n < 0 && errno == EINTR) continue;
-      if (n <= 0) break;
-      r.err.append(buf, static_cast<std::size_t>(n));
-    }
-    ::close(pipefd[0]);
+  ::close(pipefd[1]);
+  char buf[4096];
+  for (;;) {
+    const ssize_t n = ::read(pipefd[0], buf, sizeof buf);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) break;
+    r.err.append(buf, static_cast<std::size_t>(n));
   }
+  ::close(pipefd[0]);
   int status = 0;
   while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
   }
@@ -127,19 +122,12 @@ int plot_results(const std::filesystem::path& file, const std::filesystem::path&
     throw InputError(out_dir.string() + ": cannot create the figures folder: " + ec.message());
   if (::access(out_dir.c_str(), W_OK) != 0)
     throw InputError(out_dir.string() + ": cannot write figures here: " + std::strerror(errno));
-  // The first interpreter that has both modules: PATH's python3 may be a private build
-  // (pyenv, conda) without Debian's packages, which live under /usr/bin/python3.
-  std::string python;
-  for (const char* candidate : {"python3", "/usr/bin/python3"})
-    if (spawn({candidate, "-c", "import h5py, matplotlib"}, true).code == 0) {
-      python = candidate;
-      break;
-    }
-  if (python.empty())
-    throw InputError(
-        "plot: needs python3 with matplotlib and h5py (bash .ci/setup.sh installs "
-        "python3-matplotlib and python3-h5py)");
-  std::vector<std::string> args = {python};
+  // The figures are independent: plot.py draws them in as many processes as this run may
+  // use threads (--threads; the user's own RENDULIC_PLOT_JOBS wins).
+  std::vector<std::string> env;
+  if (const char* jobs = std::getenv("RENDULIC_PLOT_JOBS"); !jobs || !*jobs)
+    env.push_back("RENDULIC_PLOT_JOBS=" + std::to_string(omp_get_max_threads()));
+  std::vector<std::string> args = {""};
   if (script_file.empty()) {
     args.insert(args.end(), {"-c", kPlotScript});
   } else {
@@ -147,23 +135,37 @@ int plot_results(const std::filesystem::path& file, const std::filesystem::path&
     log::info("figures drawn by ", script_file.string());
   }
   args.insert(args.end(), {file.string(), out_dir.string()});
-  // The figures are independent: plot.py draws them in as many processes as this run may
-  // use threads (--threads; the user's own RENDULIC_PLOT_JOBS wins).
-  std::vector<std::string> env;
-  if (const char* jobs = std::getenv("RENDULIC_PLOT_JOBS"); !jobs || !*jobs)
-    env.push_back("RENDULIC_PLOT_JOBS=" + std::to_string(omp_get_max_threads()));
-  const Spawned r = spawn(args, false, true, env);
-  if (r.code == 0) {
-    // The figures it skipped, and why: one note per line, as every message of the tool.
-    std::istringstream notes(r.err);
-    for (std::string line; std::getline(notes, line);)
-      if (!line.empty()) log::info(line);
-    return 0;
+  // The first interpreter that has both modules draws: PATH's python3 may be a private build
+  // (pyenv, conda) without Debian's packages, which live under /usr/bin/python3. The script
+  // says so itself (exit 3, before it writes anything), so no interpreter is started only to
+  // ask: that probe imported matplotlib once more, ~0.9 s of every plot (docs/figures.md).
+  std::string missing;  // the last interpreter's word on it
+  for (const char* python : {"python3", "/usr/bin/python3"}) {
+    args[0] = python;
+    const Spawned r = spawn(args, env);
+    if (r.code == 0) {
+      // The figures it skipped, and why: one note per line, as every message of the tool.
+      std::istringstream notes(r.err);
+      for (std::string line; std::getline(notes, line);)
+        if (!line.empty()) log::info(line);
+      return 0;
+    }
+    // No such interpreter (127), or one without the modules: plot.py's exit 3, or a user's
+    // own script that does not say so (Python's exit 1 on the import).
+    const std::string why = last_line(r.err);
+    if (r.code == 127 || r.code == 3 || (r.code == 1 && why.rfind("ModuleNotFoundError", 0) == 0)) {
+      if (!why.empty()) missing = ": " + printable(why);
+      continue;
+    }
+    if (r.code == 2)  // plot.py's one line about data it cannot draw
+      throw InputError(file.string() + ": cannot draw the figures: " + printable(why));
+    throw std::runtime_error("plot: the figure script failed (exit " + std::to_string(r.code) +
+                             "): " + printable(why));
   }
-  if (r.code == 2)  // plot.py's one line about data it cannot draw
-    throw InputError(file.string() + ": cannot draw the figures: " + printable(last_line(r.err)));
-  throw std::runtime_error("plot: the figure script failed (exit " + std::to_string(r.code) +
-                           "): " + printable(last_line(r.err)));
+  throw InputError(
+      "plot: needs python3 with matplotlib and h5py (bash .ci/setup.sh installs "
+      "python3-matplotlib and python3-h5py)" +
+      missing);
 }
 
 Subcommand add_plot(CLI::App& parent) {

@@ -14,8 +14,12 @@ import os
 import sys
 import textwrap
 
-import h5py
-import matplotlib
+try:
+    import h5py
+    import matplotlib
+except ImportError as e:  # exit 3: `rendulic plot` runs the script with the next interpreter
+    print(f"plot.py needs h5py and matplotlib: {e}", file=sys.stderr)
+    sys.exit(3)
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402

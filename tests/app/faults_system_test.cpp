@@ -260,10 +260,13 @@ TEST(FaultsSystem, AnInterruptedPlotLeavesNoFigureScriptRunningNorItsFile) {
   const auto arg1 = cmdline.find('\0') + 1;
   EXPECT_EQ(cmdline.substr(arg1, 3), std::string("-c\0", 3));
   // With more than one core the script draws in worker processes: stop it while they draw
-  // (if they are seen in time), and none may draw on after it.
+  // (if they are seen in time), and none may draw on after it. The first interpreter may be
+  // one without the modules (PATH's pyenv or conda build), which exits at once and leaves the
+  // drawing to /usr/bin/python3: the script is looked for again while waiting.
   std::vector<pid_t> workers;
   wait_for(
       [&] {
+        script_started();
         workers = children_of(script);
         return !workers.empty();
       },

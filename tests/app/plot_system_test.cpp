@@ -4,10 +4,12 @@
 // square frames, fits and special directions in the legends, Fig. 7's error bars, PNG at
 // 300 dpi, PDF and SVG); a crowded sweep file gives a Pareto chart whose labels do not
 // overlap; `rendulic plot` runs the script given by --script, RENDULIC_PLOT_SCRIPT, or the one
-// installed beside the binary; a file that is not ours is refused with exit 2.
+// installed beside the binary, with /usr/bin/python3 where PATH's python3 lacks the modules;
+// a file that is not ours is refused with exit 2.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -278,6 +280,75 @@ TEST(Plot, DrawsEveryFigureOfASeedLikeFile) {
         EXPECT_GT(fs::file_size(p), 1000u) << p;
       }
     }
+}
+
+// A python3 for the front of PATH that notes each start in dir/tried.txt: Debian's, or with
+// `modules` false Debian's without its site directories (-S), a real interpreter without
+// matplotlib and h5py, as PATH's python3 may be (pyenv, conda). Returns its folder.
+fs::path counting_python(const fs::path& dir, bool modules) {
+  const fs::path shim =
+      write_file(dir / "bin" / "python3",
+                 "#!/bin/sh\necho tried >> " + (dir / "tried.txt").string() +
+                     "\nexec /usr/bin/python3 " + (modules ? "" : "-S ") + "\"$@\"\n");
+  fs::permissions(shim, fs::perms::owner_all, fs::perm_options::add);
+  return dir / "bin";
+}
+
+std::size_t lines_of(const fs::path& p) {
+  std::ifstream in(p);
+  const std::string text((std::istreambuf_iterator<char>(in)), {});
+  return static_cast<std::size_t>(std::count(text.begin(), text.end(), '\n'));
+}
+
+bool debian_python_draws() {
+  return rendulic::testing::run_command("/usr/bin/python3 -c 'import h5py, matplotlib'").code == 0;
+}
+
+// The compiled-in plot.py says it lacks the modules (exit 3) before it writes anything, and
+// /usr/bin/python3 draws instead.
+TEST(Plot, DrawsWithDebiansPythonWhenPathsOneLacksTheModules) {
+  if (!debian_python_draws()) GTEST_SKIP() << "no /usr/bin/python3 with matplotlib and h5py";
+  const fs::path f = rendulic::app::testing::seed_like("plot_fallback", false);
+  const fs::path dir = rendulic::testing::fresh_dir("app_plot_system/fallback");
+  const std::string path = "PATH=" + counting_python(dir, false).string() + ":\"$PATH\" ";
+  const CliResult r = rendulic::testing::run_command(path + RENDULIC_EXE + " plot " + f.string() +
+                                                     " --out " + (dir / "o").string());
+  EXPECT_EQ(r.code, 0) << r.out;
+  EXPECT_EQ(lines_of(dir / "tried.txt"), 1u);
+  for (const char* name : {"fig1_path.png", "fig3_elastic_stress.pdf", "fig7_features.svg"})
+    EXPECT_TRUE(fs::exists(dir / "o" / name)) << name;
+}
+
+// A script runs with the first interpreter that has its modules, started once (no interpreter
+// is started only to ask): a user's own script too, which need not say that it lacks a module
+// (Python's exit 1 on the import). One that imports what neither interpreter has is refused
+// in one line naming it, exit 2.
+TEST(Plot, AUsersScriptRunsWithTheInterpreterThatHasItsModules) {
+  if (!debian_python_draws()) GTEST_SKIP() << "no /usr/bin/python3 with matplotlib and h5py";
+  const fs::path f = rendulic::app::testing::seed_like("plot_fallback_script", false);
+  const fs::path mine =
+      write_file(rendulic::testing::fresh_dir("app_plot_system/fallback_script") / "mine.py",
+                 "import sys\nimport h5py, matplotlib\nopen(sys.argv[2] + '/ran.txt', "
+                 "'w').write(sys.argv[0])\n");
+  CliResult r;
+  for (const bool modules : {true, false}) {
+    const fs::path dir = rendulic::testing::fresh_dir(
+        std::string("app_plot_system/fallback_script/") + (modules ? "with" : "without"));
+    const std::string path = "PATH=" + counting_python(dir, modules).string() + ":\"$PATH\" ";
+    r = rendulic::testing::run_command(path + RENDULIC_EXE + " plot " + f.string() + " --out " +
+                                       (dir / "o").string() + " --script " + mine.string());
+    EXPECT_EQ(r.code, 0) << r.out;
+    EXPECT_EQ(lines_of(dir / "tried.txt"), 1u) << modules;  // with the modules: no probe first
+    EXPECT_TRUE(fs::exists(dir / "o" / "ran.txt")) << modules;
+  }
+  const fs::path dir = rendulic::testing::fresh_dir("app_plot_system/fallback_script/needs");
+  const std::string path = "PATH=" + counting_python(dir, false).string() + ":\"$PATH\" ";
+  const fs::path needs = write_file(dir / "needs.py", "import rendulic_no_such_module\n");
+  r = rendulic::testing::run_command(path + RENDULIC_EXE + " plot " + f.string() + " --out " +
+                                     (dir / "o").string() + " --script " + needs.string());
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("needs python3 with matplotlib and h5py"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("No module named 'rendulic_no_such_module'"), std::string::npos) << r.out;
 }
 
 // A stand-in figure script that records that it ran and with which arguments.
