@@ -138,7 +138,7 @@ int plot_results(const std::filesystem::path& file, const std::filesystem::path&
   // The first interpreter that has both modules draws: PATH's python3 may be a private build
   // (pyenv, conda) without Debian's packages, which live under /usr/bin/python3. The script
   // says so itself (exit 3, before it writes anything), so no interpreter is started only to
-  // ask: that probe imported matplotlib once more, ~0.9 s of every plot (docs/figures.md).
+  // ask: that probe imported matplotlib once more, 0.35-0.9 s of every plot (docs/figures.md).
   std::string missing;  // the last interpreter's word on it
   for (const char* python : {"python3", "/usr/bin/python3"}) {
     args[0] = python;
