@@ -262,12 +262,19 @@ TEST(FaultsSystem, AnInterruptedPlotLeavesNoFigureScriptRunningNorItsFile) {
   // With more than one core the script draws in worker processes: stop it while they draw
   // (if they are seen in time), and none may draw on after it. The first interpreter may be
   // one without the modules (PATH's pyenv or conda build), which exits at once and leaves the
-  // drawing to /usr/bin/python3: the script is looked for again while waiting.
+  // drawing to /usr/bin/python3: the script is looked for again while waiting. A worker is a
+  // fork of the script (its command line); other children are not: matplotlib's first import
+  // on a machine runs fc-list to build its font cache, which ends on its own (CI's fresh
+  // machine, 2026-12-01: that fc-list was taken for a worker that ran on).
   std::vector<pid_t> workers;
   wait_for(
       [&] {
         script_started();
-        workers = children_of(script);
+        const std::string script_cmd = read_file("/proc/" + std::to_string(script) + "/cmdline");
+        workers.clear();
+        for (pid_t c : children_of(script))
+          if (read_file("/proc/" + std::to_string(c) + "/cmdline") == script_cmd)
+            workers.push_back(c);
         return !workers.empty();
       },
       10);
