@@ -18,6 +18,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -238,7 +239,11 @@ TEST(FaultsSystem, AnInterruptedPlotLeavesNoFigureScriptRunningNorItsFile) {
   const fs::path base = base_results();
   const fs::path d = fresh_dir("signal_plot");
   fs::copy_file(base, d / "results.h5");
+  // Two drawing processes whatever the cores: with one, the script could finish its figures
+  // while the workers are waited for, and the stop would come after the end.
+  setenv("RENDULIC_PLOT_JOBS", "2", 1);
   const pid_t pid = start("plot " + (d / "results.h5").string(), d / "stderr.txt");
+  unsetenv("RENDULIC_PLOT_JOBS");
   pid_t script = 0;
   auto script_started = [&] {
     for (pid_t c : children_of(pid)) {
@@ -259,8 +264,8 @@ TEST(FaultsSystem, AnInterruptedPlotLeavesNoFigureScriptRunningNorItsFile) {
   const std::string cmdline = read_file("/proc/" + std::to_string(script) + "/cmdline");
   const auto arg1 = cmdline.find('\0') + 1;
   EXPECT_EQ(cmdline.substr(arg1, 3), std::string("-c\0", 3));
-  // With more than one core the script draws in worker processes: stop it while they draw
-  // (if they are seen in time), and none may draw on after it. The first interpreter may be
+  // The script draws in a worker process besides its own: stop it while they draw (if the
+  // worker is seen in time), and none may draw on after it. The first interpreter may be
   // one without the modules (PATH's pyenv or conda build), which exits at once and leaves the
   // drawing to /usr/bin/python3: the script is looked for again while waiting. A worker is a
   // fork of the script (its command line); other children are not: matplotlib's first import
