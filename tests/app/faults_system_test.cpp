@@ -226,6 +226,9 @@ std::vector<pid_t> children_of(pid_t pid) {
   return out;
 }
 
+// Its command line: the arguments, each ended by a NUL (Linux /proc).
+std::string cmdline_of(pid_t pid) { return read_file("/proc/" + std::to_string(pid) + "/cmdline"); }
+
 bool running(pid_t pid) {
   std::ifstream in("/proc/" + std::to_string(pid) + "/stat");
   std::string stat((std::istreambuf_iterator<char>(in)), {});
@@ -249,7 +252,7 @@ TEST(FaultsSystem, AnInterruptedPlotLeavesNoFigureScriptRunningNorItsFile) {
     for (pid_t c : children_of(pid)) {
       // Between fork and exec the child still shows rendulic's own command line: wait for
       // the interpreter's.
-      const std::string cmd = read_file("/proc/" + std::to_string(c) + "/cmdline");
+      const std::string cmd = cmdline_of(c);
       // The name of the program, not its path: the build may sit under a folder whose name
       // says python.
       const std::string argv0 = fs::path(cmd.substr(0, cmd.find('\0'))).filename().string();
@@ -261,7 +264,7 @@ TEST(FaultsSystem, AnInterruptedPlotLeavesNoFigureScriptRunningNorItsFile) {
   };
   ASSERT_TRUE(wait_for(script_started, 60)) << "the figure script never started";
   // argv: python, "-c", the script's text, the file, the folder: no script file.
-  const std::string cmdline = read_file("/proc/" + std::to_string(script) + "/cmdline");
+  const std::string cmdline = cmdline_of(script);
   const auto arg1 = cmdline.find('\0') + 1;
   EXPECT_EQ(cmdline.substr(arg1, 3), std::string("-c\0", 3));
   // The script draws in a worker process besides its own: stop it while they draw (if the
@@ -275,11 +278,10 @@ TEST(FaultsSystem, AnInterruptedPlotLeavesNoFigureScriptRunningNorItsFile) {
   wait_for(
       [&] {
         script_started();
-        const std::string script_cmd = read_file("/proc/" + std::to_string(script) + "/cmdline");
+        const std::string own = cmdline_of(script);
         workers.clear();
         for (pid_t c : children_of(script))
-          if (read_file("/proc/" + std::to_string(c) + "/cmdline") == script_cmd)
-            workers.push_back(c);
+          if (!own.empty() && cmdline_of(c) == own) workers.push_back(c);
         return !workers.empty();
       },
       10);
