@@ -1031,9 +1031,12 @@ def draw_forked(path, out, count, jobs):
         pid, r, w = forked
         if pid == 0:
             signal.signal(signal.SIGTERM, signal.SIG_DFL)
-            try:  # PR_SET_PDEATHSIG: killed with this process, whatever kills it
+            try:  # PR_SET_PDEATHSIG: killed with this process, whatever kills it; and
+                # PR_SET_NAME: shown as rendulic-draw by ps and top (and found so by the tests)
                 import ctypes
-                ctypes.CDLL(None).prctl(1, int(signal.SIGKILL))
+                libc = ctypes.CDLL(None)
+                libc.prctl(1, int(signal.SIGKILL))
+                libc.prctl(15, b"rendulic-draw", 0, 0, 0)
             except (OSError, AttributeError):
                 pass
             if os.getppid() != parent:  # it died before the line above took effect
