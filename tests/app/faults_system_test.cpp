@@ -10,6 +10,7 @@
 // The full-disk tests mount a small tmpfs when they can (root, as in CI); otherwise the
 // kernel's file size limit (ulimit -f) makes the writes fail the same way (EFBIG instead of
 // ENOSPC).
+#include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/file.h>
@@ -218,20 +219,34 @@ TEST(FaultsSystem, ASignalDuringARunKeepsTheCompletedStagesAndNoTemporary) {
   EXPECT_TRUE(rendulic::ResultsReader(out / "results.h5.partial").has_attr("/timings", "prepare"));
 }
 
-// The children of `pid` (Linux /proc).
+// A file of /proc/PID, empty once the process is gone. Read with read(2): a process that ends
+// between the open and the read makes the read fail (ESRCH), which std::ifstream turns into an
+// exception (CI, 2026-12-01: matplotlib's short-lived fc-list, read as a child of the script).
+std::string proc_file(pid_t pid, const std::string& name) {
+  const std::string path = "/proc/" + std::to_string(pid) + "/" + name;
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return {};
+  std::string out;
+  char buf[4096];
+  for (ssize_t n; (n = ::read(fd, buf, sizeof buf)) > 0;)
+    out.append(buf, static_cast<std::size_t>(n));
+  ::close(fd);
+  return out;
+}
+
+// The children of `pid`.
 std::vector<pid_t> children_of(pid_t pid) {
   std::vector<pid_t> out;
-  std::ifstream in("/proc/" + std::to_string(pid) + "/task/" + std::to_string(pid) + "/children");
+  std::istringstream in(proc_file(pid, "task/" + std::to_string(pid) + "/children"));
   for (pid_t c; in >> c;) out.push_back(c);
   return out;
 }
 
-// Its command line: the arguments, each ended by a NUL (Linux /proc).
-std::string cmdline_of(pid_t pid) { return read_file("/proc/" + std::to_string(pid) + "/cmdline"); }
+// Its command line: the arguments, each ended by a NUL.
+std::string cmdline_of(pid_t pid) { return proc_file(pid, "cmdline"); }
 
 bool running(pid_t pid) {
-  std::ifstream in("/proc/" + std::to_string(pid) + "/stat");
-  std::string stat((std::istreambuf_iterator<char>(in)), {});
+  const std::string stat = proc_file(pid, "stat");
   const auto close = stat.rfind(')');
   return close != std::string::npos && close + 2 < stat.size() && stat[close + 2] != 'Z';
 }
@@ -271,17 +286,17 @@ TEST(FaultsSystem, AnInterruptedPlotLeavesNoFigureScriptRunningNorItsFile) {
   // worker is seen in time), and none may draw on after it. The first interpreter may be
   // one without the modules (PATH's pyenv or conda build), which exits at once and leaves the
   // drawing to /usr/bin/python3: the script is looked for again while waiting. A worker is a
-  // fork of the script (its command line); other children are not: matplotlib's first import
-  // on a machine runs fc-list to build its font cache, which ends on its own (CI's fresh
-  // machine, 2026-12-01: that fc-list was taken for a worker that ran on).
+  // child that names itself rendulic-draw; other children are not: matplotlib's first import
+  // on a machine runs fc-list to build its font cache, which ends on its own, and between its
+  // fork and exec it shows the script's command line (CI's fresh machine, 2026-12-01: that
+  // fc-list was taken for a worker that ran on).
   std::vector<pid_t> workers;
   wait_for(
       [&] {
         script_started();
-        const std::string own = cmdline_of(script);
         workers.clear();
         for (pid_t c : children_of(script))
-          if (!own.empty() && cmdline_of(c) == own) workers.push_back(c);
+          if (proc_file(c, "comm") == "rendulic-draw\n") workers.push_back(c);
         return !workers.empty();
       },
       10);
