@@ -109,10 +109,12 @@ DemSystem DemSystem::restore(const State& s, const SystemOptions& options) {
   if (d.friction_) d.hist_ = history(s.tangential_history, "tangential");
   if (d.rolling_) d.hist_r_ = history(s.rolling_history, "rolling");
   d.note_list_built();
+  d.particles_ahead_ = true;  // the saved forces into their records at the first step
   return d;
 }
 
 State DemSystem::save() const {
+  sync_particles();
   State s;
   s.particles = p_;
   s.lengths = cell_.lengths();
@@ -132,6 +134,7 @@ State DemSystem::save() const {
 }
 
 void DemSystem::rebuild_list() {
+  sync_particles();  // positions (the forces are computed after the build)
   const Eigen::Vector3d L = cell_.lengths();
   const std::size_t n = p_.size();
   const double skin = options_.skin * options_.material.r_mean;
@@ -234,6 +237,38 @@ void DemSystem::note_list_built() {
     ref4_[4 * i + 2] = list_.ref_z()[i];
     ref4_[4 * i + 3] = list_.half_skins()[i];
   }
+}
+
+void DemSystem::sync_particles() const {
+  if (!records_ahead_.ahead.load(std::memory_order_acquire)) return;
+  const std::lock_guard<std::mutex> hold(records_ahead_.lock);
+  if (!records_ahead_.ahead.load(std::memory_order_relaxed)) return;
+  // The vectors' elements, not the vectors: writing them from a const member is defined (they
+  // are not const objects).
+  double* x[3] = {const_cast<double*>(p_.x.data()), const_cast<double*>(p_.y.data()),
+                  const_cast<double*>(p_.z.data())};
+  double* f[3] = {const_cast<double*>(p_.fx.data()), const_cast<double*>(p_.fy.data()),
+                  const_cast<double*>(p_.fz.data())};
+  const double* P = pos4_.data();
+  const double* A = va8_.data() + 4;
+  for (std::size_t i = 0, n = p_.size(); i < n; ++i)
+    for (int c = 0; c < 3; ++c) {
+      x[c][i] = P[4 * i + static_cast<std::size_t>(c)];
+      f[c][i] = A[8 * i + static_cast<std::size_t>(c)];
+    }
+  records_ahead_.ahead.store(false, std::memory_order_release);
+}
+
+void DemSystem::pack_particles() {
+  const std::size_t n = p_.size();
+  pack_positions();
+  if (va8_.size() < 8 * n) va8_.resize(8 * n, 0.0);
+  for (std::size_t i = 0; i < n; ++i) {
+    va8_[8 * i + 4] = p_.fx[i];
+    va8_[8 * i + 5] = p_.fy[i];
+    va8_[8 * i + 6] = p_.fz[i];
+  }
+  particles_ahead_ = false;
 }
 
 void DemSystem::pack_positions() {
@@ -487,10 +522,16 @@ struct Lanes<V8> {
   static std::array<V8, 4> gather(const double* const* p) {
     const __m512d e0 = halves(p, 0, 0), o0 = halves(p, 1, 0), e1 = halves(p, 0, 2),
                   o1 = halves(p, 1, 2);
-    return {reinterpret_cast<V8>(_mm512_unpacklo_pd(e0, o0)),
-            reinterpret_cast<V8>(_mm512_unpackhi_pd(e0, o0)),
-            reinterpret_cast<V8>(_mm512_unpacklo_pd(e1, o1)),
-            reinterpret_cast<V8>(_mm512_unpackhi_pd(e1, o1))};
+    // The interleaves as shuffles (vunpck{l,h}pd): GCC 12's intrinsics for them warn of their own
+    // undefined operand (-Wuninitialized) where they are inlined into the kick.
+    using M8 = long long __attribute__((vector_size(64)));
+    const auto lo = [](__m512d x, __m512d y) {
+      return __builtin_shuffle(V8(x), V8(y), M8{0, 8, 2, 10, 4, 12, 6, 14});
+    };
+    const auto hi = [](__m512d x, __m512d y) {
+      return __builtin_shuffle(V8(x), V8(y), M8{1, 9, 3, 11, 5, 13, 7, 15});
+    };
+    return {lo(e0, o0), hi(e0, o0), lo(e1, o1), hi(e1, o1)};
   }
   static void store_halves(__m512d v, double* const* p, int first, int at) {
     _mm_store_pd(p[first] + at, _mm512_castpd512_pd128(v));
@@ -643,11 +684,9 @@ void friction_law(FrictionLanes<kRolling>& c, std::size_t count, const double* Q
 // of its own, with its pointers and constants as locals: inside the step's parallel region GCC
 // read them from the region's shared block at every particle.
 struct KickDrift {
-  double* x[3];        // positions, SoA
-  double* v[3];        // velocities
-  const double* f[3];  // forces
-  const double *im, *ref, *radius;
-  double *W, *P;  // the velocity and position records
+  double* v[3];  // velocities
+  const double *im, *ref;
+  double *W, *P;  // the velocity (then force) and position records
   double h, dt;
   double s[3], sref[3];  // the cell's stretch over the step, and since the list's reference
   double s_min;
@@ -660,18 +699,11 @@ void kick_drift_lanes(const KickDrift& k, std::size_t& i_io, std::size_t hi, dou
                       double& e2_io) {
   using L = Lanes<V>;
   constexpr std::size_t kN = L::kN;
-  double* __restrict x = k.x[0];
-  double* __restrict y = k.x[1];
-  double* __restrict z = k.x[2];
   double* __restrict vx = k.v[0];
   double* __restrict vy = k.v[1];
   double* __restrict vz = k.v[2];
-  const double* __restrict fx = k.f[0];
-  const double* __restrict fy = k.f[1];
-  const double* __restrict fz = k.f[2];
   const double* __restrict im = k.im;
   const double* __restrict ref = k.ref;
-  const double* __restrict radius = k.radius;
   double* __restrict W = k.W;
   double* __restrict P = k.P;
   const double h = k.h, dt = k.dt, sx = k.s[0], sy = k.s[1], sz = k.s[2], rx = k.sref[0],
@@ -680,26 +712,26 @@ void kick_drift_lanes(const KickDrift& k, std::size_t& i_io, std::size_t hi, dou
   std::size_t i = i_io;
   for (; i + kN <= hi; i += kN) {
     const V hm = h * L::loadu(im + i);
-    const V fxi = L::loadu(fx + i), fyi = L::loadu(fy + i), fzi = L::loadu(fz + i);
-    const V vxi = L::loadu(vx + i) + hm * fxi, vyi = L::loadu(vy + i) + hm * fyi,
-            vzi = L::loadu(vz + i) + hm * fzi;
+    // The force from its record (beside the velocity record written below), the position from
+    // its own: the step reads and writes no other copy of either.
+    double* w[kN];
+    double* p[kN];
+    const double* a4[kN];
+    const double* r[kN];
+    for (std::size_t q = 0; q < kN; ++q)
+      w[q] = W + 8 * (i + q), a4[q] = w[q] + 4, p[q] = P + 4 * (i + q), r[q] = ref + 4 * (i + q);
+    const auto f = L::gather(a4);
+    const V vxi = L::loadu(vx + i) + hm * f[0], vyi = L::loadu(vy + i) + hm * f[1],
+            vzi = L::loadu(vz + i) + hm * f[2];
     L::storeu(vx + i, vxi);
     L::storeu(vy + i, vyi);
     L::storeu(vz + i, vzi);
     // Predicted v(t+dt) = v(t) + dt a(t), second-order accurate, for the dissipative forces.
     // The records' fourth lanes: 0 for the velocity, the radius for the position.
-    double* w[kN];
-    double* p[kN];
-    const double* r[kN];
-    for (std::size_t q = 0; q < kN; ++q)
-      w[q] = W + 8 * (i + q), p[q] = P + 4 * (i + q), r[q] = ref + 4 * (i + q);
-    L::scatter(vxi + hm * fxi, vyi + hm * fyi, vzi + hm * fzi, V{}, w);
-    const V xi = sx * (L::loadu(x + i) + dt * vxi), yi = sy * (L::loadu(y + i) + dt * vyi),
-            zi = sz * (L::loadu(z + i) + dt * vzi);
-    L::storeu(x + i, xi);
-    L::storeu(y + i, yi);
-    L::storeu(z + i, zi);
-    L::scatter(xi, yi, zi, L::loadu(radius + i), p);
+    L::scatter(vxi + hm * f[0], vyi + hm * f[1], vzi + hm * f[2], V{}, w);
+    const auto x = L::gather(p);
+    const V xi = sx * (x[0] + dt * vxi), yi = sy * (x[1] + dt * vyi), zi = sz * (x[2] + dt * vzi);
+    L::scatter(xi, yi, zi, x[3], p);
     const auto a = L::gather(r);
     const V ux = xi - rx * a[0], uy = yi - ry * a[1], uz = zi - rz * a[2];
     const V u2 = ux * ux + uy * uy + uz * uz, th = s_min * a[3];
@@ -725,14 +757,14 @@ void kick_drift(const KickDrift& k, std::size_t lo, std::size_t hi, double& e1_i
   for (; i < hi; ++i) {
     double v[3], x[3];
     const double hm = k.h * k.im[i];
+    const double* f = k.W + 8 * i + 4;
     for (int c = 0; c < 3; ++c) {
-      v[c] = k.v[c][i] + hm * k.f[c][i];
+      v[c] = k.v[c][i] + hm * f[c];
       k.v[c][i] = v[c];
-      k.W[8 * i + c] = v[c] + hm * k.f[c][i];
+      k.W[8 * i + c] = v[c] + hm * f[c];
     }
     for (int c = 0; c < 3; ++c) {
-      x[c] = k.s[c] * (k.x[c][i] + k.dt * v[c]);
-      k.x[c][i] = x[c];
+      x[c] = k.s[c] * (k.P[4 * i + c] + k.dt * v[c]);
       k.P[4 * i + c] = x[c];
     }
     const double* a = k.ref + 4 * i;
@@ -745,11 +777,12 @@ void kick_drift(const KickDrift& k, std::size_t lo, std::size_t hi, double& e1_i
 
 // Rows [lo, hi) finished from their accumulator records (a stride apart): out = the record's
 // sum, minus gamma times the damping record (the velocity) with kDamped, and, if half_kick != 0,
-// the closing half kick vel += half_kick inv out. Four rows at a time, their records transposed
-// into one vector per component, each lane the scalar arithmetic of the rest below (the same
-// bits; as scalar code the forces' finish was 7 % of a frictionless step).
+// the closing half kick vel += half_kick inv out. Without out (nullptr) the result replaces the
+// record's sum (lanes 0-2; the forces, which the step keeps there). Four rows at a time, their
+// records transposed into one vector per component, each lane the scalar arithmetic of the rest
+// below (the same bits; as scalar code the forces' finish was 7 % of a frictionless step).
 struct FinishRows {
-  const double* record;
+  double* record;
   std::size_t stride;
   const double* damping;
   double gamma;
@@ -760,13 +793,14 @@ struct FinishRows {
 
 template <bool kDamped>
 void finish_rows(const FinishRows& r, double half_kick, std::size_t lo, std::size_t hi) {
-  const double* __restrict R = r.record;
+  double* __restrict R = r.record;
   const double* __restrict D = r.damping;
   const std::size_t m = r.stride;
   const double gamma = r.gamma;
   double* __restrict ox = r.out[0];
   double* __restrict oy = r.out[1];
   double* __restrict oz = r.out[2];
+  const bool in_place = ox == nullptr;
   double* __restrict vx = r.vel[0];
   double* __restrict vy = r.vel[1];
   double* __restrict vz = r.vel[2];
@@ -778,9 +812,13 @@ void finish_rows(const FinishRows& r, double half_kick, std::size_t lo, std::siz
       const auto w = components(D + m * i, D + m * (i + 1), D + m * (i + 2), D + m * (i + 3));
       for (int c = 0; c < 3; ++c) f[c] = f[c] - gamma * w[c];
     }
-    storeu4(ox + i, f[0]);
-    storeu4(oy + i, f[1]);
-    storeu4(oz + i, f[2]);
+    if (in_place) {
+      records(f[0], f[1], f[2], f[3], R + m * i, R + m * (i + 1), R + m * (i + 2), R + m * (i + 3));
+    } else {
+      storeu4(ox + i, f[0]);
+      storeu4(oy + i, f[1]);
+      storeu4(oz + i, f[2]);
+    }
     if (half_kick != 0) {
       const V4 h = half_kick * loadu4(inv + i);
       storeu4(vx + i, loadu4(vx + i) + h * f[0]);
@@ -791,7 +829,10 @@ void finish_rows(const FinishRows& r, double half_kick, std::size_t lo, std::siz
   for (; i < hi; ++i) {
     V4 f = load4(R + m * i);
     if constexpr (kDamped) f = f - gamma * load4(D + m * i);
-    ox[i] = f[0], oy[i] = f[1], oz[i] = f[2];
+    if (in_place)
+      store4(R + m * i, f);
+    else
+      ox[i] = f[0], oy[i] = f[1], oz[i] = f[2];
     if (half_kick != 0) {
       const double h = half_kick * inv[i];
       vx[i] += h * f[0];
@@ -1102,7 +1143,7 @@ void DemSystem::forces_of_thread(std::size_t t, std::size_t T, double half_kick)
                                8,
                                W,
                                gamma_b,
-                               {p_.fx.data(), p_.fy.data(), p_.fz.data()},
+                               {nullptr, nullptr, nullptr},
                                {p_.vx.data(), p_.vy.data(), p_.vz.data()},
                                p_.inv_mass.data()},
                     half_kick, lo, hi);
@@ -1128,6 +1169,8 @@ void DemSystem::compute_forces(double half_kick, int team) {
 
 void DemSystem::refresh_forces() {
   const std::size_t n = p_.size();
+  sync_particles();
+  particles_ahead_ = false;
   pack_positions();
   if (va8_.size() < 8 * n) va8_.resize(8 * n, 0.0);
   for (std::size_t i = 0; i < n; ++i) {
@@ -1141,6 +1184,7 @@ void DemSystem::refresh_forces() {
   }
   advancing_ = false;  // the forces of the current state: the history stays
   compute_forces<true>(0.0, 1);
+  records_ahead_.ahead.store(true, std::memory_order_release);
 }
 
 void DemSystem::zero_velocities() {
@@ -1179,12 +1223,10 @@ void DemSystem::step_impl(const Eigen::Vector3d& D) {
   const Eigen::Vector3d sref = L.cwiseQuotient(list_.ref_lengths());
   if (blocks_builds_ != list_.builds()) make_blocks();
   // After make_blocks, which may grow the records.
-  const KickDrift kick{{p_.x.data(), p_.y.data(), p_.z.data()},
-                       {p_.vx.data(), p_.vy.data(), p_.vz.data()},
-                       {p_.fx.data(), p_.fy.data(), p_.fz.data()},
+  if (particles_ahead_) pack_particles();
+  const KickDrift kick{{p_.vx.data(), p_.vy.data(), p_.vz.data()},
                        p_.inv_mass.data(),
                        ref4_.data(),
-                       p_.radius.data(),
                        va8_.data(),
                        pos4_.data(),
                        h,
@@ -1206,6 +1248,8 @@ void DemSystem::step_impl(const Eigen::Vector3d& D) {
   if (tops_.size() < static_cast<std::size_t>(team)) tops_.resize(static_cast<std::size_t>(team));
   const std::size_t blocks = block_lo_.size() - 1;
   bool rebuild = false;
+  // From the kick on, p_'s positions and forces lag the records (a rebuild copies them first).
+  records_ahead_.ahead.store(true, std::memory_order_release);
 #pragma omp parallel num_threads(team) if (team > 1)
   {
     const std::size_t t = static_cast<std::size_t>(omp_get_thread_num());
@@ -1301,6 +1345,7 @@ bool DemSystem::held_at_limit(std::size_t i, std::size_t j, const Eigen::Vector3
 }
 
 std::vector<Contact> DemSystem::contacts() const {
+  sync_particles();
   const std::size_t n = p_.size();
   const Eigen::Vector3d L = cell_.lengths();
   const NormalContact law = options_.material.contact();
@@ -1404,6 +1449,7 @@ double rolling_energy(const std::vector<Contact>& contacts, const TangentialCont
 }  // namespace
 
 double DemSystem::elastic_energy() const {
+  sync_particles();
   // The sums of the contacts() records (in their order: normal and tangential springs per
   // contact, the rolling springs apart), taken from the list without building the records,
   // which cost half (frictionless) to three quarters (friction) of the call: relax() asks

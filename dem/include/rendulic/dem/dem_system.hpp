@@ -27,7 +27,9 @@
 #pragma once
 
 #include <Eigen/Dense>
+#include <atomic>
 #include <cstdint>
+#include <mutex>
 #include <new>
 #include <string>
 #include <vector>
@@ -115,8 +117,19 @@ class DemSystem {
   double sliding_dissipation() const { return sliding_dissipation_; }
   double volume_fraction() const { return solid_volume_ / volume(); }
 
-  const Particles& particles() const { return p_; }
-  Particles& mutable_particles() { return p_; }  // e.g. to set gas velocities; forces stale
+  // Positions and forces as of the last step (copied from the engine's records on demand):
+  // after another step, call it again rather than keep the reference.
+  const Particles& particles() const {
+    sync_particles();
+    return p_;
+  }
+  // E.g. to set gas velocities; forces stale. The next step or refresh takes its positions and
+  // forces from here.
+  Particles& mutable_particles() {
+    sync_particles();
+    particles_ahead_ = true;
+    return p_;
+  }
   const PeriodicCell& cell() const { return cell_; }
   // The cell's volume as the engine computes it: the product of its lengths, in the order of
   // operations that the stored runs were made with (cell().volume() is det h, which may differ
@@ -158,6 +171,13 @@ class DemSystem {
   void rebuild_list();
   // Copies positions and radii into the packed array the force loop gathers from.
   void pack_positions();
+  // A step keeps positions in pos4_ and forces in the force records only (p_'s are not
+  // written: the step's footprint, docs/performance.md "The step's footprint"); this copies
+  // them into p_ once after a step, for any reader. Under a lock: const readers may share a
+  // system across threads.
+  void sync_particles() const;
+  // After mutable_particles(): p_'s positions and forces into the records.
+  void pack_particles();
   void note_list_built();  // after every build: blocks, targets, packed positions
   void make_blocks();
   void reset_contacts_first();  // partner_first_ or entry_first_, and first_end_
@@ -212,6 +232,20 @@ class DemSystem {
   Eigen::Vector3d last_D_ = Eigen::Vector3d::Zero();
   Eigen::Vector3d last_stress_diag_ = Eigen::Vector3d::Zero();
   std::vector<double> stress_scratch_;  // per-particle diagonal stress (servo steps)
+  // p_'s positions and forces lag the records (a step or force evaluation since the last
+  // sync_particles), and p_ was handed out for editing (records to refresh from it).
+  struct Lag {
+    mutable std::mutex lock;
+    std::atomic<bool> ahead{false};
+    Lag() = default;
+    Lag(const Lag& o) : ahead(o.ahead.load()) {}
+    Lag& operator=(const Lag& o) {
+      ahead.store(o.ahead.load());
+      return *this;
+    }
+  };
+  mutable Lag records_ahead_;
+  bool particles_ahead_ = false;
   // The force loop gathers partner j's data at random: packed, one partner costs two cache
   // lines (position + radius; velocity + force accumulator) instead of ten separate arrays.
   AlignedVector pos4_;  // x, y, z, radius per particle, then the foreign slots
