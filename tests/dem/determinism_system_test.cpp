@@ -8,6 +8,8 @@
 #include <gtest/gtest.h>
 #include <omp.h>
 
+#include <cmath>
+
 #include "dem_helpers.hpp"
 
 namespace rendulic::dem {
@@ -106,6 +108,35 @@ TEST(Determinism, BothFormsOfThePairLoopGiveTheSameBits) {
     }
   omp_set_num_threads(saved);
   for (std::size_t r = 1; r < results.size(); ++r) EXPECT_EQ(results[0], results[r]) << r;
+}
+
+// A step keeps positions and forces in the engine's records and fills Particles' arrays only
+// when they are read (DemSystem::particles; docs/performance.md "The step's footprint"). Reading
+// them at every step (each copy followed by a step, some by a list rebuild), or handing them out
+// for editing without changing them, gives the trajectory of a run that never reads them, and
+// what is read after a step is what a saved state holds.
+TEST(Determinism, ReadingOrHandingOutTheParticlesBetweenStepsChangesNothing) {
+  const int saved = omp_get_max_threads();
+  omp_set_num_threads(1);
+  DemSystem a = gas();
+  drive(a, 0, 600);
+  DemSystem b = gas();
+  DemSystem c = gas();
+  double sum = 0;
+  for (int k = 0; k < 600; ++k) {
+    drive(b, k, k + 1);
+    sum += b.particles().x[static_cast<std::size_t>(k)] + b.particles().fx[0];
+    if (k % 7 == 0) {
+      EXPECT_EQ(flat(b.particles()), flat(b.save().particles));
+    }
+    drive(c, k, k + 1);
+    if (k % 50 == 0) c.mutable_particles();  // no edit: the next step packs the same values
+  }
+  omp_set_num_threads(saved);
+  EXPECT_TRUE(std::isfinite(sum));
+  EXPECT_GE(b.list_builds(), 5);
+  EXPECT_EQ(flat(a.particles()), flat(b.particles()));
+  EXPECT_EQ(flat(a.particles()), flat(c.particles()));
 }
 
 // The branchy loop visits each row's contacts first and keeps that order as contacts come and
