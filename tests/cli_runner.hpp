@@ -11,6 +11,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <sstream>
 #include <string>
 
@@ -21,6 +22,12 @@ struct CliResult {
   std::string out;  // stdout, and stderr too when merged
   std::string err;  // stderr when not merged
 };
+
+// A whole file's bytes ("" when it cannot be read).
+inline std::string read_file(const std::filesystem::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), {}};
+}
 
 // Runs a shell command line (e.g. `mpirun ... rendulic ...`); with merge_stderr its stderr
 // lands in `out`.
@@ -42,9 +49,7 @@ inline CliResult run_command(std::string cmd, bool merge_stderr = true) {
   const int status = pclose(p);
   r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   if (!err_file.empty()) {
-    std::stringstream ss;
-    ss << std::ifstream(err_file).rdbuf();
-    r.err = ss.str();
+    r.err = read_file(err_file);
     std::filesystem::remove(err_file);
   }
   return r;

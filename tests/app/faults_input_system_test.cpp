@@ -26,6 +26,7 @@
 namespace {
 namespace fs = std::filesystem;
 using rendulic::testing::CliResult;
+using rendulic::testing::read_file;
 
 fs::path fresh_dir(const std::string& name) {
   return rendulic::testing::fresh_dir("app_faults/" + name);
@@ -34,11 +35,6 @@ fs::path fresh_dir(const std::string& name) {
 fs::path write_file(const fs::path& p, const std::string& text) {
   std::ofstream(p, std::ios::binary) << text;
   return p;
-}
-
-std::string read_file(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), {}};
 }
 
 int lines(const std::string& s) { return static_cast<int>(std::count(s.begin(), s.end(), '\n')); }

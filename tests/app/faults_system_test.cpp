@@ -34,14 +34,10 @@
 namespace {
 namespace fs = std::filesystem;
 using rendulic::testing::CliResult;
+using rendulic::testing::read_file;
 using rendulic::testing::temporaries;
 
 const fs::path kRoot = fs::path(RENDULIC_TEST_TMP) / "app_faults_system";
-
-std::string read_file(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), {}};
-}
 
 fs::path fresh_dir(const std::string& name) {
   return rendulic::testing::fresh_dir("app_faults_system/" + name);

@@ -6,8 +6,6 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
-#include <fstream>
-#include <sstream>
 #include <string>
 
 #include "cli_runner.hpp"
@@ -16,6 +14,7 @@
 namespace fs = std::filesystem;
 using rendulic::testing::CliResult;
 using rendulic::testing::fresh_dir;
+using rendulic::testing::read_file;
 using rendulic::testing::run_command;
 using rendulic::testing::tiny_scenario;
 
@@ -32,12 +31,6 @@ int count(const std::string& text, const std::string& what) {
   int n = 0;
   for (auto at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
   return n;
-}
-
-std::string read_file(const fs::path& p) {
-  std::stringstream ss;
-  ss << std::ifstream(p).rdbuf();
-  return ss.str();
 }
 
 // How many processes have `what` in their command line (/proc/PID/cmdline, arguments separated
@@ -109,7 +102,7 @@ TEST(StageThreads, RefusesAWrongArgumentOrAFailingRunInOneLine) {
   refused(stage_threads("--scenario " + (dir / "none.toml").string(), true), "none.toml");
   refused(stage_threads("--scenario " + scenario.string() + " --rounds 0", true), "--rounds");
   refused(stage_threads("--scenario " + scenario.string() + " --roundz 2", true), "--roundz");
-  // The binary's own refusal of a stage it does not know, passed on; no run left behind.
+  // The binary's own refusal of a stage it does not know, passed on.
   refused(stage_threads("--scenario " + scenario.string() + " --stages prepare,isotropc --out " +
                             (dir / "runs").string(),
                         true),
