@@ -30,7 +30,7 @@ import h5py
 
 DEM_STAGES = ["prepare", "isotropic", "path", "states"]
 LOADED_BOUND = 1.25  # issue #13: default at most this much slower than one thread, loaded
-IDLE_GAIN = 1.5  # issue #13: the stages' sum at least this much faster idle, default
+IDLE_GAIN = 1.5  # issue #13: the DEM stages together at least this much faster idle, default
 SHORT = 1.0  # seconds: below this a stage's ratio is mostly scheduling noise
 
 
@@ -78,6 +78,11 @@ def run_once(rendulic, scenario, stages, sets, threads, out):
         text = f.attrs["scenario"]
         order = tomllib.loads(text.decode() if isinstance(text, bytes) else text)["run"]["stages"]
     return {s: t[s] for s in order if s in t}, wall
+
+
+def summed(runs, stages):
+    """Per run, the seconds of `stages` together."""
+    return [sum(t[s] for s in stages) for t in runs]
 
 
 class Parser(argparse.ArgumentParser):
@@ -148,15 +153,8 @@ def main():
             names = [s for s in stages if s in names]
         print(f"\n{c}: wall seconds per stage, median over {a.rounds} round(s)")
         print(f"{'stage':16} {'default':>9} {'one':>9} {'ratio median':>13} {'ratio max':>10}")
-        sums = {0: [], 1: []}
-        for th in (0, 1):
-            sums[th] = [sum(t[s] for s in names) for t in times[c][th]]
         for s in names + ["(sum)"]:
-            if s == "(sum)":
-                d, o = sums[0], sums[1]
-            else:
-                d = [t[s] for t in times[c][0]]
-                o = [t[s] for t in times[c][1]]
+            d, o = (summed(times[c][th], names if s == "(sum)" else [s]) for th in (0, 1))
             ratios = [x / y for x, y in zip(d, o) if y > 0]
             row = {
                 "condition": c,
@@ -189,8 +187,7 @@ def main():
         else:
             # The criterion is about the DEM stages; without any of them, the stages measured.
             dem = [s for s in names if s in DEM_STAGES] or names
-            d = [sum(t[s] for s in dem) for t in times[c][0]]
-            o = [sum(t[s] for s in dem) for t in times[c][1]]
+            d, o = (summed(times[c][th], dem) for th in (0, 1))
             gain = statistics.median([y / x for x, y in zip(d, o) if x > 0])
             ok = gain >= IDLE_GAIN
             verdicts.append(
