@@ -57,10 +57,9 @@ models::MaterialState state_for(const models::Law& law, const std::string& state
 
 models::StepOptions step_options_for(const std::string& scheme, double tolerance, int substeps) {
   models::StepOptions step;
-  if (scheme != "modified-euler" && scheme != "explicit")
-    throw InputError("--scheme: unknown scheme '" + scheme + "' (known: modified-euler, explicit)");
-  step.scheme =
-      scheme == "explicit" ? models::Scheme::kExplicitEuler : models::Scheme::kModifiedEuler;
+  if (!models::scheme_from_name(scheme, &step.scheme))
+    throw InputError("--scheme: unknown scheme '" + scheme +
+                     "' (known: modified-euler, explicit, bogacki-shampine, auto)");
   step.tolerance = tolerance;
   step.fixed_substeps = substeps;
   return step;
@@ -161,9 +160,12 @@ Subcommand add_envelope(CLI::App& parent) {
       ->check(CLI::IsMember({"integrated", "rate"}))
       ->capture_default_str();
   sub->add_option("--scheme", opts->scheme,
-                  "modified-euler (error controlled) or explicit (fixed substeps; reports when "
-                  "its error estimate exceeds the tolerance)")
-      ->check(CLI::IsMember({"modified-euler", "explicit"}))
+                  "modified-euler or bogacki-shampine (error controlled; the third-order "
+                  "bogacki-shampine takes 5-10x fewer rate evaluations on a law without a yield "
+                  "surface), auto (bogacki-shampine without a yield surface, modified-euler with "
+                  "one) or explicit (fixed substeps; reports when its error estimate exceeds the "
+                  "tolerance)")
+      ->check(CLI::IsMember({"modified-euler", "explicit", "bogacki-shampine", "auto"}))
       ->capture_default_str();
   sub->add_option("--tolerance", opts->tolerance, "Local relative error tolerance per substep")
       ->capture_default_str();

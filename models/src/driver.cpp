@@ -1,6 +1,6 @@
-// Material-point driver: modified Euler with error control, the plain explicit scheme with an
-// error report, and mixed strain/stress control (docs/models.md "Material-point driver"; see
-// driver.hpp for the schemes and their sources).
+// Material-point driver: modified Euler or Bogacki-Shampine 3(2) with error control, the plain
+// explicit scheme with an error report, and mixed strain/stress control (docs/models.md
+// "Material-point driver"; see driver.hpp for the schemes and their sources).
 #include "rendulic/models/driver.hpp"
 
 #include <algorithm>
@@ -105,6 +105,15 @@ StepResult integrate_fixed(const Law& law, const MaterialState& start, const Eig
 
 }  // namespace
 
+bool scheme_from_name(const std::string& name, Scheme* scheme) {
+  for (std::size_t k = 0; k < kSchemeNames.size(); ++k)
+    if (name == kSchemeNames[k]) {
+      *scheme = static_cast<Scheme>(k);
+      return true;
+    }
+  return false;
+}
+
 bool StepOptions::IsValid(std::string* why) const {
   auto fail = [&](const std::string& m) {
     if (why) *why = m;
@@ -115,6 +124,9 @@ bool StepOptions::IsValid(std::string* why) const {
   if (max_substeps < 1) return fail("max_substeps must be >= 1");
   if (!(min_fraction > 0.0 && min_fraction < 1.0)) return fail("min_fraction must be in (0, 1)");
   if (!(stress_floor > 0.0)) return fail("stress_floor must be > 0");
+  if ((scheme == Scheme::kBogackiShampine || scheme == Scheme::kAuto) && !adaptive)
+    return fail(std::string("scheme ") + kSchemeNames[static_cast<int>(scheme)] +
+                " is adaptive only (fixed substeps: modified or explicit Euler)");
   return true;
 }
 

@@ -359,7 +359,8 @@ StepResult UmatLaw::integrate(const UmatState& start, const Eigen::Matrix3d& d_e
   // Step doubling (adaptive): one increment h against two of h/2; their difference in stress is
   // the error estimate, and the two halves are kept with their stress extrapolated. Otherwise
   // `fixed_substeps` increments, one call each.
-  const bool doubling = o.adaptive && o.scheme == Scheme::kModifiedEuler;
+  // A UMAT gives no rate to build stages from: every adaptive scheme is step doubling here.
+  const bool doubling = o.adaptive && o.scheme != Scheme::kExplicitEuler;
   UmatState y = start;
   if (schedule && schedule->replay) {
     int kinc = 0;

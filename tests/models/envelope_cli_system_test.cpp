@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -123,6 +124,32 @@ TEST(EnvelopeCli, ExplicitSchemeSaysWhenItExceedsTheTolerance) {
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_NE(r.err.find("exceeded the tolerance"), std::string::npos) << r.err;
   EXPECT_NE(r.out.find("\"within_tolerance\": false"), std::string::npos);
+}
+
+// The third-order scheme through the CLI: on the sand (no yield surface) its 2e-3 envelope agrees
+// with modified Euler's to the tolerance's order (each within ~1e-6 of the exact response), and
+// auto picks it there (the same numbers).
+TEST(EnvelopeCli, BogackiShampineAgreesWithModifiedEulerAndAutoPicksIt) {
+  const std::string base = "envelope --model hypoplastic_wu --params " +
+                           data("hypoplastic_wu_params.toml") + " --state " +
+                           data("sand_state.toml") + " --amplitude 2e-3 --directions 12 --json";
+  std::vector<std::vector<double>> stress;
+  for (const char* scheme : {"modified-euler", "bogacki-shampine", "auto"}) {
+    const CliRun r = rendulic(base + " --scheme " + scheme);
+    ASSERT_EQ(r.code, 0) << scheme << ": " << r.err;
+    stress.push_back(numbers_of(r.out, "stress"));
+    ASSERT_EQ(stress.back().size(), 24u) << scheme;
+  }
+  double scale = 0;
+  for (double x : stress[0]) scale = std::max(scale, std::abs(x));
+  for (std::size_t k = 0; k < 24; ++k) {
+    EXPECT_NEAR(stress[1][k], stress[0][k], 1e-5 * scale) << k;
+    EXPECT_EQ(stress[2][k], stress[1][k]) << k;
+  }
+  // A scheme that does not exist is refused by name (exit 2, one line).
+  const CliRun bad = rendulic(base + " --scheme rk4");
+  EXPECT_EQ(bad.code, 2) << bad.err;
+  EXPECT_NE(bad.err.find("rk4"), std::string::npos) << bad.err;
 }
 
 void expect_input_error(const std::string& args, const std::vector<std::string>& mentions) {

@@ -1,8 +1,8 @@
-// The adaptive modified-Euler integrator of driver.hpp written once for any scalar type, so
-// that the same substeps that integrate a law in double precision also carry derivatives with
-// respect to its parameters when the scalar is an automatic-differentiation type (Ceres Jets;
-// docs/models.md "Exact derivatives through the driver"). Every control decision (substep
-// size, acceptance, the event location where an elastic substep meets the yield surface,
+// The adaptive integrators of driver.hpp (modified Euler, Bogacki-Shampine 3(2)) written once for
+// any scalar type, so that the same substeps that integrate a law in double precision also carry
+// derivatives with respect to its parameters when the scalar is an automatic-differentiation type
+// (Ceres Jets; docs/models.md "Exact derivatives through the driver"). Every control decision
+// (substep size, acceptance, the event location where an elastic substep meets the yield surface,
 // loading or unloading) is taken on the values only, so the derivative is that of the
 // integrator with its accepted substeps frozen; the one step whose length depends smoothly on
 // the parameters, the one that ends on the yield surface, gets its derivative from the implicit
@@ -22,6 +22,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <initializer_list>
 #include <limits>
 #include <sstream>
 #include <string>
@@ -109,15 +110,25 @@ StateT<T> advance_heun(const StateT<T>& s, const RateT<T>& r1, const RateT<T>& r
   return o;
 }
 
-// Local error estimate |y_heun - y_euler| = |r2 - r1| / 2, relative for stress and fabric,
-// absolute for the (dimensionless) internal variables; the worst block counts.
+// The local error of a difference d = y_high - y_low of the two solutions of an embedded
+// pair: relative for stress and fabric, absolute for the (dimensionless) internal variables;
+// the worst block counts.
+inline double difference_error(const LawRate& d, const MaterialState& y, double stress_floor) {
+  const double e_s = d.d_stress.norm() / std::max(y.stress.norm(), stress_floor);
+  const double e_f = d.d_fabric.norm() / std::max(y.fabric.norm(), 1e-12);
+  const double e_q = d.d_internal.lpNorm<Eigen::Infinity>();
+  return std::max({e_s, e_f, e_q});
+}
+
+// Modified Euler's: |y_heun - y_euler| = |r2 - r1| / 2 (the halving is exact, so this is the
+// same number as halving the norms).
 inline double error_estimate(const LawRate& r1, const LawRate& r2, const MaterialState& y,
                              double stress_floor) {
-  const double e_s =
-      0.5 * (r2.d_stress - r1.d_stress).norm() / std::max(y.stress.norm(), stress_floor);
-  const double e_f = 0.5 * (r2.d_fabric - r1.d_fabric).norm() / std::max(y.fabric.norm(), 1e-12);
-  const double e_q = 0.5 * (r2.d_internal - r1.d_internal).lpNorm<Eigen::Infinity>();
-  return std::max({e_s, e_f, e_q});
+  LawRate d;
+  d.d_stress = 0.5 * (r2.d_stress - r1.d_stress);
+  d.d_fabric = 0.5 * (r2.d_fabric - r1.d_fabric);
+  d.d_internal = 0.5 * (r2.d_internal - r1.d_internal);
+  return difference_error(d, y, stress_floor);
 }
 
 inline std::string fmt(double v) {
@@ -163,10 +174,75 @@ Trial<T> heun_trial(const StateT<T>& y, const Mat3<T>& de, double stress_floor, 
   return tr;
 }
 
+// y + sum_k a_k r_k over the stages given (a zero coefficient skips its rate), the volume
+// fraction following the kinematics over the stage's strain, whose trace is tr_de.
+template <typename T>
+StateT<T> advance_stages(const StateT<T>& s, std::initializer_list<double> a,
+                         std::initializer_list<const RateT<T>*> r, const T& tr_de) {
+  using std::exp;
+  StateT<T> o = s;
+  auto ri = r.begin();
+  for (double ak : a) {
+    const RateT<T>& rk = **ri++;
+    if (ak == 0.0) continue;
+    o.stress += T(ak) * rk.d_stress;
+    o.fabric += T(ak) * rk.d_fabric;
+    o.internal += T(ak) * rk.d_internal;
+  }
+  o.volume_fraction = s.volume_fraction * exp(tr_de);
+  return o;
+}
+
+// One Bogacki-Shampine 3(2) trial over de from y (Bogacki and Shampine 1989): three stages give
+// the third-order end point, a fourth rate there the embedded second-order one; their
+// difference is the local error estimate, of third order where Heun's is of second. The stage
+// states of a plastic step are corrected onto the surface as Heun's predictor is.
+template <typename T, class RateF, class CorrectF, class AdmissibleF>
+Trial<T> bs32_trial(const StateT<T>& y, const Mat3<T>& de, double stress_floor, const RateF& rate,
+                    const CorrectF& correct, const AdmissibleF& admissible, int* evaluations) {
+  Trial<T> tr;
+  const T tr_de = de.trace();
+  const auto stage = [&](const StateT<T>& ys, RateT<T>* r) {
+    if (!admissible(value_state(ys))) return false;
+    *r = rate(ys, de);
+    ++*evaluations;
+    return finite(value_rate(*r));
+  };
+  RateT<T> r1, r2, r3, r4;
+  if (!stage(y, &r1)) return tr;
+  const bool plastic = r1.plastic;
+  StateT<T> y2 = advance_stages<T>(y, {0.5}, {&r1}, T(0.5) * tr_de);
+  correct(&y2, plastic);
+  if (!stage(y2, &r2)) return tr;
+  StateT<T> y3 = advance_stages<T>(y, {0.0, 0.75}, {&r1, &r2}, T(0.75) * tr_de);
+  correct(&y3, plastic);
+  if (!stage(y3, &r3)) return tr;
+  tr.yh = advance_stages<T>(y, {2.0 / 9.0, 1.0 / 3.0, 4.0 / 9.0}, {&r1, &r2, &r3}, tr_de);
+  StateT<T> y4 = tr.yh;
+  correct(&y4, plastic);
+  if (!stage(y4, &r4)) return tr;
+  // y3 - y2 = -5/72 r1 + 1/12 r2 + 1/9 r3 - 1/8 r4.
+  const LawRate v1 = value_rate(r1), v2 = value_rate(r2), v3 = value_rate(r3), v4 = value_rate(r4);
+  LawRate d;
+  d.d_stress = -5.0 / 72.0 * v1.d_stress + 1.0 / 12.0 * v2.d_stress + 1.0 / 9.0 * v3.d_stress -
+               0.125 * v4.d_stress;
+  d.d_fabric = -5.0 / 72.0 * v1.d_fabric + 1.0 / 12.0 * v2.d_fabric + 1.0 / 9.0 * v3.d_fabric -
+               0.125 * v4.d_fabric;
+  d.d_internal = -5.0 / 72.0 * v1.d_internal + 1.0 / 12.0 * v2.d_internal +
+                 1.0 / 9.0 * v3.d_internal - 0.125 * v4.d_internal;
+  const MaterialState vh = value_state(tr.yh);
+  tr.ok = admissible(vh);
+  tr.plastic = plastic;
+  tr.err = difference_error(d, vh, stress_floor);
+  tr.ok = tr.ok && std::isfinite(tr.err);
+  return tr;
+}
+
 }  // namespace driver_detail
 
-// Modified Euler with error control over the increment d_eps (docs/models.md "Material-point
-// driver"). See the file comment for what is differentiated.
+// Modified Euler or Bogacki-Shampine 3(2) (o.scheme; kAuto picks by the law) with error control
+// over the increment d_eps (docs/models.md "Material-point driver"). See the file comment for what
+// is differentiated.
 template <class Ops>
 StepResultT<typename Ops::Scalar> integrate_adaptive(const Ops& law,
                                                      const StateT<typename Ops::Scalar>& start,
@@ -189,15 +265,30 @@ StepResultT<typename Ops::Scalar> integrate_adaptive(const Ops& law,
     return law.value_rate(s, de);
   };
   const auto vcorrect = [&](MaterialState* s, bool on) { law.value_correct(s, on); };
+  // kAuto: the third-order pair where the law is smooth (no yield surface to locate), modified
+  // Euler across a surface, where the third order buys nothing (docs/models.md "Tolerance").
+  const bool third = o.scheme == Scheme::kBogackiShampine ||
+                     (o.scheme == Scheme::kAuto && law.value_yield_function(value_state(start)) ==
+                                                       -std::numeric_limits<double>::infinity());
   // Value-only trial over the fraction h of the increment (event location, on doubles).
   const auto value_trial = [&](const MaterialState& yv, double h) {
-    return driver_detail::heun_trial<double>(yv, Eigen::Matrix3d(h * d_eps), o.stress_floor, vrate,
-                                             vcorrect, admissible, &res.rate_evaluations);
+    const Eigen::Matrix3d de = h * d_eps;
+    return third ? driver_detail::bs32_trial<double>(yv, de, o.stress_floor, vrate, vcorrect,
+                                                     admissible, &res.rate_evaluations)
+                 : driver_detail::heun_trial<double>(yv, de, o.stress_floor, vrate, vcorrect,
+                                                     admissible, &res.rate_evaluations);
   };
   // The trial over the (possibly parameter-dependent) fraction h.
   const auto trial = [&](const T& h) {
-    return driver_detail::heun_trial<T>(y, Mat3<T>(h * d_eps_t), o.stress_floor, rate, correct,
-                                        admissible, &res.rate_evaluations);
+    const Mat3<T> de = h * d_eps_t;
+    return third ? driver_detail::bs32_trial<T>(y, de, o.stress_floor, rate, correct, admissible,
+                                                &res.rate_evaluations)
+                 : driver_detail::heun_trial<T>(y, de, o.stress_floor, rate, correct, admissible,
+                                                &res.rate_evaluations);
+  };
+  // Sloan's factor q = 0.9 (TOL/R)^(1/p), p the order of the local error estimate.
+  const auto factor = [&](double err) {
+    return third ? 0.9 * std::cbrt(o.tolerance / err) : 0.9 * std::sqrt(o.tolerance / err);
   };
   while (value_of(t) < 1.0) {
     if (res.substeps + res.rejected >= o.max_substeps) {
@@ -278,8 +369,8 @@ StepResultT<typename Ops::Scalar> integrate_adaptive(const Ops& law,
     const bool ok = tr.ok;
     const double err = tr.err;
     if (!ok || err > o.tolerance) {
-      // Sloan's factor q = 0.9 sqrt(TOL/R) (second-order local error), never below 0.1.
-      const double q = ok ? std::max(0.9 * std::sqrt(o.tolerance / err), 0.1) : 0.1;
+      // Sloan's factor (above), never below 0.1.
+      const double q = ok ? std::max(factor(err), 0.1) : 0.1;
       dt = value_of(h) * q;
       ++res.rejected;
       rejected_last = true;
@@ -291,7 +382,7 @@ StepResultT<typename Ops::Scalar> integrate_adaptive(const Ops& law,
     dt = value_of(h);
     ++res.substeps;
     res.error_estimate = std::max(res.error_estimate, err);
-    double q = err > 0.0 ? 0.9 * std::sqrt(o.tolerance / err) : 2.0;
+    double q = err > 0.0 ? factor(err) : 2.0;
     q = std::min(q, rejected_last ? 1.0 : 2.0);  // no growth right after a rejection
     rejected_last = false;
     dt = q * dt;
