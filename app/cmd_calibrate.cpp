@@ -218,6 +218,8 @@ Subcommand add_calibrate(CLI::App& parent) {
                  keys.key("calibration.function_tolerance"));
   add_key_option(sub, "--driver-tolerance", args->settings.driver_tolerance,
                  keys.key("calibration.driver_tolerance"));
+  add_key_option(sub, "--driver-scheme", args->settings.driver_scheme,
+                 keys.key("calibration.driver_scheme"));
   add_key_option(sub, "--max-substeps", args->settings.max_substeps,
                  keys.key("calibration.max_substeps"));
   sub->add_flag("--progress", args->progress, "Print Ceres's iterations (cost, step) to stdout");

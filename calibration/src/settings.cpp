@@ -71,6 +71,14 @@ const OptionTable<CalibrationSettings>& calibration_option_table() {
              .min = 1e-10,
              .max = 1e-2},
             [](CalibrationSettings& s) -> double& { return s.driver_tolerance; }},
+        Row{{.path = "calibration.driver_scheme",
+             .unit = "-",
+             .help = "Scheme of the integrated predictions: auto (the third-order "
+                     "bogacki-shampine for a law without a yield surface, modified-euler for one "
+                     "with it), modified-euler or bogacki-shampine for every law "
+                     "(docs/calibration.md 'Predictions and derivatives').",
+             .choices = {"auto", "modified-euler", "bogacki-shampine"}},
+            [](CalibrationSettings& s) -> std::string& { return s.driver_scheme; }},
         Row{{.path = "calibration.max_substeps",
              .unit = "-",
              .help = "Most driver substeps of one integrated prediction during a fit; a trial "
@@ -134,6 +142,8 @@ CalibrationPlan calibration_plan(const CalibrationSettings& s) {
   opt.objective.path = s.path;
   opt.objective.envelope_features = s.features;
   opt.objective.step.tolerance = s.driver_tolerance;
+  // The key's choices are names of kSchemeNames (IsValid above).
+  models::scheme_from_name(s.driver_scheme, &opt.objective.step.scheme);
   opt.objective.step.max_substeps = s.max_substeps;
   p.load.states = s.states;
   // Held-out states are predicted, so their data must be loaded too.

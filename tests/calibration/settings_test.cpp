@@ -22,6 +22,9 @@ TEST(CalibrationSettings, KeysCarryTheStructsDefaults) {
   EXPECT_EQ(s.function_tolerance, kDemFunctionTolerance);
   EXPECT_EQ(s.driver_tolerance, 1e-6);  // the driver's own default (docs/models.md "Tolerance")
   EXPECT_EQ(s.max_substeps, ObjectiveOptions{}.step.max_substeps);
+  // The third-order pair where a law has no yield surface (docs/calibration.md).
+  EXPECT_EQ(s.driver_scheme, "auto");
+  EXPECT_EQ(calibration_plan(s).options.objective.step.scheme, models::Scheme::kAuto);
   EXPECT_EQ(std::get<double>(schema.find("calibration.function_tolerance")->default_value),
             kDemFunctionTolerance);
 }
@@ -38,6 +41,9 @@ TEST(CalibrationSettings, PlanTranslatesOnce) {
   CalibrationPlan p = calibration_plan(s);
   EXPECT_EQ(p.options.objective.step.tolerance, 1e-4);
   EXPECT_EQ(p.options.objective.step.max_substeps, 5000);
+  s.driver_scheme = "bogacki-shampine";
+  EXPECT_EQ(calibration_plan(s).options.objective.step.scheme, models::Scheme::kBogackiShampine);
+  s.driver_scheme = "auto";
   EXPECT_EQ(p.models, models::law_names());
   EXPECT_TRUE(p.options.holdout.empty());
   EXPECT_FALSE(p.options.objective.path);
@@ -73,6 +79,18 @@ TEST(CalibrationSettings, OutOfRangeIsRefusedNamingTheKey) {
   s = {};
   s.max_substeps = 1;
   EXPECT_THROW(calibration_plan(s), InputError);
+  // Only the adaptive schemes: explicit Euler's one fixed substep would fit nothing well.
+  for (const char* bad : {"explicit", "rk4"}) {
+    s = {};
+    s.driver_scheme = bad;
+    try {
+      calibration_plan(s);
+      FAIL() << "accepted the driver scheme " << bad;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("calibration.driver_scheme"), std::string::npos)
+          << e.what();
+    }
+  }
 }
 
 }  // namespace

@@ -27,6 +27,9 @@ struct CalibrationSettings {
   bool features = false;  // the envelope-feature objective
   // Local relative error of the driver's substeps in the integrated predictions.
   double driver_tolerance = ObjectiveOptions{}.step.tolerance;
+  // The driver's scheme there (a name of models::kSchemeNames, adaptive ones only).
+  std::string driver_scheme =
+      models::kSchemeNames[static_cast<int>(ObjectiveOptions{}.step.scheme)];
   // Most substeps of one integrated prediction during a fit (ObjectiveOptions::step).
   int max_substeps = ObjectiveOptions{}.step.max_substeps;
   std::string umat, umat_params;  // model umat: the UMAT's library and parameters file
