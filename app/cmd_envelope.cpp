@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "commands.hpp"
 #include "rendulic/core/errors.hpp"
@@ -57,9 +58,12 @@ models::MaterialState state_for(const models::Law& law, const std::string& state
 
 models::StepOptions step_options_for(const std::string& scheme, double tolerance, int substeps) {
   models::StepOptions step;
-  if (!models::scheme_from_name(scheme, &step.scheme))
-    throw InputError("--scheme: unknown scheme '" + scheme +
-                     "' (known: modified-euler, explicit, bogacki-shampine, auto)");
+  if (!models::scheme_from_name(scheme, &step.scheme)) {
+    std::string names;
+    for (const char* n : models::kSchemeNames)
+      names += (names.empty() ? "" : ", ") + std::string(n);
+    throw InputError("--scheme: unknown scheme '" + scheme + "' (known: " + names + ")");
+  }
   step.tolerance = tolerance;
   step.fixed_substeps = substeps;
   return step;
@@ -165,7 +169,8 @@ Subcommand add_envelope(CLI::App& parent) {
                   "surface), auto (bogacki-shampine without a yield surface, modified-euler with "
                   "one) or explicit (fixed substeps; reports when its error estimate exceeds the "
                   "tolerance)")
-      ->check(CLI::IsMember({"modified-euler", "explicit", "bogacki-shampine", "auto"}))
+      ->check(CLI::IsMember(
+          std::vector<std::string>(models::kSchemeNames.begin(), models::kSchemeNames.end())))
       ->capture_default_str();
   sub->add_option("--tolerance", opts->tolerance, "Local relative error tolerance per substep")
       ->capture_default_str();
