@@ -315,18 +315,33 @@ CalibrationSummary calibrate(const CalibrationData& data, const CalibrationOptio
                            "the elasto-plastic envelopes are outside what it can describe)");
   if (!out.fit.converged)
     out.warnings.push_back("the optimiser did not report convergence: " + out.fit.report);
+  out.evaluations = objective.tally();
   if (out.fit.params.size() == out.param_names.size() && objective.integrated()) {
     // Where a prediction at the optimum needs most of the substeps a fit allows, trial points
     // beyond may have failed on that limit alone, and the fit stopped there rather than where
     // the data put it (docs/calibration.md "When to stop").
     const DriverLoad load = objective.driver_load(out.fit.params);
-    if (load.substeps > 0 && load.substeps >= kNearSubstepLimit * load.limit)
+    const EvaluationTally& tally = out.evaluations;
+    if (load.substeps > 0 && load.substeps >= kNearSubstepLimit * load.limit) {
       out.warnings.push_back(
           "at the optimum, " + load.where + " needs " + std::to_string(load.substeps) + " of the " +
           std::to_string(load.limit) +
           " driver substeps a prediction may take (calibration.max_substeps): trial points that "
           "need more count as failed, so the fit may have stopped on that limit rather than at "
           "the data's optimum");
+    } else if (tally.failed_on_limit > 0) {
+      // The optimum is well inside the limit, but trial points on the way failed on it alone:
+      // the optimiser took them for an infinite cost and went elsewhere, which can keep a fit
+      // out of a better basin (quick.toml's hypoplastic_wu under modified Euler did, silently).
+      out.warnings.push_back(
+          std::to_string(tally.failed_on_limit) + " of the fit's " +
+          std::to_string(tally.evaluations) +
+          " evaluations failed because a prediction needed more than the " +
+          std::to_string(load.limit) +
+          " driver substeps it may take (calibration.max_substeps): the optimiser counted those "
+          "trial points as an infinite cost, so a larger calibration.max_substeps may find a "
+          "lower one");
+    }
   }
 
   // The fit's substep budget fails stiff probes fast (what the optimiser needs); the misfits at

@@ -173,6 +173,8 @@ struct KernelBase {
 };
 
 struct Objective::Impl {
+  Impl(std::string law, ParameterSpace sp, const ObjectiveOptions& o)
+      : law_name(std::move(law)), space(std::move(sp)), options(o) {}
   std::string law_name;
   ParameterSpace space;
   ObjectiveOptions options;
@@ -184,6 +186,16 @@ struct Objective::Impl {
   int n_residuals = 0;
   bool any_integrated = false;
   std::unique_ptr<KernelBase> kernel;
+  // Every evaluation (values, or values and Jacobian) since construction, the failed ones, and
+  // those failed because a prediction needed more driver substeps than options.step allows
+  // (Objective::tally).
+  mutable std::atomic<long> evaluations{0}, failed{0}, failed_on_limit{0};
+  bool count(bool ok, const std::atomic<bool>& on_limit) const {
+    ++evaluations;
+    if (!ok) ++failed;
+    if (!ok && on_limit) ++failed_on_limit;
+    return ok;
+  }
 };
 
 namespace {
@@ -205,36 +217,39 @@ class Kernel final : public KernelBase {
   // Residuals for any scalar: double for values, Jets for the exact Jacobian (integrated
   // predictions go through the driver with Jets, driver_core.hpp). Ceres's evaluations cut
   // these into parts that may take a second thread (JetCost below).
+  // `on_limit` is set where a prediction fails on the driver's substep limit.
   template <typename T>
-  bool eval(const T* z, T* r) const {
+  bool eval(const T* z, T* r, std::atomic<bool>* on_limit) const {
     T p[M::kCount];
     o_->space.full(z, p);
     double pd[M::kCount];
     for (int i = 0; i < M::kCount; ++i) pd[i] = value_of(p[i]);
-    if (o_->path_task.active && !path_residuals<T>(p, pd, r)) return false;
+    if (o_->path_task.active && !path_residuals<T>(p, pd, r, on_limit)) return false;
     for (int t = 0; t < static_cast<int>(o_->tasks.size()); ++t)
-      if (!task_residuals<T>(t, p, pd, r)) return false;
+      if (!task_residuals<T>(t, p, pd, r, on_limit)) return false;
     return all_finite(r, o_->n_residuals);
   }
 
   // One part of the residuals: the path's (part -1) or envelope task `part`'s. The parts are
   // independent, and each computes as it does inside eval(): the same bits.
   template <typename T>
-  bool eval_part(const T* z, T* r, int part) const {
+  bool eval_part(const T* z, T* r, int part, std::atomic<bool>* on_limit) const {
     T p[M::kCount];
     o_->space.full(z, p);
     double pd[M::kCount];
     for (int i = 0; i < M::kCount; ++i) pd[i] = value_of(p[i]);
-    return part < 0 ? path_residuals<T>(p, pd, r) : task_residuals<T>(part, p, pd, r);
+    return part < 0 ? path_residuals<T>(p, pd, r, on_limit)
+                    : task_residuals<T>(part, p, pd, r, on_limit);
   }
 
   // Residuals of one envelope task.
   template <typename T>
-  bool task_residuals(int index, const T* p, const double* pd, T* r) const {
+  bool task_residuals(int index, const T* p, const double* pd, T* r,
+                      std::atomic<bool>* on_limit) const {
     const EnvTask& t = o_->tasks[static_cast<std::size_t>(index)];
     std::vector<Eigen::Matrix<T, 2, 1>> ps, pf;
     const StateData& s = o_->states[t.state];
-    if (!predict<T>(p, pd, s, t.env, t.integrated, &ps, &pf)) return false;
+    if (!predict<T>(p, pd, s, t.env, t.integrated, &ps, &pf, nullptr, on_limit)) return false;
     const int m = t.env.size();
     if (t.stress_offset >= 0)
       for (int i = 0; i < m; ++i)
@@ -262,11 +277,15 @@ class Kernel final : public KernelBase {
     return true;
   }
 
-  bool residuals(const double* z, double* r) const override { return eval<double>(z, r); }
+  bool residuals(const double* z, double* r) const override {
+    std::atomic<bool> on_limit{false};
+    return o_->count(eval<double>(z, r, &on_limit), on_limit);
+  }
 
+  // Central differences: each of the 2p + 1 evaluations of a Jacobian counts as one.
   struct NumericFunctor {
     const Kernel* k;
-    bool operator()(double const* const* z, double* r) const { return k->eval<double>(z[0], r); }
+    bool operator()(double const* const* z, double* r) const { return k->residuals(z[0], r); }
   };
 
   // The exact Jacobian by forward-mode Jets of 4 derivatives: the residuals evaluated once per
@@ -290,12 +309,16 @@ class Kernel final : public KernelBase {
       const int n = k_->o_->space.size(), m = k_->o_->n_residuals;
       const int path = k_->o_->path_task.active ? 1 : 0;
       const int parts = path + static_cast<int>(k_->o_->tasks.size());
+      std::atomic<bool> on_limit{false};
       if (jac == nullptr || jac[0] == nullptr) {
         // The values alone, part by part: a trial point of a fit with integrated predictions
         // is tens of milliseconds of substeps, worth the free core as much as a Jacobian is.
-        return share_units(parts,
-                           [&](int u) { return k_->eval_part<double>(z[0], r, u - path); }) &&
-               all_finite(r, m);
+        return k_->o_->count(
+            share_units(
+                parts,
+                [&](int u) { return k_->eval_part<double>(z[0], r, u - path, &on_limit); }) &&
+                all_finite(r, m),
+            on_limit);
       }
       using J = ceres::Jet<double, 4>;
       const int passes = (n + 3) / 4;
@@ -308,14 +331,14 @@ class Kernel final : public KernelBase {
           in[i] = J(z[0][i]);
           if (i / 4 == pass) in[i].v[i % 4] = 1.0;
         }
-        return k_->eval_part<J>(in.data(), out[pass].data(), part);
+        return k_->eval_part<J>(in.data(), out[pass].data(), part, &on_limit);
       });
-      if (!ok) return false;
+      if (!ok) return k_->o_->count(false, on_limit);
       for (int k = 0; k < m; ++k) {
         r[k] = out.back()[k].a;
         for (int j = 0; j < n; ++j) jac[0][k * n + j] = out[j / 4][k].v[j % 4];
       }
-      return all_finite(r, m);
+      return k_->o_->count(all_finite(r, m), on_limit);
     }
 
    private:
@@ -428,6 +451,13 @@ class Kernel final : public KernelBase {
     return st;
   }
 
+  // A failed integration: false, and `on_limit` set where it failed on the substep limit.
+  template <class Result>
+  bool failed(const Result& res, std::atomic<bool>* on_limit) const {
+    if (on_limit && res.substeps + res.rejected >= o_->options.step.max_substeps) *on_limit = true;
+    return false;
+  }
+
   // The prediction with the most substeps so far (driver_load): its count and index.
   struct MostSubsteps {
     int count = 0, index = -1;
@@ -442,7 +472,8 @@ class Kernel final : public KernelBase {
   template <typename T>
   bool predict(const T* p, const double* pd, const StateData& s, const EnvelopeRecord& env,
                bool integrated, std::vector<Eigen::Matrix<T, 2, 1>>* ps,
-               std::vector<Eigen::Matrix<T, 2, 1>>* pf, MostSubsteps* most = nullptr) const {
+               std::vector<Eigen::Matrix<T, 2, 1>>* pf, MostSubsteps* most = nullptr,
+               std::atomic<bool>* on_limit = nullptr) const {
     const int m = env.size();
     ps->resize(m);
     pf->resize(m);
@@ -455,7 +486,7 @@ class Kernel final : public KernelBase {
         const auto res =
             models::integrate_adaptive(ops, st, env.strain_tensor(i), o_->options.step);
         if (most) most->see(res, i);
-        if (!res.success) return false;
+        if (!res.success) return failed(res, on_limit);
         (*ps)[i] = pair_of<T>(models::Mat3<T>(res.end.stress - st.stress));
         (*pf)[i] = pair_of<T>(models::Mat3<T>(res.end.fabric - st.fabric));
       }
@@ -475,7 +506,7 @@ class Kernel final : public KernelBase {
   // the model is sampled exactly at the data's rows; one state per data row.
   template <typename T>
   bool run_path(const T* p, const double* pd, std::vector<models::StateT<T>>* states,
-                MostSubsteps* most = nullptr) const {
+                MostSubsteps* most = nullptr, std::atomic<bool>* on_limit = nullptr) const {
     const PathData& d = o_->path;
     const models::MaterialState sd = start_state(pd, d.stress[0], d.fabric[0], d.volume_fraction);
     if (!M::admissible(pd, sd, nullptr)) return false;
@@ -485,7 +516,7 @@ class Kernel final : public KernelBase {
     for (std::size_t k = 1; k < d.eps_dev.size(); ++k) {
       const auto res = models::integrate_adaptive(ops, y, d.increment(k), o_->options.step);
       if (most) most->see(res, static_cast<int>(k));
-      if (!res.success) return false;
+      if (!res.success) return failed(res, on_limit);
       y = res.end;
       states->push_back(y);
     }
@@ -495,10 +526,10 @@ class Kernel final : public KernelBase {
   // Path residuals: (iso, dev) pairs of stress and fabric at every data row after the
   // first (which the model starts from).
   template <typename T>
-  bool path_residuals(const T* p, const double* pd, T* r) const {
+  bool path_residuals(const T* p, const double* pd, T* r, std::atomic<bool>* on_limit) const {
     const PathData& d = o_->path;
     std::vector<models::StateT<T>> s;
-    if (!run_path<T>(p, pd, &s)) return false;
+    if (!run_path<T>(p, pd, &s, nullptr, on_limit)) return false;
     const Eigen::Matrix<T, 2, 2> R = rendulic_to_iso_dev().cast<T>();
     const PathTask& t = o_->path_task;
     for (std::size_t k = 1; k < d.eps_dev.size(); ++k) {
@@ -533,13 +564,13 @@ class UmatKernel final : public KernelBase {
 
   // Residuals at z; `schedules` (if given) records the increments of every integration in
   // evaluation order, or, with `replay`, replays them.
-  bool eval(const double* z, double* r, std::vector<models::UmatSchedule>* schedules,
-            bool replay) const {
+  bool eval(const double* z, double* r, std::vector<models::UmatSchedule>* schedules, bool replay,
+            std::atomic<bool>* on_limit) const {
     std::vector<double> p(o_->space.base().size());
     o_->space.full(z, p.data());
     const models::UmatLaw law = with(p.data());
     std::size_t next = 0;
-    Schedules sc{schedules, replay, &next};
+    Schedules sc{schedules, replay, &next, on_limit};
     if (o_->path_task.active && !path_residuals(law, sc, r)) return false;
     for (const EnvTask& t : o_->tasks) {
       std::vector<Eigen::Vector2d> ps, pf;
@@ -560,7 +591,10 @@ class UmatKernel final : public KernelBase {
     return all_finite(r, o_->n_residuals);
   }
 
-  bool residuals(const double* z, double* r) const override { return eval(z, r, nullptr, false); }
+  bool residuals(const double* z, double* r) const override {
+    std::atomic<bool> on_limit{false};
+    return o_->count(eval(z, r, nullptr, false, &on_limit), on_limit);
+  }
 
   class Cost final : public ceres::CostFunction {
    public:
@@ -569,8 +603,15 @@ class UmatKernel final : public KernelBase {
       set_num_residuals(k->o_->n_residuals);
     }
     bool Evaluate(double const* const* z, double* r, double** jac) const override {
+      std::atomic<bool> on_limit{false};
+      return k_->o_->count(evaluate(z, r, jac, &on_limit), on_limit);
+    }
+
+   private:
+    bool evaluate(double const* const* z, double* r, double** jac,
+                  std::atomic<bool>* on_limit) const {
       std::vector<models::UmatSchedule> schedules;
-      if (!k_->eval(z[0], r, &schedules, false)) return false;
+      if (!k_->eval(z[0], r, &schedules, false, on_limit)) return false;
       if (!jac || !jac[0]) return true;
       const int n = parameter_block_sizes()[0], m = num_residuals();
       std::vector<double> zz(z[0], z[0] + n), rp(m), rm(m);
@@ -579,16 +620,15 @@ class UmatKernel final : public KernelBase {
         // the truncation error is O(h^2) and the rounding error ~1e-10 of the residuals.
         const double h = 1e-6 * std::max(std::abs(zz[j]), 1.0);
         zz[j] = z[0][j] + h;
-        if (!k_->eval(zz.data(), rp.data(), &schedules, true)) return false;
+        if (!k_->eval(zz.data(), rp.data(), &schedules, true, on_limit)) return false;
         zz[j] = z[0][j] - h;
-        if (!k_->eval(zz.data(), rm.data(), &schedules, true)) return false;
+        if (!k_->eval(zz.data(), rm.data(), &schedules, true, on_limit)) return false;
         zz[j] = z[0][j];
         for (int i = 0; i < m; ++i) jac[0][i * n + j] = (rp[i] - rm[i]) / (2.0 * h);
       }
       return true;
     }
 
-   private:
     const UmatKernel* k_;
   };
 
@@ -598,7 +638,8 @@ class UmatKernel final : public KernelBase {
                 EnvelopeRecord* out) const override {
     std::vector<Eigen::Vector2d> ps, pf;
     std::size_t next = 0;
-    if (!predict(with(p), s, probes, integrated, {nullptr, false, &next}, &ps, &pf)) return false;
+    if (!predict(with(p), s, probes, integrated, {nullptr, false, &next, nullptr}, &ps, &pf))
+      return false;
     *out = model_record(probes, std::move(ps), std::move(pf));
     return true;
   }
@@ -606,7 +647,7 @@ class UmatKernel final : public KernelBase {
   bool path(const double* p, PathData* out) const override {
     std::vector<models::MaterialState> states;
     std::size_t next = 0;
-    if (!run_path(with(p), {nullptr, false, &next}, &states)) return false;
+    if (!run_path(with(p), {nullptr, false, &next, nullptr}, &states)) return false;
     fill_path(states, o_->path, out);
     return true;
   }
@@ -616,6 +657,7 @@ class UmatKernel final : public KernelBase {
     std::vector<models::UmatSchedule>* all;
     bool replay;
     std::size_t* next;
+    std::atomic<bool>* on_limit;  // set where an integration fails on the substep limit
     models::UmatSchedule* take() const {
       if (!all) return nullptr;
       if (!replay) {
@@ -640,7 +682,10 @@ class UmatKernel final : public KernelBase {
     models::UmatSchedule* s = sc.take();
     // A replay must use the recorded increments: a missing schedule is a failed evaluation.
     if (sc.all && sc.replay && !s) return false;
-    return law.integrate(y, de, o_->options.step, end, s).success;
+    const models::StepResult res = law.integrate(y, de, o_->options.step, end, s);
+    if (!res.success && sc.on_limit && res.substeps + res.rejected >= o_->options.step.max_substeps)
+      *sc.on_limit = true;
+    return res.success;
   }
 
   bool predict(const models::UmatLaw& law, const StateData& s, const EnvelopeRecord& env,
@@ -764,8 +809,7 @@ double path_noise(const std::vector<Eigen::Vector2d>& change, double scale) {
 Objective::Objective(std::string law_name, const CalibrationData& data,
                      const std::vector<std::string>& states, ParameterSpace space,
                      const ObjectiveOptions& options)
-    : impl_(std::make_unique<Impl>(
-          Impl{law_name, std::move(space), options, {}, {}, {}, {}, {}, 0, false, nullptr})) {
+    : impl_(std::make_unique<Impl>(law_name, std::move(space), options)) {
   std::string why;
   if (!options.IsValid(&why)) throw InputError("calibration objective: " + why);
   Impl& o = *impl_;
@@ -925,6 +969,10 @@ bool Objective::integrated() const { return impl_->any_integrated; }
 
 DriverLoad Objective::driver_load(const std::vector<double>& p) const {
   return impl_->kernel->driver_load(p.data());
+}
+
+EvaluationTally Objective::tally() const {
+  return {impl_->evaluations.load(), impl_->failed.load(), impl_->failed_on_limit.load()};
 }
 
 bool Objective::predict_path(const std::vector<double>& p, PathData* out) const {

@@ -73,6 +73,9 @@ std::string to_json(const CalibrationSummary& s) {
   o["solver_report"] = f.report;
   o["at_bound"] = f.at_bound;
   o["evaluations"] = f.evaluations;
+  o["objective_evaluations"] = s.evaluations.evaluations;
+  o["objective_evaluations_failed"] = s.evaluations.failed;
+  o["objective_evaluations_failed_on_limit"] = s.evaluations.failed_on_limit;
   o["seconds"] = num(f.seconds);
   o["n_residuals"] = f.uncertainty.n_residuals;
   o["rank"] = f.uncertainty.rank;
@@ -146,6 +149,9 @@ void write_calibration(ResultsWriter& out, const CalibrationSummary& s) {
   out.attr(g, "termination", f.termination);
   out.attr(g, "global_start", s.global_start);
   out.attr(g, "seconds", f.seconds);
+  out.attr(g, "objective_evaluations", std::int64_t{s.evaluations.evaluations});
+  out.attr(g, "objective_evaluations_failed", std::int64_t{s.evaluations.failed});
+  out.attr(g, "objective_evaluations_failed_on_limit", std::int64_t{s.evaluations.failed_on_limit});
   out.attr(g, "n_free", std::int64_t{s.score.n_free});
   out.attr(g, "at_bound", s.at_bound);
   out.attr(g, "undetermined", s.undetermined);

@@ -2,7 +2,10 @@
 // stop"): which integrated prediction takes the most substeps, checked against the public
 // driver (models::integrate) probe by probe; calibrate()'s warning when the optimum needs most
 // of the fit's substep cap, where trial points beyond fail on the cap alone; and held-out states
-// predicted with the driver's own budget, not that cap.
+// predicted with the driver's own budget, not that cap; the objective's tally of evaluations
+// that failed on the cap, and calibrate()'s warning when trial points did though the optimum
+// is well inside it.
+#include <ceres/ceres.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -97,6 +100,99 @@ TEST(DriverLoad, CalibrateWarnsWhereTheOptimumNeedsMostOfTheCap) {
   const CalibrationSummary tight = calibrate(d, o);
   ASSERT_TRUE(tight.fit.converged) << tight.fit.report;
   EXPECT_TRUE(mentions_substeps(tight.warnings)) << tight.BriefReport();
+}
+
+// Objective::tally counts every evaluation, the failed ones, and those failed because a
+// prediction needed more substeps than the cap: values alone, a Jacobian of Jets, Ceres's cost
+// function; a failure of another kind (a substep below min_fraction) is not on the limit.
+TEST(DriverLoad, TallyCountsTheEvaluationsThatFailOnTheCap) {
+  const auto law = law_with("elastoplastic_fabric", testing::kElastoplasticTruth);
+  const CalibrationData d = plastic_data(*law);
+  std::vector<std::string> labels;
+  for (const auto& s : d.states) labels.push_back(s.label);
+  const ParameterSpace space(*law, law->parameters(), {"M_ss"});
+  const std::vector<double> z = space.to_z(law->parameters());
+  const auto objective = [&](const ObjectiveOptions& oo) {
+    return Objective("elastoplastic_fabric", d, labels, space, oo);
+  };
+  const auto expect = [](const EvaluationTally& t, long n, long failed, long on_limit) {
+    EXPECT_EQ(t.evaluations, n);
+    EXPECT_EQ(t.failed, failed);
+    EXPECT_EQ(t.failed_on_limit, on_limit);
+  };
+  std::vector<double> r(static_cast<std::size_t>(objective({}).num_residuals()));
+  Eigen::VectorXd rv;
+  Eigen::MatrixXd J;
+
+  ObjectiveOptions roomy;
+  const Objective ok = objective(roomy);
+  const int need = ok.driver_load(law->parameters()).substeps;
+  ASSERT_GT(need, 2);
+  ASSERT_TRUE(ok.residuals(z.data(), r.data()));
+  ASSERT_TRUE(ok.jacobian(z.data(), &rv, &J));
+  expect(ok.tally(), 2, 0, 0);
+
+  // One substep fewer than the stiffest probe needs: every evaluation fails on the cap.
+  ObjectiveOptions tight;
+  tight.step.max_substeps = need - 1;
+  const Objective capped = objective(tight);
+  EXPECT_FALSE(capped.residuals(z.data(), r.data()));
+  expect(capped.tally(), 1, 1, 1);
+  EXPECT_FALSE(capped.jacobian(z.data(), &rv, &J));
+  expect(capped.tally(), 2, 2, 2);
+  const std::unique_ptr<ceres::CostFunction> f(capped.make_cost_function());
+  const double* params[1] = {z.data()};
+  EXPECT_FALSE(f->Evaluate(params, r.data(), nullptr));
+  expect(capped.tally(), 3, 3, 3);
+
+  // A substep may not be shorter than 0.9 of the increment: the first rejection fails, with
+  // the cap far away.
+  ObjectiveOptions coarse;
+  coarse.step.min_fraction = 0.9;
+  coarse.step.tolerance = 1e-12;
+  const Objective stiff = objective(coarse);
+  EXPECT_FALSE(stiff.residuals(z.data(), r.data()));
+  expect(stiff.tally(), 1, 1, 0);
+}
+
+// The optimum well inside the cap (no warning of the kind above), but a global search over the
+// box visits points whose probes need more: calibrate() counts them and says so, and with room
+// for every trial point it says nothing. Without the tally the fit's warnings were silent here.
+TEST(DriverLoad, CalibrateSaysWhenTrialPointsFailedOnTheCap) {
+  const auto law = law_with("elastoplastic_fabric", testing::kElastoplasticTruth);
+  const CalibrationData d = plastic_data(*law);
+  CalibrationOptions o = m_ss_from_the_truth();
+  o.solver.backend = Backend::kGlobal;
+  o.solver.global_evaluations = 60;
+  o.solver.local_evaluations = 30;
+  std::vector<std::string> labels;
+  for (const auto& s : d.states) labels.push_back(s.label);
+  const int need =
+      Objective(o.model, d, labels, ParameterSpace(*law, law->parameters(), {"M_ss"}), o.objective)
+          .driver_load(law->parameters())
+          .substeps;
+  const auto on_the_way = [](const std::vector<std::string>& warnings) {
+    return std::any_of(warnings.begin(), warnings.end(), [](const std::string& w) {
+      return w.find("evaluations failed because a prediction needed more than") !=
+             std::string::npos;
+    });
+  };
+
+  o.objective.step.max_substeps = 1000000;
+  const CalibrationSummary roomy = calibrate(d, o);
+  ASSERT_TRUE(roomy.fit.converged) << roomy.fit.report;
+  EXPECT_GT(roomy.evaluations.evaluations, 60);
+  EXPECT_EQ(roomy.evaluations.failed_on_limit, 0);
+  EXPECT_FALSE(on_the_way(roomy.warnings)) << roomy.BriefReport();
+
+  o.objective.step.max_substeps = 2 * need + 2;  // the optimum needs less than half of it
+  const CalibrationSummary tight = calibrate(d, o);
+  ASSERT_TRUE(tight.fit.converged) << tight.fit.report;
+  EXPECT_NEAR(tight.fit.params[law->parameter_index("M_ss")], 0.45, 1e-4);
+  EXPECT_FALSE(mentions_substeps(tight.warnings)) << tight.BriefReport();
+  EXPECT_GT(tight.evaluations.failed_on_limit, 0);
+  EXPECT_LE(tight.evaluations.failed_on_limit, tight.evaluations.failed);
+  EXPECT_TRUE(on_the_way(tight.warnings)) << tight.BriefReport();
 }
 
 // Held-out states are a measurement at the fitted parameters: a probe there that needs more

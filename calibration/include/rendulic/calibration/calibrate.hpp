@@ -93,6 +93,9 @@ struct CalibrationSummary {
   ModelScore score;          // on the common yardstick (fitted_misfit, held_out_misfit: its own)
   PathData predicted_path;   // the fitted law's undrained path (empty without path data)
   std::string global_start;  // "not needed", or "used (why): costs"
+  // The objective's evaluations over the fit (local, global start, uncertainty): how many
+  // failed, and how many on the driver's substep limit (a warning says so).
+  EvaluationTally evaluations;
   std::vector<std::string> at_bound;      // free parameters on a bound of their box
   std::vector<std::string> undetermined;  // stderr infinite or above half the value
   // k* of the data (Pa): the model envelopes are stored starred like the DEM's (0: in Pa).

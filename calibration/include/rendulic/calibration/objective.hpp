@@ -141,6 +141,17 @@ struct DriverLoad {
   std::string where;  // "the probe at theta = 290.264 deg of state e's envelope dynamic_0.02"
 };
 
+// The objective's evaluations since it was built (Objective::tally): each call of residuals(),
+// jacobian() or a cost function's Evaluate (Ceres's trial points and Jacobians, NLopt's points,
+// each central difference) is one. Trial points that fail on the driver's substep limit count
+// as an infinite cost, which steers a fit away from them: calibrate() says how many there were
+// (docs/calibration.md "When to stop").
+struct EvaluationTally {
+  long evaluations = 0;
+  long failed = 0;           // the law could not be evaluated (any reason)
+  long failed_on_limit = 0;  // of those, a prediction needed more than step.max_substeps
+};
+
 // One block of the residual vector, for reports and for per-state errors.
 struct ResidualBlock {
   std::string state;  // label, or "path"
@@ -192,6 +203,8 @@ class Objective {
   // Over the fitted states' integrated predictions and the path, at full parameter vector p:
   // the one that needs the driver's most substeps (a UMAT: substeps 0, not counted).
   DriverLoad driver_load(const std::vector<double>& p) const;
+  // Evaluations so far (thread-safe: the fit's two starts share the objective).
+  EvaluationTally tally() const;
 
   struct Impl;
 

@@ -292,14 +292,15 @@ StepResultT<typename Ops::Scalar> integrate_adaptive(const Ops& law,
   };
   while (value_of(t) < 1.0) {
     if (res.substeps + res.rejected >= o.max_substeps) {
-      res.reason = "modified Euler: more than " + std::to_string(o.max_substeps) +
-                   " substeps (reached fraction " + fmt(value_of(t)) + " of the increment)";
+      res.reason = std::string(third ? "Bogacki-Shampine" : "modified Euler") + ": more than " +
+                   std::to_string(o.max_substeps) + " substeps (reached fraction " +
+                   fmt(value_of(t)) + " of the increment)";
       res.end = y;
       return res;
     }
     if (dt < o.min_fraction) {
-      res.reason = "modified Euler: substep below " + fmt(o.min_fraction) +
-                   " of the increment at fraction " + fmt(value_of(t)) +
+      res.reason = std::string(third ? "Bogacki-Shampine" : "modified Euler") + ": substep below " +
+                   fmt(o.min_fraction) + " of the increment at fraction " + fmt(value_of(t)) +
                    " (law too stiff or undefined)";
       res.end = y;
       return res;
