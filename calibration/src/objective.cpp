@@ -190,6 +190,13 @@ struct Objective::Impl {
   // those failed because a prediction needed more driver substeps than options.step allows
   // (Objective::tally).
   mutable std::atomic<long> evaluations{0}, failed{0}, failed_on_limit{0};
+  // Where the last failed evaluation failed: the part (kPath, or an envelope task's index) and
+  // its probe. Evaluations start there, so that a trial point that fails where the last one
+  // did (the stiff probe of a fit near the substep cap) fails before the other predictions are
+  // integrated. The order changes no value: every probe starts from its state, every part
+  // writes its own residuals (docs/calibration.md "When to stop").
+  static constexpr int kPath = -1, kNoPart = -2;
+  mutable std::atomic<int> fail_part{kNoPart}, fail_probe{0};
   bool count(bool ok, const std::atomic<bool>& on_limit) const {
     ++evaluations;
     if (!ok) ++failed;
@@ -214,42 +221,57 @@ class Kernel final : public KernelBase {
  public:
   explicit Kernel(const Objective::Impl* o) : o_(o) {}
 
+  // What the units of one evaluation share: whether a prediction failed on the substep limit,
+  // and where the objective's last failure was, read once so that every unit sees one order.
+  struct EvalContext {
+    std::atomic<bool> on_limit{false};
+    // A prediction failed: the evaluation fails whatever the others give, so the units still
+    // running stop at their next probe or path increment.
+    std::atomic<bool> stop{false};
+    int fail_part = Objective::Impl::kNoPart, fail_probe = 0;
+    explicit EvalContext(const Objective::Impl* o)
+        : fail_part(o->fail_part.load(std::memory_order_relaxed)),
+          fail_probe(o->fail_probe.load(std::memory_order_relaxed)) {}
+    // The part of the k-th of `parts` units in evaluation order (kPath, or a task index): the
+    // last failure's part first, then the others in their order.
+    int part(int k, int parts, int path) const {
+      const int hint = fail_part + path;  // the failed part's place in the natural order
+      if (fail_part == Objective::Impl::kNoPart || hint < 0 || hint >= parts) return k - path;
+      if (k == 0) return fail_part;
+      return (k <= hint ? k - 1 : k) - path;
+    }
+  };
+
   // Residuals for any scalar: double for values, Jets for the exact Jacobian (integrated
   // predictions go through the driver with Jets, driver_core.hpp). Ceres's evaluations cut
   // these into parts that may take a second thread (JetCost below).
-  // `on_limit` is set where a prediction fails on the driver's substep limit.
   template <typename T>
-  bool eval(const T* z, T* r, std::atomic<bool>* on_limit) const {
-    T p[M::kCount];
-    o_->space.full(z, p);
-    double pd[M::kCount];
-    for (int i = 0; i < M::kCount; ++i) pd[i] = value_of(p[i]);
-    if (o_->path_task.active && !path_residuals<T>(p, pd, r, on_limit)) return false;
-    for (int t = 0; t < static_cast<int>(o_->tasks.size()); ++t)
-      if (!task_residuals<T>(t, p, pd, r, on_limit)) return false;
+  bool eval(const T* z, T* r, EvalContext* ctx) const {
+    const int path = o_->path_task.active ? 1 : 0;
+    const int parts = path + static_cast<int>(o_->tasks.size());
+    for (int k = 0; k < parts; ++k)
+      if (!eval_part<T>(z, r, ctx->part(k, parts, path), ctx)) return false;
     return all_finite(r, o_->n_residuals);
   }
 
   // One part of the residuals: the path's (part -1) or envelope task `part`'s. The parts are
   // independent, and each computes as it does inside eval(): the same bits.
   template <typename T>
-  bool eval_part(const T* z, T* r, int part, std::atomic<bool>* on_limit) const {
+  bool eval_part(const T* z, T* r, int part, EvalContext* ctx) const {
     T p[M::kCount];
     o_->space.full(z, p);
     double pd[M::kCount];
     for (int i = 0; i < M::kCount; ++i) pd[i] = value_of(p[i]);
-    return part < 0 ? path_residuals<T>(p, pd, r, on_limit)
-                    : task_residuals<T>(part, p, pd, r, on_limit);
+    return part < 0 ? path_residuals<T>(p, pd, r, ctx) : task_residuals<T>(part, p, pd, r, ctx);
   }
 
   // Residuals of one envelope task.
   template <typename T>
-  bool task_residuals(int index, const T* p, const double* pd, T* r,
-                      std::atomic<bool>* on_limit) const {
+  bool task_residuals(int index, const T* p, const double* pd, T* r, EvalContext* ctx) const {
     const EnvTask& t = o_->tasks[static_cast<std::size_t>(index)];
     std::vector<Eigen::Matrix<T, 2, 1>> ps, pf;
     const StateData& s = o_->states[t.state];
-    if (!predict<T>(p, pd, s, t.env, t.integrated, &ps, &pf, nullptr, on_limit)) return false;
+    if (!predict<T>(p, pd, s, t.env, t.integrated, &ps, &pf, nullptr, ctx, index)) return false;
     const int m = t.env.size();
     if (t.stress_offset >= 0)
       for (int i = 0; i < m; ++i)
@@ -278,8 +300,8 @@ class Kernel final : public KernelBase {
   }
 
   bool residuals(const double* z, double* r) const override {
-    std::atomic<bool> on_limit{false};
-    return o_->count(eval<double>(z, r, &on_limit), on_limit);
+    EvalContext ctx(o_);
+    return o_->count(eval<double>(z, r, &ctx), ctx.on_limit);
   }
 
   // Central differences: each of the 2p + 1 evaluations of a Jacobian counts as one.
@@ -309,36 +331,38 @@ class Kernel final : public KernelBase {
       const int n = k_->o_->space.size(), m = k_->o_->n_residuals;
       const int path = k_->o_->path_task.active ? 1 : 0;
       const int parts = path + static_cast<int>(k_->o_->tasks.size());
-      std::atomic<bool> on_limit{false};
+      EvalContext ctx(k_->o_);
       if (jac == nullptr || jac[0] == nullptr) {
         // The values alone, part by part: a trial point of a fit with integrated predictions
         // is tens of milliseconds of substeps, worth the free core as much as a Jacobian is.
-        return k_->o_->count(
-            share_units(
-                parts,
-                [&](int u) { return k_->eval_part<double>(z[0], r, u - path, &on_limit); }) &&
-                all_finite(r, m),
-            on_limit);
+        return k_->o_->count(share_units(parts,
+                                         [&](int u) {
+                                           return k_->eval_part<double>(
+                                               z[0], r, ctx.part(u, parts, path), &ctx);
+                                         }) &&
+                                 all_finite(r, m),
+                             ctx.on_limit);
       }
       using J = ceres::Jet<double, 4>;
       const int passes = (n + 3) / 4;
       std::vector<std::vector<J>> out(static_cast<std::size_t>(passes),
                                       std::vector<J>(static_cast<std::size_t>(m)));
+      // Every pass of a part before the next part: the last failure's part first.
       const bool ok = share_units(passes * parts, [&](int u) {
-        const int pass = u / parts, part = u % parts - path;
+        const int pass = u % passes, part = ctx.part(u / passes, parts, path);
         std::vector<J> in(static_cast<std::size_t>(n));
         for (int i = 0; i < n; ++i) {
           in[i] = J(z[0][i]);
           if (i / 4 == pass) in[i].v[i % 4] = 1.0;
         }
-        return k_->eval_part<J>(in.data(), out[pass].data(), part, &on_limit);
+        return k_->eval_part<J>(in.data(), out[pass].data(), part, &ctx);
       });
-      if (!ok) return k_->o_->count(false, on_limit);
+      if (!ok) return k_->o_->count(false, ctx.on_limit);
       for (int k = 0; k < m; ++k) {
         r[k] = out.back()[k].a;
         for (int j = 0; j < n; ++j) jac[0][k * n + j] = out[j / 4][k].v[j % 4];
       }
-      return k_->o_->count(all_finite(r, m), on_limit);
+      return k_->o_->count(all_finite(r, m), ctx.on_limit);
     }
 
    private:
@@ -451,10 +475,15 @@ class Kernel final : public KernelBase {
     return st;
   }
 
-  // A failed integration: false, and `on_limit` set where it failed on the substep limit.
+  // A failed integration of a fit's evaluation (ctx) at probe `probe` of part `part`: false,
+  // where it failed kept for the next evaluations, and on_limit set if on the substep limit.
   template <class Result>
-  bool failed(const Result& res, std::atomic<bool>* on_limit) const {
-    if (on_limit && res.substeps + res.rejected >= o_->options.step.max_substeps) *on_limit = true;
+  bool failed(const Result& res, EvalContext* ctx, int part, int probe) const {
+    if (!ctx) return false;
+    ctx->stop = true;
+    o_->fail_probe.store(probe, std::memory_order_relaxed);
+    o_->fail_part.store(part, std::memory_order_relaxed);
+    if (res.substeps + res.rejected >= o_->options.step.max_substeps) ctx->on_limit = true;
     return false;
   }
 
@@ -473,7 +502,7 @@ class Kernel final : public KernelBase {
   bool predict(const T* p, const double* pd, const StateData& s, const EnvelopeRecord& env,
                bool integrated, std::vector<Eigen::Matrix<T, 2, 1>>* ps,
                std::vector<Eigen::Matrix<T, 2, 1>>* pf, MostSubsteps* most = nullptr,
-               std::atomic<bool>* on_limit = nullptr) const {
+               EvalContext* ctx = nullptr, int part = 0) const {
     const int m = env.size();
     ps->resize(m);
     pf->resize(m);
@@ -482,11 +511,15 @@ class Kernel final : public KernelBase {
     const models::StateT<T> st = models::state_cast<T>(sd);
     if (integrated) {
       const models::StaticLawOps<M, T> ops{p, pd};
-      for (int i = 0; i < m; ++i) {
+      // From the probe where this part failed last (each probe starts from the state).
+      const int first = ctx && ctx->fail_part == part && m > 0 ? ctx->fail_probe % m : 0;
+      for (int k = 0; k < m; ++k) {
+        if (ctx && ctx->stop) return false;
+        const int i = (first + k) % m;
         const auto res =
             models::integrate_adaptive(ops, st, env.strain_tensor(i), o_->options.step);
         if (most) most->see(res, i);
-        if (!res.success) return failed(res, on_limit);
+        if (!res.success) return failed(res, ctx, part, i);
         (*ps)[i] = pair_of<T>(models::Mat3<T>(res.end.stress - st.stress));
         (*pf)[i] = pair_of<T>(models::Mat3<T>(res.end.fabric - st.fabric));
       }
@@ -506,7 +539,7 @@ class Kernel final : public KernelBase {
   // the model is sampled exactly at the data's rows; one state per data row.
   template <typename T>
   bool run_path(const T* p, const double* pd, std::vector<models::StateT<T>>* states,
-                MostSubsteps* most = nullptr, std::atomic<bool>* on_limit = nullptr) const {
+                MostSubsteps* most = nullptr, EvalContext* ctx = nullptr) const {
     const PathData& d = o_->path;
     const models::MaterialState sd = start_state(pd, d.stress[0], d.fabric[0], d.volume_fraction);
     if (!M::admissible(pd, sd, nullptr)) return false;
@@ -514,9 +547,10 @@ class Kernel final : public KernelBase {
     models::StateT<T> y = models::state_cast<T>(sd);
     states->assign(1, y);
     for (std::size_t k = 1; k < d.eps_dev.size(); ++k) {
+      if (ctx && ctx->stop) return false;
       const auto res = models::integrate_adaptive(ops, y, d.increment(k), o_->options.step);
       if (most) most->see(res, static_cast<int>(k));
-      if (!res.success) return failed(res, on_limit);
+      if (!res.success) return failed(res, ctx, Objective::Impl::kPath, static_cast<int>(k));
       y = res.end;
       states->push_back(y);
     }
@@ -526,10 +560,10 @@ class Kernel final : public KernelBase {
   // Path residuals: (iso, dev) pairs of stress and fabric at every data row after the
   // first (which the model starts from).
   template <typename T>
-  bool path_residuals(const T* p, const double* pd, T* r, std::atomic<bool>* on_limit) const {
+  bool path_residuals(const T* p, const double* pd, T* r, EvalContext* ctx) const {
     const PathData& d = o_->path;
     std::vector<models::StateT<T>> s;
-    if (!run_path<T>(p, pd, &s, nullptr, on_limit)) return false;
+    if (!run_path<T>(p, pd, &s, nullptr, ctx)) return false;
     const Eigen::Matrix<T, 2, 2> R = rendulic_to_iso_dev().cast<T>();
     const PathTask& t = o_->path_task;
     for (std::size_t k = 1; k < d.eps_dev.size(); ++k) {

@@ -155,6 +155,45 @@ TEST(DriverLoad, TallyCountsTheEvaluationsThatFailOnTheCap) {
   expect(stiff.tally(), 1, 1, 0);
 }
 
+// After a failed evaluation the objective starts the next ones where it failed (that part
+// first, from that probe on), so that trial points failing there fail at once: the values and
+// the Jacobian at a point that succeeds are the same bits as from an objective that never
+// failed.
+TEST(DriverLoad, StartingWhereTheLastEvaluationFailedChangesNoBit) {
+  const auto law = law_with("elastoplastic_fabric", testing::kElastoplasticTruth);
+  const CalibrationData d = plastic_data(*law);
+  std::vector<std::string> labels;
+  for (const auto& s : d.states) labels.push_back(s.label);
+  const ParameterSpace space(*law, law->parameters(), {"M_ss"});
+  ObjectiveOptions oo;
+  const auto need = [&](const std::vector<double>& p) {
+    return Objective("elastoplastic_fabric", d, labels, space, oo).driver_load(p).substeps;
+  };
+  // A smaller M_ss makes the probes stiffer: with the cap between the two needs, the truth
+  // evaluates and the stiff point fails on the cap.
+  std::vector<double> stiff = law->parameters();
+  stiff[static_cast<std::size_t>(law->parameter_index("M_ss"))] = 0.3;
+  const int easy_need = need(law->parameters()), stiff_need = need(stiff);
+  ASSERT_GT(stiff_need, 2 * easy_need) << "M_ss = 0.3 is not stiffer than the truth";
+  oo.step.max_substeps = (easy_need + stiff_need) / 2;
+  const Objective fresh("elastoplastic_fabric", d, labels, space, oo);
+  const Objective hinted("elastoplastic_fabric", d, labels, space, oo);
+  const std::vector<double> z_stiff = space.to_z(stiff), z = space.to_z(law->parameters());
+  std::vector<double> r0(static_cast<std::size_t>(fresh.num_residuals())), r1 = r0;
+  ASSERT_FALSE(hinted.residuals(z_stiff.data(), r1.data()));
+  ASSERT_EQ(hinted.tally().failed_on_limit, 1);
+  ASSERT_TRUE(fresh.residuals(z.data(), r0.data()));
+  ASSERT_TRUE(hinted.residuals(z.data(), r1.data()));
+  EXPECT_EQ(r0, r1);
+  Eigen::VectorXd v0, v1;
+  Eigen::MatrixXd J0, J1;
+  ASSERT_FALSE(hinted.jacobian(z_stiff.data(), &v1, &J1));
+  ASSERT_TRUE(fresh.jacobian(z.data(), &v0, &J0));
+  ASSERT_TRUE(hinted.jacobian(z.data(), &v1, &J1));
+  EXPECT_EQ(v0, v1);
+  EXPECT_EQ(J0, J1);
+}
+
 // The optimum well inside the cap (no warning of the kind above), but a global search over the
 // box visits points whose probes need more: calibrate() counts them and says so, and with room
 // for every trial point it says nothing. Without the tally the fit's warnings were silent here.
