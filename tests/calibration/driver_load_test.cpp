@@ -27,6 +27,12 @@ CalibrationData plastic_data(const models::Law& law) {
   return testing::synthetic_data(law, spec);
 }
 
+std::vector<std::string> labels_of(const CalibrationData& d) {
+  std::vector<std::string> labels;
+  for (const auto& s : d.states) labels.push_back(s.label);
+  return labels;
+}
+
 // M_ss fitted from the truth (the other parameters held there), least squares, no global
 // start: the optimum is the truth, and so are the substeps its probes need.
 CalibrationOptions m_ss_from_the_truth() {
@@ -49,8 +55,7 @@ bool mentions_substeps(const std::vector<std::string>& warnings) {
 TEST(DriverLoad, IsTheMostSubstepsOfAnyIntegratedProbe) {
   const auto law = law_with("elastoplastic_fabric", testing::kElastoplasticTruth);
   const CalibrationData d = plastic_data(*law);
-  std::vector<std::string> labels;
-  for (const auto& s : d.states) labels.push_back(s.label);
+  const std::vector<std::string> labels = labels_of(d);
   ObjectiveOptions oo;
   const Objective obj("elastoplastic_fabric", d, labels,
                       ParameterSpace(*law, law->parameters(), {"M_ss"}), oo);
@@ -108,8 +113,7 @@ TEST(DriverLoad, CalibrateWarnsWhereTheOptimumNeedsMostOfTheCap) {
 TEST(DriverLoad, TallyCountsTheEvaluationsThatFailOnTheCap) {
   const auto law = law_with("elastoplastic_fabric", testing::kElastoplasticTruth);
   const CalibrationData d = plastic_data(*law);
-  std::vector<std::string> labels;
-  for (const auto& s : d.states) labels.push_back(s.label);
+  const std::vector<std::string> labels = labels_of(d);
   const ParameterSpace space(*law, law->parameters(), {"M_ss"});
   const std::vector<double> z = space.to_z(law->parameters());
   const auto objective = [&](const ObjectiveOptions& oo) {
@@ -162,8 +166,7 @@ TEST(DriverLoad, TallyCountsTheEvaluationsThatFailOnTheCap) {
 TEST(DriverLoad, StartingWhereTheLastEvaluationFailedChangesNoBit) {
   const auto law = law_with("elastoplastic_fabric", testing::kElastoplasticTruth);
   const CalibrationData d = plastic_data(*law);
-  std::vector<std::string> labels;
-  for (const auto& s : d.states) labels.push_back(s.label);
+  const std::vector<std::string> labels = labels_of(d);
   const ParameterSpace space(*law, law->parameters(), {"M_ss"});
   ObjectiveOptions oo;
   const auto need = [&](const std::vector<double>& p) {
@@ -204,8 +207,7 @@ TEST(DriverLoad, CalibrateSaysWhenTrialPointsFailedOnTheCap) {
   o.solver.backend = Backend::kGlobal;
   o.solver.global_evaluations = 60;
   o.solver.local_evaluations = 30;
-  std::vector<std::string> labels;
-  for (const auto& s : d.states) labels.push_back(s.label);
+  const std::vector<std::string> labels = labels_of(d);
   const int need =
       Objective(o.model, d, labels, ParameterSpace(*law, law->parameters(), {"M_ss"}), o.objective)
           .driver_load(law->parameters())
