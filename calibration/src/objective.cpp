@@ -483,7 +483,7 @@ class Kernel final : public KernelBase {
     ctx->stop = true;
     o_->fail_probe.store(probe, std::memory_order_relaxed);
     o_->fail_part.store(part, std::memory_order_relaxed);
-    if (res.substeps + res.rejected >= o_->options.step.max_substeps) ctx->on_limit = true;
+    if (res.on_substep_limit) ctx->on_limit = true;
     return false;
   }
 
@@ -492,8 +492,8 @@ class Kernel final : public KernelBase {
     int count = 0, index = -1;
     template <class Result>
     void see(const Result& res, int index_of) {
-      if (res.substeps + res.rejected <= count) return;
-      count = res.substeps + res.rejected;
+      if (res.attempted() <= count) return;
+      count = res.attempted();
       index = index_of;
     }
   };
@@ -717,8 +717,7 @@ class UmatKernel final : public KernelBase {
     // A replay must use the recorded increments: a missing schedule is a failed evaluation.
     if (sc.all && sc.replay && !s) return false;
     const models::StepResult res = law.integrate(y, de, o_->options.step, end, s);
-    if (!res.success && sc.on_limit && res.substeps + res.rejected >= o_->options.step.max_substeps)
-      *sc.on_limit = true;
+    if (sc.on_limit && res.on_substep_limit) *sc.on_limit = true;
     return res.success;
   }
 

@@ -391,7 +391,8 @@ StepResult UmatLaw::integrate(const UmatState& start, const Eigen::Matrix3d& d_e
   int cuts = 0, kinc = 0;
   bool rejected_last = false;
   while (1.0 - t > 1e-14) {
-    if (res.substeps + res.rejected >= o.max_substeps) {
+    if (res.attempted() >= o.max_substeps) {
+      res.on_substep_limit = true;
       res.reason = "UMAT driver: more than " + std::to_string(o.max_substeps) +
                    " increments (reached fraction " + fmt(t) + " of the strain increment)";
       break;

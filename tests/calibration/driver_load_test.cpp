@@ -74,8 +74,8 @@ TEST(DriverLoad, IsTheMostSubstepsOfAnyIntegratedProbe) {
       for (std::size_t i = 0; i < env.size(); ++i) {
         const models::StepResult r = models::integrate(*law, st, env.strain_tensor(i), oo.step);
         ASSERT_TRUE(r.success) << r.reason;
-        if (r.substeps + r.rejected > most) {
-          most = r.substeps + r.rejected;
+        if (r.attempted() > most) {
+          most = r.attempted();
           where = " of state " + s.label + "'s envelope " + env.name;
         }
       }

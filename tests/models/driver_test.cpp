@@ -253,5 +253,41 @@ TEST(Driver, FailuresAreReasonsNotExceptions) {
   EXPECT_NE(e.reason.find("left the law's domain"), std::string::npos) << e.reason;
 }
 
+// The cap on substeps is the one failure a larger cap cures, so it carries its own flag (the
+// calibration counts it apart); a substep below min_fraction or a state outside the law's
+// domain does not set it. The reason names the scheme that ran.
+TEST(Driver, TheSubstepCapIsFlaggedApartFromOtherFailures) {
+  auto law = make_law("hypoplastic_wu");
+  StepOptions o;
+  o.tolerance = 1e-10;
+  o.max_substeps = 5;
+  for (const Scheme scheme : {Scheme::kModifiedEuler, Scheme::kBogackiShampine}) {
+    o.scheme = scheme;
+    const StepResult r = integrate(*law, sand_state(*law), large_increment(), o);
+    EXPECT_FALSE(r.success);
+    EXPECT_TRUE(r.on_substep_limit) << r.reason;
+    EXPECT_EQ(r.attempted(), 5);
+    const char* name = scheme == Scheme::kModifiedEuler ? "modified Euler" : "Bogacki-Shampine";
+    EXPECT_EQ(r.reason.rfind(std::string(name) + ": more than 5 substeps", 0), 0u) << r.reason;
+  }
+  o.max_substeps = 10000000;
+  o.min_fraction = 0.5;  // the first rejection drops below it
+  o.scheme = Scheme::kModifiedEuler;
+  const StepResult m = integrate(*law, sand_state(*law), large_increment(), o);
+  EXPECT_FALSE(m.success);
+  EXPECT_FALSE(m.on_substep_limit);
+  EXPECT_NE(m.reason.find("substep below"), std::string::npos) << m.reason;
+  MaterialState s = sand_state(*law);
+  s.stress *= -1.0;
+  const StepResult t = integrate(*law, s, probe_strain(0.0, 1e-3));
+  EXPECT_FALSE(t.success);
+  EXPECT_FALSE(t.on_substep_limit);
+  o = StepOptions{};
+  const StepResult ok = integrate(*law, sand_state(*law), large_increment(), o);
+  ASSERT_TRUE(ok.success) << ok.reason;
+  EXPECT_FALSE(ok.on_substep_limit);
+  EXPECT_LT(ok.attempted(), o.max_substeps);
+}
+
 }  // namespace
 }  // namespace rendulic::models

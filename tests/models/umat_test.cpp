@@ -196,6 +196,13 @@ TEST(Umat, PnewdtCutsAreHonouredAndLeaveNoTrace) {
   const PathSeries p = law.run_path(s, 4.0 * de, po, &end);
   ASSERT_TRUE(p.success) << p.reason;
   EXPECT_NEAR(end.statev[7], -4.0 * de(0, 0), 1e-14);
+  // The 50 increments the cuts need do not fit under a cap of 20: flagged as the cap, which
+  // the calibration counts apart from other failures.
+  o.max_substeps = 20;
+  const StepResult c = law.integrate(law.umat_state(s), de, o, &end);
+  EXPECT_FALSE(c.success);
+  EXPECT_TRUE(c.on_substep_limit) << c.reason;
+  EXPECT_NE(c.reason.find("more than 20 increments"), std::string::npos) << c.reason;
 }
 
 TEST(Umat, FortranPnewdtUmatStaysExact) {
@@ -228,6 +235,7 @@ TEST(Umat, EndlessPnewdtIsAClearError) {
   const StepResult r = law.integrate(law.umat_state(sheared(law)), probe_strain(0.0, 1e-4), {});
   EXPECT_FALSE(r.success);
   EXPECT_NE(r.reason.find("PNEWDT"), std::string::npos) << r.reason;
+  EXPECT_FALSE(r.on_substep_limit);  // it failed on the smallest increment, not on the cap
 }
 
 TEST(Umat, NanFromTheUmatNamesTheIncrement) {

@@ -62,6 +62,11 @@ struct StepResultT {
   int substeps = 0;
   int rejected = 0;
   int rate_evaluations = 0;
+  // True when the integration stopped on StepOptions::max_substeps: the one failure a larger
+  // cap cures (the calibration counts and reports these apart, docs/calibration.md).
+  bool on_substep_limit = false;
+  // Substeps tried, accepted or rejected: what max_substeps bounds.
+  int attempted() const { return substeps + rejected; }
 };
 using StepResult = StepResultT<double>;
 

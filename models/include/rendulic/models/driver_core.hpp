@@ -270,6 +270,7 @@ StepResultT<typename Ops::Scalar> integrate_adaptive(const Ops& law,
   const bool third = o.scheme == Scheme::kBogackiShampine ||
                      (o.scheme == Scheme::kAuto && law.value_yield_function(value_state(start)) ==
                                                        -std::numeric_limits<double>::infinity());
+  const char* const scheme = third ? "Bogacki-Shampine" : "modified Euler";
   // Value-only trial over the fraction h of the increment (event location, on doubles).
   const auto value_trial = [&](const MaterialState& yv, double h) {
     const Eigen::Matrix3d de = h * d_eps;
@@ -291,16 +292,16 @@ StepResultT<typename Ops::Scalar> integrate_adaptive(const Ops& law,
     return third ? 0.9 * std::cbrt(o.tolerance / err) : 0.9 * std::sqrt(o.tolerance / err);
   };
   while (value_of(t) < 1.0) {
-    if (res.substeps + res.rejected >= o.max_substeps) {
-      res.reason = std::string(third ? "Bogacki-Shampine" : "modified Euler") + ": more than " +
-                   std::to_string(o.max_substeps) + " substeps (reached fraction " +
-                   fmt(value_of(t)) + " of the increment)";
+    if (res.attempted() >= o.max_substeps) {
+      res.on_substep_limit = true;
+      res.reason = std::string(scheme) + ": more than " + std::to_string(o.max_substeps) +
+                   " substeps (reached fraction " + fmt(value_of(t)) + " of the increment)";
       res.end = y;
       return res;
     }
     if (dt < o.min_fraction) {
-      res.reason = std::string(third ? "Bogacki-Shampine" : "modified Euler") + ": substep below " +
-                   fmt(o.min_fraction) + " of the increment at fraction " + fmt(value_of(t)) +
+      res.reason = std::string(scheme) + ": substep below " + fmt(o.min_fraction) +
+                   " of the increment at fraction " + fmt(value_of(t)) +
                    " (law too stiff or undefined)";
       res.end = y;
       return res;
