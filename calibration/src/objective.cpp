@@ -185,6 +185,17 @@ struct Objective::Impl {
   std::vector<ResidualBlock> blocks;
   int n_residuals = 0;
   bool any_integrated = false;
+  // The law has a yield surface (models::kHasYieldSurface), so an elastic amplitude is no
+  // promise of an elastic response: its small probes are integrated as well. A UMAT's are not:
+  // the adapter cannot tell whether it has one (docs/umat.md "Calibration").
+  bool yield_surface = false;
+  // Whether the prediction of `env` is integrated by the driver or one evaluation of the rate
+  // law: kAuto integrates every envelope of a law with a yield surface, and the others' above
+  // the elastic amplitude (docs/calibration.md "Predictions and derivatives").
+  bool integrated(const EnvelopeRecord& env) const {
+    return options.prediction == Prediction::kIntegrated ||
+           (options.prediction == Prediction::kAuto && (yield_surface || !env.elastic()));
+  }
   std::unique_ptr<KernelBase> kernel;
   // Every evaluation (values, or values and Jacobian) since construction, the failed ones, and
   // those failed because a prediction needed more driver substeps than options.step allows
@@ -851,6 +862,9 @@ Objective::Objective(std::string law_name, const CalibrationData& data,
   const bool law_fabric = !umat && detail::dispatch_law(law_name, [](auto tag) {
     return detail::kHasFabric<typename decltype(tag)::type>;
   });
+  o.yield_surface = !umat && detail::dispatch_law(law_name, [](auto tag) {
+    return models::kHasYieldSurface<typename decltype(tag)::type>;
+  });
   int offset = 0;
   auto add_block = [&](const std::string& st, const std::string& kind, const std::string& env,
                        double amplitude, int size, double scale, double weight, bool integrated,
@@ -885,8 +899,7 @@ Objective::Objective(std::string law_name, const CalibrationData& data,
       EnvTask t;
       t.state = si;
       t.env = env;
-      t.integrated = options.prediction == Prediction::kIntegrated ||
-                     (options.prediction == Prediction::kAuto && !env.elastic());
+      t.integrated = o.integrated(env);
       const int m = env.size();
       t.stress_scale = rms_norm(env.stress);
       if (!(t.stress_scale > 0.0))
@@ -1036,9 +1049,7 @@ bool Objective::jacobian(const double* z, Eigen::VectorXd* r, Eigen::MatrixXd* J
 EnvelopeRecord Objective::predict_envelope(const std::vector<double>& p, const StateData& state,
                                            const EnvelopeRecord& probes, bool* ok) const {
   EnvelopeRecord out;
-  const bool integrated = impl_->options.prediction == Prediction::kIntegrated ||
-                          (impl_->options.prediction == Prediction::kAuto && !probes.elastic());
-  *ok = impl_->kernel->envelope(p.data(), state, probes, integrated, &out);
+  *ok = impl_->kernel->envelope(p.data(), state, probes, impl_->integrated(probes), &out);
   return out;
 }
 

@@ -6,9 +6,12 @@
 // (the output says so).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <iostream>
 
 #include "rendulic/calibration/calibrate.hpp"
+#include "rendulic/calibration/objective.hpp"
+#include "rendulic/models/envelope.hpp"
 #include "synthetic.hpp"
 
 namespace rendulic::calibration {
@@ -56,6 +59,82 @@ TEST(ElastoplasticCalibration, RecoversEvolutionParametersFromPathAndEnvelopes) 
     EXPECT_NEAR(st.model_plastic.thinning, st.plastic.thinning, 1e-4);
     EXPECT_LT((st.model_plastic.shift - st.plastic.shift).norm(), 1e-4 * st.plastic.a);
   }
+}
+
+// An elastic amplitude is no promise of an elastic response for a law with a yield surface:
+// with an elastic range of m_e P / 2G ~ 7e-6 in strain, this law's 5e-5 probes flow plastically
+// in most directions. The objective must predict them as the law responds (integrated by the
+// driver), not by one evaluation of the elastic rate at the state, which would let a fit shrink
+// m_e without its elastic envelopes noticing (docs/calibration.md "Predictions and
+// derivatives"). A law without a yield surface keeps the rate prediction, to the bit.
+TEST(ElastoplasticCalibration, SmallProbesOfALawWithAYieldSurfaceAreIntegrated) {
+  std::vector<std::pair<std::string, double>> truth = testing::kElastoplasticTruth;
+  for (auto& [name, v] : truth)
+    if (name == "m_e") v = 2e-5;
+  const auto law = law_with("elastoplastic_fabric", truth);
+  testing::SyntheticSpec spec;
+  spec.states.resize(1);
+  spec.directions = 12;
+  CalibrationData d = testing::synthetic_data(*law, spec);
+  // The data: the law's own response at 5e-5, integrated.
+  StateData& st = d.states[0];
+  const models::MaterialState ms = law->make_state(st.stress, st.fabric, st.volume_fraction);
+  models::EnvelopeOptions eo;
+  eo.amplitude = spec.elastic_amplitude;
+  eo.directions = spec.directions;
+  eo.method = models::EnvelopeMethod::kIntegrated;
+  eo.step.tolerance = 1e-12;
+  const EnvelopeRecord truth_env = models::model_envelope(*law, ms, eo);
+  EnvelopeRecord& env = st.envelopes[0];
+  ASSERT_TRUE(env.elastic());
+  double plastic_share = 0.0;  // how far the data are from the elastic rate's envelope
+  for (std::size_t i = 0; i < env.size(); ++i) {
+    plastic_share = std::max(plastic_share,
+                             (truth_env.stress[i] - env.stress[i]).norm() / env.stress[i].norm());
+    env.stress[i] = truth_env.stress[i];
+    env.fabric[i] = truth_env.fabric[i];
+  }
+  ASSERT_GT(plastic_share, 0.1);  // the test's premise: plastic flow at the elastic amplitude
+
+  const ParameterSpace space(*law, law->parameters(), {"m_e"});
+  const std::vector<double> z = space.to_z(law->parameters());
+  ObjectiveOptions oo;
+  oo.path = false;
+  oo.step.tolerance = 1e-10;
+  oo.step.max_substeps = 100000;
+  const Objective obj("elastoplastic_fabric", d, {"s0"}, space, oo);
+  ASSERT_TRUE(obj.integrated());
+  for (const auto& b : obj.blocks()) EXPECT_TRUE(b.integrated) << b.kind;
+  Eigen::VectorXd r(obj.num_residuals());
+  ASSERT_TRUE(obj.residuals(z.data(), r.data()));
+  // Residuals are relative to the envelope's rms response: the driver's error at 1e-10.
+  EXPECT_LT(r.lpNorm<Eigen::Infinity>(), 1e-6);
+  bool ok = false;
+  const EnvelopeRecord pe = obj.predict_envelope(law->parameters(), st, env, &ok);
+  ASSERT_TRUE(ok);
+  for (std::size_t i = 0; i < env.size(); ++i)
+    EXPECT_LT((pe.stress[i] - env.stress[i]).norm(), 1e-6 * env.stress[i].norm()) << i;
+  // The rate prediction, asked for, is the elastic one and misses the data.
+  oo.prediction = Prediction::kRate;
+  const Objective by_rate("elastoplastic_fabric", d, {"s0"}, space, oo);
+  ASSERT_TRUE(by_rate.residuals(z.data(), r.data()));
+  EXPECT_GT(r.lpNorm<Eigen::Infinity>(), 0.05);
+
+  // A law without a yield surface: its elastic envelopes stay one rate evaluation, the same
+  // residuals as asking for the rate.
+  const auto elastic = law_with("anisotropic_elastic", {{"B", 2.2e10}, {"G", 3e9}});
+  const CalibrationData de = testing::synthetic_data(*elastic, spec);
+  const ParameterSpace es(*elastic, elastic->parameters(), {"G"});
+  const std::vector<double> ze = es.to_z(elastic->parameters());
+  ObjectiveOptions eo2;
+  const Objective automatic("anisotropic_elastic", de, {"s0"}, es, eo2);
+  EXPECT_FALSE(automatic.integrated());
+  eo2.prediction = Prediction::kRate;
+  const Objective rate("anisotropic_elastic", de, {"s0"}, es, eo2);
+  Eigen::VectorXd ra(automatic.num_residuals()), rr(rate.num_residuals());
+  ASSERT_TRUE(automatic.residuals(ze.data(), ra.data()));
+  ASSERT_TRUE(rate.residuals(ze.data(), rr.data()));
+  EXPECT_EQ(ra, rr);
 }
 
 }  // namespace

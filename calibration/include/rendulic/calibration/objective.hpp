@@ -16,8 +16,9 @@
 // values) and maps them to unbounded-ish working coordinates z: log(p) for positive
 // parameters whose bounds span two decades or more (moduli, rates), p itself otherwise. Bounds
 // are kept in z. Prediction: envelopes of elastic amplitude are one evaluation of the rate law
-// (exact for the incrementally linear response); larger probes and the path are integrated
-// with the models/ driver. The Jacobian is exact: Ceres Jets through the law's template and,
+// (exact for the incrementally linear response) for a law without a yield surface; larger
+// probes, every probe of a law with a yield surface and the path are integrated with the
+// models/ driver. The Jacobian is exact: Ceres Jets through the law's template and,
 // for integrated predictions, through the driver's substeps (models/driver_core.hpp); central
 // differences remain available (Derivatives::kCentral) as the independent check.
 // Every block also carries a model-free estimate of the noise of its data (from the data's
@@ -107,7 +108,9 @@ struct ObjectiveOptions {
   // measured fabric response is below this scale (nothing to fit, and its scale would divide
   // by ~0).
   double fabric_scale_min = 1e-14;
-  // kAuto: rate evaluation for elastic amplitudes (< 1e-4), integration otherwise.
+  // kAuto: rate evaluation for elastic amplitudes (< 1e-4) of a law without a yield surface
+  // (and of a UMAT, which cannot say), integration otherwise: a small elastic range can make a
+  // 5e-5 probe plastic (docs/calibration.md "Predictions and derivatives").
   Prediction prediction = Prediction::kAuto;
   Derivatives derivatives = Derivatives::kExact;
   // Driver settings for integrated predictions. The driver's local tolerance 1e-6 (relative

@@ -14,6 +14,7 @@
 #include <memory>
 #include <string>
 #include <string_view>
+#include <type_traits>
 #include <vector>
 
 #include "rendulic/core/conventions.hpp"
@@ -66,6 +67,13 @@ struct WithoutPlasticity {
     return T(-std::numeric_limits<double>::infinity());
   }
 };
+
+// Whether a scalar-generic law M has an elastic domain bounded by a yield surface: every law
+// without one derives from WithoutPlasticity. For such a law a probe of any amplitude may leave
+// the elastic domain, so no amplitude is elastic by its size alone (docs/calibration.md
+// "Predictions and derivatives").
+template <class M>
+inline constexpr bool kHasYieldSurface = !std::is_base_of_v<WithoutPlasticity, M>;
 
 struct ParameterInfo {
   std::string name;
