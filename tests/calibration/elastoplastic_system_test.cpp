@@ -11,7 +11,6 @@
 
 #include "rendulic/calibration/calibrate.hpp"
 #include "rendulic/calibration/objective.hpp"
-#include "rendulic/models/envelope.hpp"
 #include "synthetic.hpp"
 
 namespace rendulic::calibration {
@@ -76,15 +75,12 @@ TEST(ElastoplasticCalibration, SmallProbesOfALawWithAYieldSurfaceAreIntegrated) 
   spec.states.resize(1);
   spec.directions = 12;
   CalibrationData d = testing::synthetic_data(*law, spec);
-  // The data: the law's own response at 5e-5, integrated.
+  // The data: the law's own response at 5e-5, integrated (no noise: no generator needed).
   StateData& st = d.states[0];
   const models::MaterialState ms = law->make_state(st.stress, st.fabric, st.volume_fraction);
-  models::EnvelopeOptions eo;
-  eo.amplitude = spec.elastic_amplitude;
-  eo.directions = spec.directions;
-  eo.method = models::EnvelopeMethod::kIntegrated;
-  eo.step.tolerance = 1e-12;
-  const EnvelopeRecord truth_env = models::model_envelope(*law, ms, eo);
+  const EnvelopeRecord truth_env =
+      testing::envelope_of(*law, ms, "elastic", spec.elastic_amplitude, spec.directions,
+                           models::EnvelopeMethod::kIntegrated, testing::NoiseSpec{}, nullptr);
   EnvelopeRecord& env = st.envelopes[0];
   ASSERT_TRUE(env.elastic());
   double plastic_share = 0.0;  // how far the data are from the elastic rate's envelope
