@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <iostream>
+#include <random>
 
 #include "rendulic/calibration/calibrate.hpp"
 #include "rendulic/calibration/objective.hpp"
@@ -75,12 +76,13 @@ TEST(ElastoplasticCalibration, SmallProbesOfALawWithAYieldSurfaceAreIntegrated) 
   spec.states.resize(1);
   spec.directions = 12;
   CalibrationData d = testing::synthetic_data(*law, spec);
-  // The data: the law's own response at 5e-5, integrated (no noise: no generator needed).
+  // The data: the law's own response at 5e-5, integrated (spec.noise is none: rng draws nothing).
   StateData& st = d.states[0];
   const models::MaterialState ms = law->make_state(st.stress, st.fabric, st.volume_fraction);
+  std::mt19937 rng(spec.noise.seed);
   const EnvelopeRecord truth_env =
       testing::envelope_of(*law, ms, "elastic", spec.elastic_amplitude, spec.directions,
-                           models::EnvelopeMethod::kIntegrated, testing::NoiseSpec{}, nullptr);
+                           models::EnvelopeMethod::kIntegrated, spec.noise, &rng);
   EnvelopeRecord& env = st.envelopes[0];
   ASSERT_TRUE(env.elastic());
   double plastic_share = 0.0;  // how far the data are from the elastic rate's envelope
