@@ -38,8 +38,9 @@ struct ProbeOptions {
   // engine at fixed cell to `relax`).
   std::string relax_method = "fire";
   // "fire": the engine's relaxation first runs down to this E_kin / E_el (the inertial part of
-  // a plastic probe's rearrangements), FIRE then takes the slow tail. 1e-4 moves the plastic
-  // envelopes of 1e-5 less than another realisation of the method does, with 56-58 % fewer
+  // a plastic probe's rearrangements), FIRE then takes the slow tail. At nine of ten measured
+  // states 1e-4 moves the plastic envelopes of 1e-5 less than another realisation of the
+  // method does (at the tenth by 0.3 %, where realisations agree to 0.02 %), with 56-58 % fewer
   // relaxation steps (docs/accuracy.md "FIRE from 1e-4").
   double relax_fire_from = 1e-4;
   // Minimisation probes: FIRE to max net force < force_tolerance * mean contact force.
