@@ -9,7 +9,9 @@
 // job or a second MPI rank on a user's machine); loaded figures are the mean over the
 // repetitions, since the waits for a descheduled thread are what they measure. --lammps writes
 // the same states as LAMMPS data files, and the timed contact laws as LAMMPS pair lines, for
-// bench/lammps_compare.sh.
+// bench/lammps_compare.sh. Around each state's idle figures it measures the round trip of a
+// cache line between two cores (team.hpp), which a team of two pays for and a VM may change by
+// the minute.
 #include <omp.h>
 #include <signal.h>
 #include <sys/prctl.h>
@@ -26,6 +28,7 @@
 #include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <sstream>
 
 #include "commands.hpp"
@@ -34,6 +37,7 @@
 #include "rendulic/core/packing_file.hpp"
 #include "rendulic/dem/contact.hpp"
 #include "rendulic/dem/protocols.hpp"
+#include "rendulic/dem/team.hpp"
 
 namespace rendulic::app {
 namespace {
@@ -191,7 +195,8 @@ Subcommand add_bench(CLI::App& parent) {
       "threads and the default setting; --load adds the same figures beside a busy process");
   sub->add_flag("--json", o->json,
                 "print a JSON list of {volume_fraction, threads (0: default), n_particles, "
-                "ns_per_particle_step[, ns_per_particle_step_loaded]}");
+                "ns_per_particle_step[, ns_per_particle_step_loaded][, core_round_trip_ns_before, "
+                "core_round_trip_ns_after]}");
   sub->add_flag("--load", o->load,
                 "also time every figure beside a busy loop (a child process), side by side");
   sub->add_option("--lammps", o->lammps_dir,
@@ -240,8 +245,12 @@ Subcommand add_bench(CLI::App& parent) {
             write_lammps(state, lammps_file(*o, nu, ".data"));
             write_lammps_pair(state, lammps_file(*o, nu, ".pair"));
           }
+          // The cores' round trip around the idle figures: a VM may move its vCPUs apart and
+          // back within minutes, and a team of two pays per line that crosses between them.
+          const std::optional<double> trip_before = dem::core_round_trip_ns();
           std::vector<Figure> idle, loaded;
           for (int t : settings) idle.push_back(time_steps(state, t, all_cores, *o));
+          const std::optional<double> trip_after = dem::core_round_trip_ns();
           if (o->load) {
             BusyLoop busy;
             for (int t : settings) loaded.push_back(time_steps(state, t, all_cores, *o));
@@ -255,6 +264,10 @@ Subcommand add_bench(CLI::App& parent) {
               row["n_particles"] = o->n_particles;
               row["ns_per_particle_step"] = idle[k].best;
               if (o->load) row["ns_per_particle_step_loaded"] = loaded[k].mean;
+              if (trip_before && trip_after) {
+                row["core_round_trip_ns_before"] = *trip_before;
+                row["core_round_trip_ns_after"] = *trip_after;
+              }
               json.push_back(row);
             } else {
               std::cout << std::setw(15) << nu << std::setw(9)
@@ -263,6 +276,14 @@ Subcommand add_bench(CLI::App& parent) {
               if (o->load) std::cout << std::setw(8) << std::setprecision(4) << loaded[k].mean;
               std::cout << "\n";
             }
+          }
+          if (!o->json) {
+            if (trip_before && trip_after)
+              std::cout << "  round trip between two cores, before / after the idle figures: "
+                        << std::setprecision(4) << *trip_before << " / " << *trip_after << " ns\n";
+            else
+              std::cout << "  round trip between two cores: not measured (fewer than two CPUs "
+                           "allowed)\n";
           }
           if (o->friction > 0) {
             // The same state and steps, frictionless and frictional (springs from zero).

@@ -6,17 +6,16 @@
 // engine figures from two hosts compare only with these beside them.
 // Run: build/bench/host_bench
 #include <benchmark/benchmark.h>
-#include <pthread.h>
-#include <sched.h>
 
 #include <algorithm>
-#include <atomic>
 #include <cstddef>
 #include <cstdint>
 #include <numeric>
+#include <optional>
 #include <random>
-#include <thread>
 #include <vector>
+
+#include "rendulic/dem/team.hpp"
 
 namespace {
 
@@ -44,47 +43,21 @@ void BM_ChaseLatency(benchmark::State& state) {
 }
 BENCHMARK(BM_ChaseLatency)->RangeMultiplier(2)->Range(16, 64 * 1024)->ArgName("KiB");
 
-bool pin(int cpu) {
-  cpu_set_t set;
-  CPU_ZERO(&set);
-  CPU_SET(cpu, &set);
-  return pthread_setaffinity_np(pthread_self(), sizeof set, &set) == 0;
-}
-
-// A counter line passed between cores 0 and 1: each side waits for the other's increment.
+// A counter line passed between two cores (rendulic::dem::core_round_trip_ns, which `rendulic
+// bench` reports beside its figures), about 10 ms per iteration.
 void BM_CoreToCoreRoundTrip(benchmark::State& state) {
-  if (std::thread::hardware_concurrency() < 2) {
-    state.SkipWithError("needs two cores");
-    return;
+  double sum = 0;
+  int n = 0;
+  for (auto _ : state) {
+    const std::optional<double> trip = rendulic::dem::core_round_trip_ns(0.01);
+    if (!trip) {
+      state.SkipWithError("needs two CPUs it may be pinned to");
+      return;
+    }
+    sum += *trip;
+    ++n;
   }
-  alignas(64) std::atomic<std::int64_t> flag{0};
-  std::atomic<bool> done{false};
-  std::thread other([&] {
-    pin(1);
-    std::int64_t seen = 0;
-    while (!done.load(std::memory_order_relaxed)) {
-      const std::int64_t v = flag.load(std::memory_order_acquire);
-      if (v != seen && (v & 1)) {
-        flag.store(v + 1, std::memory_order_release);
-        seen = v + 1;
-      }
-    }
-  });
-  pin(0);
-  constexpr std::int64_t kTrips = 1 << 14;
-  std::int64_t v = 0;
-  for (auto _ : state)
-    for (std::int64_t k = 0; k < kTrips; ++k) {
-      flag.store(++v, std::memory_order_release);
-      while (flag.load(std::memory_order_acquire) != v + 1) {
-      }
-      ++v;
-    }
-  done.store(true);
-  other.join();
-  state.counters["ns_per_round_trip"] =
-      benchmark::Counter(static_cast<double>(state.iterations() * kTrips),
-                         benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+  state.counters["ns_per_round_trip"] = sum / n;
 }
 BENCHMARK(BM_CoreToCoreRoundTrip)->UseRealTime();
 

@@ -1,9 +1,11 @@
-// The team-size rule and controller of DEM steps, and the barrier inside a step (team.hpp;
-// docs/performance.md).
+// The team-size rule and controller of DEM steps, the barrier inside a step, and the round trip
+// between two cores that a team pays for (team.hpp; docs/performance.md).
 #include "rendulic/dem/team.hpp"
 
 #if defined(__linux__)
 #include <linux/futex.h>
+#include <pthread.h>
+#include <sched.h>
 #include <sys/syscall.h>
 #include <unistd.h>
 
@@ -14,6 +16,7 @@
 #include <chrono>
 #include <cmath>
 #include <thread>
+#include <vector>
 
 namespace rendulic::dem {
 
@@ -194,6 +197,74 @@ void TeamBarrier::arrive_and_wait(std::size_t team) {
   sleeps_.fetch_add(1, std::memory_order_relaxed);
   while (generation_.load(std::memory_order_seq_cst) == g) sleep_while_equal(generation_, g);
   sleepers_.fetch_sub(1, std::memory_order_relaxed);
+}
+
+std::optional<double> core_round_trip_ns(double seconds) {
+#if defined(__linux__)
+  cpu_set_t allowed;
+  CPU_ZERO(&allowed);
+  if (sched_getaffinity(0, sizeof allowed, &allowed) != 0) return std::nullopt;
+  std::vector<int> cpus;
+  for (int c = 0; c < CPU_SETSIZE && cpus.size() < 2; ++c)
+    if (CPU_ISSET(c, &allowed)) cpus.push_back(c);
+  if (cpus.size() < 2) return std::nullopt;
+  auto pin = [](int cpu) {
+    cpu_set_t one;
+    CPU_ZERO(&one);
+    CPU_SET(cpu, &one);
+    return pthread_setaffinity_np(pthread_self(), sizeof one, &one) == 0;
+  };
+  // The first side makes the counter odd and waits for the second to make it even; both stop
+  // when the counter is negative. Each side gives up if its pinning failed.
+  alignas(64) std::atomic<std::int64_t> counter{0};
+  std::atomic<int> pinned{0};
+  std::atomic<bool> failed{false};
+  std::int64_t trips = 0;
+  double elapsed = 0;
+  std::thread second([&] {
+    if (!pin(cpus[1])) failed.store(true);
+    pinned.fetch_add(1);
+    for (std::int64_t seen = 0;;) {
+      const std::int64_t v = counter.load(std::memory_order_acquire);
+      if (v < 0) return;
+      if (v != seen && (v & 1)) {
+        counter.store(v + 1, std::memory_order_release);
+        seen = v + 1;
+      }
+    }
+  });
+  std::thread first([&] {
+    if (!pin(cpus[0])) failed.store(true);
+    pinned.fetch_add(1);
+    while (pinned.load() < 2) {
+    }
+    if (failed.load()) {
+      counter.store(-1, std::memory_order_release);
+      return;
+    }
+    const auto start = std::chrono::steady_clock::now();
+    std::int64_t v = 0;
+    for (;;) {
+      for (int k = 0; k < 1024; ++k) {
+        counter.store(++v, std::memory_order_release);
+        while (counter.load(std::memory_order_acquire) != v + 1) {
+        }
+        ++v;
+      }
+      trips += 1024;
+      elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      if (elapsed >= seconds) break;
+    }
+    counter.store(-1, std::memory_order_release);
+  });
+  first.join();
+  second.join();
+  if (failed.load() || trips == 0) return std::nullopt;
+  return elapsed / static_cast<double>(trips) * 1e9;
+#else
+  (void)seconds;
+  return std::nullopt;
+#endif
 }
 
 }  // namespace rendulic::dem

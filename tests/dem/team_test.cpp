@@ -4,14 +4,20 @@
 // per step (loaded), or one turning into the other. No wall clock is read. The pair loop's form
 // (DemSystem::set_fixed_loop), chosen by a controller of the same kind, is checked on a real
 // system: the default tries both forms, a fixed form and a frictional system never switch. The
-// step's barrier is checked with real threads: its memory order, and a late member waited for.
+// step's barrier is checked with real threads: its memory order, and a late member waited for;
+// and the cores' round trip (core_round_trip_ns) with real pinned threads.
 #include "rendulic/dem/team.hpp"
 
 #include <gtest/gtest.h>
 #include <omp.h>
+#if defined(__linux__)
+#include <pthread.h>
+#include <sched.h>
+#endif
 
 #include <chrono>
 #include <functional>
+#include <optional>
 #include <thread>
 #include <vector>
 
@@ -305,6 +311,47 @@ TEST(TeamBarrier, WaitsAsleepForALateMember) {
   // scheduler delayed it past the late one's arrival).
   EXPECT_GE(barrier.sleeps(), 1);
 }
+
+#if defined(__linux__)
+// The cores' round trip `rendulic bench` reports: between the first two CPUs the caller may run
+// on, a positive figure, the caller's affinity left as it was; refused where the caller may run
+// on one CPU only. The bound is loose on purpose (a partner descheduled by another test costs a
+// time slice per trip); what is checked is that a figure is measured, not how fast.
+TEST(CoreRoundTrip, MeasuredBetweenTwoAllowedCpusAndRefusedOnOne) {
+  cpu_set_t before;
+  CPU_ZERO(&before);
+  ASSERT_EQ(sched_getaffinity(0, sizeof before, &before), 0);
+  const std::optional<double> trip = core_round_trip_ns(0.01);
+  if (CPU_COUNT(&before) >= 2) {
+    ASSERT_TRUE(trip.has_value());
+    EXPECT_GT(*trip, 0.0);
+    EXPECT_LT(*trip, 1e8);  // 0.1 s per trip
+  } else {
+    EXPECT_FALSE(trip.has_value());
+  }
+  cpu_set_t after;
+  CPU_ZERO(&after);
+  ASSERT_EQ(sched_getaffinity(0, sizeof after, &after), 0);
+  EXPECT_TRUE(CPU_EQUAL(&before, &after));
+
+  std::optional<double> on_one = 1.0;
+  bool pinned = false;
+  std::thread one([&] {
+    cpu_set_t set;
+    CPU_ZERO(&set);
+    for (int c = 0; c < CPU_SETSIZE; ++c)
+      if (CPU_ISSET(c, &before)) {
+        CPU_SET(c, &set);
+        break;
+      }
+    pinned = pthread_setaffinity_np(pthread_self(), sizeof set, &set) == 0;
+    on_one = core_round_trip_ns(0.01);
+  });
+  one.join();
+  ASSERT_TRUE(pinned);
+  EXPECT_FALSE(on_one.has_value());
+}
+#endif
 
 }  // namespace
 }  // namespace rendulic::dem

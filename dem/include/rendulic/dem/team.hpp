@@ -17,6 +17,7 @@
 #include <atomic>
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 
 namespace rendulic::dem {
 
@@ -129,5 +130,15 @@ class TeamBarrier {
   std::atomic<std::int64_t> sleeps_{0};
   double spin_seconds_;
 };
+
+// The round trip of a cache line between the first two CPUs this thread may run on, in ns: two
+// threads pinned there pass a counter back and forth for about `seconds`. It is what a team of
+// two pays for each line that crosses between its members (a barrier costs about one), and a
+// VM may move its vCPUs nearer or further apart from one minute to the next (85-110 ns or
+// 287-349 ns on one host: docs/performance.md "An eighth host"), so `rendulic bench` reports it
+// beside its figures and bench/host_bench.cpp times it. Nothing when fewer than two CPUs are
+// allowed or a thread cannot be pinned (and off Linux). The caller's own affinity is unchanged.
+// Meaningless beside a busy process: a descheduled partner makes a trip a time slice.
+std::optional<double> core_round_trip_ns(double seconds = 0.05);
 
 }  // namespace rendulic::dem
