@@ -4,14 +4,17 @@
 // default setting (the team chosen while running, team.hpp). The states are prepared quickly
 // (fast compression with a strong background damping, then relaxed), which matters for timing
 // only through the contact network, not for physics; the timed steps use the seed material.
-// Idle figures are the best of several repetitions (the machine may be shared). With --load
-// every figure is taken a second time beside a busy loop in a child process (a browser, another
-// job or a second MPI rank on a user's machine); loaded figures are the mean over the
-// repetitions, since the waits for a descheduled thread are what they measure. --lammps writes
-// the same states as LAMMPS data files, and the timed contact laws as LAMMPS pair lines, for
-// bench/lammps_compare.sh. Around each state's idle figures it measures the round trip of a
-// cache line between two cores (team.hpp), which a team of two pays for and a VM may change by
-// the minute.
+// Every figure of a state times the same steps of the same trajectory: at nu = 0.64 the
+// extension unjams the state within ~20 000 steps and a step gets 1.6x cheaper on the way
+// (docs/performance.md "The same steps for every figure"), so a faster setting that ran further
+// in a fixed wall time was timed on cheaper steps. The settings alternate in rounds; idle
+// figures are the best round (the machine may be shared). With --load every figure is taken a
+// second time beside a busy loop in a child process (a browser, another job or a second MPI
+// rank on a user's machine); loaded figures are the mean over the rounds, since the waits for a
+// descheduled thread are what they measure. --lammps writes the same states as LAMMPS data
+// files, and the timed contact laws as LAMMPS pair lines, for bench/lammps_compare.sh. Before
+// each round and after the last it measures the round trip of a cache line between two cores
+// (team.hpp), which a team of two pays for and a VM may change by the minute.
 #include <omp.h>
 #include <signal.h>
 #include <sys/prctl.h>
@@ -35,6 +38,7 @@
 #include "packing_system.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/packing_file.hpp"
+#include "rendulic/core/statistics.hpp"
 #include "rendulic/dem/contact.hpp"
 #include "rendulic/dem/protocols.hpp"
 #include "rendulic/dem/team.hpp"
@@ -49,7 +53,8 @@ struct BenchOptions {
   std::int64_t n_particles = 9261;
   std::vector<int> threads = {1, 2};
   std::vector<double> volume_fractions = {0.64, 0.82};
-  double seconds = 1.0;         // timed wall time per figure and repetition (at least)
+  double seconds = 1.0;         // the state's first timed run (at least); sets the steps
+  std::int64_t steps = 0;       // > 0: the steps every figure times instead
   double friction = 0;          // > 0: also 1 thread with this mu on the same states
   double rolling_friction = 0;  // > 0 (with friction): also with this mu_r
   int repetitions = 3;
@@ -117,48 +122,117 @@ dem::DemSystem prepared_state(const BenchOptions& o, double nu) {
 }
 
 const Eigen::Vector3d kRate(400.0, -200.0, -200.0);  // the quick scenario's path rate
+// A run stops at this factor of the first run's wall time even short of the state's steps: a
+// setting that slow (a team whose member a busy process deschedules) needs no exact span.
+constexpr double kCapFactor = 20.0;
 
-// One figure: `threads` > 0 is a fixed team of that size, 0 the default (the team chosen while
-// running, up to all cores). Returns the best and the mean over the repetitions, wall, and the
-// best in CPU time of the process (a shared machine's fair figure for one thread).
-struct Figure {
-  double best = 1e300, mean = 0, best_cpu = 1e300;
+// Steps before every timed run, the same for every figure (LAMMPS's `run 100` in
+// bench/lammps_compare.sh): the caches, the thread pool and the list are warm.
+constexpr std::int64_t kWarmSteps = 100;
+
+// The steps every figure of a state times (after kWarmSteps from the state), and a cap on a
+// run's wall time for a setting far slower than the first (a team beside a busy process).
+struct Span {
+  std::int64_t steps = 0;  // 0: not yet known (the first run times --seconds and sets it)
+  double cap_seconds = 0;
+};
+
+// One timed run from the state: `threads` > 0 is a fixed team of that size, 0 the default (the
+// team chosen while running, up to all cores; its first windows are part of what it costs).
+// Wall and CPU time of the process (a shared machine's fair figure for one thread) per
+// particle-step.
+struct Run {
+  double ns = 0, ns_cpu = 0, seconds = 0, steps = 0;
 };
 double cpu_seconds() {
   timespec t{};
   clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
   return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
 }
-Figure time_steps(const dem::DemSystem& base, int threads, int all_cores, const BenchOptions& o) {
+Run time_once(const dem::DemSystem& base, int threads, int all_cores, const BenchOptions& o,
+              Span& span) {
   omp_set_num_threads(threads > 0 ? threads : all_cores);
-  Figure f;
-  double total_seconds = 0, total_steps = 0;
   const double n = static_cast<double>(base.particles().size());
-  for (int rep = 0; rep < o.repetitions; ++rep) {
-    dem::DemSystem s = base;
-    s.set_fixed_team(threads);
-    // Warm caches and the thread pool; the default setting also settles its team size.
-    const auto w0 = std::chrono::steady_clock::now();
-    do s.advance(20, kRate);
-    while (threads == 0 &&
-           std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count() < 0.2);
-    std::int64_t steps = 0;
-    const double c0 = cpu_seconds();
-    const auto t0 = std::chrono::steady_clock::now();
-    double el = 0;
-    while (el < o.seconds) {
-      s.advance(50, kRate);
-      steps += 50;
-      el = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    }
-    f.best = std::min(f.best, el * 1e9 / (static_cast<double>(steps) * n));
-    f.best_cpu =
-        std::min(f.best_cpu, (cpu_seconds() - c0) * 1e9 / (static_cast<double>(steps) * n));
-    total_seconds += el;
-    total_steps += static_cast<double>(steps);
+  dem::DemSystem s = base;
+  s.set_fixed_team(threads);
+  s.advance(kWarmSteps, kRate);
+  const bool first = span.steps == 0;
+  std::int64_t steps = 0;
+  const double c0 = cpu_seconds();
+  const auto t0 = std::chrono::steady_clock::now();
+  double el = 0;
+  while (first ? el < o.seconds : steps < span.steps && el < span.cap_seconds) {
+    const std::int64_t chunk = first ? 50 : std::min<std::int64_t>(50, span.steps - steps);
+    s.advance(chunk, kRate);
+    steps += chunk;
+    el = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   }
-  f.mean = total_seconds * 1e9 / (total_steps * n);
+  if (first) span = {steps, kCapFactor * std::max(el, o.seconds)};
+  Run r;
+  r.steps = static_cast<double>(steps);
+  r.seconds = el;
+  r.ns = el * 1e9 / (r.steps * n);
+  r.ns_cpu = (cpu_seconds() - c0) * 1e9 / (r.steps * n);
+  return r;
+}
+
+// A setting's figure over the rounds: the best and the mean (over all steps), wall, the best in
+// CPU time, and each round's wall figure.
+struct Figure {
+  double best = 1e300, mean = 0, best_cpu = 1e300;
+  std::vector<double> rounds;
+};
+// Every setting once per round from the same state over the same steps (`span`), the order
+// reversed every other round, so that the settings share both the trajectory and the machine's
+// moments: a VM that moves its vCPUs apart for a minute, or a drift, then shows in every
+// setting's figure of that round instead of in one setting's. With `trips`, the cores' round
+// trip is measured before each round and after the last (rounds + 1 figures, or none where it
+// cannot be measured).
+std::vector<Figure> time_rounds(const dem::DemSystem& base, const std::vector<int>& settings,
+                                int all_cores, const BenchOptions& o, Span& span,
+                                std::vector<double>* trips = nullptr) {
+  std::vector<Figure> f(settings.size());
+  std::vector<double> seconds(settings.size(), 0), steps(settings.size(), 0);
+  auto trip = [&] {
+    if (!trips) return;
+    if (const std::optional<double> t = dem::core_round_trip_ns()) trips->push_back(*t);
+  };
+  const std::size_t m = settings.size();
+  for (int rep = 0; rep < o.repetitions; ++rep) {
+    trip();
+    for (std::size_t i = 0; i < m; ++i) {
+      const std::size_t k = rep % 2 == 0 ? i : m - 1 - i;
+      const Run r = time_once(base, settings[k], all_cores, o, span);
+      f[k].best = std::min(f[k].best, r.ns);
+      f[k].best_cpu = std::min(f[k].best_cpu, r.ns_cpu);
+      f[k].rounds.push_back(r.ns);
+      seconds[k] += r.seconds;
+      steps[k] += r.steps;
+    }
+  }
+  trip();
+  if (trips && trips->size() != static_cast<std::size_t>(o.repetitions) + 1) trips->clear();
+  const double n = static_cast<double>(base.particles().size());
+  for (std::size_t k = 0; k < m; ++k) f[k].mean = seconds[k] * 1e9 / (steps[k] * n);
   return f;
+}
+
+// The default setting's figure against the fastest fixed team's in the same round, the median
+// over the rounds: what the team controller (team.hpp) costs or gains, with the host's changes
+// between rounds taken out.
+double default_against_fastest(const std::vector<int>& settings, const std::vector<Figure>& f) {
+  std::vector<double> ratio;
+  for (std::size_t r = 0; r < f.front().rounds.size(); ++r) {
+    double fastest = 1e300, by_default = 0;
+    for (std::size_t k = 0; k < settings.size(); ++k) {
+      if (settings[k] > 0)
+        fastest = std::min(fastest, f[k].rounds[r]);
+      else
+        by_default = f[k].rounds[r];
+    }
+    ratio.push_back(by_default / fastest);
+  }
+  return median(ratio);
 }
 
 // The state as a LAMMPS data file (the writer of `rendulic export`), its time step in the
@@ -194,9 +268,10 @@ Subcommand add_bench(CLI::App& parent) {
       "DEM throughput (ns per particle-step) on the standard states: fixed teams of 1 and 2 "
       "threads and the default setting; --load adds the same figures beside a busy process");
   sub->add_flag("--json", o->json,
-                "print a JSON list of {volume_fraction, threads (0: default), n_particles, "
+                "print a JSON list of {volume_fraction, threads (0: default), n_particles, steps, "
                 "ns_per_particle_step[, ns_per_particle_step_loaded][, core_round_trip_ns_before, "
-                "core_round_trip_ns_after]}");
+                "core_round_trip_ns_after, core_round_trip_ns_rounds], "
+                "ns_per_particle_step_rounds[, ns_per_particle_step_loaded_rounds]}");
   sub->add_flag("--load", o->load,
                 "also time every figure beside a busy loop (a child process), side by side");
   sub->add_option("--lammps", o->lammps_dir,
@@ -209,9 +284,15 @@ Subcommand add_bench(CLI::App& parent) {
   sub->add_option("--threads", o->threads, "fixed team sizes to time (the default is added)")
       ->capture_default_str()
       ->check(CLI::Range(1, 1024));
-  sub->add_option("--seconds", o->seconds, "timed wall time per figure and repetition")
+  sub->add_option("--seconds", o->seconds,
+                  "wall time of each state's first timed run, whose steps every figure of the "
+                  "state then times")
       ->capture_default_str()
       ->check(CLI::Range(0.01, 600.0));
+  sub->add_option("--steps", o->steps,
+                  "the steps every figure times instead (after 100 warm-up steps, as "
+                  "bench/lammps_compare.sh has LAMMPS do)")
+      ->check(CLI::Range(std::int64_t{1}, std::int64_t{100000000}));
   sub->add_option("--friction", o->friction,
                   "also time 1 thread with Coulomb friction mu (dem.friction) on the same states, "
                   "beside the frictionless engine, wall and CPU time")
@@ -221,7 +302,8 @@ Subcommand add_bench(CLI::App& parent) {
                   "(dem.rolling_friction) on the same states")
       ->check(CLI::Range(0.0, 1.0));
   sub->add_option("--repetitions", o->repetitions,
-                  "repetitions (idle: the best is reported; loaded: the mean)")
+                  "rounds, each timing every setting once (idle: the best is reported; loaded: "
+                  "the mean)")
       ->capture_default_str()
       ->check(CLI::Range(1, 100));
   return {
@@ -245,15 +327,17 @@ Subcommand add_bench(CLI::App& parent) {
             write_lammps(state, lammps_file(*o, nu, ".data"));
             write_lammps_pair(state, lammps_file(*o, nu, ".pair"));
           }
-          // The cores' round trip around the idle figures: a VM may move its vCPUs apart and
-          // back within minutes, and a team of two pays per line that crosses between them.
-          const std::optional<double> trip_before = dem::core_round_trip_ns();
-          std::vector<Figure> idle, loaded;
-          for (int t : settings) idle.push_back(time_steps(state, t, all_cores, *o));
-          const std::optional<double> trip_after = dem::core_round_trip_ns();
+          // The idle figures in alternated rounds, the cores' round trip between them: a VM may
+          // move its vCPUs apart and back within minutes, and a team of two pays per line that
+          // crosses between them. Every figure of the state covers the same steps.
+          Span span{o->steps, o->steps > 0 ? 1e300 : 0.0};
+          std::vector<double> trips;
+          const std::vector<Figure> idle =
+              time_rounds(state, settings, all_cores, *o, span, &trips);
+          std::vector<Figure> loaded;
           if (o->load) {
             BusyLoop busy;
-            for (int t : settings) loaded.push_back(time_steps(state, t, all_cores, *o));
+            loaded = time_rounds(state, settings, all_cores, *o, span);
           }
           for (std::size_t k = 0; k < settings.size(); ++k) {
             const int t = settings[k];
@@ -262,12 +346,16 @@ Subcommand add_bench(CLI::App& parent) {
               row["volume_fraction"] = nu;
               row["threads"] = t;
               row["n_particles"] = o->n_particles;
+              row["steps"] = span.steps;
               row["ns_per_particle_step"] = idle[k].best;
               if (o->load) row["ns_per_particle_step_loaded"] = loaded[k].mean;
-              if (trip_before && trip_after) {
-                row["core_round_trip_ns_before"] = *trip_before;
-                row["core_round_trip_ns_after"] = *trip_after;
+              if (!trips.empty()) {
+                row["core_round_trip_ns_before"] = trips.front();
+                row["core_round_trip_ns_after"] = trips.back();
+                row["core_round_trip_ns_rounds"] = trips;
               }
+              row["ns_per_particle_step_rounds"] = idle[k].rounds;
+              if (o->load) row["ns_per_particle_step_loaded_rounds"] = loaded[k].rounds;
               json.push_back(row);
             } else {
               std::cout << std::setw(15) << nu << std::setw(9)
@@ -278,12 +366,33 @@ Subcommand add_bench(CLI::App& parent) {
             }
           }
           if (!o->json) {
-            if (trip_before && trip_after)
+            std::cout << "  every figure: steps " << kWarmSteps << " to " << kWarmSteps + span.steps
+                      << " from the state\n";
+            if (!trips.empty()) {
               std::cout << "  round trip between two cores, before / after the idle figures: "
-                        << std::setprecision(4) << *trip_before << " / " << *trip_after << " ns\n";
-            else
+                        << std::setprecision(4) << trips.front() << " / " << trips.back()
+                        << " ns\n";
+            } else {
               std::cout << "  round trip between two cores: not measured (fewer than two CPUs "
                            "allowed)\n";
+            }
+            if (o->repetitions > 1) {
+              std::cout << "  idle rounds, ns per particle-step (";
+              for (std::size_t k = 0; k < settings.size(); ++k)
+                std::cout << (k ? " / " : "")
+                          << (settings[k] > 0 ? std::to_string(settings[k]) : "default");
+              std::cout << (trips.empty() ? "):\n" : "; round trip before / after, ns):\n");
+              for (std::size_t r = 0; r < idle.front().rounds.size(); ++r) {
+                std::cout << "    " << r + 1 << ": ";
+                for (std::size_t k = 0; k < settings.size(); ++k)
+                  std::cout << (k ? " / " : "") << std::setprecision(4) << idle[k].rounds[r];
+                if (!trips.empty())
+                  std::cout << "; " << std::setprecision(4) << trips[r] << " / " << trips[r + 1];
+                std::cout << "\n";
+              }
+              std::cout << "  default against the fastest fixed team of the same round, median: "
+                        << std::setprecision(3) << default_against_fastest(settings, idle) << "x\n";
+            }
           }
           if (o->friction > 0) {
             // The same state and steps, frictionless and frictional (springs from zero).
@@ -292,13 +401,15 @@ Subcommand add_bench(CLI::App& parent) {
             const dem::DemSystem rough = dem::DemSystem::restore(state.save(), f);
             if (!o->lammps_dir.empty())
               write_lammps_pair(rough, lammps_file(*o, nu, "-friction.pair"));
-            const Figure smooth_1 = time_steps(state, 1, all_cores, *o);
-            const Figure rough_1 = time_steps(rough, 1, all_cores, *o);
+            const Figure smooth_1 = time_rounds(state, {1}, all_cores, *o, span).front();
+            const Figure rough_1 = time_rounds(rough, {1}, all_cores, *o, span).front();
             // And with rolling resistance (its springs from zero too).
             Figure rolling_1;
             if (o->rolling_friction > 0) {
               f.material.mu_r = o->rolling_friction;
-              rolling_1 = time_steps(dem::DemSystem::restore(state.save(), f), 1, all_cores, *o);
+              rolling_1 =
+                  time_rounds(dem::DemSystem::restore(state.save(), f), {1}, all_cores, *o, span)
+                      .front();
             }
             if (o->json) {
               // One row per contact law (rolling_friction only where it is on).
@@ -307,6 +418,7 @@ Subcommand add_bench(CLI::App& parent) {
                 row["volume_fraction"] = nu;
                 row["threads"] = 1;
                 row["n_particles"] = o->n_particles;
+                row["steps"] = span.steps;
                 row["friction"] = mu;
                 if (mu_r > 0) row["rolling_friction"] = mu_r;
                 row["ns_per_particle_step"] = fig.best;

@@ -5,6 +5,8 @@
 # velocity damping and no tangential force, fix viscous for the background damping, fix deform
 # for the same constant-volume extension, the same time step) then runs each state with a few
 # neighbour skins, and the best is reported, in ns per particle-step as rendulic reports it.
+# Both codes time the same steps of the same trajectory: 100 warm-up steps, then STEPS (at
+# nu = 0.64 the extension unjams the state, and later steps are cheaper).
 # With MU > 0 both codes also time one thread / one process with Coulomb friction MU on the same
 # states (rendulic: `bench --friction`; LAMMPS: tangential linear_history), and the script
 # reports each code's frictional step against its own frictionless one. The pair lines come
@@ -21,10 +23,10 @@ command -v lmp > /dev/null || { echo "lammps_compare: lmp not found (apt-get ins
 dir=$(mktemp -d)
 trap 'rm -rf "$dir"' EXIT
 
-echo "== rendulic (idle figures: best of 3 x 2 s)"
+echo "== rendulic (idle figures: best of 3 rounds of steps 100 to $((100 + steps)))"
 friction=()
 if awk -v m="$mu" 'BEGIN {exit !(m > 0)}'; then friction=(--friction "$mu"); fi
-"$rendulic" bench --json --repetitions 3 --seconds 2 "${friction[@]}" --lammps "$dir" |
+"$rendulic" bench --json --repetitions 3 --steps "$steps" "${friction[@]}" --lammps "$dir" |
   tee "$dir/rendulic.json"
 # rendulic's frictional step against its frictionless one (the JSON rows that carry "friction").
 awk '/"volume_fraction"/ {nu = $2 + 0} /"friction"/ {f = $2 + 0; rough = 1}

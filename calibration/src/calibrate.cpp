@@ -9,6 +9,7 @@
 
 #include "rendulic/core/conventions.hpp"
 #include "rendulic/core/errors.hpp"
+#include "rendulic/core/statistics.hpp"
 #include "rendulic/models/law.hpp"
 
 namespace rendulic::calibration {
@@ -30,13 +31,6 @@ namespace {
 // The share of the driver's substep cap above which calibrate() warns that the fit may have
 // ended on that cap (DriverLoad).
 constexpr double kNearSubstepLimit = 0.5;
-
-double median(std::vector<double> v) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
 
 StateSummary analyse_state(const StateData& s) {
   StateSummary out;
