@@ -1203,10 +1203,20 @@ void DemSystem::step_impl(const Eigen::Vector3d& D) {
   // Step times (wall, without list builds) feed the team controller when it has a choice, and
   // the choice of the frictionless pair loop's form (force_block): the branchy one (1) or the
   // compact one (2), which give the same bits, chosen by the same kind of timed windows.
+  // The two controllers try their alternatives one at a time: while the team controller tries
+  // another size the loop keeps its current form, and the steps of the loop's tries do not
+  // count for the team. Both start together, so without this the team's first try ran with the
+  // loop's first try of the other form (at N = 1000, nu = 0.64: 1.37x dearer) and lost against
+  // one thread with the current form (docs/performance.md "The two controllers' tries").
   bool timed = false;
   const int team = choose_team(&timed);
+  const bool team_trying = timed && team != controller_.current();
   const bool loop_timed = !friction_ && fixed_loop_ == 0;
-  compact_ = fixed_loop_ > 0 ? fixed_loop_ == 2 : loop_timed && loop_controller_.choose(2) == 2;
+  const int loop_form = !loop_timed   ? 0
+                        : team_trying ? loop_controller_.current()
+                                      : loop_controller_.choose(2);
+  const bool loop_trying = loop_timed && !team_trying && loop_form != loop_controller_.current();
+  compact_ = fixed_loop_ > 0 ? fixed_loop_ == 2 : loop_form == 2;
   const bool clocked = timed || loop_timed;
   const auto start =
       clocked ? std::chrono::steady_clock::now() : std::chrono::steady_clock::time_point{};
@@ -1288,10 +1298,8 @@ void DemSystem::step_impl(const Eigen::Vector3d& D) {
     const double seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() -
         rebuild_seconds;
-    if (timed && !first_team_step) controller_.record(team, seconds);
-    // The loop's windows count only steps with the team in use (not the team's explorations).
-    if (loop_timed && (!timed || team == controller_.current()))
-      loop_controller_.record(compact_ ? 2 : 1, seconds);
+    if (timed && !first_team_step && !loop_trying) controller_.record(team, seconds);
+    if (loop_timed && !team_trying) loop_controller_.record(compact_ ? 2 : 1, seconds);
   }
 }
 

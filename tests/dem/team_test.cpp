@@ -3,9 +3,10 @@
 // a model machine where a team is faster (idle), slower by a descheduled member's time slice
 // per step (loaded), or one turning into the other. No wall clock is read. The pair loop's form
 // (DemSystem::set_fixed_loop), chosen by a controller of the same kind, is checked on a real
-// system: the default tries both forms, a fixed form and a frictional system never switch. The
-// step's barrier is checked with real threads: its memory order, and a late member waited for;
-// and the cores' round trip (core_round_trip_ns) with real pinned threads.
+// system: the default tries both forms, never in a step that tries another team size, a fixed
+// form and a frictional system never switch. The step's barrier is checked with real threads:
+// its memory order, and a late member waited for; and the cores' round trip
+// (core_round_trip_ns) with real pinned threads.
 #include "rendulic/dem/team.hpp"
 
 #include <gtest/gtest.h>
@@ -114,6 +115,32 @@ TEST(LoopForm, TheDefaultTriesBothFormsAFixedOneAndFrictionNever) {
   for (int k = 0; k < 3000; ++k) fr.step(D);
   EXPECT_FALSE(fr.compact_loop());
   EXPECT_EQ(fr.loop_controller().explorations(), 0);
+  omp_set_num_threads(saved);
+}
+
+// The team controller and the loop's controller try their alternatives one at a time: a step
+// that tries another team size runs the loop's current form, so that the try is compared with
+// its baseline on the same loop (both controllers start together, and their first tries used
+// to coincide). Needs two threads; the cap only bounds a broken controller's run.
+TEST(LoopForm, NeverTriedInTheSameStepAsAnotherTeamSize) {
+  const int saved = omp_get_max_threads();
+  omp_set_num_threads(2);
+  if (omp_get_max_threads() < 2) GTEST_SKIP() << "one thread only: no team to try";
+  DemSystem s = dilute_gas(1000);
+  const Eigen::Vector3d D = Eigen::Vector3d::Constant(-100.0);
+  bool team_tried = false, loop_tried = false;
+  for (int k = 0; k < 400000 && !(team_tried && loop_tried); ++k) {
+    s.step(D);
+    // A controller's current choice changes only to what was just tried, so a step whose team
+    // or form differs from the current one after it was a try.
+    const bool team_try = s.team() != s.team_controller().current();
+    const bool loop_try = (s.compact_loop() ? 2 : 1) != s.loop_controller().current();
+    ASSERT_FALSE(team_try && loop_try) << "step " << k;
+    team_tried = team_tried || team_try;
+    loop_tried = loop_tried || loop_try;
+  }
+  EXPECT_TRUE(team_tried);
+  EXPECT_TRUE(loop_tried);
   omp_set_num_threads(saved);
 }
 
