@@ -19,7 +19,6 @@
 #include <limits>
 #include <numbers>
 #include <stdexcept>
-#include <type_traits>
 
 #include "contacts_first.hpp"
 #include "rendulic/core/conventions.hpp"
@@ -546,13 +545,6 @@ struct Lanes<V8> {
     store_halves(_mm512_unpacklo_pd(v(z), v(w)), p, 0, 2);
     store_halves(_mm512_unpackhi_pd(v(z), v(w)), p, 1, 2);
   }
-  static V8 loadu(const double* p) { return reinterpret_cast<V8>(_mm512_loadu_pd(p)); }
-  static void storeu(double* p, V8 v) { _mm512_storeu_pd(p, reinterpret_cast<__m512d>(v)); }
-  template <class Mask>
-  static bool any(Mask c) {
-    const __m512i m = reinterpret_cast<__m512i>(c);
-    return _mm512_test_epi64_mask(m, m) != 0;
-  }
 };
 using LawLanes = V8;
 #else
@@ -677,12 +669,14 @@ void friction_law(FrictionLanes<kRolling>& c, std::size_t count, const double* Q
 
 // The opening half kick and the drift of particles [lo, hi) (dem_system.hpp, the step), the
 // rows' records for the force loop, and the rebuild rule's two largest excesses e1 >= e2
-// (neighbor_list.hpp), carried in and out. Four particles at a time in the lanes of a V4 (eight
-// in a V8 with AVX-512, as the frictional law), each lane the scalar arithmetic of one particle
-// (the same bits): as scalar code this pass was 12 % of a frictionless step (docs/performance.md
-// "The kick and drift in lanes"). A function
-// of its own, with its pointers and constants as locals: inside the step's parallel region GCC
-// read them from the region's shared block at every particle.
+// (neighbor_list.hpp), carried in and out. Four particles at a time in the lanes of a V4, each
+// lane the scalar arithmetic of one particle (the same bits): as scalar code this pass was 12 %
+// of a frictionless step (docs/performance.md "The kick and drift in lanes"). Not eight in a
+// V8 as the law: the pass is mostly transpositions, which a Zen 4 core takes in two passes for
+// a zmm vector, and eight lanes made the frictionless step 3 % longer (docs/performance.md
+// "The kick and drift on four lanes again"). A function of its own, with its pointers and
+// constants as locals: inside the step's parallel region GCC read them from the region's
+// shared block at every particle.
 struct KickDrift {
   double* v[3];  // velocities
   const double *im, *ref;
@@ -750,8 +744,7 @@ void kick_drift_lanes(const KickDrift& k, std::size_t& i_io, std::size_t hi, dou
 
 void kick_drift(const KickDrift& k, std::size_t lo, std::size_t hi, double& e1_io, double& e2_io) {
   std::size_t i = lo;
-  kick_drift_lanes<LawLanes>(k, i, hi, e1_io, e2_io);
-  if constexpr (!std::is_same_v<LawLanes, V4>) kick_drift_lanes<V4>(k, i, hi, e1_io, e2_io);
+  kick_drift_lanes<V4>(k, i, hi, e1_io, e2_io);
   // The last particles, fewer than four, one by one with the same arithmetic.
   double e1 = e1_io, e2 = e2_io;
   for (; i < hi; ++i) {
