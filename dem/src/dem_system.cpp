@@ -686,11 +686,11 @@ struct KickDrift {
   double s_min;
 };
 
-// Particles [i, hi) in runs of Lanes<V>::kN while a whole run is left (i advances), each lane
-// the scalar arithmetic of one particle.
-template <class V>
+// Particles [i, hi) four at a time while four are left (i advances), each lane the scalar
+// arithmetic of one particle.
 void kick_drift_lanes(const KickDrift& k, std::size_t& i_io, std::size_t hi, double& e1_io,
                       double& e2_io) {
+  using V = V4;
   using L = Lanes<V>;
   constexpr std::size_t kN = L::kN;
   double* __restrict vx = k.v[0];
@@ -744,7 +744,7 @@ void kick_drift_lanes(const KickDrift& k, std::size_t& i_io, std::size_t hi, dou
 
 void kick_drift(const KickDrift& k, std::size_t lo, std::size_t hi, double& e1_io, double& e2_io) {
   std::size_t i = lo;
-  kick_drift_lanes<V4>(k, i, hi, e1_io, e2_io);
+  kick_drift_lanes(k, i, hi, e1_io, e2_io);
   // The last particles, fewer than four, one by one with the same arithmetic.
   double e1 = e1_io, e2 = e2_io;
   for (; i < hi; ++i) {
