@@ -1090,6 +1090,9 @@ void DemSystem::forces_of_thread(std::size_t t, std::size_t T, double half_kick)
   const std::size_t n = p_.size();
   const std::size_t blocks = block_lo_.size() - 1;
   const std::size_t b0 = blocks * t / T, b1 = blocks * (t + 1) / T;
+  using Clock = std::chrono::steady_clock;
+  const bool clocked = phase_timing_;
+  const auto c0 = clocked ? Clock::now() : Clock::time_point{};
   if (rolling_)
     for (std::size_t b = b0; b < b1; ++b) force_block_friction<kStress, true>(b);
   else if (friction_)
@@ -1098,7 +1101,9 @@ void DemSystem::forces_of_thread(std::size_t t, std::size_t T, double half_kick)
     for (std::size_t b = b0; b < b1; ++b) force_block<kStress, true>(b);
   else
     for (std::size_t b = b0; b < b1; ++b) force_block<kStress, false>(b);
+  const auto c1 = clocked ? Clock::now() : c0;
   if (T > 1) barrier_.arrive_and_wait(T);
+  const auto c2 = clocked ? Clock::now() : c0;
   const double gamma_b = options_.material.gamma_b;
   const double* __restrict W = va8_.data();
   double* __restrict A = va8_.data() + 4;
@@ -1140,6 +1145,12 @@ void DemSystem::forces_of_thread(std::size_t t, std::size_t T, double half_kick)
                                {p_.vx.data(), p_.vy.data(), p_.vz.data()},
                                p_.inv_mass.data()},
                     half_kick, lo, hi);
+  if (clocked) {
+    Phases& ph = phase_clocks_[t].p;
+    ph.forces += std::chrono::duration<double>(c1 - c0).count();
+    ph.wait_forces += std::chrono::duration<double>(c2 - c1).count();
+    ph.finish += std::chrono::duration<double>(Clock::now() - c2).count();
+  }
 }
 
 void DemSystem::sum_stress() {
@@ -1151,9 +1162,22 @@ void DemSystem::sum_stress() {
   last_stress_diag_ = s / volume();
 }
 
+void DemSystem::set_phase_timing(bool on) {
+  phase_timing_ = on;
+  phase_clocks_.assign(on ? static_cast<std::size_t>(std::max(last_team_, 1)) : 0, PhaseClock{});
+}
+
+std::vector<DemSystem::Phases> DemSystem::phases() const {
+  std::vector<Phases> out;
+  for (const PhaseClock& c : phase_clocks_) out.push_back(c.p);
+  return out;
+}
+
 template <bool kStress>
 void DemSystem::compute_forces(double half_kick, int team) {
   if (blocks_builds_ != list_.builds()) make_blocks();
+  if (phase_timing_ && phase_clocks_.size() < static_cast<std::size_t>(team))
+    phase_clocks_.resize(static_cast<std::size_t>(team));
 #pragma omp parallel num_threads(team) if (team > 1)
   forces_of_thread<kStress>(static_cast<std::size_t>(omp_get_thread_num()),
                             static_cast<std::size_t>(omp_get_num_threads()), half_kick);
@@ -1249,6 +1273,8 @@ void DemSystem::step_impl(const Eigen::Vector3d& D) {
   // common case) the forces follow in the same region; a rebuild leaves the region, and the
   // forces get one of their own.
   if (tops_.size() < static_cast<std::size_t>(team)) tops_.resize(static_cast<std::size_t>(team));
+  if (phase_timing_ && phase_clocks_.size() < static_cast<std::size_t>(team))
+    phase_clocks_.resize(static_cast<std::size_t>(team));
   const std::size_t blocks = block_lo_.size() - 1;
   bool rebuild = false;
   // From the kick on, p_'s positions and forces lag the records (a rebuild copies them first).
@@ -1259,11 +1285,20 @@ void DemSystem::step_impl(const Eigen::Vector3d& D) {
     const std::size_t T = static_cast<std::size_t>(omp_get_num_threads());
     double e1 = -1e300, e2 = -1e300;
     const std::size_t lo = block_lo_[blocks * t / T], hi = block_lo_[blocks * (t + 1) / T];
+    using Clock = std::chrono::steady_clock;
+    const auto c0 = phase_timing_ ? Clock::now() : Clock::time_point{};
     kick_drift(kick, lo, hi, e1, e2);
     // The rotations' half kick, then the rows' records for the force loop.
     if (friction_) pack_rotations(lo, hi, h, true);
     tops_[t] = {e1, e2};
+    const auto c1 = phase_timing_ ? Clock::now() : c0;
     if (T > 1) barrier_.arrive_and_wait(T);
+    if (phase_timing_) {
+      Phases& ph = phase_clocks_[t].p;
+      ph.kick += std::chrono::duration<double>(c1 - c0).count();
+      ph.wait_kick += std::chrono::duration<double>(Clock::now() - c1).count();
+      ++ph.steps;
+    }
     e1 = e2 = -1e300;
     for (std::size_t u = 0; u < T; ++u) {
       keep_two_largest(tops_[u].e1, e1, e2);
@@ -1275,11 +1310,12 @@ void DemSystem::step_impl(const Eigen::Vector3d& D) {
   }
   double rebuild_seconds = 0;
   if (rebuild) {
-    const auto r0 = clocked ? std::chrono::steady_clock::now() : start;
+    const auto r0 = clocked || phase_timing_ ? std::chrono::steady_clock::now() : start;
     rebuild_list();
-    if (clocked)
+    if (clocked || phase_timing_)
       rebuild_seconds =
           std::chrono::duration<double>(std::chrono::steady_clock::now() - r0).count();
+    if (phase_timing_) phase_clocks_[0].p.list += rebuild_seconds;
     compute_forces<kStress>(h, team);
   } else if constexpr (kStress) {
     sum_stress();

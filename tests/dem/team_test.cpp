@@ -6,7 +6,8 @@
 // system: the default tries both forms, never in a step that tries another team size, a fixed
 // form and a frictional system never switch. The step's barrier is checked with real threads:
 // its memory order, and a late member waited for; and the cores' round trip
-// (core_round_trip_ns) with real pinned threads.
+// (core_round_trip_ns) with real pinned threads. The phase clock of a step (set_phase_timing)
+// changes no bit and accounts every step of every member.
 #include "rendulic/dem/team.hpp"
 
 #include <gtest/gtest.h>
@@ -80,6 +81,47 @@ TEST(TeamRule, ASmallSystemStepsOnOneThreadAndALargerOneUsesTheTeam) {
   omp_set_num_threads(1);  // one thread available: no team, whatever is asked
   large.advance(1, Eigen::Vector3d::Zero());
   EXPECT_EQ(large.team(), 1);
+  omp_set_num_threads(saved);
+}
+
+// DemSystem::set_phase_timing (rendulic bench --phases) only reads clocks: the same steps give
+// the same bits with it on or off, and it accounts every step of every member of the team.
+TEST(PhaseTiming, SameBitsAndEveryStepOfEveryMemberAccounted) {
+  const int saved = omp_get_max_threads();
+  omp_set_num_threads(2);
+  const DemSystem start = dilute_gas(1000);
+  const Eigen::Vector3d D(400.0, -200.0, -200.0);
+  DemSystem plain = start, timed = start;
+  plain.set_fixed_team(2);
+  timed.set_fixed_team(2);
+  timed.advance(5, D);
+  plain.advance(5, D);
+  EXPECT_TRUE(timed.phases().empty());  // off by default
+  timed.set_phase_timing(true);
+  const std::int64_t builds = timed.list_builds();
+  constexpr int kSteps = 1500;
+  timed.advance(kSteps, D);
+  plain.advance(kSteps, D);
+  ASSERT_EQ(timed.team(), 2);
+  const Particles &a = plain.particles(), &b = timed.particles();
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    ASSERT_EQ(a.x[i], b.x[i]) << i;
+    ASSERT_EQ(a.vy[i], b.vy[i]) << i;
+    ASSERT_EQ(a.fz[i], b.fz[i]) << i;
+  }
+  const std::vector<DemSystem::Phases> p = timed.phases();
+  ASSERT_EQ(p.size(), 2u);
+  for (const DemSystem::Phases& q : p) {
+    EXPECT_EQ(q.steps, kSteps);
+    for (const double s : {q.kick, q.wait_kick, q.forces, q.wait_forces, q.finish})
+      EXPECT_GT(s, 0.0);
+  }
+  // The gas is sheared: the list is rebuilt, and only thread 0 accounts for the builds.
+  ASSERT_GT(timed.list_builds(), builds);
+  EXPECT_GT(p[0].list, 0.0);
+  EXPECT_EQ(p[1].list, 0.0);
+  timed.set_phase_timing(true);  // clears
+  for (const DemSystem::Phases& q : timed.phases()) EXPECT_EQ(q.steps, 0);
   omp_set_num_threads(saved);
 }
 

@@ -155,6 +155,19 @@ class DemSystem {
   // each row's contacts first, 2 every row in the list's order. Results are the same.
   void set_fixed_loop(int form) { fixed_loop_ = form; }
   bool compact_loop() const { return compact_; }  // the form of the last step
+  // Where a step's wall time goes, per thread of its team (rendulic bench --phases;
+  // docs/performance.md "Where a team's step goes"): seconds summed over the steps since
+  // set_phase_timing(true), which clears them. kick: the kick and drift of the thread's rows;
+  // wait_kick: the barrier after it; forces: the pair loop over its blocks; wait_forces: the
+  // barrier after that; finish: its rows' sums and closing half kick; list: the list builds
+  // (thread 0, serial and team parts alike). A rebuild step's forces count too, outside a step's
+  // region. Off (the default) a step reads no clock for it.
+  struct Phases {
+    double kick = 0, wait_kick = 0, forces = 0, wait_forces = 0, finish = 0, list = 0;
+    std::int64_t steps = 0;  // steps whose kick this thread ran
+  };
+  void set_phase_timing(bool on);
+  std::vector<Phases> phases() const;
   const TeamController& loop_controller() const { return loop_controller_; }
   // Diagonal of the stress from the last force evaluation that computed it (servo steps).
   Eigen::Vector3d last_stress_diag() const { return last_stress_diag_; }
@@ -279,6 +292,13 @@ class DemSystem {
   };
   std::vector<Top> tops_;
   TeamBarrier barrier_;  // the step region's two barriers (team.hpp: no system call per release)
+  // set_phase_timing: per thread of the team, padded to a cache line (each thread writes its
+  // own while the others run).
+  struct alignas(64) PhaseClock {
+    Phases p;
+  };
+  bool phase_timing_ = false;
+  std::vector<PhaseClock> phase_clocks_;
   TeamController controller_;
   int fixed_team_ = 0;
   // The pair loop's form as a two-rung ladder: "size" 1 the branchy loop, 2 the compact one.
