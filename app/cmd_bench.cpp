@@ -1,9 +1,9 @@
-// `rendulic bench [--json] [--load] [--lammps DIR]` (docs/performance.md): DEM throughput in ns
-// per particle-step on the standard states (isotropic nu = 0.64 and nu = 0.82, N = 9261) under
-// strain-controlled constant-volume extension, for fixed teams of 1 and 2 threads and for the
-// default setting (the team chosen while running, team.hpp). The states are prepared quickly
-// (fast compression with a strong background damping, then relaxed), which matters for timing
-// only through the contact network, not for physics; the timed steps use the seed material.
+// `rendulic bench [--json] [--load] [--phases] [--lammps DIR]` (docs/performance.md): DEM
+// throughput in ns per particle-step on the standard states (isotropic nu = 0.64 and nu = 0.82, N =
+// 9261) under strain-controlled constant-volume extension, for fixed teams of 1 and 2 threads and
+// for the default setting (the team chosen while running, team.hpp). The states are prepared
+// quickly (fast compression with a strong background damping, then relaxed), which matters for
+// timing only through the contact network, not for physics; the timed steps use the seed material.
 // Every figure of a state times the same steps of the same trajectory: at nu = 0.64 the
 // extension unjams the state within ~20 000 steps and a step gets 1.6x cheaper on the way
 // (docs/performance.md "The same steps for every figure"), so a faster setting that ran further
@@ -14,7 +14,9 @@
 // descheduled thread are what they measure. --lammps writes the same states as LAMMPS data
 // files, and the timed contact laws as LAMMPS pair lines, for bench/lammps_compare.sh. Before
 // each round and after the last it measures the round trip of a cache line between two cores
-// (team.hpp), which a team of two pays for and a VM may change by the minute.
+// (team.hpp), which a team of two pays for and a VM may change by the minute. --phases runs each
+// setting once more with the engine's phase clock (DemSystem::set_phase_timing) and says where
+// each thread's step goes (docs/performance.md "Where a team's step goes").
 #include <omp.h>
 #include <signal.h>
 #include <sys/prctl.h>
@@ -33,6 +35,7 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <sstream>
+#include <utility>
 
 #include "commands.hpp"
 #include "packing_system.hpp"
@@ -49,6 +52,7 @@ namespace {
 struct BenchOptions {
   bool json = false;
   bool load = false;
+  bool phases = false;
   std::string lammps_dir;
   std::int64_t n_particles = 9261;
   std::vector<int> threads = {1, 2};
@@ -143,6 +147,7 @@ struct Span {
 // particle-step.
 struct Run {
   double ns = 0, ns_cpu = 0, seconds = 0, steps = 0;
+  std::vector<dem::DemSystem::Phases> phases;  // with `phases`: per thread of the team
 };
 double cpu_seconds() {
   timespec t{};
@@ -150,12 +155,13 @@ double cpu_seconds() {
   return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
 }
 Run time_once(const dem::DemSystem& base, int threads, int all_cores, const BenchOptions& o,
-              Span& span) {
+              Span& span, bool phases = false) {
   omp_set_num_threads(threads > 0 ? threads : all_cores);
   const double n = static_cast<double>(base.particles().size());
   dem::DemSystem s = base;
   s.set_fixed_team(threads);
   s.advance(kWarmSteps, kRate);
+  if (phases) s.set_phase_timing(true);
   const bool first = span.steps == 0;
   std::int64_t steps = 0;
   const double c0 = cpu_seconds();
@@ -173,7 +179,33 @@ Run time_once(const dem::DemSystem& base, int threads, int all_cores, const Benc
   r.seconds = el;
   r.ns = el * 1e9 / (r.steps * n);
   r.ns_cpu = (cpu_seconds() - c0) * 1e9 / (r.steps * n);
+  if (phases) r.phases = s.phases();
   return r;
+}
+
+// Where a step's wall time went (--phases), us per step: one object per thread of the team, and
+// on thread 0 "other", the wall time no phase holds (the team's fork and join, the step's serial
+// parts, the clock reads).
+nlohmann::ordered_json phases_json(const Run& r) {
+  nlohmann::ordered_json threads = nlohmann::ordered_json::array();
+  const double us = 1e6 / r.steps;
+  for (std::size_t t = 0; t < r.phases.size(); ++t) {
+    const dem::DemSystem::Phases& p = r.phases[t];
+    nlohmann::ordered_json row;
+    row["thread"] = t;
+    row["kick"] = p.kick * us;
+    row["wait_kick"] = p.wait_kick * us;
+    row["forces"] = p.forces * us;
+    row["wait_forces"] = p.wait_forces * us;
+    row["finish"] = p.finish * us;
+    if (t == 0) {
+      row["list"] = p.list * us;
+      row["other"] = r.seconds * us -
+                     (p.kick + p.wait_kick + p.forces + p.wait_forces + p.finish + p.list) * us;
+    }
+    threads.push_back(row);
+  }
+  return threads;
 }
 
 // A setting's figure over the rounds: the best and the mean (over all steps), wall, the best in
@@ -271,7 +303,13 @@ Subcommand add_bench(CLI::App& parent) {
                 "print a JSON list of {volume_fraction, threads (0: default), n_particles, steps, "
                 "ns_per_particle_step[, ns_per_particle_step_loaded][, core_round_trip_ns_before, "
                 "core_round_trip_ns_after, core_round_trip_ns_rounds], "
-                "ns_per_particle_step_rounds[, ns_per_particle_step_loaded_rounds]}");
+                "ns_per_particle_step_rounds[, ns_per_particle_step_loaded_rounds][, "
+                "phases_us_per_step]}");
+  sub->add_flag("--phases", o->phases,
+                "after the rounds, one more run of each setting over the same steps that says "
+                "where a step's wall time goes, per thread of the team (us per step: kick and "
+                "drift, the wait after it, pair forces, the wait after them, finish, list "
+                "builds, other); in --json the field phases_us_per_step");
   sub->add_flag("--load", o->load,
                 "also time every figure beside a busy loop (a child process), side by side");
   sub->add_option("--lammps", o->lammps_dir,
@@ -334,6 +372,10 @@ Subcommand add_bench(CLI::App& parent) {
           std::vector<double> trips;
           const std::vector<Figure> idle =
               time_rounds(state, settings, all_cores, *o, span, &trips);
+          std::vector<Run> phased;
+          if (o->phases)
+            for (const int t : settings)
+              phased.push_back(time_once(state, t, all_cores, *o, span, true));
           std::vector<Figure> loaded;
           if (o->load) {
             BusyLoop busy;
@@ -356,6 +398,7 @@ Subcommand add_bench(CLI::App& parent) {
               }
               row["ns_per_particle_step_rounds"] = idle[k].rounds;
               if (o->load) row["ns_per_particle_step_loaded_rounds"] = loaded[k].rounds;
+              if (o->phases) row["phases_us_per_step"] = phases_json(phased[k]);
               json.push_back(row);
             } else {
               std::cout << std::setw(15) << nu << std::setw(9)
@@ -375,6 +418,34 @@ Subcommand add_bench(CLI::App& parent) {
             } else {
               std::cout << "  round trip between two cores: not measured (fewer than two CPUs "
                            "allowed)\n";
+            }
+            if (o->phases) {
+              const std::streamsize precision = std::cout.precision();
+              std::cout << "  where a step goes, us per step (one more run of each setting):\n"
+                        << "    threads  thread   kick   wait  forces   wait  finish   list  "
+                           "other\n";
+              for (std::size_t k = 0; k < settings.size(); ++k) {
+                const nlohmann::ordered_json rows = phases_json(phased[k]);
+                for (const auto& row : rows) {
+                  std::cout << "    " << std::setw(7)
+                            << (settings[k] > 0 ? std::to_string(settings[k]) : "default")
+                            << std::setw(8) << row["thread"].get<int>() << std::fixed
+                            << std::setprecision(1);
+                  // The columns' widths as the header's.
+                  const std::pair<const char*, int> columns[] = {{"kick", 7},
+                                                                 {"wait_kick", 7},
+                                                                 {"forces", 8},
+                                                                 {"wait_forces", 7},
+                                                                 {"finish", 8}};
+                  for (const auto& [key, width] : columns)
+                    std::cout << std::setw(width) << row[key].get<double>();
+                  if (row.contains("list"))
+                    std::cout << std::setw(7) << row["list"].get<double>() << std::setw(7)
+                              << row["other"].get<double>();
+                  std::cout << std::defaultfloat << "\n";
+                }
+              }
+              std::cout.precision(precision);
             }
             if (o->repetitions > 1) {
               std::cout << "  idle rounds, ns per particle-step (";

@@ -1,7 +1,8 @@
 // `rendulic bench` (docs/performance.md "Commands", "The same steps for every figure"): every
 // figure of a state times the same steps of the same trajectory, the settings in alternated
 // rounds with each round's figure and the cores' round trip between rounds in the JSON, and
-// --steps fixes the span. Nothing here is timed: the test reads what the bench says it did.
+// --steps fixes the span, and --phases says where a step goes per thread. Nothing here is timed:
+// the test reads what the bench says it did.
 #include <gtest/gtest.h>
 
 #include <map>
@@ -55,6 +56,43 @@ TEST(Bench, EveryFigureOfAStateTimesTheSameStepsInAlternatedRounds) {
   EXPECT_EQ(steps.size(), 2u);
   EXPECT_EQ(settings, 6);  // 1 thread, 2 threads, the default; two states
   EXPECT_EQ(laws, 4);      // frictionless and frictional, one thread; two states
+}
+
+// --phases: one more run per setting over the same steps, the time per step of each phase for
+// each thread of the team; the phases and "other" add up to the run's wall time per step, which
+// the bench does not report, so the test checks the parts: non-negative, one object per member
+// of the team (N = 1000 allows a team of two), list builds and "other" on thread 0 only.
+TEST(Bench, PhasesSayWhereAStepGoesPerThreadOfTheTeam) {
+  const auto r = run_rendulic(
+      "bench --json --particles 1000 --repetitions 1 --steps 40 --threads 1 2 --phases", false);
+  ASSERT_EQ(r.code, 0) << r.err;
+  const nlohmann::json rows = nlohmann::json::parse(r.out);
+  int teams_of_two = 0;
+  for (const auto& row : rows) {
+    ASSERT_TRUE(row.contains("phases_us_per_step")) << row.dump();
+    const auto& threads = row.at("phases_us_per_step");
+    const int t = row.at("threads");
+    if (t > 0) {
+      EXPECT_EQ(threads.size(), static_cast<std::size_t>(t)) << row.dump();
+    }
+    teams_of_two += t == 2;
+    for (std::size_t k = 0; k < threads.size(); ++k) {
+      const auto& p = threads[k];
+      EXPECT_EQ(p.at("thread").get<std::size_t>(), k);
+      for (const char* key : {"kick", "wait_kick", "forces", "wait_forces", "finish"})
+        EXPECT_GE(p.at(key).get<double>(), 0.0) << key << " " << row.dump();
+      EXPECT_EQ(p.contains("list"), k == 0);
+      EXPECT_EQ(p.contains("other"), k == 0);
+      if (k == 0) {
+        EXPECT_GE(p.at("list").get<double>(), 0.0);
+      }
+    }
+  }
+  EXPECT_EQ(teams_of_two, 2);  // two states
+  const auto text =
+      run_rendulic("bench --particles 1000 --repetitions 1 --steps 20 --threads 1 --phases", false);
+  ASSERT_EQ(text.code, 0) << text.err;
+  EXPECT_NE(text.out.find("where a step goes"), std::string::npos) << text.out;
 }
 
 TEST(Bench, StepsFixesTheSpanOfEveryFigure) {
