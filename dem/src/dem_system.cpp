@@ -1167,6 +1167,11 @@ void DemSystem::set_phase_timing(bool on) {
   phase_clocks_.assign(on ? static_cast<std::size_t>(std::max(last_team_, 1)) : 0, PhaseClock{});
 }
 
+void DemSystem::clock_phases_of(int team) {
+  if (phase_timing_ && phase_clocks_.size() < static_cast<std::size_t>(team))
+    phase_clocks_.resize(static_cast<std::size_t>(team));
+}
+
 std::vector<DemSystem::Phases> DemSystem::phases() const {
   std::vector<Phases> out;
   for (const PhaseClock& c : phase_clocks_) out.push_back(c.p);
@@ -1176,8 +1181,7 @@ std::vector<DemSystem::Phases> DemSystem::phases() const {
 template <bool kStress>
 void DemSystem::compute_forces(double half_kick, int team) {
   if (blocks_builds_ != list_.builds()) make_blocks();
-  if (phase_timing_ && phase_clocks_.size() < static_cast<std::size_t>(team))
-    phase_clocks_.resize(static_cast<std::size_t>(team));
+  clock_phases_of(team);
 #pragma omp parallel num_threads(team) if (team > 1)
   forces_of_thread<kStress>(static_cast<std::size_t>(omp_get_thread_num()),
                             static_cast<std::size_t>(omp_get_num_threads()), half_kick);
@@ -1273,8 +1277,7 @@ void DemSystem::step_impl(const Eigen::Vector3d& D) {
   // common case) the forces follow in the same region; a rebuild leaves the region, and the
   // forces get one of their own.
   if (tops_.size() < static_cast<std::size_t>(team)) tops_.resize(static_cast<std::size_t>(team));
-  if (phase_timing_ && phase_clocks_.size() < static_cast<std::size_t>(team))
-    phase_clocks_.resize(static_cast<std::size_t>(team));
+  clock_phases_of(team);
   const std::size_t blocks = block_lo_.size() - 1;
   bool rebuild = false;
   // From the kick on, p_'s positions and forces lag the records (a rebuild copies them first).

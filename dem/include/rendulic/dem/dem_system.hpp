@@ -299,6 +299,9 @@ class DemSystem {
   };
   bool phase_timing_ = false;
   std::vector<PhaseClock> phase_clocks_;
+  // Before a region of `team` threads (a step's, or the forces' after a rebuild): a clock for
+  // each member when the phases are timed.
+  void clock_phases_of(int team);
   TeamController controller_;
   int fixed_team_ = 0;
   // The pair loop's form as a two-rung ladder: "size" 1 the branchy loop, 2 the compact one.
