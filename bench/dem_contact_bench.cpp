@@ -85,6 +85,8 @@ BENCHMARK(BM_Step)
     ->Args({82, 2, 9261, 0, 0})
     ->Args({64, 1, 9261, 50, 0})
     ->Args({82, 1, 9261, 50, 0})
+    ->Args({64, 2, 9261, 50, 0})
+    ->Args({82, 2, 9261, 50, 0})
     // The loop's two forms against N (docs/performance.md "The contact test and the branch
     // predictor").
     ->ArgsProduct({{64, 82}, {1}, {4000, 9261}, {0}, {0, 1, 2}})

@@ -837,7 +837,7 @@ void finish_rows(const FinishRows& r, double half_kick, std::size_t lo, std::siz
 }  // namespace
 
 template <bool kStress, bool kRolling>
-void DemSystem::force_block_friction(std::size_t b) {
+void DemSystem::force_block_friction(std::size_t b, bool handed) {
   using F = FrictionLanes<kRolling>;
   const std::size_t n = p_.size();
   const Eigen::Vector3d L = cell_.lengths();
@@ -862,12 +862,20 @@ void DemSystem::force_block_friction(std::size_t b) {
   // The rows' force and torque accumulators were cleared by pack_rotations.
   if constexpr (kStress)
     for (std::size_t i = lo; i < hi; ++i) sd[3 * i] = sd[3 * i + 1] = sd[3 * i + 2] = 0.0;
+  const double* __restrict X = slot_in_.data();
   for (std::size_t s = slot_lo_[b]; s < slot_lo_[b + 1]; ++s) {
     const std::size_t r = n + s, j = static_cast<std::size_t>(slot_particle_[s]);
-    store4(P + 4 * r, load4(P + 4 * j) - shift[slot_code_[s]]);
-    store4(W + 8 * r, load4(W + 8 * j));
+    if (handed && slot_handed_[s]) {
+      const double* x = X + 24 * s;
+      store4(P + 4 * r, load4(x) - shift[slot_code_[s]]);
+      store4(W + 8 * r, load4(x + 4));
+      for (int q = 0; q < 12; q += 4) store4(Q + 16 * r + q, load4(x + 8 + q));
+    } else {
+      store4(P + 4 * r, load4(P + 4 * j) - shift[slot_code_[s]]);
+      store4(W + 8 * r, load4(W + 8 * j));
+      for (int q = 0; q < 12; q += 4) store4(Q + 16 * r + q, load4(Q + 16 * j + q));
+    }
     store4(A + 8 * r, V4{});
-    for (int q = 0; q < 12; q += 4) store4(Q + 16 * r + q, load4(Q + 16 * j + q));
     store4(Q + 16 * r + 12, V4{});
   }
   F lanes{};
@@ -1093,14 +1101,16 @@ void DemSystem::forces_of_thread(std::size_t t, std::size_t T, double half_kick)
   using Clock = std::chrono::steady_clock;
   const bool clocked = phase_timing_;
   const auto c0 = clocked ? Clock::now() : Clock::time_point{};
+  const bool handed = T > 1 && T == static_cast<std::size_t>(handoff_team_);
   if (rolling_)
-    for (std::size_t b = b0; b < b1; ++b) force_block_friction<kStress, true>(b);
+    for (std::size_t b = b0; b < b1; ++b) force_block_friction<kStress, true>(b, handed);
   else if (friction_)
-    for (std::size_t b = b0; b < b1; ++b) force_block_friction<kStress, false>(b);
+    for (std::size_t b = b0; b < b1; ++b) force_block_friction<kStress, false>(b, handed);
   else if (compact_)
-    for (std::size_t b = b0; b < b1; ++b) force_block<kStress, true>(b);
+    for (std::size_t b = b0; b < b1; ++b) force_block<kStress, true>(b, handed);
   else
-    for (std::size_t b = b0; b < b1; ++b) force_block<kStress, false>(b);
+    for (std::size_t b = b0; b < b1; ++b) force_block<kStress, false>(b, handed);
+  if (handed) hand_out(t);
   const auto c1 = clocked ? Clock::now() : c0;
   if (T > 1) barrier_.arrive_and_wait(T);
   const auto c2 = clocked ? Clock::now() : c0;
@@ -1114,15 +1124,19 @@ void DemSystem::forces_of_thread(std::size_t t, std::size_t T, double half_kick)
     const std::int32_t* first = sp + slot_lo_[c];
     const std::int32_t* last = sp + slot_lo_[c + 1];
     first = std::lower_bound(first, last, static_cast<std::int32_t>(lo));
+    // Another thread's block returned its shares of these rows through slot_out_.
+    const bool out = handed && (c < b0 || c >= b1);
+    const double* __restrict S = out ? slot_out_.data() : A + 8 * n;
     for (const std::int32_t* q = first; q != last && static_cast<std::size_t>(*q) < hi; ++q) {
       double* a = A + 8 * static_cast<std::size_t>(*q);
-      store4(a, load4(a) + load4(A + 8 * (n + static_cast<std::size_t>(q - sp))));
+      store4(a, load4(a) + load4(S + 8 * static_cast<std::size_t>(q - sp)));
     }
     if (friction_) {
       double* Q = rot16_.data() + 12;
       for (const std::int32_t* q = first; q != last && static_cast<std::size_t>(*q) < hi; ++q) {
         double* a = Q + 16 * static_cast<std::size_t>(*q);
-        store4(a, load4(a) + load4(Q + 16 * (n + static_cast<std::size_t>(q - sp))));
+        const auto u = static_cast<std::size_t>(q - sp);
+        store4(a, load4(a) + load4(out ? slot_out_.data() + 8 * u + 4 : Q + 16 * (n + u)));
       }
     }
   }
@@ -1153,6 +1167,74 @@ void DemSystem::forces_of_thread(std::size_t t, std::size_t T, double half_kick)
   }
 }
 
+// Which slots cross between the threads of a team of `team` (dem_system.hpp, the hand-offs):
+// a slot of block c whose particle lies in another thread's rows. Recomputed when the blocks or
+// the team change; a thread then fills and returns its own lists, no line written by two.
+void DemSystem::prepare_handoffs(int team) {
+  const int T = team;
+  if (handoff_team_ == T && handoff_builds_ == blocks_builds_) return;
+  handoff_team_ = T;
+  handoff_builds_ = blocks_builds_;
+  const std::size_t blocks = block_lo_.size() - 1, S = slot_particle_.size();
+  const std::size_t U = static_cast<std::size_t>(T);
+  slot_handed_.assign(S, 0);
+  fills_.assign(U, {});
+  returns_.assign(U, {});
+  if (T < 2) return;
+  std::vector<std::size_t> thread_of(blocks);
+  for (std::size_t t = 0; t < U; ++t)
+    for (std::size_t c = blocks * t / U; c < blocks * (t + 1) / U; ++c) thread_of[c] = t;
+  for (std::size_t c = 0; c < blocks; ++c)
+    for (std::size_t s = slot_lo_[c]; s < slot_lo_[c + 1]; ++s) {
+      const auto j = static_cast<std::size_t>(slot_particle_[s]);
+      const std::size_t cj = static_cast<std::size_t>(
+          std::upper_bound(block_lo_.begin(), block_lo_.end(), j) - block_lo_.begin() - 1);
+      if (thread_of[cj] == thread_of[c]) continue;
+      slot_handed_[s] = 1;
+      fills_[thread_of[cj]].push_back(static_cast<std::int32_t>(s));
+      returns_[thread_of[c]].push_back(static_cast<std::int32_t>(s));
+    }
+  if (slot_in_.size() < 24 * S) slot_in_.resize(24 * S, 0.0);
+  if (slot_out_.size() < 8 * S) slot_out_.resize(8 * S, 0.0);
+}
+
+void DemSystem::hand_in(std::size_t t) {
+  const double* __restrict P = pos4_.data();
+  const double* __restrict W = va8_.data();
+  double* __restrict X = slot_in_.data();
+  if (!friction_) {
+    for (const std::int32_t s : fills_[t]) {
+      const auto j = static_cast<std::size_t>(slot_particle_[static_cast<std::size_t>(s)]);
+      stream_line(X + 8 * static_cast<std::size_t>(s), load4(P + 4 * j), load4(W + 8 * j));
+    }
+  } else {
+    // Three lines: position and velocity; the mid-step velocity and angular velocity; the
+    // predicted angular velocity (rot16_'s first twelve doubles).
+    const double* __restrict Q = rot16_.data();
+    for (const std::int32_t s : fills_[t]) {
+      const auto j = static_cast<std::size_t>(slot_particle_[static_cast<std::size_t>(s)]);
+      double* x = X + 24 * static_cast<std::size_t>(s);
+      stream_line(x, load4(P + 4 * j), load4(W + 8 * j));
+      stream_line(x + 8, load4(Q + 16 * j), load4(Q + 16 * j + 4));
+      stream_line(x + 16, load4(Q + 16 * j + 8), V4{});
+    }
+  }
+  stream_fence();
+}
+
+void DemSystem::hand_out(std::size_t t) {
+  const std::size_t n = p_.size();
+  const double* __restrict A = va8_.data() + 4;
+  double* __restrict Y = slot_out_.data();
+  // The force share, and with friction the torque share (rot16_ at +12).
+  const double* __restrict Q = friction_ ? rot16_.data() + 12 : nullptr;
+  for (const std::int32_t s : returns_[t]) {
+    const auto u = static_cast<std::size_t>(s);
+    stream_line(Y + 8 * u, load4(A + 8 * (n + u)), Q ? load4(Q + 16 * (n + u)) : V4{});
+  }
+  stream_fence();
+}
+
 void DemSystem::sum_stress() {
   // Serial sum in particle order: independent of the thread count.
   const std::size_t n = p_.size();
@@ -1181,10 +1263,18 @@ std::vector<DemSystem::Phases> DemSystem::phases() const {
 template <bool kStress>
 void DemSystem::compute_forces(double half_kick, int team) {
   if (blocks_builds_ != list_.builds()) make_blocks();
+  prepare_handoffs(team);
   clock_phases_of(team);
 #pragma omp parallel num_threads(team) if (team > 1)
-  forces_of_thread<kStress>(static_cast<std::size_t>(omp_get_thread_num()),
-                            static_cast<std::size_t>(omp_get_num_threads()), half_kick);
+  {
+    const std::size_t t = static_cast<std::size_t>(omp_get_thread_num());
+    const std::size_t T = static_cast<std::size_t>(omp_get_num_threads());
+    if (T > 1 && T == static_cast<std::size_t>(handoff_team_)) {
+      hand_in(t);
+      barrier_.arrive_and_wait(T);
+    }
+    forces_of_thread<kStress>(t, T, half_kick);
+  }
   if constexpr (kStress) sum_stress();
 }
 
@@ -1253,6 +1343,7 @@ void DemSystem::step_impl(const Eigen::Vector3d& D) {
   const Eigen::Vector3d L = cell_.lengths().cwiseProduct(s);
   const Eigen::Vector3d sref = L.cwiseQuotient(list_.ref_lengths());
   if (blocks_builds_ != list_.builds()) make_blocks();
+  prepare_handoffs(team);
   // After make_blocks, which may grow the records.
   if (particles_ahead_) pack_particles();
   const KickDrift kick{{p_.vx.data(), p_.vy.data(), p_.vz.data()},
@@ -1293,6 +1384,7 @@ void DemSystem::step_impl(const Eigen::Vector3d& D) {
     kick_drift(kick, lo, hi, e1, e2);
     // The rotations' half kick, then the rows' records for the force loop.
     if (friction_) pack_rotations(lo, hi, h, true);
+    if (T > 1 && T == static_cast<std::size_t>(handoff_team_)) hand_in(t);
     tops_[t] = {e1, e2};
     const auto c1 = phase_timing_ ? Clock::now() : c0;
     if (T > 1) barrier_.arrive_and_wait(T);

@@ -55,7 +55,7 @@ void DemSystem::reset_contacts_first() {
 // (docs/performance.md "Contacts first in each row"). Both forms give the same bits; the step
 // chooses by timing (DemSystem::step_impl).
 template <bool kStress, bool kCompact>
-void DemSystem::force_block(std::size_t b) {
+void DemSystem::force_block(std::size_t b, bool handed) {
   const std::size_t n = p_.size();
   const Eigen::Vector3d L = cell_.lengths();
   // A pair is handled as whole 4-double records: one vector operation per record instead of
@@ -75,10 +75,12 @@ void DemSystem::force_block(std::size_t b) {
   double* __restrict sd = stress_scratch_.data();
   const std::size_t lo = block_lo_[b], hi = block_lo_[b + 1];
   for (std::size_t i = lo; i < hi; ++i) store4(A + 8 * i, V4{});
+  const double* __restrict X = slot_in_.data();
   for (std::size_t s = slot_lo_[b]; s < slot_lo_[b + 1]; ++s) {
     const std::size_t r = n + s, j = static_cast<std::size_t>(slot_particle_[s]);
-    store4(P + 4 * r, load4(P + 4 * j) - shift[slot_code_[s]]);
-    store4(W + 8 * r, load4(W + 8 * j));
+    const bool in = handed && slot_handed_[s];
+    store4(P + 4 * r, load4(in ? X + 8 * s : P + 4 * j) - shift[slot_code_[s]]);
+    store4(W + 8 * r, load4(in ? X + 8 * s + 4 : W + 8 * j));
     store4(A + 8 * r, V4{});
   }
   for (std::size_t i = lo; i < hi; ++i) {
@@ -188,9 +190,9 @@ void DemSystem::force_block(std::size_t b) {
   }
 }
 
-template void DemSystem::force_block<false, false>(std::size_t);
-template void DemSystem::force_block<false, true>(std::size_t);
-template void DemSystem::force_block<true, false>(std::size_t);
-template void DemSystem::force_block<true, true>(std::size_t);
+template void DemSystem::force_block<false, false>(std::size_t, bool);
+template void DemSystem::force_block<false, true>(std::size_t, bool);
+template void DemSystem::force_block<true, false>(std::size_t, bool);
+template void DemSystem::force_block<true, true>(std::size_t, bool);
 
 }  // namespace rendulic::dem

@@ -212,14 +212,15 @@ class DemSystem {
   template <bool kStress>
   void forces_of_thread(std::size_t t, std::size_t T, double half_kick);
   // kCompact: the touching entries gathered first (the loop's two forms, dem_system.cpp).
+  // handed: the team's hand-offs are prepared for this team (its handed slots read slot_in_).
   template <bool kStress, bool kCompact>
-  void force_block(std::size_t b);
+  void force_block(std::size_t b, bool handed);
   // The same with friction (docs/physics.md section 1b): normal and tangential forces, torques,
   // the history of each entry advanced when advancing_.
   // kRolling: with rolling resistance (its springs in hist_r_), a template argument so that
   // the path without it is the same code as before rolling existed.
   template <bool kStress, bool kRolling>
-  void force_block_friction(std::size_t b);
+  void force_block_friction(std::size_t b, bool handed);
   // Copies the rows' mid-step velocities and angular velocities into rot16_ and clears their
   // force and torque accumulators (friction: force_block_friction adds to them); with
   // opening_kick, first the rotations' opening half kick (half_kick = dt / 2).
@@ -281,6 +282,23 @@ class DemSystem {
   // second part does not touch skips it after one test per entry (force_block_friction).
   std::vector<std::int32_t> entry_first_;
   std::vector<std::uint8_t> slot_code_;  // the periodic image of each slot (NeighborList code)
+  // Hand-offs between the threads of a team of handoff_team_ (prepare_handoffs): a slot of one
+  // thread's block whose particle another thread kicks is filled by that thread, right after
+  // its kick, into slot_in_ (the position and velocity records, 8 doubles per slot; with
+  // friction also rot16_'s, 24), and the share the block leaves there goes back through
+  // slot_out_ (8 doubles per slot: force, and with friction torque), both written
+  // with non-temporal stores. A core's stores into lines the other core has read wait for those
+  // lines to come back, and on this project's VMs that wait grows with the cores' distance
+  // (docs/performance.md "Hand-offs past the caches").
+  int handoff_team_ = 0;
+  std::int64_t handoff_builds_ = -1;
+  std::vector<std::vector<std::int32_t>> fills_;    // per thread: the slots it fills (slot_in_)
+  std::vector<std::vector<std::int32_t>> returns_;  // per thread: the slots it returns (slot_out_)
+  std::vector<std::uint8_t> slot_handed_;           // per slot: 1 if handed over
+  AlignedVector slot_in_, slot_out_;
+  void prepare_handoffs(int team);
+  void hand_in(std::size_t t);
+  void hand_out(std::size_t t);
   // make_blocks' scratch: per block its slots' keys (27 j + code, ascending), per thread of
   // its team a partner's first slot.
   std::vector<std::vector<std::int64_t>> block_keys_;
