@@ -133,11 +133,11 @@ State DemSystem::save() const {
 }
 
 void DemSystem::rebuild_list() {
-  sync_particles();  // positions (the forces are computed after the build)
+  const int team = last_team_;
+  sync_particles(team);  // positions (the forces are computed after the build)
   const Eigen::Vector3d L = cell_.lengths();
   const std::size_t n = p_.size();
   const double skin = options_.skin * options_.material.r_mean;
-  const int team = last_team_;
   double* pos[3] = {p_.x.data(), p_.y.data(), p_.z.data()};
   // Non-affine displacements of the interval that ends here choose the next skins.
   std::vector<double> u;
@@ -225,20 +225,47 @@ void DemSystem::carry_history(const std::vector<std::int64_t>& old_offset,
 }
 
 void DemSystem::note_list_built() {
-  pack_positions();
+  // The blocks first, so that each row's records below are written by the thread that kicks
+  // it: written by one thread for all rows, every line of the other's rows crossed back at its
+  // next kick (docs/performance.md "Hand-offs past the caches").
   make_blocks();
-  // The rebuild rule's reference positions and half skins, read at every step: one record.
   const std::size_t n = p_.size();
+  if (pos4_.size() < 4 * n) pos4_.resize(4 * n, 0.0);
   if (ref4_.size() != 4 * n) ref4_.assign(4 * n, 0.0);
-  for (std::size_t i = 0; i < n; ++i) {
-    ref4_[4 * i] = list_.ref_x()[i];
-    ref4_[4 * i + 1] = list_.ref_y()[i];
-    ref4_[4 * i + 2] = list_.ref_z()[i];
-    ref4_[4 * i + 3] = list_.half_skins()[i];
+  const int team = blocks_team();
+#pragma omp parallel num_threads(team) if (team > 1)
+  {
+    const auto [lo, hi] = rows_of(static_cast<std::size_t>(omp_get_thread_num()),
+                                  static_cast<std::size_t>(omp_get_num_threads()));
+    double* __restrict q = pos4_.data();
+    // The rebuild rule's reference positions and half skins, read at every step: one record.
+    double* __restrict r = ref4_.data();
+    for (std::size_t i = lo; i < hi; ++i) {
+      q[4 * i] = p_.x[i];
+      q[4 * i + 1] = p_.y[i];
+      q[4 * i + 2] = p_.z[i];
+      q[4 * i + 3] = p_.radius[i];
+      r[4 * i] = list_.ref_x()[i];
+      r[4 * i + 1] = list_.ref_y()[i];
+      r[4 * i + 2] = list_.ref_z()[i];
+      r[4 * i + 3] = list_.half_skins()[i];
+    }
   }
 }
 
-void DemSystem::sync_particles() const {
+int DemSystem::blocks_team() const {
+  return static_cast<int>(std::min<std::size_t>(static_cast<std::size_t>(std::max(last_team_, 1)),
+                                                block_lo_.size() - 1));
+}
+
+std::pair<std::size_t, std::size_t> DemSystem::rows_of(std::size_t t, std::size_t T) const {
+  const std::size_t n = p_.size();
+  if (block_lo_.size() < 2 || block_lo_.back() != n) return {n * t / T, n * (t + 1) / T};
+  const std::size_t blocks = block_lo_.size() - 1;
+  return {block_lo_[blocks * t / T], block_lo_[blocks * (t + 1) / T]};
+}
+
+void DemSystem::sync_particles(int team) const {
   if (!records_ahead_.ahead.load(std::memory_order_acquire)) return;
   const std::lock_guard<std::mutex> hold(records_ahead_.lock);
   if (!records_ahead_.ahead.load(std::memory_order_relaxed)) return;
@@ -250,11 +277,16 @@ void DemSystem::sync_particles() const {
                   const_cast<double*>(p_.fz.data())};
   const double* P = pos4_.data();
   const double* A = va8_.data() + 4;
-  for (std::size_t i = 0, n = p_.size(); i < n; ++i)
-    for (int c = 0; c < 3; ++c) {
-      x[c][i] = P[4 * i + static_cast<std::size_t>(c)];
-      f[c][i] = A[8 * i + static_cast<std::size_t>(c)];
-    }
+#pragma omp parallel num_threads(team) if (team > 1)
+  {
+    const auto [lo, hi] = rows_of(static_cast<std::size_t>(omp_get_thread_num()),
+                                  static_cast<std::size_t>(omp_get_num_threads()));
+    for (std::size_t i = lo; i < hi; ++i)
+      for (int c = 0; c < 3; ++c) {
+        x[c][i] = P[4 * i + static_cast<std::size_t>(c)];
+        f[c][i] = A[8 * i + static_cast<std::size_t>(c)];
+      }
+  }
   records_ahead_.ahead.store(false, std::memory_order_release);
 }
 
@@ -313,8 +345,7 @@ void DemSystem::make_blocks() {
   // independent but for where they start, so one barrier (the sizes' prefix) splits the work.
   // On one thread, while the other waited, it took 1.5 M cycles per rebuild at nu = 0.82,
   // N = 9261 (docs/performance.md "Two threads on one list").
-  const int team = static_cast<int>(
-      std::min<std::size_t>(static_cast<std::size_t>(std::max(last_team_, 1)), blocks));
+  const int team = blocks_team();
   first_slot_of_.resize(static_cast<std::size_t>(team) * n);
 #pragma omp parallel num_threads(team) if (team > 1)
   {
@@ -1369,7 +1400,6 @@ void DemSystem::step_impl(const Eigen::Vector3d& D) {
   // forces get one of their own.
   if (tops_.size() < static_cast<std::size_t>(team)) tops_.resize(static_cast<std::size_t>(team));
   clock_phases_of(team);
-  const std::size_t blocks = block_lo_.size() - 1;
   bool rebuild = false;
   // From the kick on, p_'s positions and forces lag the records (a rebuild copies them first).
   records_ahead_.ahead.store(true, std::memory_order_release);
@@ -1378,7 +1408,7 @@ void DemSystem::step_impl(const Eigen::Vector3d& D) {
     const std::size_t t = static_cast<std::size_t>(omp_get_thread_num());
     const std::size_t T = static_cast<std::size_t>(omp_get_num_threads());
     double e1 = -1e300, e2 = -1e300;
-    const std::size_t lo = block_lo_[blocks * t / T], hi = block_lo_[blocks * (t + 1) / T];
+    const auto [lo, hi] = rows_of(t, T);
     using Clock = std::chrono::steady_clock;
     const auto c0 = phase_timing_ ? Clock::now() : Clock::time_point{};
     kick_drift(kick, lo, hi, e1, e2);

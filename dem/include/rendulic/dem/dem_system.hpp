@@ -187,8 +187,13 @@ class DemSystem {
   // A step keeps positions in pos4_ and forces in the force records only (p_'s are not
   // written: the step's footprint, docs/performance.md "The step's footprint"); this copies
   // them into p_ once after a step, for any reader. Under a lock: const readers may share a
-  // system across threads.
-  void sync_particles() const;
+  // system across threads. On a team (a rebuild), each thread copies the rows it kicks.
+  void sync_particles(int team = 1) const;
+  // The rows of thread t of a team of T: those of the blocks it computes and kicks (all rows
+  // before the first blocks).
+  std::pair<std::size_t, std::size_t> rows_of(std::size_t t, std::size_t T) const;
+  // The team of the work done at a list build: the last step's, at most one thread per block.
+  int blocks_team() const;
   // After mutable_particles(): p_'s positions and forces into the records.
   void pack_particles();
   void note_list_built();  // after every build: blocks, targets, packed positions
