@@ -1132,7 +1132,7 @@ void DemSystem::forces_of_thread(std::size_t t, std::size_t T, double half_kick)
   using Clock = std::chrono::steady_clock;
   const bool clocked = phase_timing_;
   const auto c0 = clocked ? Clock::now() : Clock::time_point{};
-  const bool handed = T > 1 && T == static_cast<std::size_t>(handoff_team_);
+  const bool handed = hands_off(T);
   if (rolling_)
     for (std::size_t b = b0; b < b1; ++b) force_block_friction<kStress, true>(b, handed);
   else if (friction_)
@@ -1229,6 +1229,10 @@ void DemSystem::prepare_handoffs(int team) {
   if (slot_out_.size() < 8 * S) slot_out_.resize(8 * S, 0.0);
 }
 
+bool DemSystem::hands_off(std::size_t T) const {
+  return T > 1 && T == static_cast<std::size_t>(handoff_team_);
+}
+
 void DemSystem::hand_in(std::size_t t) {
   const double* __restrict P = pos4_.data();
   const double* __restrict W = va8_.data();
@@ -1300,7 +1304,7 @@ void DemSystem::compute_forces(double half_kick, int team) {
   {
     const std::size_t t = static_cast<std::size_t>(omp_get_thread_num());
     const std::size_t T = static_cast<std::size_t>(omp_get_num_threads());
-    if (T > 1 && T == static_cast<std::size_t>(handoff_team_)) {
+    if (hands_off(T)) {
       hand_in(t);
       barrier_.arrive_and_wait(T);
     }
@@ -1414,7 +1418,7 @@ void DemSystem::step_impl(const Eigen::Vector3d& D) {
     kick_drift(kick, lo, hi, e1, e2);
     // The rotations' half kick, then the rows' records for the force loop.
     if (friction_) pack_rotations(lo, hi, h, true);
-    if (T > 1 && T == static_cast<std::size_t>(handoff_team_)) hand_in(t);
+    if (hands_off(T)) hand_in(t);
     tops_[t] = {e1, e2};
     const auto c1 = phase_timing_ ? Clock::now() : c0;
     if (T > 1) barrier_.arrive_and_wait(T);

@@ -302,6 +302,8 @@ class DemSystem {
   std::vector<std::uint8_t> slot_handed_;           // per slot: 1 if handed over
   AlignedVector slot_in_, slot_out_;
   void prepare_handoffs(int team);
+  // Whether a region of T threads hands off (prepared for a team of T: OpenMP may give fewer).
+  bool hands_off(std::size_t T) const;
   void hand_in(std::size_t t);
   void hand_out(std::size_t t);
   // make_blocks' scratch: per block its slots' keys (27 j + code, ascending), per thread of
