@@ -237,14 +237,10 @@ void DemSystem::note_list_built() {
   {
     const auto [lo, hi] = rows_of(static_cast<std::size_t>(omp_get_thread_num()),
                                   static_cast<std::size_t>(omp_get_num_threads()));
-    double* __restrict q = pos4_.data();
+    pack_positions(lo, hi);
     // The rebuild rule's reference positions and half skins, read at every step: one record.
     double* __restrict r = ref4_.data();
     for (std::size_t i = lo; i < hi; ++i) {
-      q[4 * i] = p_.x[i];
-      q[4 * i + 1] = p_.y[i];
-      q[4 * i + 2] = p_.z[i];
-      q[4 * i + 3] = p_.radius[i];
       r[4 * i] = list_.ref_x()[i];
       r[4 * i + 1] = list_.ref_y()[i];
       r[4 * i + 2] = list_.ref_z()[i];
@@ -258,11 +254,16 @@ int DemSystem::blocks_team() const {
                                                 block_lo_.size() - 1));
 }
 
+std::pair<std::size_t, std::size_t> DemSystem::blocks_of(std::size_t t, std::size_t T) const {
+  const std::size_t blocks = block_lo_.size() - 1;
+  return {blocks * t / T, blocks * (t + 1) / T};
+}
+
 std::pair<std::size_t, std::size_t> DemSystem::rows_of(std::size_t t, std::size_t T) const {
   const std::size_t n = p_.size();
   if (block_lo_.size() < 2 || block_lo_.back() != n) return {n * t / T, n * (t + 1) / T};
-  const std::size_t blocks = block_lo_.size() - 1;
-  return {block_lo_[blocks * t / T], block_lo_[blocks * (t + 1) / T]};
+  const auto [b0, b1] = blocks_of(t, T);
+  return {block_lo_[b0], block_lo_[b1]};
 }
 
 void DemSystem::sync_particles(int team) const {
@@ -305,8 +306,12 @@ void DemSystem::pack_particles() {
 void DemSystem::pack_positions() {
   const std::size_t n = p_.size();
   if (pos4_.size() < 4 * n) pos4_.resize(4 * n, 0.0);
+  pack_positions(0, n);
+}
+
+void DemSystem::pack_positions(std::size_t lo, std::size_t hi) {
   double* __restrict q = pos4_.data();
-  for (std::size_t i = 0; i < n; ++i) {
+  for (std::size_t i = lo; i < hi; ++i) {
     q[4 * i] = p_.x[i];
     q[4 * i + 1] = p_.y[i];
     q[4 * i + 2] = p_.z[i];
@@ -351,7 +356,7 @@ void DemSystem::make_blocks() {
   {
     const std::size_t t = static_cast<std::size_t>(omp_get_thread_num());
     const std::size_t T = static_cast<std::size_t>(omp_get_num_threads());
-    const std::size_t b0 = blocks * t / T, b1 = blocks * (t + 1) / T;
+    const auto [b0, b1] = blocks_of(t, T);
     std::int32_t* first_slot_of = first_slot_of_.data() + t * n;
     const auto key = [&](std::int64_t e) {
       return 27 * static_cast<std::int64_t>(list_.index[e]) + list_.shift_code[e];
@@ -1128,7 +1133,7 @@ template <bool kStress>
 void DemSystem::forces_of_thread(std::size_t t, std::size_t T, double half_kick) {
   const std::size_t n = p_.size();
   const std::size_t blocks = block_lo_.size() - 1;
-  const std::size_t b0 = blocks * t / T, b1 = blocks * (t + 1) / T;
+  const auto [b0, b1] = blocks_of(t, T);
   using Clock = std::chrono::steady_clock;
   const bool clocked = phase_timing_;
   const auto c0 = clocked ? Clock::now() : Clock::time_point{};
@@ -1214,7 +1219,7 @@ void DemSystem::prepare_handoffs(int team) {
   if (T < 2) return;
   std::vector<std::size_t> thread_of(blocks);
   for (std::size_t t = 0; t < U; ++t)
-    for (std::size_t c = blocks * t / U; c < blocks * (t + 1) / U; ++c) thread_of[c] = t;
+    for (auto [c, c1] = blocks_of(t, U); c < c1; ++c) thread_of[c] = t;
   for (std::size_t c = 0; c < blocks; ++c)
     for (std::size_t s = slot_lo_[c]; s < slot_lo_[c + 1]; ++s) {
       const auto j = static_cast<std::size_t>(slot_particle_[s]);

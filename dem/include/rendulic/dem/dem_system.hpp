@@ -184,6 +184,7 @@ class DemSystem {
   void rebuild_list();
   // Copies positions and radii into the packed array the force loop gathers from.
   void pack_positions();
+  void pack_positions(std::size_t lo, std::size_t hi);  // rows [lo, hi), pos4_ already sized
   // A step keeps positions in pos4_ and forces in the force records only (p_'s are not
   // written: the step's footprint, docs/performance.md "The step's footprint"); this copies
   // them into p_ once after a step, for any reader. Under a lock: const readers may share a
@@ -191,6 +192,8 @@ class DemSystem {
   void sync_particles(int team = 1) const;
   // The rows of thread t of a team of T: those of the blocks it computes and kicks (all rows
   // before the first blocks).
+  // The blocks [b0, b1) of thread t of a team of T: the team's one split of the work.
+  std::pair<std::size_t, std::size_t> blocks_of(std::size_t t, std::size_t T) const;
   std::pair<std::size_t, std::size_t> rows_of(std::size_t t, std::size_t T) const;
   // The team of the work done at a list build: the last step's, at most one thread per block.
   int blocks_team() const;
