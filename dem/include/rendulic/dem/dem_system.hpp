@@ -190,10 +190,10 @@ class DemSystem {
   // them into p_ once after a step, for any reader. Under a lock: const readers may share a
   // system across threads. On a team (a rebuild), each thread copies the rows it kicks.
   void sync_particles(int team = 1) const;
-  // The rows of thread t of a team of T: those of the blocks it computes and kicks (all rows
-  // before the first blocks).
   // The blocks [b0, b1) of thread t of a team of T: the team's one split of the work.
   std::pair<std::size_t, std::size_t> blocks_of(std::size_t t, std::size_t T) const;
+  // The rows of thread t of a team of T: those of the blocks it computes and kicks (all rows
+  // before the first blocks).
   std::pair<std::size_t, std::size_t> rows_of(std::size_t t, std::size_t T) const;
   // The team of the work done at a list build: the last step's, at most one thread per block.
   int blocks_team() const;
