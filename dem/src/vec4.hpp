@@ -28,17 +28,19 @@ namespace rendulic::dem::vec4 {
 typedef double V4 __attribute__((vector_size(32)));
 inline V4 load4(const double* p) { return *reinterpret_cast<const V4*>(p); }
 inline void store4(double* p, V4 v) { *reinterpret_cast<V4*>(p) = v; }
-// A whole 64-byte record (two four-double halves) written past the caches, and the fence that
-// makes such writes visible before a barrier: the team's hand-offs (DemSystem::hand_in,
-// docs/performance.md "Hand-offs past the caches").
-inline void stream_line(double* p, V4 a, V4 b) {
+// A four-double half of a 64-byte line, and a whole line (two halves), written past the
+// caches, and the fence that makes such writes visible before a barrier: the team's hand-offs
+// (DemSystem::hand_in and hand_out, docs/performance.md "Hand-offs past the caches").
+inline void stream_half_line(double* p, V4 a) {
 #if defined(__AVX__)
   _mm256_stream_pd(p, reinterpret_cast<__m256d>(a));
-  _mm256_stream_pd(p + 4, reinterpret_cast<__m256d>(b));
 #else
   store4(p, a);
-  store4(p + 4, b);
 #endif
+}
+inline void stream_line(double* p, V4 a, V4 b) {
+  stream_half_line(p, a);
+  stream_half_line(p + 4, b);
 }
 inline void stream_fence() {
 #if defined(__AVX__)

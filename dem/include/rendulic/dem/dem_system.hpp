@@ -294,7 +294,8 @@ class DemSystem {
   // thread's block whose particle another thread kicks is filled by that thread, right after
   // its kick, into slot_in_ (the position and velocity records, 8 doubles per slot; with
   // friction also rot16_'s, 24), and the share the block leaves there goes back through
-  // slot_out_ (8 doubles per slot: force, and with friction torque), both written
+  // slot_out_ (with friction 8 doubles per slot, force and torque; without, the force alone in
+  // 4, two slots a line: half the lines to fetch from the other core), both written
   // with non-temporal stores. A core's stores into lines the other core has read wait for those
   // lines to come back, and on this project's VMs that wait grows with the cores' distance
   // (docs/performance.md "Hand-offs past the caches").
