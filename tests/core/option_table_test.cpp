@@ -7,10 +7,13 @@
 
 #include <functional>
 
+#include "input_error.hpp"
 #include "rendulic/core/errors.hpp"
 
 namespace rendulic {
 namespace {
+
+using rendulic::testing::input_error;
 
 struct Inner {
   double tolerance = 1e-6;
@@ -102,12 +105,7 @@ TEST(OptionTable, CheckRefusesWhatTheScenarioRefuses) {
   EXPECT_TRUE(table().check(good, &why)) << why;
   for (const auto& [assignment, spoil] : bad) {
     Scenario sc(schema);
-    std::string scenario_error;
-    try {
-      sc.apply_override(assignment);
-    } catch (const InputError& e) {
-      scenario_error = e.what();
-    }
+    const std::string scenario_error = input_error([&] { sc.apply_override(assignment); });
     ASSERT_FALSE(scenario_error.empty()) << assignment;
     Example e;
     spoil(e);

@@ -17,12 +17,14 @@
 #include <csignal>
 #include <fstream>
 
+#include "input_error.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/result_paths.hpp"
 
 namespace rendulic {
 namespace {
 namespace fs = std::filesystem;
+using rendulic::testing::input_error;
 
 fs::path fresh_dir(const std::string& name) {
   const fs::path d = fs::path(RENDULIC_TEST_TMP) / "core_results" / name;
@@ -147,12 +149,8 @@ TEST(Results, ListsUnitsCountersAndTheFirstSchema) {
     w.attr("/", "schema", "rendulic/9");
     w.commit();
   }
-  try {
-    ResultsReader r(f);
-    ADD_FAILURE() << "a file of schema rendulic/9 was read";
-  } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("rendulic/9"), std::string::npos) << e.what();
-  }
+  const std::string what = input_error([&] { ResultsReader r(f); });
+  EXPECT_NE(what.find("rendulic/9"), std::string::npos) << what;
 }
 
 TEST(Results, FailureMidWriteLeavesNoResultsFile) {
@@ -242,11 +240,8 @@ TEST(Results, RefusesFilesThatAreNotOurs) {
     std::ofstream(d / "truncated.h5", std::ios::binary) << bytes.substr(0, 600);
   }
   EXPECT_THROW(ResultsReader(d / "truncated.h5"), InputError);
-  try {
-    ResultsReader r(d / "text.h5");
-  } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("not an HDF5 file"), std::string::npos);
-  }
+  const std::string what = input_error([&] { ResultsReader r(d / "text.h5"); });
+  EXPECT_NE(what.find("not an HDF5 file"), std::string::npos) << what;
 }
 
 // Runs `fn` in a child process (for limits and signals that must not touch the test runner);
@@ -263,18 +258,6 @@ int in_child(Fn&& fn) {
   int status = 0;
   waitpid(pid, &status, 0);
   return status;
-}
-
-// The message of the InputError `fn` throws, or "" (a test failure) if it throws none.
-template <class Fn>
-std::string input_error(Fn&& fn) {
-  try {
-    fn();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  ADD_FAILURE() << "no InputError";
-  return "";
 }
 
 fs::path small_file(const fs::path& d) {

@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "input_error.hpp"
 #include "rendulic/core/errors.hpp"
 
 namespace rendulic {
@@ -77,17 +78,7 @@ ScenarioSchema make_schema() {
   return s;
 }
 
-// Runs `fn`, expects an InputError, returns its message.
-template <class Fn>
-std::string input_error(Fn&& fn) {
-  try {
-    fn();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  ADD_FAILURE() << "no InputError";
-  return "";
-}
+using rendulic::testing::input_error;
 
 TEST(Scenario, DefaultsWithoutAFile) {
   const auto schema = make_schema();

@@ -11,11 +11,14 @@
 #include <map>
 
 #include "dem_helpers.hpp"
+#include "input_error.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/dem/probe_campaign.hpp"
 
 namespace rendulic::dem {
 namespace {
+
+using rendulic::testing::input_error;
 
 std::vector<double> flat(const DemSystem& s) {
   const Particles& p = s.particles();
@@ -309,14 +312,10 @@ TEST(FrictionSystem, FrictionlessStatesCarryNoHistory) {
 TEST(FrictionSystem, StaticToolsRefuseAFrictionalPacking) {
   DemSystem s = gas();
   drive(s, 0, 10);
-  try {
-    (void)packing_of(s);
-    FAIL() << "a frictional packing reached the frictionless tools";
-  } catch (const InputError& e) {
-    const std::string what = e.what();
-    EXPECT_NE(what.find("dem.friction"), std::string::npos) << what;
-    EXPECT_EQ(what.find('\n'), std::string::npos) << what;
-  }
+  // A frictional packing must not reach the frictionless tools.
+  const std::string what = input_error([&] { (void)packing_of(s); });
+  EXPECT_NE(what.find("dem.friction"), std::string::npos) << what;
+  EXPECT_EQ(what.find('\n'), std::string::npos) << what;
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 
 #include <filesystem>
 
+#include "input_error.hpp"
 #include "rendulic/core/envelope_io.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/result_paths.hpp"
@@ -14,6 +15,8 @@
 
 namespace rendulic::dem {
 namespace {
+
+using rendulic::testing::input_error;
 
 std::filesystem::path test_file(const char* name) {
   const std::filesystem::path dir = std::filesystem::path(RENDULIC_TEST_TMP) / "probe_plane_io";
@@ -110,14 +113,9 @@ TEST(ProbePlaneIo, UnknownPlaneInAFileIsRefusedNamingIt) {
     out.attr(group, "plane", "octahedral");
     out.commit();
   }
-  try {
-    read_envelope(ResultsReader(file), group);
-    ADD_FAILURE() << "an unknown plane was read";
-  } catch (const InputError& e) {
-    const std::string what = e.what();
-    EXPECT_NE(what.find("octahedral"), std::string::npos) << what;
-    EXPECT_EQ(what.find('\n'), std::string::npos) << what;
-  }
+  const std::string what = input_error([&] { read_envelope(ResultsReader(file), group); });
+  EXPECT_NE(what.find("octahedral"), std::string::npos) << what;
+  EXPECT_EQ(what.find('\n'), std::string::npos) << what;
 }
 
 }  // namespace
