@@ -1163,7 +1163,7 @@ void DemSystem::forces_of_thread(std::size_t t, std::size_t T, double half_kick)
     // Another thread's block returned its shares of these rows through slot_out_.
     const bool out = handed && (c < b0 || c >= b1);
     const double* __restrict S = out ? slot_out_.data() : A + 8 * n;
-    const std::size_t so = out && !friction_ ? 4 : 8;  // slot_out_'s stride (dem_system.hpp)
+    const std::size_t so = out ? share_stride() : 8;
     for (const std::int32_t* q = first; q != last && static_cast<std::size_t>(*q) < hi; ++q) {
       double* a = A + 8 * static_cast<std::size_t>(*q);
       store4(a, load4(a) + load4(S + so * static_cast<std::size_t>(q - sp)));
@@ -1173,7 +1173,7 @@ void DemSystem::forces_of_thread(std::size_t t, std::size_t T, double half_kick)
       for (const std::int32_t* q = first; q != last && static_cast<std::size_t>(*q) < hi; ++q) {
         double* a = Q + 16 * static_cast<std::size_t>(*q);
         const auto u = static_cast<std::size_t>(q - sp);
-        store4(a, load4(a) + load4(out ? slot_out_.data() + 8 * u + 4 : Q + 16 * (n + u)));
+        store4(a, load4(a) + load4(out ? slot_out_.data() + so * u + 4 : Q + 16 * (n + u)));
       }
     }
   }
@@ -1270,16 +1270,12 @@ void DemSystem::hand_out(std::size_t t) {
   // The force share, and with friction the torque share (rot16_ at +12) in the same line;
   // without friction two slots' force shares a line (dem_system.hpp, slot_out_).
   const double* __restrict Q = friction_ ? rot16_.data() + 12 : nullptr;
-  if (Q)
-    for (const std::int32_t s : returns_[t]) {
-      const auto u = static_cast<std::size_t>(s);
-      stream_line(Y + 8 * u, load4(A + 8 * (n + u)), load4(Q + 16 * (n + u)));
-    }
-  else
-    for (const std::int32_t s : returns_[t]) {
-      const auto u = static_cast<std::size_t>(s);
-      stream_half_line(Y + 4 * u, load4(A + 8 * (n + u)));
-    }
+  const std::size_t so = share_stride();
+  for (const std::int32_t s : returns_[t]) {
+    const auto u = static_cast<std::size_t>(s);
+    stream_half_line(Y + so * u, load4(A + 8 * (n + u)));
+    if (Q) stream_half_line(Y + so * u + 4, load4(Q + 16 * (n + u)));
+  }
   stream_fence();
 }
 

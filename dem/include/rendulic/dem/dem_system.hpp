@@ -310,6 +310,8 @@ class DemSystem {
   bool hands_off(std::size_t T) const;
   void hand_in(std::size_t t);
   void hand_out(std::size_t t);
+  // slot_out_'s doubles per slot: force and torque with friction, the force alone without.
+  std::size_t share_stride() const { return friction_ ? 8 : 4; }
   // make_blocks' scratch: per block its slots' keys (27 j + code, ascending), per thread of
   // its team a partner's first slot.
   std::vector<std::vector<std::int64_t>> block_keys_;
