@@ -1320,6 +1320,10 @@ void DemSystem::compute_forces(double half_kick, int team) {
     forces_of_thread<kStress>(t, T, half_kick);
   }
   if constexpr (kStress) sum_stress();
+  // The force records are now ahead of p_ again, also in a step whose list build copied them
+  // out before these forces existed (rebuild_list): without this, a save or an unedited
+  // mutable_particles() right after such a step carried the forces the step started from.
+  records_ahead_.ahead.store(true, std::memory_order_release);
 }
 
 void DemSystem::refresh_forces() {
@@ -1339,7 +1343,6 @@ void DemSystem::refresh_forces() {
   }
   advancing_ = false;  // the forces of the current state: the history stays
   compute_forces<true>(0.0, 1);
-  records_ahead_.ahead.store(true, std::memory_order_release);
 }
 
 void DemSystem::zero_velocities() {

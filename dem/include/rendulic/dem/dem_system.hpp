@@ -213,7 +213,7 @@ class DemSystem {
   // Team size of the next step; *adaptive: the controller chose it (the step is timed).
   int choose_team(bool* adaptive);
   // Forces at the current positions from the velocities in va8_; then, if half_kick != 0,
-  // v += half_kick F / m (the closing half kick of a step).
+  // v += half_kick F / m (the closing half kick of a step). Marks the records ahead of p_.
   template <bool kStress>
   void compute_forces(double half_kick, int team);
   // Inside a parallel region of T threads (or serially with T = 1): thread t's share of it.
