@@ -149,7 +149,7 @@ TEST(Determinism, ASaveRightAfterAListRebuildContinuesTheRun) {
   DemSystem a = gas();
   DemSystem b = gas();
   int k = 0;
-  std::int64_t builds = b.list_builds();
+  const std::int64_t builds = b.list_builds();
   for (; k < 600 && b.list_builds() == builds; ++k) drive(b, k, k + 1);
   ASSERT_GT(b.list_builds(), builds) << "no rebuild in 600 steps";
   drive(a, 0, k);
