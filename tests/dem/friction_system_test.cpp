@@ -4,7 +4,8 @@
 // rebuilds; the stress's antisymmetric part equal to the particles' total torque (so symmetric
 // at rest, to round-off, on a relaxed packing); the contacts' sliding flag that of the last
 // step's own stick-slip test; frictionless states unchanged (no history); and the static tools
-// refusing a frictional packing with one line naming dem.friction.
+// refusing a frictional packing with one line naming dem.friction; a save right after a list
+// rebuild continuing the run.
 #include <gtest/gtest.h>
 #include <omp.h>
 
@@ -316,6 +317,39 @@ TEST(FrictionSystem, StaticToolsRefuseAFrictionalPacking) {
   const std::string what = input_error([&] { (void)packing_of(s); });
   EXPECT_NE(what.find("dem.friction"), std::string::npos) << what;
   EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+}
+
+// The frictional twin of Determinism.ASaveRightAfterAListRebuildContinuesTheRun, with rolling:
+// a state saved (or an unedited mutable_particles()) right after a step that rebuilt the list
+// carries that step's forces and torques, so the restored and the re-packed runs stay on the
+// uninterrupted run's bits, springs included, on one and two threads (each fails without
+// compute_forces marking the records ahead).
+TEST(FrictionSystem, ASaveRightAfterAListRebuildContinuesTheRun) {
+  const int saved = omp_get_max_threads();
+  for (int threads : {1, 2}) {
+    omp_set_num_threads(threads);
+    SystemOptions o = frictional();
+    o.material.mu_r = 0.1;
+    DemSystem a = gas(o);
+    DemSystem b = gas(o);
+    a.set_fixed_team(threads);
+    b.set_fixed_team(threads);
+    int k = 0;
+    const std::int64_t builds = b.list_builds();
+    for (; k < 600 && b.list_builds() == builds; ++k) drive(b, k, k + 1);
+    ASSERT_GT(b.list_builds(), builds) << "no rebuild in 600 steps";
+    drive(a, 0, k);
+    EXPECT_EQ(flat(a), flat(b));
+    DemSystem c = DemSystem::restore(b.save(), b.options());
+    c.set_fixed_team(threads);
+    b.mutable_particles();  // no edit: the next step packs the same values
+    drive(a, k, k + 50);
+    drive(b, k, k + 50);
+    drive(c, k, k + 50);
+    EXPECT_EQ(flat(a), flat(b)) << threads;
+    EXPECT_EQ(flat(a), flat(c)) << threads;
+  }
+  omp_set_num_threads(saved);
 }
 
 }  // namespace
