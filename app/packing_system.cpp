@@ -79,6 +79,10 @@ std::optional<dem::DemSystem> restore_checkpoint(const ResultsReader& in, const 
   s.lengths = three(in, group + datasets::kCellLengths);
   s.strain_E = three(in, cp + datasets::kStrainE);
   s.last_D = three(in, cp + datasets::kLastD);
+  if (in.exists(cp + datasets::kLastStressDiag)) {
+    s.last_stress_diag = three(in, cp + datasets::kLastStressDiag);
+    s.last_stress_known = true;
+  }
   s.time = in.attr_double(cp, "time");
   s.steps = in.attr_int(cp, "steps");
   s.ref_x = column(ref, 0), s.ref_y = column(ref, 1), s.ref_z = column(ref, 2);

@@ -329,6 +329,9 @@ void write_state(ResultsWriter& out, const std::string& g, const dem::DemSystem&
   out.write(cp + datasets::kStrainE,
             std::vector<double>(st.strain_E.data(), st.strain_E.data() + 3));
   out.write(cp + datasets::kLastD, std::vector<double>(st.last_D.data(), st.last_D.data() + 3));
+  if (st.last_stress_known)
+    out.write(cp + datasets::kLastStressDiag,
+              std::vector<double>(st.last_stress_diag.data(), st.last_stress_diag.data() + 3));
   out.attr(cp, "time", st.time);
   out.attr(cp, "steps", st.steps);
   if (!sys.material().frictional()) return;  // frictionless checkpoints keep their layout

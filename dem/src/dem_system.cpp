@@ -86,6 +86,8 @@ DemSystem DemSystem::restore(const State& s, const SystemOptions& options) {
   d.stress_scratch_.assign(3 * d.p_.size(), 0.0);
   d.init_rotations();
   d.sliding_dissipation_ = s.sliding_dissipation;
+  d.last_stress_diag_ = s.last_stress_diag;
+  d.last_stress_known_ = s.last_stress_known;
   // The list is a pure function of the reference state: rebuild it from there.
   Particles ref = s.particles;
   ref.x = s.ref_x;
@@ -128,6 +130,10 @@ State DemSystem::save() const {
   s.ref_half_skin = list_.half_skins();
   if (friction_) s.tangential_history = hist_;
   if (rolling_) s.rolling_history = hist_r_;
+  if (last_stress_known_) {
+    s.last_stress_diag = last_stress_diag_;
+    s.last_stress_known = true;
+  }
   s.sliding_dissipation = sliding_dissipation_;
   return s;
 }
@@ -1286,6 +1292,7 @@ void DemSystem::sum_stress() {
   Eigen::Vector3d s = Eigen::Vector3d::Zero();
   for (std::size_t i = 0; i < n; ++i) s += Eigen::Vector3d(sd[3 * i], sd[3 * i + 1], sd[3 * i + 2]);
   last_stress_diag_ = s / volume();
+  last_stress_known_ = true;
 }
 
 void DemSystem::set_phase_timing(bool on) {
@@ -1358,6 +1365,7 @@ void DemSystem::step_measuring_stress(const Eigen::Vector3d& D) { step_impl<true
 
 template <bool kStress>
 void DemSystem::step_impl(const Eigen::Vector3d& D) {
+  if constexpr (!kStress) last_stress_known_ = false;  // sum_stress sets it on a measuring step
   // Step times (wall, without list builds) feed the team controller when it has a choice, and
   // the choice of the frictionless pair loop's form (force_block): the branchy one (1) or the
   // compact one (2), which give the same bits, chosen by the same kind of timed windows.
@@ -1484,8 +1492,11 @@ void DemSystem::step(const CellControl& control) {
     step(D);
     return;
   }
-  // The servo reads the stress of the previous force evaluation (one step of lag).
-  step_impl<true>(control.velocity_gradient(last_stress_diag_, options_.material.k_star()));
+  // The servo reads the stress of the previous force evaluation (one step of lag), which a
+  // plain step did not sum: then it measures the stress now (the protocols' servos do the same
+  // at their start). A restored state carries the summed one, so a restored run continues.
+  const Eigen::Vector3d sd = last_stress_known_ ? last_stress_diag_ : stress().diagonal();
+  step_impl<true>(control.velocity_gradient(sd, options_.material.k_star()));
 }
 
 Eigen::Vector3d DemSystem::branch(std::size_t i, std::int64_t e, const Eigen::Vector3d& L) const {

@@ -40,10 +40,12 @@ void io(A& a, Particles& p) {
 template <class A>
 void io(A& a, State& s) {
   auto& [particles, lengths, strain_E, last_D, time, steps, ref_x, ref_y, ref_z, ref_lengths,
-         ref_half_skin, tangential_history, sliding_dissipation, rolling_history] = s;
+         ref_half_skin, tangential_history, sliding_dissipation, rolling_history, last_stress_diag,
+         last_stress_known] = s;
   a(particles), a(lengths), a(strain_E), a(last_D), a(time), a(steps);
   a(ref_x), a(ref_y), a(ref_z), a(ref_lengths), a(ref_half_skin);
   a(tangential_history), a(sliding_dissipation), a(rolling_history);
+  a(last_stress_diag), a(last_stress_known);
 }
 template <class A>
 void io(A& a, Material& m) {

@@ -2,8 +2,9 @@
 // frictional packing sheared so that its contacts carry springs and some slide is brought to
 // rest (the dynamic relaxation alone, its balance of forces and torques reported), written as
 // a state with its checkpoint and read back; both then continue bit-identically (angular
-// velocities, torques and tangential springs included). A frictional scenario that asks for a
-// static tool is refused at once, naming the keys, before any simulation.
+// velocities, torques and tangential springs included), and so does a servo-held state. A
+// frictional scenario that asks for a static tool is refused at once, naming the keys, before
+// any simulation.
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -107,6 +108,35 @@ TEST(FrictionState, RestsWithTorquesAndContinuesBitIdenticallyThroughAResultsFil
   back->advance(2000, Eigen::Vector3d(-200.0, 100.0, 100.0));
   EXPECT_EQ(flat(*back), flat(sys));
   EXPECT_GT(sys.save().tangential_history.size(), 0u);
+}
+
+// A state whose last step summed its stress (a servo step: the packing held at a lateral
+// stress) writes that stress into its checkpoint (last_stress_diag), so the servo read back
+// from the file continues on the same bits.
+TEST(FrictionState, AServoStateContinuesBitIdenticallyThroughAResultsFile) {
+  dem::DemSystem sys = sheared();
+  const dem::CellControl control =
+      dem::CellControl::drained_triaxial(-200.0, sys.measure().pressure);
+  for (int k = 0; k < 20; ++k) sys.step(control);
+  ASSERT_TRUE(sys.save().last_stress_known);
+  fs::create_directories(kRoot);
+  const fs::path file = kRoot / "servo.h5";
+  {
+    ResultsWriter out(file);
+    write_material(out, sys.options(), static_cast<std::int64_t>(sys.particles().size()));
+    write_state(out, paths::state("a"), sys, dem::RestSummary{}, 1e-9, true);
+    out.commit();
+  }
+  ResultsReader in(file);
+  EXPECT_EQ(in.read_vector(paths::state("a") + "/checkpoint/last_stress_diag").size(), 3u);
+  std::optional<dem::DemSystem> back = restore_checkpoint(in, paths::state("a"), frictional());
+  ASSERT_TRUE(back.has_value());
+  for (int k = 0; k < 200; ++k) {
+    sys.step(control);
+    back->step(control);
+  }
+  EXPECT_EQ(flat(*back), flat(sys));
+  EXPECT_EQ(back->cell().lengths(), sys.cell().lengths());
 }
 
 TEST(FrictionState, AFrictionalScenarioAskingForAStaticToolIsRefusedAtOnce) {

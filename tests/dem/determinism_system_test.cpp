@@ -229,5 +229,33 @@ TEST(Determinism, ForcesAtRestMatchAnAllPairsSum) {
   }
 }
 
+// The servo of step(CellControl) reads the stress that the last step summed. A state saved
+// during the servo phase carries it, so the restored run continues on the uninterrupted run's
+// bits (before, it restarted from a zero stress: the first step drove the lateral axes at the
+// servo's largest rate). A servo step after plain steps, which sum no stress, measures it
+// now: its D is the control's answer to stress() before the step (before, the stress summed
+// at the last measuring step, here the refresh of the system's construction).
+TEST(Determinism, TheServoReadsTheLastStepsStressAlsoAfterARestore) {
+  const int saved = omp_get_max_threads();
+  omp_set_num_threads(1);
+  DemSystem a = gas();
+  drive(a, 0, 600);
+  DemSystem b = gas();
+  drive(b, 0, 450);
+  DemSystem c = DemSystem::restore(b.save(), b.options());
+  drive(c, 450, 600);
+  EXPECT_EQ(flat(a.particles()), flat(c.particles()));
+  EXPECT_EQ(a.cell().lengths(), c.cell().lengths());
+
+  DemSystem d = gas();
+  drive(d, 0, 400);
+  const CellControl control = CellControl::drained_triaxial(-100.0, 1e5);
+  const Eigen::Vector3d D = control.velocity_gradient(d.stress().diagonal(), d.material().k_star());
+  d.step(control);
+  omp_set_num_threads(saved);
+  EXPECT_EQ(d.last_D(), D);
+  EXPECT_NE(D[1], -100.0);  // the lateral axes follow the servo
+}
+
 }  // namespace
 }  // namespace rendulic::dem

@@ -109,6 +109,9 @@ inline constexpr char kReferenceCellLengths[] = "/reference_cell_lengths";
 inline constexpr char kReferenceHalfSkins[] = "/reference_half_skins";
 inline constexpr char kStrainE[] = "/strain_E";
 inline constexpr char kLastD[] = "/last_D";
+// ... when the state's last force evaluation summed its stress (a servo step, a refresh):
+// DemSystem::step(CellControl) reads it.
+inline constexpr char kLastStressDiag[] = "/last_stress_diag";  // Pa
 // ... of a frictional state only: angular velocities and torques [N,3], the tangential spring
 // of each entry of the neighbour list [entries,3] in the list's order (the list is rebuilt
 // identically from the reference state) and the sliding dissipation so far (attribute); with
@@ -207,6 +210,7 @@ inline constexpr Entry kDatasets[] = {
     {"max_force", "N"},
     {"strain_E", "1"},
     {"last_D", "1/s"},
+    {"last_stress_diag", "Pa"},
     {"angular_velocities", "1/s"},
     {"torques", "N m"},
     {"tangential_springs", "m"},

@@ -86,6 +86,11 @@ struct State {
   double sliding_dissipation = 0;
   // With rolling resistance, the rolling spring of each entry likewise (empty without).
   std::vector<double> rolling_history;
+  // The stress diagonal (Pa) that the last step summed in its force loop, which the next
+  // step(CellControl) reads, when that step summed it (a servo or step_measuring_stress step,
+  // or a force refresh); unknown otherwise, and the next servo step measures it.
+  Eigen::Vector3d last_stress_diag = Eigen::Vector3d::Zero();
+  bool last_stress_known = false;
 };
 
 class DemSystem {
@@ -99,7 +104,8 @@ class DemSystem {
   // One step with the imposed velocity gradient diag(D) (1/s, positive = extension).
   void step(const Eigen::Vector3d& D);
   void advance(std::int64_t n, const Eigen::Vector3d& D);
-  // One step whose D comes from a cell control (servo axes use the stress of the last step).
+  // One step whose D comes from a cell control. Servo axes use the stress that the last step
+  // summed (one step of lag); after a step that did not sum it (step(D)), the stress of now.
   void step(const CellControl& control);
   // One step with the imposed D that also sums the stress's diagonal (last_stress_diag()):
   // for a servo kept outside the engine, e.g. the integral servo of the paths (protocols.hpp).
@@ -253,6 +259,7 @@ class DemSystem {
   Eigen::Vector3d strain_E_ = Eigen::Vector3d::Zero();
   Eigen::Vector3d last_D_ = Eigen::Vector3d::Zero();
   Eigen::Vector3d last_stress_diag_ = Eigen::Vector3d::Zero();
+  bool last_stress_known_ = false;      // last_stress_diag_ is that of the current forces
   std::vector<double> stress_scratch_;  // per-particle diagonal stress (servo steps)
   // p_'s positions and forces lag the records (a step or force evaluation since the last
   // sync_particles), and p_ was handed out for editing (records to refresh from it).
