@@ -37,7 +37,9 @@ std::filesystem::path run_scenario(const RunRequest& r) {
   if (r.resume) {
     writer.emplace(ResultsWriter::resume(final_path));
     for (const auto& note : writer->notes()) log::info(note);
-    const ResumePlan plan = resume_plan(scenario, ResultsReader(writer->temporary_path()));
+    // The working copy of DIR/results.h5.partial, named as that file in any message.
+    const ResumePlan plan =
+        resume_plan(scenario, ResultsReader(writer->temporary_path(), writer->partial_path()));
     completed = plan.completed;
     if (completed.empty()) {
       log::info("resume: ", plan.why_not.empty() ? "no completed stage kept" : plan.why_not,
@@ -46,7 +48,7 @@ std::filesystem::path run_scenario(const RunRequest& r) {
     } else {
       std::string kept;
       for (const auto& c : completed) kept += (kept.empty() ? "" : ", ") + c;
-      log::info("resume: the stages ", kept, " are taken from ", final_path.string(), ".partial");
+      log::info("resume: the stages ", kept, " are taken from ", writer->partial_path().string());
     }
   }
   if (!writer) writer.emplace(final_path);
@@ -76,7 +78,7 @@ std::filesystem::path run_scenario(const RunRequest& r) {
   }
   if (r.resume) {
     std::error_code ec;  // the kept stages are in the final file now, or were redone
-    std::filesystem::remove(final_path.string() + ".partial", ec);
+    std::filesystem::remove(out.partial_path(), ec);
   }
   log::info("wrote ", out.final_path().string());
   run_post_commit(scenario, out.final_path(), ctx);

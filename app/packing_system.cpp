@@ -1,6 +1,8 @@
 // Conversions between Packing and DemSystem, and the checkpoint reader (see packing_system.hpp).
 #include "packing_system.hpp"
 
+#include <cmath>
+
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/result_paths.hpp"
 #include "rendulic/dem/protocols.hpp"
@@ -42,8 +44,31 @@ std::vector<double> spring_history(const Eigen::MatrixXd& m) {
   Eigen::Map<Rows>(h.data(), m.rows(), 3) = m;
   return h;
 }
+// A checkpoint is restarted as it is, so a number that is not finite would become NaN
+// trajectories (or a neighbour list built from NaN): each read is checked, naming its object.
+template <class Values>
+const Values& finite(const ResultsReader& in, const std::string& path, const Values& v) {
+  for (const double x : v)
+    if (!std::isfinite(x))
+      throw InputError(in.path().string() + ":" + path + " holds a number that is not finite");
+  return v;
+}
+Eigen::MatrixXd matrix(const ResultsReader& in, const std::string& path) {
+  Eigen::MatrixXd m = in.read_matrix(path);
+  finite(in, path, m.reshaped());
+  return m;
+}
+std::vector<double> vector(const ResultsReader& in, const std::string& path) {
+  return finite(in, path, in.read_vector(path));
+}
+double number(const ResultsReader& in, const std::string& object, const char* name) {
+  const double x = in.attr_double(object, name);
+  if (!std::isfinite(x))
+    throw InputError(in.path().string() + ":" + object + " attribute " + name + " is not finite");
+  return x;
+}
 Eigen::Vector3d three(const ResultsReader& in, const std::string& path) {
-  const std::vector<double> v = in.read_vector(path);
+  const std::vector<double> v = vector(in, path);
   if (v.size() != 3) throw InputError(in.path().string() + ": " + path + " must hold 3 numbers");
   return {v[0], v[1], v[2]};
 }
@@ -54,11 +79,11 @@ std::optional<dem::DemSystem> restore_checkpoint(const ResultsReader& in, const 
   const std::string cp = group + paths::kCheckpoint;
   if (!in.is_group(cp)) return std::nullopt;
   const std::string where = in.path().string() + ":" + cp;
-  const Eigen::MatrixXd x = in.read_matrix(group + datasets::kPositions);
-  const std::vector<double> radii = in.read_vector(group + datasets::kRadii);
-  const Eigen::MatrixXd v = in.read_matrix(cp + datasets::kVelocities);
-  const Eigen::MatrixXd f = in.read_matrix(cp + datasets::kForces);
-  const Eigen::MatrixXd ref = in.read_matrix(cp + datasets::kReferencePositions);
+  const Eigen::MatrixXd x = matrix(in, group + datasets::kPositions);
+  const std::vector<double> radii = vector(in, group + datasets::kRadii);
+  const Eigen::MatrixXd v = matrix(in, cp + datasets::kVelocities);
+  const Eigen::MatrixXd f = matrix(in, cp + datasets::kForces);
+  const Eigen::MatrixXd ref = matrix(in, cp + datasets::kReferencePositions);
   const auto n = static_cast<Eigen::Index>(radii.size());
   for (const Eigen::MatrixXd* m : {&x, &v, &f, &ref})
     if (m->rows() != n || m->cols() != 3)
@@ -83,19 +108,19 @@ std::optional<dem::DemSystem> restore_checkpoint(const ResultsReader& in, const 
     s.last_stress_diag = three(in, cp + datasets::kLastStressDiag);
     s.last_stress_known = true;
   }
-  s.time = in.attr_double(cp, "time");
+  s.time = number(in, cp, "time");
   s.steps = in.attr_int(cp, "steps");
   s.ref_x = column(ref, 0), s.ref_y = column(ref, 1), s.ref_z = column(ref, 2);
   s.ref_lengths = three(in, cp + datasets::kReferenceCellLengths);
-  s.ref_half_skin = in.read_vector(cp + datasets::kReferenceHalfSkins);
+  s.ref_half_skin = vector(in, cp + datasets::kReferenceHalfSkins);
   if (!s.ref_half_skin.empty() && s.ref_half_skin.size() != radii.size())
     throw InputError(where + ": reference_half_skins must hold one number per particle");
   // A frictional state's rotations and tangential springs (absent from frictionless files and
   // from files written before friction: such a state restarts its springs from zero).
   if (in.exists(cp + datasets::kTangentialSprings)) {
-    const Eigen::MatrixXd w = in.read_matrix(cp + datasets::kAngularVelocities);
-    const Eigen::MatrixXd t = in.read_matrix(cp + datasets::kTorques);
-    const Eigen::MatrixXd xi = in.read_matrix(cp + datasets::kTangentialSprings);
+    const Eigen::MatrixXd w = matrix(in, cp + datasets::kAngularVelocities);
+    const Eigen::MatrixXd t = matrix(in, cp + datasets::kTorques);
+    const Eigen::MatrixXd xi = matrix(in, cp + datasets::kTangentialSprings);
     for (const Eigen::MatrixXd* m : {&w, &t})
       if (m->rows() != n || m->cols() != 3)
         throw InputError(where + ": angular velocities and torques must be [N,3]");
@@ -104,16 +129,20 @@ std::optional<dem::DemSystem> restore_checkpoint(const ResultsReader& in, const 
     p.wx = column(w, 0), p.wy = column(w, 1), p.wz = column(w, 2);
     p.tx = column(t, 0), p.ty = column(t, 1), p.tz = column(t, 2);
     s.tangential_history = spring_history(xi);
-    s.sliding_dissipation = in.attr_double(cp, "sliding_dissipation");
+    s.sliding_dissipation = number(in, cp, "sliding_dissipation");
     // With rolling resistance, its springs, one per entry as the tangential ones.
     if (in.exists(cp + datasets::kRollingSprings)) {
-      const Eigen::MatrixXd xr = in.read_matrix(cp + datasets::kRollingSprings);
+      const Eigen::MatrixXd xr = matrix(in, cp + datasets::kRollingSprings);
       if (xr.rows() != xi.rows() || (xr.rows() > 0 && xr.cols() != 3))
         throw InputError(where + ": rolling springs must be [entries,3] as the tangential ones");
       s.rolling_history = spring_history(xr);
     }
   }
-  return dem::DemSystem::restore(s, options);
+  try {
+    return dem::DemSystem::restore(s, options);
+  } catch (const InputError& e) {  // e.g. another dem.skin than the state's list was made with
+    throw InputError(where + ": " + e.what());
+  }
 }
 
 }  // namespace rendulic::app

@@ -197,12 +197,12 @@ void run_pipeline(const Scenario& scenario, ResultsWriter& out, const RunContext
   if (was_completed("states")) {
     // The states as the states stage left them: restarted bit for bit from their checkpoints.
     session.options = dem::dem_options_from_scenario(scenario);
-    const ResultsReader kept(out.temporary_path());
+    const ResultsReader kept(out.temporary_path(), out.partial_path());
     for (const std::string& label : session.options->state_labels) {
       auto sys = restore_checkpoint(kept, paths::state(label), session.options->system);
       if (!sys)
         throw InputError("run --resume: state " + label + " has no checkpoint in " +
-                         out.temporary_path().string());
+                         kept.path().string());
       session.relaxed.emplace_back(label, std::move(*sys));
     }
   }

@@ -657,6 +657,7 @@ std::string ResultsWriter::keep_partial() {
 const std::vector<std::string>& ResultsWriter::notes() const { return impl_->notes; }
 const fs::path& ResultsWriter::final_path() const { return impl_->final_path; }
 const fs::path& ResultsWriter::temporary_path() const { return impl_->tmp_path; }
+fs::path ResultsWriter::partial_path() const { return with_suffix(impl_->final_path, ".partial"); }
 
 // ========================================================================================
 struct ResultsReader::Impl {
@@ -746,19 +747,22 @@ struct ResultsReader::Impl {
   }
 };
 
-ResultsReader::ResultsReader(const fs::path& path) : impl_(std::make_unique<Impl>()) {
+ResultsReader::ResultsReader(const fs::path& path) : ResultsReader(path, path) {}
+
+ResultsReader::ResultsReader(const fs::path& path, const fs::path& shown_as)
+    : impl_(std::make_unique<Impl>()) {
   detail::quiet_hdf5();
-  impl_->path = path;
+  impl_->path = shown_as;
   std::error_code ec;
   const fs::file_status st = fs::status(path, ec);
   if (ec && ec != std::errc::no_such_file_or_directory)
-    throw InputError(path.string() + ": cannot read: " + ec.message());
-  if (!fs::exists(st)) throw InputError(path.string() + ": no such file");
-  if (!fs::is_regular_file(st)) throw InputError(path.string() + ": not a regular file");
+    throw InputError(shown_as.string() + ": cannot read: " + ec.message());
+  if (!fs::exists(st)) throw InputError(shown_as.string() + ": no such file");
+  if (!fs::is_regular_file(st)) throw InputError(shown_as.string() + ": not a regular file");
   {
     // Open it ourselves first: HDF5 reports an unreadable file as "not HDF5".
     const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK);
-    if (fd < 0) throw InputError(path.string() + ": cannot read: " + std::strerror(errno));
+    if (fd < 0) throw InputError(shown_as.string() + ": cannot read: " + std::strerror(errno));
     ::close(fd);
   }
   bool is_h5 = false;
@@ -767,22 +771,22 @@ ResultsReader::ResultsReader(const fs::path& path) : impl_(std::make_unique<Impl
   } catch (const H5::Exception&) {
     is_h5 = false;
   }
-  if (!is_h5) throw InputError(path.string() + ": not an HDF5 file");
+  if (!is_h5) throw InputError(shown_as.string() + ": not an HDF5 file");
   detail::forget_hdf5_reason();
   try {
     impl_->holder = std::make_unique<H5::H5File>(path.string(), H5F_ACC_RDONLY);
   } catch (const H5::Exception& e) {
-    throw InputError(path.string() +
+    throw InputError(shown_as.string() +
                      ": cannot open (corrupt HDF5 file?): " + detail::hdf5_reason(e));
   }
   std::string schema;
   try {
     schema = attr_string("/", "schema");
   } catch (const InputError&) {
-    throw InputError(path.string() + ": not a rendulic results file (no schema attribute)");
+    throw InputError(shown_as.string() + ": not a rendulic results file (no schema attribute)");
   }
   if (schema != kSchema && schema != kSchemaPrevious)
-    throw InputError(path.string() + ": schema '" + shown(schema) + "' is not " + kSchema +
+    throw InputError(shown_as.string() + ": schema '" + shown(schema) + "' is not " + kSchema +
                      " (or the previous " + kSchemaPrevious + "); a newer rendulic wrote it?");
 }
 

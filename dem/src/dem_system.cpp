@@ -15,6 +15,7 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <limits>
 #include <numbers>
@@ -94,6 +95,19 @@ DemSystem DemSystem::restore(const State& s, const SystemOptions& options) {
   ref.y = s.ref_y;
   ref.z = s.ref_z;
   const double skin = options.skin * options.material.r_mean;
+  // A saved list's half skins fit the skin it was made with (the smallest is half of it): with
+  // another dem.skin the saved list, and the springs kept per entry, cannot be rebuilt.
+  if (!s.ref_half_skin.empty() &&
+      !NeighborList::half_skins_fit(s.particles.radius, skin, s.ref_half_skin)) {
+    const double made = 2.0 * *std::min_element(s.ref_half_skin.begin(), s.ref_half_skin.end()) /
+                        options.material.r_mean;
+    char text[160];
+    std::snprintf(text, sizeof text,
+                  "DEM state: its neighbour list was made with dem.skin = %.6g, not %.6g: "
+                  "restart it with the skin of the run that saved it",
+                  made, options.skin);
+    throw InputError(text);
+  }
   if (s.ref_half_skin.empty())
     d.list_.build(ref, s.ref_lengths, skin);
   else

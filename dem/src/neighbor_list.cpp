@@ -44,6 +44,17 @@ void NeighborList::build(const Particles& p, const Eigen::Vector3d& L, double sk
   build(p, L, skin, std::vector<double>(p.size(), 0.5 * skin));
 }
 
+bool NeighborList::half_skins_fit(const std::vector<double>& radius, double skin,
+                                  const std::vector<double>& half_skins) {
+  if (half_skins.size() != radius.size()) return false;
+  const double r_max = radius.empty() ? 0.0 : *std::max_element(radius.begin(), radius.end());
+  for (std::size_t i = 0; i < radius.size(); ++i)
+    if (!(half_skins[i] >= 0.5 * skin * (1 - 1e-12) &&
+          radius[i] + half_skins[i] <= (r_max + 0.5 * skin) * (1 + 1e-12)))
+      return false;
+  return true;
+}
+
 void NeighborList::build(const Particles& p, const Eigen::Vector3d& L, double skin,
                          std::vector<double> half_skins, int threads) {
   const std::size_t n = p.size();
@@ -51,10 +62,8 @@ void NeighborList::build(const Particles& p, const Eigen::Vector3d& L, double sk
   skin_ = skin;
   if (half_skins.size() != n)
     throw std::invalid_argument("NeighborList::build: one half skin per particle");
-  for (std::size_t i = 0; i < n; ++i)
-    if (!(half_skins[i] >= 0.5 * skin * (1 - 1e-12) &&
-          p.radius[i] + half_skins[i] <= (r_max_ + 0.5 * skin) * (1 + 1e-12)))
-      throw std::invalid_argument("NeighborList::build: half skin out of its bounds");
+  if (!half_skins_fit(p.radius, skin, half_skins))
+    throw std::invalid_argument("NeighborList::build: half skin out of its bounds");
   half_skin_ = std::move(half_skins);
   const double cutoff = 2.0 * r_max_ + skin;
   for (int a = 0; a < 3; ++a)

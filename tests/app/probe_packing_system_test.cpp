@@ -6,15 +6,19 @@
 //    is installed, and by this test in another column layout) and the results file's state give
 //    the same linear-response envelopes;
 //  - a packing away from equilibrium is brought to rest, and the report says what moved;
-//  - bad packing files exit 2 with one line and write nothing;
+//  - bad packing files exit 2 with one line and write nothing, and so does a results file's
+//    state probed with another dem.skin than its list was made with or with a number in its
+//    checkpoint that is not finite;
 //  - probe planes: a deviatoric envelope beside the unchanged Rendulic one, an unknown plane
 //    refused.
+#include <H5Cpp.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
+#include <limits>
 #include <numeric>
 #include <sstream>
 
@@ -227,6 +231,44 @@ TEST(Probe, UnknownPlaneExitsTwoWithOneLineAndWritesNothing) {
   EXPECT_EQ(rendulic::testing::error_lines(run.err), 1) << run.err;
   EXPECT_NE(run.err.find("meridian_200"), std::string::npos) << run.err;
   EXPECT_FALSE(fs::exists(run_out / "results.h5"));
+}
+
+// A results file's state restarts from its checkpoint as it is: its neighbour list (and, with
+// friction, the springs kept per entry) fits the dem.skin it was made with only, and each of
+// its numbers must be finite. Another skin was an internal error (exit 1), a force of inf a
+// results file carrying it; both are one line naming the culprit, exit 2, nothing written.
+TEST(Probe, AResultsFileStateWithAnotherSkinOrANonFiniteNumberIsRefused) {
+  const fs::path base = tiny();
+  const fs::path out = rendulic::testing::fresh_dir("app_probe/checkpoint_bad");
+  const CliResult skin = probe(base.string() + ":/states/b --methods dynamic --set dem.skin=0.05" +
+                               " --out " + (out / "skin").string());
+  EXPECT_EQ(skin.code, 2) << skin.err;
+  EXPECT_EQ(rendulic::testing::error_lines(skin.err), 1) << skin.err;
+  EXPECT_NE(skin.err.find(base.string() + ":/states/b/checkpoint: "), std::string::npos)
+      << skin.err;
+  EXPECT_NE(skin.err.find("made with dem.skin = "), std::string::npos) << skin.err;
+  EXPECT_NE(skin.err.find("not 0.05"), std::string::npos) << skin.err;
+  EXPECT_FALSE(fs::exists(out / "skin" / "results.h5"));
+
+  const fs::path copy = out / "nan.h5";
+  fs::copy_file(base, copy);
+  {
+    H5::H5File h(copy.string(), H5F_ACC_RDWR);
+    H5::DataSet d = h.openDataSet("/states/b/checkpoint/forces");
+    std::vector<double> v(static_cast<std::size_t>(d.getSpace().getSimpleExtentNpoints()));
+    d.read(v.data(), H5::PredType::NATIVE_DOUBLE);
+    v[4] = std::numeric_limits<double>::infinity();
+    d.write(v.data(), H5::PredType::NATIVE_DOUBLE);
+  }
+  const CliResult nan =
+      probe(copy.string() + ":/states/b --methods dynamic --out " + (out / "nan").string());
+  EXPECT_EQ(nan.code, 2) << nan.err;
+  EXPECT_EQ(rendulic::testing::error_lines(nan.err), 1) << nan.err;
+  EXPECT_NE(nan.err.find(copy.string() +
+                         ":/states/b/checkpoint/forces holds a number that is not finite"),
+            std::string::npos)
+      << nan.err;
+  EXPECT_FALSE(fs::exists(out / "nan" / "results.h5"));
 }
 
 void expect_refused(const std::string& name, const std::string& text, const std::string& what) {

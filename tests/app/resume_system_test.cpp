@@ -12,10 +12,12 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <map>
 #include <sstream>
 #include <vector>
@@ -228,7 +230,45 @@ TEST(ResumeRefusal, AnotherScenariosKeptStagesAreRefused) {
   EXPECT_EQ(r.code, 2);
   EXPECT_EQ(rendulic::testing::error_lines(r.err), 1) << r.err;
   EXPECT_NE(r.err.find("another scenario"), std::string::npos) << r.err;
+  // Named as the file the user has, not the working copy the run reads.
+  EXPECT_NE(r.err.find((dir / "results.h5.partial").string() + " holds"), std::string::npos)
+      << r.err;
   EXPECT_TRUE(fs::exists(dir / "results.h5.partial"));
+}
+
+// A kept state is restarted from its checkpoint as it is: a number there that is not finite
+// (here one force) would have become NaN trajectories, and a broken half skin an internal
+// error. Both are one line naming the object in DIR/results.h5.partial, exit 2, and the kept
+// file stays as it was.
+TEST(ResumeRefusal, AKeptCheckpointWithANumberThatIsNotFiniteIsRefusedNamingIt) {
+  const fs::path dir = rendulic::testing::fresh_dir("app_resume/nan");
+  run(dir, "probes");
+  const fs::path partial = dir / "results.h5.partial";
+  ASSERT_TRUE(fs::exists(partial));
+  for (const std::string object :
+       {"/states/b/checkpoint/forces", "/states/a/checkpoint/reference_half_skins"}) {
+    {
+      H5::H5File h(partial.string(), H5F_ACC_RDWR);
+      H5::DataSet d = h.openDataSet(object);
+      std::vector<double> v(static_cast<std::size_t>(d.getSpace().getSimpleExtentNpoints()));
+      d.read(v.data(), H5::PredType::NATIVE_DOUBLE);
+      v[1] = std::nan("");
+      d.write(v.data(), H5::PredType::NATIVE_DOUBLE);
+    }
+    std::ifstream in(partial, std::ios::binary);
+    const std::string before((std::istreambuf_iterator<char>(in)), {});
+    const auto r = rendulic::testing::run_rendulic(
+        "run " + scenario().string() + " --out " + dir.string() + " --resume --threads 1 --quiet",
+        false);
+    EXPECT_EQ(r.code, 2) << r.err;
+    EXPECT_EQ(rendulic::testing::error_lines(r.err), 1) << r.err;
+    EXPECT_NE(r.err.find(partial.string() + ":" + object + " holds a number that is not finite"),
+              std::string::npos)
+        << r.err;
+    std::ifstream again(partial, std::ios::binary);
+    EXPECT_EQ(std::string((std::istreambuf_iterator<char>(again)), {}), before);
+    EXPECT_FALSE(fs::exists(dir / "results.h5"));
+  }
 }
 
 }  // namespace

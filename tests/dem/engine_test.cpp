@@ -1,11 +1,13 @@
 // Engine invariants with closed forms (docs/physics.md sections 1-3): stress, fabric
 // and coordination of a lattice with known forces; affine deformation of a non-touching
 // lattice creates no forces; volume conserved on a constant-volume path; momentum
-// conservation; rattler removal; bit-identical restart; thread-count independence.
+// conservation; rattler removal; bit-identical restart (refused with another skin);
+// thread-count independence.
 #include <gtest/gtest.h>
 #include <omp.h>
 
 #include <cmath>
+#include <cstdio>
 #include <numbers>
 
 #include "dem_helpers.hpp"
@@ -180,6 +182,33 @@ TEST(Engine, RestartIsBitIdentical) {
   EXPECT_EQ(flat(a.particles()), flat(b.particles()));  // exact, not near
   EXPECT_EQ(a.cell().lengths(), b.cell().lengths());
   EXPECT_EQ(a.time(), b.time());
+}
+
+// A saved list's half skins fit the skin it was made with only (the list, and with friction
+// the springs kept per entry, could not be rebuilt with another): restore() says so as bad
+// input naming dem.skin and both values, not as an internal error of the list.
+TEST(Engine, RestoreWithAnotherSkinIsRefusedNamingIt) {
+  SystemOptions o;
+  GasOptions g;
+  g.n_particles = 400;
+  g.volume_fraction = 0.35;
+  DemSystem a = make_gas(o, g, 3);
+  a.advance(1500, Eigen::Vector3d::Constant(-3000.0));
+  const State saved = a.save();
+  ASSERT_FALSE(saved.ref_half_skin.empty());
+  SystemOptions other = o;
+  other.skin = 0.5 * o.skin;
+  try {
+    DemSystem::restore(saved, other);
+    ADD_FAILURE() << "restored with another skin";
+  } catch (const InputError& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("dem.skin"), std::string::npos) << m;
+    char made[64];
+    std::snprintf(made, sizeof made, "= %.6g, not %.6g", o.skin, other.skin);
+    EXPECT_NE(m.find(made), std::string::npos) << m;
+  }
+  EXPECT_NO_THROW(DemSystem::restore(saved, o));
 }
 
 TEST(Engine, CellTooSmallForOneImageIsRefused) {

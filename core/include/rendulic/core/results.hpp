@@ -79,6 +79,8 @@ class ResultsWriter {
 
   const std::filesystem::path& final_path() const;
   const std::filesystem::path& temporary_path() const;
+  // FINAL.partial: where a failed run keeps its completed stages, and resume() starts from.
+  std::filesystem::path partial_path() const;
 
  private:
   ResultsWriter() = default;
@@ -93,6 +95,9 @@ class ResultsReader {
   // the object when it is missing, of the wrong kind (a group for a dataset), type (text for
   // numbers) or shape, or cannot be read.
   explicit ResultsReader(const std::filesystem::path& path);
+  // Reads `path` but names `shown_as` in every message and in path(): e.g. a working copy of
+  // DIR/results.h5.partial, named as the file the user knows.
+  ResultsReader(const std::filesystem::path& path, const std::filesystem::path& shown_as);
   ResultsReader(ResultsReader&&) noexcept;
   ~ResultsReader();
 

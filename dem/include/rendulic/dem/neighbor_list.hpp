@@ -59,6 +59,10 @@ class NeighborList {
   // on `threads` threads (0: omp_get_max_threads()); the list does not depend on them.
   void build(const Particles& p, const Eigen::Vector3d& lengths, double skin,
              std::vector<double> half_skins, int threads = 0);
+  // Whether per-particle half skins fit `skin` as build() asks (a saved list's half skins
+  // fit the skin it was made with only).
+  static bool half_skins_fit(const std::vector<double>& radius, double skin,
+                             const std::vector<double>& half_skins);
 
   // Reference state of the last build (for the rebuild rule and for bit-identical restarts).
   const std::vector<double>& ref_x() const { return ref_x_; }
