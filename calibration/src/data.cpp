@@ -3,6 +3,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
+#include <type_traits>
 
 #include "rendulic/core/conventions.hpp"
 #include "rendulic/core/envelope_io.hpp"
@@ -196,6 +198,24 @@ CalibrationData load_calibration_data(const std::filesystem::path& file,
     if (e.size() != st.size() || e.size() != fb.size() ||
         (!undrained_path && eps.size() != e.size()))
       throw InputError(name + ": /path eps_dev, strain, stress and fabric differ in length");
+    // Every row, not only those sampled below: a NaN in eps_dev would stop the sampling there
+    // and silently drop the rest of the path.
+    auto finite_rows = [&](const auto& rows, const char* dataset) {
+      for (std::size_t j = 0; j < rows.size(); ++j) {
+        bool ok;
+        if constexpr (std::is_same_v<std::decay_t<decltype(rows[j])>, double>)
+          ok = std::isfinite(rows[j]);
+        else
+          ok = rows[j].allFinite();
+        if (!ok)
+          throw InputError(name + ": " + path + dataset + " row " + std::to_string(j) +
+                           " is not finite");
+      }
+    };
+    finite_rows(e, datasets::kEpsDev);
+    finite_rows(st, datasets::kStress);
+    finite_rows(fb, datasets::kFabric);
+    finite_rows(eps, datasets::kStrain);
     if (e.size() >= 2) {
       // Even subsampling along the path keeps the cost of the path block bounded while
       // covering the whole curve; the start row is always kept (it seeds the model path). The
@@ -223,13 +243,10 @@ CalibrationData load_calibration_data(const std::filesystem::path& file,
       if (r.exists(path + datasets::kVolumeFraction)) {
         const auto nu = r.read_vector(path + datasets::kVolumeFraction);
         if (nu.empty()) throw InputError(name + ": /path/volume_fraction is empty");
+        if (!std::isfinite(nu.front()))
+          throw InputError(name + ": /path/volume_fraction row 0 is not finite");
         data.path.volume_fraction = nu.front();
       }
-      for (std::size_t k = 0; k < data.path.eps_dev.size(); ++k)
-        if (!std::isfinite(data.path.eps_dev[k]) || !data.path.stress[k].allFinite() ||
-            !data.path.fabric[k].allFinite() ||
-            (!data.path.strain.empty() && !data.path.strain[k].allFinite()))
-          throw InputError(name + ": /path has non-finite values");
     }
   }
   return data;

@@ -2,12 +2,16 @@
 // docs/calibration.md): a drained-like path stored with its strain tensors is loaded with that
 // strain, the law is driven by its increments, and the law that made the data fits them to
 // round-off; read as if it were undrained (the strain of its eps_dev alone) it would not. An
-// undrained file keeps the undrained strain of its eps_dev.
+// undrained file keeps the undrained strain of its eps_dev. A row that is not finite, in any
+// series, is refused.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
+#include <string>
 
 #include "rendulic/calibration/calibrate.hpp"
+#include "rendulic/core/errors.hpp"
 #include "rendulic/core/results.hpp"
 #include "synthetic.hpp"
 #include "synthetic_file.hpp"
@@ -73,6 +77,45 @@ TEST(PathBlock, ADrainedPathIsFittedAlongItsOwnStrain) {
   EXPECT_TRUE(as_undrained.path.strain.empty());
   const CalibrationSummary wrong = calibrate(as_undrained, o);
   EXPECT_GT(wrong.path_misfit, 100 * std::max(fit.path_misfit, 1e-9));
+}
+
+// Every row of the path's series is checked, not only the rows sampled for the fit: a NaN in
+// eps_dev stopped the sampling at its row and silently dropped the rest of the path (rc 0).
+// Each is one line naming the dataset and the row.
+TEST(PathBlock, ARowThatIsNotFiniteIsRefusedNamingItsDataset) {
+  const auto law =
+      testing::law_with("isotropic_elastic", {{"K", 2.0e10}, {"G", 3e9}, {"c_F", 4.0}});
+  const CalibrationData d = testing::synthetic_data(*law, testing::SyntheticSpec{});
+  const StateData& s0 = d.states.front();
+  const Eigen::Matrix3d end = Eigen::Vector3d(0.01, -0.002, -0.002).asDiagonal();
+  models::PathOptions po;
+  po.steps = 40;
+  po.step.tolerance = 1e-12;
+  const models::PathSeries ps =
+      models::strain_path(*law, law->make_state(s0.stress, s0.fabric, s0.volume_fraction), end, po);
+  ASSERT_TRUE(ps.success) << ps.reason;
+  ASSERT_GT(ps.eps_dev.size(), 30u);
+  LoadOptions few;
+  few.max_path_samples = 4;  // rows 7 and 23 are not among the sampled ones
+  const double nan = std::nan("");
+  for (const std::string dataset : {"eps_dev", "strain", "stress", "fabric"})
+    for (const std::size_t row : {std::size_t{7}, std::size_t{23}}) {
+      SCOPED_TRACE(dataset + " row " + std::to_string(row));
+      models::PathSeries bad = ps;
+      if (dataset == "eps_dev") bad.eps_dev[row] = nan;
+      if (dataset == "strain") bad.strain[row](1, 1) = nan;
+      if (dataset == "stress") bad.stress[row](0, 2) = nan;
+      if (dataset == "fabric") bad.fabric[row](2, 2) = nan;
+      const fs::path file = path_file("nan", "drained_compression", bad, d);
+      try {
+        load_calibration_data(file, few);
+        ADD_FAILURE() << "loaded";
+      } catch (const InputError& e) {
+        EXPECT_EQ(std::string(e.what()), file.string() + ": /path/" + dataset + " row " +
+                                             std::to_string(row) + " is not finite");
+      }
+    }
+  EXPECT_NO_THROW(load_calibration_data(path_file("fine", "drained_compression", ps, d), few));
 }
 
 }  // namespace
