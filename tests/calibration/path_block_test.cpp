@@ -41,18 +41,29 @@ fs::path path_file(const std::string& name, const std::string& type, const model
   return file;
 }
 
-TEST(PathBlock, ADrainedPathIsFittedAlongItsOwnStrain) {
-  const auto law =
+// Synthetic envelopes of an isotropic elastic law and its path in `steps` steps to `end`:
+// axial compression with lateral expansion, not isochoric, so not an undrained strain.
+struct DrainedData {
+  std::unique_ptr<models::Law> law =
       testing::law_with("isotropic_elastic", {{"K", 2.0e10}, {"G", 3e9}, {"c_F", 4.0}});
-  const CalibrationData d = testing::synthetic_data(*law, testing::SyntheticSpec{});
-  const StateData& s0 = d.states.front();
-  // Axial compression with lateral expansion: not isochoric, so not an undrained strain.
-  const Eigen::Matrix3d end = Eigen::Vector3d(0.01, -0.002, -0.002).asDiagonal();
-  models::PathOptions po;
-  po.steps = 12;
-  po.step.tolerance = 1e-12;
-  const models::PathSeries ps =
-      models::strain_path(*law, law->make_state(s0.stress, s0.fabric, s0.volume_fraction), end, po);
+  CalibrationData d = testing::synthetic_data(*law, testing::SyntheticSpec{});
+  Eigen::Matrix3d end = Eigen::Vector3d(0.01, -0.002, -0.002).asDiagonal();
+  models::PathSeries ps;
+  explicit DrainedData(int steps) {
+    const StateData& s0 = d.states.front();
+    models::PathOptions po;
+    po.steps = steps;
+    po.step.tolerance = 1e-12;
+    ps = models::strain_path(*law, law->make_state(s0.stress, s0.fabric, s0.volume_fraction), end,
+                             po);
+  }
+};
+
+TEST(PathBlock, ADrainedPathIsFittedAlongItsOwnStrain) {
+  const DrainedData dd(12);
+  const CalibrationData& d = dd.d;
+  const models::PathSeries& ps = dd.ps;
+  const Eigen::Matrix3d& end = dd.end;
   ASSERT_TRUE(ps.success) << ps.reason;
 
   const CalibrationData drained =
@@ -83,16 +94,9 @@ TEST(PathBlock, ADrainedPathIsFittedAlongItsOwnStrain) {
 // eps_dev stopped the sampling at its row and silently dropped the rest of the path (rc 0).
 // Each is one line naming the dataset and the row.
 TEST(PathBlock, ARowThatIsNotFiniteIsRefusedNamingItsDataset) {
-  const auto law =
-      testing::law_with("isotropic_elastic", {{"K", 2.0e10}, {"G", 3e9}, {"c_F", 4.0}});
-  const CalibrationData d = testing::synthetic_data(*law, testing::SyntheticSpec{});
-  const StateData& s0 = d.states.front();
-  const Eigen::Matrix3d end = Eigen::Vector3d(0.01, -0.002, -0.002).asDiagonal();
-  models::PathOptions po;
-  po.steps = 40;
-  po.step.tolerance = 1e-12;
-  const models::PathSeries ps =
-      models::strain_path(*law, law->make_state(s0.stress, s0.fabric, s0.volume_fraction), end, po);
+  const DrainedData dd(40);
+  const CalibrationData& d = dd.d;
+  const models::PathSeries& ps = dd.ps;
   ASSERT_TRUE(ps.success) << ps.reason;
   ASSERT_GT(ps.eps_dev.size(), 30u);
   LoadOptions few;
