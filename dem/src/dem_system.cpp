@@ -1379,6 +1379,18 @@ void DemSystem::step_measuring_stress(const Eigen::Vector3d& D) { step_impl<true
 
 template <bool kStress>
 void DemSystem::step_impl(const Eigen::Vector3d& D) {
+  // Checked before the step changes anything: a rate the step cannot follow (a NaN from a
+  // servo, or a material whose contact time makes dt huge: density 1e300 gave dt ~ 1e139 s,
+  // infinite cell lengths and an internal error of the list) is bad input, not NaN states.
+  if (const double strain = D.cwiseAbs().maxCoeff() * dt_; !(strain <= kMaxStrainPerStep)) {
+    char text[320];
+    std::snprintf(text, sizeof text,
+                  "DEM: the imposed strain rate %.6g 1/s strains the cell by %.6g per time step "
+                  "(dt = %.6g s), more than %g: lower the rate, or check the material (k, "
+                  "density and r_mean set dt)",
+                  D.cwiseAbs().maxCoeff(), strain, dt_, kMaxStrainPerStep);
+    throw InputError(text);
+  }
   if constexpr (!kStress) last_stress_known_ = false;  // sum_stress sets it on a measuring step
   // Step times (wall, without list builds) feed the team controller when it has a choice, and
   // the choice of the frictionless pair loop's form (force_block): the branchy one (1) or the

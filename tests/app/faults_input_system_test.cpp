@@ -1,10 +1,11 @@
 // Hostile input and faults that the real `rendulic` binary meets before or without any DEM
 // (docs/usage.md: exit 2 and one line naming the culprit, nothing written, never a crash):
 // state labels HDF5 cannot hold, a folder, device or FIFO as the scenario, a key nested 50,000
-// deep, integers at the edge of int64, an unstable preparation damping, a run that computes
-// nothing, damaged results files (a wrongly typed attribute, /states as a dataset, a dangling
-// link, an envelope without stress pairs, a hard-link cycle), `calibrate --out` to a path it
-// cannot write, report and plot into a folder it cannot write, stale temporary files.
+// deep, integers at the edge of int64, an unstable preparation damping, a step that strains the
+// cell too far, a run that computes nothing, damaged results files (a wrongly typed attribute,
+// /states as a dataset, a dangling link, an envelope without stress pairs, a hard-link cycle),
+// `calibrate --out` to a path it cannot write, report and plot into a folder it cannot write,
+// stale temporary files.
 // Synthetic results files (synthetic_results.hpp) stand in for a run's; the damage is done with
 // HDF5's own API.
 #include <H5Cpp.h>
@@ -22,6 +23,7 @@
 #include "cli_runner.hpp"
 #include "rendulic/core/results.hpp"
 #include "synthetic_results.hpp"
+#include "tiny_run.hpp"
 
 namespace {
 namespace fs = std::filesystem;
@@ -92,6 +94,19 @@ TEST(Faults, ANonPositiveNumberIsOneShortLine) {
       expect_refusal(r, command.substr(command.rfind(' ') + 1));
       EXPECT_LT(r.err.size(), 120u) << r.err;
     }
+}
+
+// A material whose contact time makes the time step huge (density 1e300: dt ~ 1e140 s), so
+// that one step strains the cell by more than DemSystem::kMaxStrainPerStep, is refused at the
+// first step: it was an internal error of the neighbour list (exit 1) after infinite cell
+// lengths.
+TEST(Faults, AStepThatStrainsTheCellTooFarIsOneLine) {
+  const fs::path d = fresh_dir("strain_step");
+  const CliResult r = rendulic("run " + rendulic::testing::tiny_scenario(d).string() + " --out " +
+                               (d / "o").string() + " --quiet --set material.density=1e300");
+  expect_refusal(r, "per time step");
+  EXPECT_NE(r.err.find("density"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(d / "o" / "results.h5"));
 }
 
 TEST(Faults, StateLabelsHdf5CannotHoldAreRefusedBeforeAnythingIsWritten) {

@@ -2,12 +2,13 @@
 // and coordination of a lattice with known forces; affine deformation of a non-touching
 // lattice creates no forces; volume conserved on a constant-volume path; momentum
 // conservation; rattler removal; bit-identical restart (refused with another skin);
-// thread-count independence.
+// thread-count independence; a step straining the cell too far refused.
 #include <gtest/gtest.h>
 #include <omp.h>
 
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <numbers>
 
 #include "dem_helpers.hpp"
@@ -210,6 +211,32 @@ TEST(Engine, RestoreWithAnotherSkinIsRefusedNamingIt) {
     EXPECT_NE(m.find(made), std::string::npos) << m;
   }
   EXPECT_NO_THROW(DemSystem::restore(saved, o));
+}
+
+// A step the integrator cannot follow is refused before it changes anything: a rate that
+// strains the cell by more than DemSystem::kMaxStrainPerStep in one step, and a rate that is
+// not finite (a servo gone wrong). Just below the limit the step is taken.
+TEST(Engine, AStepStrainingTheCellTooFarOrByNaNIsRefusedUntouched) {
+  SystemOptions o;
+  DemSystem s = compressed_gas(o);
+  const double limit = DemSystem::kMaxStrainPerStep / s.dt();
+  const State before = s.save();
+  for (const Eigen::Vector3d& D :
+       {Eigen::Vector3d(0.0, 1.001 * limit, 0.0), Eigen::Vector3d(-1.001 * limit, 0.0, 0.0),
+        Eigen::Vector3d(std::nan(""), 0.0, 0.0),
+        Eigen::Vector3d(0.0, 0.0, std::numeric_limits<double>::infinity())}) {
+    try {
+      s.step(D);
+      ADD_FAILURE() << "stepped with D = " << D.transpose();
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("per time step"), std::string::npos) << e.what();
+    }
+    EXPECT_EQ(s.steps(), before.steps);
+    EXPECT_EQ(s.cell().lengths(), before.lengths);
+    EXPECT_EQ(flat(s.particles()), flat(before.particles));
+  }
+  EXPECT_NO_THROW(s.step(Eigen::Vector3d(0.0, 0.999 * limit, 0.0)));
+  EXPECT_EQ(s.steps(), before.steps + 1);
 }
 
 TEST(Engine, CellTooSmallForOneImageIsRefused) {

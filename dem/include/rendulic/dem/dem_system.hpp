@@ -101,7 +101,10 @@ class DemSystem {
   static DemSystem restore(const State& state, const SystemOptions& options);
   State save() const;
 
-  // One step with the imposed velocity gradient diag(D) (1/s, positive = extension).
+  // One step with the imposed velocity gradient diag(D) (1/s, positive = extension). A step
+  // that would strain the cell by more than kMaxStrainPerStep (|D_aa| dt), or a D that is not
+  // finite, throws InputError and changes nothing.
+  static constexpr double kMaxStrainPerStep = 1e-2;
   void step(const Eigen::Vector3d& D);
   void advance(std::int64_t n, const Eigen::Vector3d& D);
   // One step whose D comes from a cell control. Servo axes use the stress that the last step
