@@ -47,19 +47,20 @@ std::vector<double> spring_history(const Eigen::MatrixXd& m) {
 // A checkpoint is restarted as it is, so a number that is not finite would become NaN
 // trajectories (or a neighbour list built from NaN): each read is checked, naming its object.
 template <class Values>
-const Values& finite(const ResultsReader& in, const std::string& path, const Values& v) {
+void check_finite(const ResultsReader& in, const std::string& path, const Values& v) {
   for (const double x : v)
     if (!std::isfinite(x))
       throw InputError(in.path().string() + ":" + path + " holds a number that is not finite");
-  return v;
 }
 Eigen::MatrixXd matrix(const ResultsReader& in, const std::string& path) {
   Eigen::MatrixXd m = in.read_matrix(path);
-  finite(in, path, m.reshaped());
+  check_finite(in, path, m.reshaped());
   return m;
 }
 std::vector<double> vector(const ResultsReader& in, const std::string& path) {
-  return finite(in, path, in.read_vector(path));
+  std::vector<double> v = in.read_vector(path);
+  check_finite(in, path, v);
+  return v;
 }
 double number(const ResultsReader& in, const std::string& object, const char* name) {
   const double x = in.attr_double(object, name);
