@@ -23,11 +23,13 @@ bool Material::IsValid(std::string* why) const {
   if (!(r_mean > 0 && std::isfinite(r_mean))) return fail("r_mean must be positive");
   if (!(w >= 1 && std::isfinite(w))) return fail("w must be >= 1");
   if (!(mu >= 0 && std::isfinite(mu))) return fail("dem.friction (mu) must be >= 0");
-  if (!(k_t_ratio > 0 && std::isfinite(k_t_ratio))) return fail("dem.k_t_ratio must be positive");
+  if (!(k_t_ratio >= kMinSpringRatio && std::isfinite(k_t_ratio)))
+    return fail("dem.k_t_ratio must be >= 1e-6");
   if (!(gamma_t_ratio >= 0 && std::isfinite(gamma_t_ratio)))
     return fail("dem.gamma_t_ratio must be >= 0");
   if (!(mu_r >= 0 && std::isfinite(mu_r))) return fail("dem.rolling_friction (mu_r) must be >= 0");
-  if (!(k_r_ratio > 0 && std::isfinite(k_r_ratio))) return fail("dem.k_r_ratio must be positive");
+  if (!(k_r_ratio >= kMinSpringRatio && std::isfinite(k_r_ratio)))
+    return fail("dem.k_r_ratio must be >= 1e-6");
   if (!(gamma_r_ratio >= 0 && std::isfinite(gamma_r_ratio)))
     return fail("dem.gamma_r_ratio must be >= 0");
   if (mu_r > 0 && !(mu > 0))

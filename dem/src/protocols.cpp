@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <numeric>
 #include <sstream>
@@ -522,9 +523,11 @@ PathSummary run_path(DemSystem& sys, const PathOptions& o, const SampleFn& sampl
   // Events (samples, snapshots, the end) are hit exactly by shortening the step's rate; a path
   // whose strain stops growing (a servo that cannot hold its target) is stopped by the cap.
   constexpr double kHit = 1e-12;  // relative tolerance of landing on an event
-  const auto max_steps = static_cast<std::int64_t>(10.0 * o.eps_dev_max /
-                                                   (kFactor * (held ? o.rate_min : o.rate) * dt)) +
-                         10 * (o.samples + 10);
+  const std::int64_t max_steps =
+      step_count(10.0 * o.eps_dev_max / (kFactor * (held ? o.rate_min : o.rate) * dt),
+                 std::string("path: ten times the path's steps at ") +
+                     (held ? "path.rate_min" : "path.rate")) +
+      10 * (o.samples + 10);
   for (std::int64_t it = 0;; ++it) {
     held_rate.update(it, sys, &rate);
     const double inc = kFactor * rate * dt;
@@ -598,13 +601,22 @@ WindowMean window_mean(const std::vector<double>& x, const std::vector<double>& 
   return w;
 }
 
+std::int64_t step_count(double steps, const std::string& what) {
+  if (!(steps <= kMaxSteps)) {
+    char text[64];
+    std::snprintf(text, sizeof text, " needs %.3g time steps, more than %.0e", steps, kMaxSteps);
+    throw InputError(what + text);
+  }
+  return static_cast<std::int64_t>(steps);
+}
+
 std::int64_t impose_strain_increment(DemSystem& sys, const Eigen::Vector3d& d_eps, double rate) {
   if (!(rate > 0 && std::isfinite(rate))) throw InputError("strain increment: rate must be > 0");
   if (!d_eps.allFinite()) throw InputError("strain increment: non-finite component");
   const double largest = d_eps.cwiseAbs().maxCoeff();
   if (largest == 0) return 0;
-  const std::int64_t n =
-      std::max<std::int64_t>(1, static_cast<std::int64_t>(std::ceil(largest / (rate * sys.dt()))));
+  const std::int64_t n = std::max<std::int64_t>(
+      1, step_count(std::ceil(largest / (rate * sys.dt())), "strain increment at this rate"));
   // epsilon = -E: a compressive increment is a negative D.
   const Eigen::Vector3d D = -d_eps / (static_cast<double>(n) * sys.dt());
   sys.advance(n, D);

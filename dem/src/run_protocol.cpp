@@ -16,7 +16,7 @@ PreparedPacking prepare_packing(const DemRunOptions& o, std::uint64_t seed, cons
   check_time_step(prep.material, prep.dt_factor, "preparation.gamma_b");
   DemSystem sys = make_gas(prep, o.gas, seed);
   if (o.mix_time > 0) {
-    const auto n = static_cast<std::int64_t>(std::ceil(o.mix_time / sys.dt()));
+    const std::int64_t n = step_count(std::ceil(o.mix_time / sys.dt()), "preparation.mix_time");
     for (std::int64_t k = 0; k < n; ++k) {
       sys.step(Eigen::Vector3d::Zero());
       if (progress && k % 256 == 0) progress(double(k) / n);

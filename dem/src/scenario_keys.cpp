@@ -98,9 +98,8 @@ const OptionTable<DemRunOptions>& dem_run_option_table() {
            .unit = "-",
            .help = "Tangential stiffness k_t / k (used when dem.friction > 0); 2/7 gives a "
                    "sticking pair of equal spheres the normal contact's frequency.",
-           .min = 0,
-           .max = 1,
-           .min_open = true},
+           .min = kMinSpringRatio,
+           .max = 1},
           [](O& o) -> double& { return o.system.material.k_t_ratio; }},
       Row{{.path = "dem.gamma_t_ratio",
            .unit = "-",
@@ -127,9 +126,8 @@ const OptionTable<DemRunOptions>& dem_run_option_table() {
                    "k_t / k, makes the rolling spring's resistance to a turn (a'^2 k_r) a "
                    "quarter of the tangential spring's for equal spheres, so that rolling does "
                    "not set the time step.",
-           .min = 0,
-           .max = 1,
-           .min_open = true},
+           .min = kMinSpringRatio,
+           .max = 1},
           [](O& o) -> double& { return o.system.material.k_r_ratio; }},
       Row{{.path = "dem.gamma_r_ratio",
            .unit = "-",

@@ -242,6 +242,17 @@ TEST(Friction, KeysRefuseBadValuesAndTheStaticToolsRefuseFriction) {
   mat.k_t_ratio = 0.0;
   EXPECT_FALSE(mat.IsValid(&why));
   EXPECT_NE(why.find("dem.k_t_ratio"), std::string::npos) << why;
+  // Below kMinSpringRatio a slip's reset spring mu |f_n| / k_t could overflow when squared.
+  mat.k_t_ratio = 0.5 * kMinSpringRatio;
+  EXPECT_FALSE(mat.IsValid(&why));
+  EXPECT_NE(why.find("dem.k_t_ratio must be >= 1e-6"), std::string::npos) << why;
+  mat.k_t_ratio = kMinSpringRatio;
+  mat.mu_r = 0.1;
+  mat.k_r_ratio = 0.5 * kMinSpringRatio;
+  EXPECT_FALSE(mat.IsValid(&why));
+  EXPECT_NE(why.find("dem.k_r_ratio must be >= 1e-6"), std::string::npos) << why;
+  mat.k_r_ratio = kMinSpringRatio;
+  EXPECT_TRUE(mat.IsValid(&why)) << why;
   // The stability bound takes the tangential springs' faster rotation into account.
   Material stiff;
   stiff.mu = 0.5;

@@ -2,7 +2,8 @@
 // number of the imposed rate at that sample's pressure, I = rate 2<r> sqrt(rho / P), also on
 // the steps shortened to land on samples and snapshots; the loading's snapshots land exactly
 // on their volume fractions without changing the loading; window means and their batch-means
-// standard errors; a path and the isotropic loading that hold an inertial number.
+// standard errors; a path and the isotropic loading that hold an inertial number; a rate too
+// slow for any run refused.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -187,6 +188,24 @@ TEST(Paths, UndrainedCompressionKeepsTheVolumeAndEndsAtItsDeviatoricStrain) {
   EXPECT_NEAR(rows.back().eps_dev, 2e-3, 1e-12);
   EXPECT_NEAR(p.snapshots[0].strain_E().norm(), 1e-3, 1e-14);
   EXPECT_EQ(p.servo_error, 0.0);
+}
+
+// A rate so slow that the path (or a probe's strain increment) would need more than
+// kMaxSteps steps is refused up front, naming the key: the step count overflowed its integer
+// before (path.rate = 1e-300 said "did not reach s in -9223372036854775608 steps").
+TEST(Paths, ARateNeedingMoreThanKMaxStepsIsRefusedNamingIt) {
+  DemSystem sys = jammed(0.72);
+  PathOptions slow = short_path("undrained_compression", 2e-3);
+  slow.rate = 1e-300;
+  const std::string why = input_error([&] { run_path(sys, slow); });
+  EXPECT_NE(why.find("path.rate needs "), std::string::npos) << why;
+  EXPECT_NE(why.find("time steps, more than 1e+15"), std::string::npos) << why;
+  const std::string inc =
+      input_error([&] { impose_strain_increment(sys, Eigen::Vector3d(1e-3, 0.0, 0.0), 1e-300); });
+  EXPECT_NE(inc.find("strain increment at this rate needs "), std::string::npos) << inc;
+  EXPECT_EQ(step_count(12.0, "x"), 12);
+  EXPECT_NE(input_error([] { step_count(std::nan(""), "x"); }).find("x needs nan"),
+            std::string::npos);
 }
 
 TEST(Paths, IsotropicLoadingRaisesTheVolumeFractionByTheClosedForm) {

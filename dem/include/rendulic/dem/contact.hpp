@@ -146,6 +146,12 @@ struct TangentialContact {
 #endif
 
 // Material of the seed study (docs/physics.md section 1), SI units.
+// The smallest k_t / k and k_r / k: a slipping contact resets its spring to mu |f_n| / k_t,
+// and with k_t / k = 1e-300 that length overflowed when squared (NaN springs, then an
+// internal error). A spring a million times softer than the normal one is far below any
+// material's; the floor leaves |xi|^2 finite by 290 decades.
+inline constexpr double kMinSpringRatio = 1e-6;
+
 struct Material {
   double k = 1e8;         // normal stiffness, kg/s^2
   double gamma = 1.0;     // contact viscosity, kg/s

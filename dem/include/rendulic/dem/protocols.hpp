@@ -209,6 +209,12 @@ struct WindowMean {
 WindowMean window_mean(const std::vector<double>& x, const std::vector<double>& y, double x_lo,
                        double x_hi, int batches = 5);
 
+// A number of time steps computed from a span and a rate, as an integer. Beyond kMaxSteps
+// (1e15: months on the smallest packing) no run finishes, and the conversion would overflow:
+// InputError "<what> needs N time steps, more than 1e15" instead.
+inline constexpr double kMaxSteps = 1e15;
+std::int64_t step_count(double steps, const std::string& what);
+
 // Imposes the diagonal strain increment d_eps (compression positive, docs/physics.md section 5)
 // in whole steps at constant D, the largest component advancing at `rate` (1/s) at most.
 // Returns the number of steps.
