@@ -1382,13 +1382,16 @@ void DemSystem::step_impl(const Eigen::Vector3d& D) {
   // Checked before the step changes anything: a rate the step cannot follow (a NaN from a
   // servo, or a material whose contact time makes dt huge: density 1e300 gave dt ~ 1e139 s,
   // infinite cell lengths and an internal error of the list) is bad input, not NaN states.
-  if (const double strain = D.cwiseAbs().maxCoeff() * dt_; !(strain <= kMaxStrainPerStep)) {
+  // (allFinite first: Eigen's maxCoeff may pass over a NaN that is not in the first lane.)
+  const double rate =
+      D.allFinite() ? D.cwiseAbs().maxCoeff() : std::numeric_limits<double>::quiet_NaN();
+  if (const double strain = rate * dt_; !(strain <= kMaxStrainPerStep)) {
     char text[320];
     std::snprintf(text, sizeof text,
                   "DEM: the imposed strain rate %.6g 1/s strains the cell by %.6g per time step "
                   "(dt = %.6g s), more than %g: lower the rate, or check the material (k, "
                   "density and r_mean set dt)",
-                  D.cwiseAbs().maxCoeff(), strain, dt_, kMaxStrainPerStep);
+                  rate, strain, dt_, kMaxStrainPerStep);
     throw InputError(text);
   }
   if constexpr (!kStress) last_stress_known_ = false;  // sum_stress sets it on a measuring step

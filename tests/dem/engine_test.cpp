@@ -223,7 +223,8 @@ TEST(Engine, AStepStrainingTheCellTooFarOrByNaNIsRefusedUntouched) {
   const State before = s.save();
   for (const Eigen::Vector3d& D :
        {Eigen::Vector3d(0.0, 1.001 * limit, 0.0), Eigen::Vector3d(-1.001 * limit, 0.0, 0.0),
-        Eigen::Vector3d(std::nan(""), 0.0, 0.0),
+        Eigen::Vector3d(std::nan(""), 0.0, 0.0), Eigen::Vector3d(1.0, std::nan(""), 2.0),
+        Eigen::Vector3d(-3.0, 1.0, std::nan("")),
         Eigen::Vector3d(0.0, 0.0, std::numeric_limits<double>::infinity())}) {
     try {
       s.step(D);
