@@ -144,10 +144,8 @@ State DemSystem::save() const {
   s.ref_half_skin = list_.half_skins();
   if (friction_) s.tangential_history = hist_;
   if (rolling_) s.rolling_history = hist_r_;
-  if (last_stress_known_) {
-    s.last_stress_diag = last_stress_diag_;
-    s.last_stress_known = true;
-  }
+  s.last_stress_diag = last_stress_diag_;  // read only where last_stress_known says so
+  s.last_stress_known = last_stress_known_;
   s.sliding_dissipation = sliding_dissipation_;
   return s;
 }
