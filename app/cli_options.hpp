@@ -6,6 +6,7 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <cmath>
 #include <cstdint>
 #include <string>
 #include <type_traits>
@@ -30,6 +31,30 @@ inline CLI::Validator positive_number(bool zero_allowed = false) {
         return "Value " + text + (zero_allowed ? " is not a number >= 0" : " is not a number > 0");
       },
       zero_allowed ? "NONNEGATIVE" : "POSITIVE");
+}
+
+// The check of a real number in [lo, hi]. CLI11's Range lets NaN through (every comparison with
+// it is false), and `bench --friction nan` then skipped the frictional figures without a word.
+inline CLI::Validator real_in_range(double lo, double hi) {
+  const CLI::Range range(lo, hi);
+  return CLI::Validator(
+      [range](std::string& text) -> std::string {
+        double v = 0.0;
+        if (CLI::detail::lexical_cast(text, v) && !std::isfinite(v))
+          return "Value " + text + " is not a finite number";
+        return range(text);
+      },
+      range.get_description());
+}
+
+// --progress-every of the commands that print progress lines (run, probe).
+inline CLI::Option* add_progress_every(CLI::App* app, double& seconds) {
+  return app
+      ->add_option("--progress-every", seconds,
+                   "seconds of work between two progress lines when stderr is not a terminal "
+                   "(a log file, a batch job); a terminal gets a live line instead")
+      ->check(real_in_range(0.1, 86400.0))
+      ->capture_default_str();
 }
 
 template <class T>

@@ -37,6 +37,7 @@
 #include <sstream>
 #include <utility>
 
+#include "cli_options.hpp"
 #include "commands.hpp"
 #include "packing_system.hpp"
 #include "rendulic/core/errors.hpp"
@@ -326,7 +327,7 @@ Subcommand add_bench(CLI::App& parent) {
                   "wall time of each state's first timed run, whose steps every figure of the "
                   "state then times")
       ->capture_default_str()
-      ->check(CLI::Range(0.01, 600.0));
+      ->check(real_in_range(0.01, 600.0));
   sub->add_option("--steps", o->steps,
                   "the steps every figure times instead (after 100 warm-up steps, as "
                   "bench/lammps_compare.sh has LAMMPS do)")
@@ -334,11 +335,11 @@ Subcommand add_bench(CLI::App& parent) {
   sub->add_option("--friction", o->friction,
                   "also time 1 thread with Coulomb friction mu (dem.friction) on the same states, "
                   "beside the frictionless engine, wall and CPU time")
-      ->check(CLI::Range(0.0, 10.0));
+      ->check(real_in_range(0.0, 10.0));
   sub->add_option("--rolling-friction", o->rolling_friction,
                   "with --friction: also time 1 thread with rolling resistance mu_r "
                   "(dem.rolling_friction) on the same states")
-      ->check(CLI::Range(0.0, 1.0));
+      ->check(real_in_range(0.0, 1.0));
   sub->add_option("--repetitions", o->repetitions,
                   "rounds, each timing every setting once (idle: the best is reported; loaded: "
                   "the mean)")
@@ -351,7 +352,13 @@ Subcommand add_bench(CLI::App& parent) {
           throw InputError(
               "bench: --rolling-friction needs --friction > 0 (rotations exist only with "
               "friction)");
-        if (!o->lammps_dir.empty()) std::filesystem::create_directories(o->lammps_dir);
+        if (!o->lammps_dir.empty()) {
+          std::error_code ec;
+          std::filesystem::create_directories(o->lammps_dir, ec);
+          if (ec)
+            throw InputError(o->lammps_dir +
+                             ": cannot create the --lammps folder: " + ec.message());
+        }
         std::vector<int> settings = o->threads;
         settings.push_back(0);  // the default
         nlohmann::ordered_json json = nlohmann::ordered_json::array();

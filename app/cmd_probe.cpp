@@ -321,10 +321,7 @@ Subcommand add_probe(CLI::App& parent) {
   sub->add_option("--threads", o->threads, "OpenMP threads over the probes (0: all cores)")
       ->check(thread_count());
   sub->add_flag("--quiet", o->quiet, "no progress; warnings and errors still print");
-  sub->add_option("--progress-every", o->progress_every,
-                  "seconds between progress lines when stderr is not a terminal")
-      ->check(CLI::Range(0.1, 86400.0))
-      ->capture_default_str();
+  add_progress_every(sub, o->progress_every);
   return {sub, [o]() -> int {
             probe_packing(*o);
             return 0;

@@ -106,11 +106,7 @@ Subcommand add_run(CLI::App& parent) {
                 "(same scenario and --set values): the result is that of an uninterrupted run");
   sub->add_flag("--quiet", o->quiet,
                 "no progress display and no progress lines; warnings and errors still print");
-  sub->add_option("--progress-every", o->progress_every,
-                  "seconds of work between two progress lines when stderr is not a terminal "
-                  "(a log file, a batch job); a terminal gets a live line instead")
-      ->check(CLI::Range(0.1, 86400.0))
-      ->capture_default_str();
+  add_progress_every(sub, o->progress_every);
   return {sub, [o]() -> int {
             // Before anything else, so that the workers never parse, print or write.
             dem::MpiSession mpi;

@@ -8,6 +8,8 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <string>
+#include <vector>
 
 #include "cli_runner.hpp"
 #include "rendulic/core/results.hpp"
@@ -40,6 +42,35 @@ TEST(Cli, UnknownSubcommandOrOptionExits2) {
   EXPECT_EQ(rendulic("frobnicate").code, 2);
   EXPECT_EQ(rendulic("inspect --bogus x").code, 2);
   EXPECT_EQ(rendulic("").code, 2);
+}
+
+// CLI11's own range check lets NaN through; before real_in_range, `bench --friction nan` timed
+// the frictionless engine alone and exited 0, and `bench --seconds nan` printed 1e+300 ns.
+TEST(Cli, ARealOptionThatIsNotFiniteIsRefusedNamingIt) {
+  const fs::path d = fresh_dir("not_finite");
+  const fs::path scenario = write_file(d / "s.toml", "[dem]\nn_particles = 250\n");
+  for (const std::string& args : std::vector<std::string>{
+           "bench --particles 100 --steps 1 --repetitions 1 --seconds nan",
+           "bench --particles 100 --steps 1 --repetitions 1 --friction nan",
+           "bench --particles 100 --steps 1 --repetitions 1 --friction 0.5 --rolling-friction nan",
+           "bench --particles 100 --steps 1 --repetitions 1 --friction inf",
+           "run " + scenario.string() + " --out " + (d / "out").string() + " --progress-every nan",
+           "probe missing.data --out " + (d / "probe").string() + " --progress-every nan"}) {
+    const CmdResult r = rendulic(args);
+    EXPECT_EQ(r.code, 2) << args << "\n" << r.out;
+    EXPECT_EQ(lines(r.out), 1) << args << "\n" << r.out;
+    EXPECT_NE(r.out.find("is not a finite number"), std::string::npos) << args << "\n" << r.out;
+  }
+  EXPECT_FALSE(fs::exists(d / "out"));
+  EXPECT_FALSE(fs::exists(d / "probe"));
+  // The folder of the LAMMPS files cannot be made where a file stands: one line, not an internal
+  // error (exit 1), before any state is prepared.
+  const fs::path file = write_file(d / "a_file", "x\n");
+  const CmdResult r = rendulic("bench --particles 100 --steps 1 --repetitions 1 --lammps " +
+                               (file / "sub").string());
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_EQ(lines(r.out), 1) << r.out;
+  EXPECT_NE(r.out.find("cannot create the --lammps folder"), std::string::npos) << r.out;
 }
 
 TEST(Cli, BadScenarioExits2NamingTheKeyAndWritesNothing) {
