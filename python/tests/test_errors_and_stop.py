@@ -57,6 +57,13 @@ def test_model_input_errors_have_the_file_readers_messages():
     with pytest.raises(rendulic.InputError, match="must be a symmetric 3x3 tensor"):
         rendulic.model_envelope("isotropic_elastic", {"stress": [[1, 2, 0], [0, 1, 0],
                                                                   [0, 0, 1]]})
+    # A value that is not numbers names its key (numpy's own message named none).
+    with pytest.raises(rendulic.InputError, match="parameters: 'K' must be a number"):
+        rendulic.model_envelope("isotropic_elastic", state, {"K": "stiff"})
+    with pytest.raises(rendulic.InputError, match="state: 'fabric' must be a number"):
+        rendulic.material_point_path("isotropic_elastic", dict(state, fabric="isotropic"))
+    with pytest.raises(TypeError, match="state: expected a dict or the path of a TOML file"):
+        rendulic.model_envelope("isotropic_elastic", 5)
     with pytest.raises(rendulic.InputError, match="unknown shape"):
         rendulic.fit_envelope(np.ones((6, 2)), shape="ellipsoid")
 
