@@ -28,7 +28,6 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <iomanip>
 #include <iostream>
 #include <memory>
@@ -43,6 +42,7 @@
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/packing_file.hpp"
 #include "rendulic/core/statistics.hpp"
+#include "rendulic/core/text_file.hpp"
 #include "rendulic/dem/contact.hpp"
 #include "rendulic/dem/protocols.hpp"
 #include "rendulic/dem/team.hpp"
@@ -280,10 +280,9 @@ void write_lammps(const dem::DemSystem& s, const std::filesystem::path& file) {
 // The contact law of a timed system as LAMMPS pair lines (dem::lammps_pair_lines, the one
 // statement of the mapping), which bench/lammps_compare.sh includes beside the data file.
 void write_lammps_pair(const dem::DemSystem& s, const std::filesystem::path& file) {
-  std::ofstream out(file);
-  out << dem::lammps_pair_lines(s.material());
-  out.flush();
-  if (!out) throw InputError(file.string() + ": cannot write the LAMMPS pair lines");
+  AtomicTextFile out(file, "the LAMMPS pair lines");
+  out.stream() << dem::lammps_pair_lines(s.material());
+  out.commit();
 }
 
 std::filesystem::path lammps_file(const BenchOptions& o, double nu, const char* suffix) {

@@ -9,8 +9,6 @@
 
 #include <algorithm>
 #include <cctype>
-#include <cerrno>
-#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -23,11 +21,11 @@
 #include "rendulic/calibration/calibrate.hpp"
 #include "rendulic/calibration/report.hpp"
 #include "rendulic/calibration/settings.hpp"
-#include "rendulic/core/cleanup.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/log.hpp"
 #include "rendulic/core/result_paths.hpp"
 #include "rendulic/core/results.hpp"
+#include "rendulic/core/text_file.hpp"
 #include "rendulic/models/law.hpp"
 #include "rendulic/models/umat.hpp"
 
@@ -54,47 +52,6 @@ std::vector<std::string> split_commas(const std::vector<std::string>& in) {
   }
   return out;
 }
-
-// The --out file, written atomically: its temporary is created before anything else, so an
-// unwritable path is refused before the calibration runs and before results.h5 is touched.
-class JsonOut {
- public:
-  explicit JsonOut(const std::string& path) : final_(path) {
-    namespace fs = std::filesystem;
-    const fs::path folder = final_.has_parent_path() ? final_.parent_path() : fs::path(".");
-    tmp_ = folder / ("." + final_.filename().string() + ".tmp-" + std::to_string(::getpid()));
-    std::error_code ec;
-    if (fs::is_directory(final_, ec)) throw InputError(path + ": is a folder (--out names a file)");
-    handle_ = cleanup::remove_on_death(tmp_);
-    std::ofstream f(tmp_);
-    if (!f) throw InputError(path + ": cannot write the JSON output: " + std::strerror(errno));
-  }
-  JsonOut(const JsonOut&) = delete;
-  JsonOut& operator=(const JsonOut&) = delete;
-  ~JsonOut() {
-    std::error_code ec;
-    if (!done_) std::filesystem::remove(tmp_, ec);
-    cleanup::forget(handle_);
-  }
-  void write(const std::string& text) {
-    std::ofstream f(tmp_, std::ios::trunc);
-    f << text;
-    if (!f.flush()) throw InputError(final_.string() + ": cannot write the JSON output");
-  }
-  void commit() {
-    std::error_code ec;
-    std::filesystem::rename(tmp_, final_, ec);
-    if (ec)
-      throw InputError(final_.string() +
-                       ": cannot move the JSON output into place: " + ec.message());
-    done_ = true;
-  }
-
- private:
-  std::filesystem::path final_, tmp_;
-  int handle_ = -1;
-  bool done_ = false;
-};
 
 int run_calibrate(const CalibrateArgs& a) {
   using namespace rendulic::calibration;
@@ -137,8 +94,10 @@ int run_calibrate(const CalibrateArgs& a) {
       throw InputError("--value '" + kv + "': not a number");
     }
   }
-  std::optional<JsonOut> json_out;
-  if (!a.out.empty()) json_out.emplace(a.out);
+  // Made now, so that an --out that cannot be written is refused before the calibration runs
+  // and before results.h5 is touched.
+  std::optional<AtomicTextFile> json_out;
+  if (!a.out.empty()) json_out.emplace(a.out, "the JSON output");
   const CalibrationData data = load_calibration_data(a.results, plan.load);
   const CalibrationSummary summary = calibrate(data, opt);
   const std::string json = to_json(summary);
@@ -152,7 +111,10 @@ int run_calibrate(const CalibrateArgs& a) {
     log::warning(a.results, " is read-only: /calibration/", settings.model, " not written");
   // The JSON is complete on disk before the results file is replaced: a failure to write
   // it must not leave the results file changed and the command failed.
-  if (json_out) json_out->write(json);
+  if (json_out) {
+    json_out->stream() << json;
+    json_out->flush();
+  }
   if (!a.no_write && writable) {
     // The selection over every law now in the file (the others as stored).
     std::vector<ModelScore> scores{summary.score};

@@ -7,15 +7,16 @@
 #include <omp.h>
 
 #include <filesystem>
-#include <fstream>
 #include <iostream>
 #include <memory>
+#include <optional>
 
 #include "cli_options.hpp"
 #include "commands.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/log.hpp"
 #include "rendulic/core/results.hpp"
+#include "rendulic/core/text_file.hpp"
 #include "sweep.hpp"
 
 namespace rendulic::app {
@@ -84,17 +85,19 @@ Subcommand add_sweep(CLI::App& parent) {
             const SweepSummary summary =
                 run_sweep(scenario, so, [](const std::string& l) { log::info("[sweep] ", l); });
             write_sweep_h5(summary, out);
-            {
-              const std::filesystem::path tmp = dir / "sweep.csv.tmp";
-              std::ofstream(tmp) << sweep_csv(summary);
-              std::filesystem::rename(tmp, dir / "sweep.csv");
-            }
+            // The CSVs are on disk before sweep.h5 is committed, and renamed after it.
+            AtomicTextFile csv(dir / "sweep.csv", "the sweep's table");
+            csv.stream() << sweep_csv(summary);
+            csv.flush();
+            std::optional<AtomicTextFile> path_csv;
             if (!summary.path_points.empty()) {
-              const std::filesystem::path tmp = dir / "sweep_path.csv.tmp";
-              std::ofstream(tmp) << sweep_path_csv(summary);
-              std::filesystem::rename(tmp, dir / "sweep_path.csv");
+              path_csv.emplace(dir / "sweep_path.csv", "the sweep's path table");
+              path_csv->stream() << sweep_path_csv(summary);
+              path_csv->flush();
             }
             out.commit();
+            csv.commit();
+            if (path_csv) path_csv->commit();
             for (const auto& l : summary.breaks) log::info("[sweep] break: ", l);
             for (const auto& l : summary.recommendations) log::info("[sweep] cheapest: ", l);
             try {

@@ -5,7 +5,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <fstream>
 #include <iomanip>
 #include <limits>
 #include <map>
@@ -16,6 +15,7 @@
 #include "rendulic/core/envelope_io.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/result_paths.hpp"
+#include "rendulic/core/text_file.hpp"
 #include "rendulic/core/version.hpp"
 #include "rendulic/dem/probe_envelope.hpp"
 #include "rendulic/dem/protocols.hpp"
@@ -845,20 +845,12 @@ std::filesystem::path write_report(const std::filesystem::path& results_file, bo
       figures.push_back(e.path().string());
     std::sort(figures.begin(), figures.end());
   }
-  const fs::path out = dir / "report.md", tmp = dir / ".report.md.tmp";
   // Made before the temporary file is: a damaged results file fails here and leaves nothing.
   const std::string text = report_markdown(r, claims, figures);
-  {
-    std::ofstream f(tmp);
-    f << text;
-    if (!f) {
-      std::error_code ec;
-      fs::remove(tmp, ec);
-      throw InputError(tmp.string() + ": cannot write report");
-    }
-  }
-  fs::rename(tmp, out);
-  return out;
+  AtomicTextFile out(dir / "report.md", "the report");
+  out.stream() << text;
+  out.commit();
+  return out.path();
 }
 
 }  // namespace rendulic::app

@@ -19,6 +19,7 @@
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/result_paths.hpp"
 #include "rendulic/core/results.hpp"
+#include "rendulic/core/text_file.hpp"
 
 namespace rendulic {
 namespace {
@@ -435,8 +436,8 @@ Packing read_results_state(const fs::path& file, const std::string& group) {
 
 void write_lammps_data(const fs::path& file, const Packing& p, double density,
                        const std::string& title) {
-  std::ofstream out(file);
-  if (!out) throw InputError(file.string() + ": cannot write the LAMMPS data file");
+  AtomicTextFile f(file, "the LAMMPS data file");
+  std::ostream& out = f.stream();
   const Eigen::Vector3d& L = p.lengths;
   out << std::setprecision(17) << title << "\n\n"
       << p.size() << " atoms\n1 atom types\n\n"
@@ -455,8 +456,7 @@ void write_lammps_data(const fs::path& file, const Packing& p, double density,
     for (int a = 0; a < 3; ++a) out << " " << (p.velocities.rows() > 0 ? p.velocities(r, a) : 0.0);
     out << " 0 0 0\n";
   }
-  out.flush();
-  if (!out) throw InputError(file.string() + ": cannot write the LAMMPS data file (disk full?)");
+  f.commit();
 }
 
 }  // namespace rendulic

@@ -96,6 +96,27 @@ TEST(Export, RefusesAStateThatIsNotThere) {
   EXPECT_FALSE(fs::exists(dir / "z.data"));
 }
 
+// A disk that refuses bytes (here a file-size limit of 4 KiB, SIGXFSZ ignored as a full disk
+// sends none): one line naming the file, and an earlier export of the same name left whole.
+// Before AtomicTextFile the data file was written in place and 4 KiB of it stayed.
+TEST(Export, ADiskThatRefusesBytesLeavesTheEarlierDataFileWhole) {
+  const fs::path results = rendulic::testing::tiny_results(kRoot);
+  const fs::path dir = rendulic::testing::fresh_dir("app_export/limit");
+  const fs::path data = dir / "a.data";
+  std::ofstream(data) << "an earlier export\n";
+  const auto r =
+      run_command("trap '' XFSZ; ulimit -f 4; exec " + std::string(RENDULIC_EXE) + " export " +
+                      results.string() + " --state a --lammps " + data.string(),
+                  false);
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_EQ(rendulic::testing::error_lines(r.err), 1) << r.err;
+  EXPECT_NE(r.err.find("a.data: cannot write the LAMMPS data file: File too large"),
+            std::string::npos)
+      << r.err;
+  EXPECT_EQ(rendulic::testing::read_file(data), "an earlier export\n");
+  for (const auto& e : fs::directory_iterator(dir)) EXPECT_EQ(e.path(), data);
+}
+
 // A frictional run with rolling resistance: export prints the stored material's tangential
 // and rolling settings (docs/interop.md "Friction against LAMMPS"), and LAMMPS accepts them.
 TEST(Export, PrintsTheFrictionAndRollingSettingsOfTheStoredMaterial) {

@@ -285,7 +285,7 @@ TEST(Faults, ReportAndPlotIntoAFolderTheyCannotWriteExitTwo) {
   };
   expect_refusal(run("report " + f.string()), "figures: cannot write figures here");
   expect_refusal(run("plot " + f.string()), "figures: cannot write figures here");
-  expect_refusal(run("report --no-figures " + f.string()), "cannot write report");
+  expect_refusal(run("report --no-figures " + f.string()), "cannot write the report");
   fs::permissions(dir, fs::perms::owner_all);
   fs::permissions(dir / "figures", fs::perms::owner_all);
 }

@@ -58,6 +58,7 @@ Packing read_results_state(const std::filesystem::path& file, const std::string&
 // The packing as a LAMMPS data file (atom_style sphere, box [0, L_a), one atom type, the given
 // density for every atom, and a Velocities section: the packing's, or zero), numbers with 17
 // significant digits so that reading it back gives the same doubles. `title` is the first line.
+// Written whole or not at all (AtomicTextFile): a failed write leaves an earlier FILE as it was.
 void write_lammps_data(const std::filesystem::path& file, const Packing& packing, double density,
                        const std::string& title);
 

@@ -1,0 +1,48 @@
+// A text output written whole or not at all (docs/usage.md "Results are atomic"): the text goes
+// to a temporary file beside the final one (.NAME.tmp-PID), which commit() renames onto it. A
+// full disk, a file-size limit or a signal leaves the earlier file as it was and no half-written
+// one; the temporary is removed on failure and on death by a signal (core/cleanup.hpp). Used by
+// every text file the commands write: calibrate --out, report.md, the sweep's CSVs, exported
+// LAMMPS data files and bench's pair lines.
+#pragma once
+
+#include <filesystem>
+#include <sstream>
+#include <string>
+
+namespace rendulic {
+
+class AtomicTextFile {
+ public:
+  // Creates the temporary now, so that a place that cannot be written is refused (InputError,
+  // "FILE: cannot write WHAT: reason") before any work is done. `what` names the file in
+  // messages ("the JSON output"). A FILE that is a folder is refused too.
+  AtomicTextFile(std::filesystem::path file, std::string what);
+  AtomicTextFile(const AtomicTextFile&) = delete;
+  AtomicTextFile& operator=(const AtomicTextFile&) = delete;
+  // Without commit(), removes the temporary.
+  ~AtomicTextFile();
+
+  // The text, kept in memory until flush() or commit().
+  std::ostream& stream() {
+    flushed_ = false;
+    return text_;
+  }
+  // Writes the text to the temporary and checks that every byte reached the disk; InputError
+  // naming the file and the reason otherwise (the temporary then gone). For a caller that must
+  // know the file fits before it replaces another (calibrate writes its JSON before it replaces
+  // results.h5, and renames it after).
+  void flush();
+  // flush() unless done since the last change, then renames the temporary onto the final name.
+  void commit();
+  const std::filesystem::path& path() const { return final_; }
+
+ private:
+  std::filesystem::path final_, tmp_;
+  std::string what_;
+  std::ostringstream text_;
+  int handle_ = -1;
+  bool flushed_ = false, done_ = false;
+};
+
+}  // namespace rendulic

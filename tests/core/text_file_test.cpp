@@ -1,0 +1,120 @@
+// AtomicTextFile (core/text_file.hpp; docs/usage.md "Results are atomic"): the text reaches the
+// final name whole or not at all. A file-size limit (RLIMIT_FSIZE, with SIGXFSZ ignored) makes
+// the disk refuse bytes as a full one does, without needing a small mount; it is set in a
+// child process so that this test's own output is not limited.
+#include "rendulic/core/text_file.hpp"
+
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <string>
+
+#include "rendulic/core/errors.hpp"
+
+namespace {
+namespace fs = std::filesystem;
+
+fs::path fresh(const std::string& name) {
+  const fs::path d = fs::path(RENDULIC_TEST_TMP) / "core_text_file" / name;
+  fs::remove_all(d);
+  fs::create_directories(d);
+  return d;
+}
+
+std::string contents(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), {}};
+}
+
+bool only_file_is(const fs::path& dir, const std::string& name) {
+  int n = 0;
+  for (const auto& e : fs::directory_iterator(dir)) {
+    if (e.path().filename() != name) return false;
+    ++n;
+  }
+  return n == 1;
+}
+
+TEST(AtomicTextFile, CommitPutsTheWholeTextUnderTheFinalName) {
+  const fs::path d = fresh("commit");
+  {
+    rendulic::AtomicTextFile f(d / "a.txt", "the test text");
+    f.stream() << "one\n" << 2 << "\n";
+    EXPECT_FALSE(fs::exists(d / "a.txt")) << "nothing under the final name before commit";
+    f.commit();
+  }
+  EXPECT_EQ(contents(d / "a.txt"), "one\n2\n");
+  EXPECT_TRUE(only_file_is(d, "a.txt"));
+}
+
+TEST(AtomicTextFile, WithoutCommitTheEarlierFileStaysAndNoTemporaryIsLeft) {
+  const fs::path d = fresh("abandon");
+  std::ofstream(d / "a.txt") << "earlier\n";
+  {
+    rendulic::AtomicTextFile f(d / "a.txt", "the test text");
+    f.stream() << "later\n";
+    f.flush();
+  }
+  EXPECT_EQ(contents(d / "a.txt"), "earlier\n");
+  EXPECT_TRUE(only_file_is(d, "a.txt"));
+}
+
+TEST(AtomicTextFile, APlaceThatCannotBeWrittenIsRefusedAtOnceNamingIt) {
+  const fs::path d = fresh("refused");
+  try {
+    rendulic::AtomicTextFile f(d / "no" / "such" / "a.txt", "the test text");
+    FAIL() << "a missing folder was accepted";
+  } catch (const rendulic::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("no/such/a.txt: cannot write the test text: No such file"),
+              std::string::npos)
+        << e.what();
+  }
+  try {
+    rendulic::AtomicTextFile f(d, "the test text");
+    FAIL() << "a folder was accepted";
+  } catch (const rendulic::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("is a folder"), std::string::npos) << e.what();
+  }
+}
+
+// The child's exit status: 0 refused with the expected message and the earlier file intact,
+// 1 committed (the defect), 2 another outcome.
+int write_past_a_size_limit(const fs::path& d) {
+  const pid_t child = fork();
+  if (child == 0) {
+    signal(SIGXFSZ, SIG_IGN);
+    const rlimit limit{4096, 4096};
+    setrlimit(RLIMIT_FSIZE, &limit);
+    try {
+      rendulic::AtomicTextFile f(d / "a.txt", "the test text");
+      f.stream() << std::string(100000, 'x');
+      f.commit();
+      _exit(1);
+    } catch (const rendulic::InputError& e) {
+      const std::string what = e.what();
+      _exit(what.find("a.txt: cannot write the test text: File too large") != std::string::npos
+                ? 0
+                : 2);
+    }
+    _exit(2);
+  }
+  int status = 0;
+  waitpid(child, &status, 0);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : 3;
+}
+
+TEST(AtomicTextFile, ADiskThatRefusesBytesLeavesTheEarlierFileWholeAndNoTemporary) {
+  const fs::path d = fresh("limit");
+  std::ofstream(d / "a.txt") << "earlier\n";
+  EXPECT_EQ(write_past_a_size_limit(d), 0);
+  EXPECT_EQ(contents(d / "a.txt"), "earlier\n");
+  EXPECT_TRUE(only_file_is(d, "a.txt"));
+}
+
+}  // namespace
