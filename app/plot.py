@@ -77,7 +77,18 @@ def save(fig, out, name, ctx, description=None):
         # PNG takes no "Description" key in every matplotlib; the SVG and PDF carry it.
         md = meta if ext == "svg" else ({"Subject": description} if ext == "pdf" and
                                         description else None)
-        fig.savefig(path, dpi=PNG_DPI, bbox_inches=box, metadata=md)
+        # Whole or not at all, as every file rendulic writes (docs/usage.md "Results are
+        # atomic"): a full disk must not leave a truncated figure under its name.
+        tmp = os.path.join(out, f".{name}.{ext}.tmp-{os.getpid()}")
+        try:
+            fig.savefig(tmp, format=ext, dpi=PNG_DPI, bbox_inches=box, metadata=md)
+            os.replace(tmp, path)
+        except BaseException:
+            try:
+                os.remove(tmp)
+            except OSError:
+                pass
+            raise
         ctx["written"].append(path)
     if ctx.get("keep") is not None:
         ctx["keep"][name] = fig
@@ -1005,13 +1016,19 @@ def draw_forked(path, out, count, jobs):
         while len(taken := os.read(queue, 2)) == 2:
             yield int.from_bytes(taken, "little")
 
-    def stop(*_):
+    def end_children():
+        # A child killed while it saves leaves its temporary (save()); it is removed here.
         for pid, _, _ in children:
             try:
                 os.kill(pid, signal.SIGKILL)
                 os.waitpid(pid, 0)
             except OSError:
                 pass
+        remove_temporaries(out, [pid for pid, _, _ in children])
+
+    def stop(*_):
+        end_children()
+        remove_temporaries(out, [os.getpid()])  # this process's own, interrupted
         os._exit(128 + signal.SIGTERM)
 
     def share():
@@ -1053,7 +1070,12 @@ def draw_forked(path, out, count, jobs):
         os.close(w)
         children.append((pid, r, k))
         signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGTERM})
-    figures = share()
+    try:
+        figures = share()
+    except BaseException:
+        # This process failed (a full disk): its children would die with it mid-figure.
+        end_children()
+        raise
     os.close(queue)
     errors = []
     for pid, r, k in children:
@@ -1070,6 +1092,21 @@ def draw_forked(path, out, count, jobs):
     if errors:
         raise RuntimeError(errors[0])
     return sorted(figures, key=lambda x: x[0])
+
+
+def remove_temporaries(out, pids):
+    """Removes the temporaries save() made in `out` for the processes `pids`."""
+    ends = tuple(f".tmp-{pid}" for pid in pids)
+    try:
+        names = os.listdir(out)
+    except OSError:
+        return
+    for name in names:
+        if name.startswith(".") and name.endswith(ends):
+            try:
+                os.remove(os.path.join(out, name))
+            except OSError:
+                pass
 
 
 def draw_figures(path, out, which, keep):
@@ -1104,6 +1141,10 @@ def plot_jobs():
 
 
 def main():
+    # rendulic stops this script with SIGTERM: as an exception, so that a figure being saved
+    # removes its temporary (draw_forked's own handler does so for its processes).
+    import signal
+    signal.signal(signal.SIGTERM, lambda *_: sys.exit(128 + signal.SIGTERM))
     if len(sys.argv) != 3:
         print("usage: plot.py FILE.h5 OUTDIR", file=sys.stderr)
         return 2

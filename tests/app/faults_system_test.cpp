@@ -303,6 +303,8 @@ TEST(FaultsSystem, AnInterruptedPlotLeavesNoFigureScriptRunningNorItsFile) {
   EXPECT_TRUE(wait_for([&] { return !running(script); }, 30)) << "the figure script runs on";
   // The script ends only after its workers (terminated and joined on its way out).
   for (pid_t w : workers) EXPECT_FALSE(running(w)) << "a figure worker runs on";
+  // Nor a figure's temporary: each is saved beside its name and renamed (plot.py save()).
+  EXPECT_TRUE(temporaries(d / "figures").empty()) << temporaries(d / "figures").front();
 }
 
 TEST(FaultsSystem, TheNextRunTidiesStaleTemporariesAndTheStoredScenarioReplays) {

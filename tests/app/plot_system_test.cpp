@@ -13,6 +13,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <map>
 #include <set>
 #include <string>
 
@@ -317,6 +318,36 @@ TEST(Plot, DrawsWithDebiansPythonWhenPathsOneLacksTheModules) {
   EXPECT_EQ(lines_of(dir / "tried.txt"), 1u);
   for (const char* name : {"fig1_path.png", "fig3_elastic_stress.pdf", "fig7_features.svg"})
     EXPECT_TRUE(fs::exists(dir / "o" / name)) << name;
+}
+
+// A disk that refuses bytes (a file-size limit of 8 KiB; Python ignores SIGXFSZ) while the
+// figures are drawn again: one line, exit 2, and every figure of the earlier plot keeps its
+// bytes, none truncated under its name, no temporary left.
+TEST(Plot, ADiskThatRefusesBytesLeavesTheEarlierFiguresWhole) {
+  if (!debian_python_draws()) GTEST_SKIP() << "no /usr/bin/python3 with matplotlib and h5py";
+  const fs::path f = rendulic::app::testing::seed_like("plot_limit", false);
+  const fs::path dir = rendulic::testing::fresh_dir("app_plot_system/limit");
+  const std::string plot =
+      std::string(RENDULIC_EXE) + " plot " + f.string() + " --out " + (dir / "o").string();
+  ASSERT_EQ(rendulic::testing::run_command(plot).code, 0);
+  std::map<std::string, std::string> before;
+  for (const auto& e : fs::directory_iterator(dir / "o"))
+    before[e.path().filename().string()] = rendulic::testing::read_file(e.path());
+  ASSERT_GT(before.size(), 3u);
+  const CliResult r =
+      rendulic::testing::run_command("trap '' XFSZ; ulimit -f 8; exec " + plot, false);
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_EQ(rendulic::testing::error_lines(r.err), 1) << r.err;
+  EXPECT_NE(r.err.find("File too large"), std::string::npos) << r.err;
+  std::map<std::string, std::string> after;
+  for (const auto& e : fs::directory_iterator(dir / "o"))
+    after[e.path().filename().string()] = rendulic::testing::read_file(e.path());
+  EXPECT_EQ(after.size(), before.size());
+  for (const auto& [name, bytes] : after) {
+    const auto it = before.find(name);
+    ASSERT_NE(it, before.end()) << name << " is new";
+    EXPECT_TRUE(it->second == bytes) << name << " changed";
+  }
 }
 
 // A script runs with the first interpreter that has its modules, started once (no interpreter
