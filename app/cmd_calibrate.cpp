@@ -116,7 +116,10 @@ int run_calibrate(const CalibrateArgs& a) {
     json_out->flush();
   }
   if (!a.no_write && writable) {
-    // The selection over every law now in the file (the others as stored).
+    ResultsWriter w = ResultsWriter::update(a.results);
+    for (const auto& note : w.notes()) log::info(note);
+    // The selection over every law now in the file (the others as stored), read while the
+    // update holds the file: a calibration of another law that ended meanwhile is in it.
     std::vector<ModelScore> scores{summary.score};
     {
       const ResultsReader r(a.results);
@@ -126,8 +129,6 @@ int run_calibrate(const CalibrateArgs& a) {
           if (m != settings.model && read_model_score(r, m, &ms)) scores.push_back(ms);
         }
     }
-    ResultsWriter w = ResultsWriter::update(a.results);
-    for (const auto& note : w.notes()) log::info(note);
     write_calibration(w, summary);
     write_selection(w, select_model(scores));
     w.commit();

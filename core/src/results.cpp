@@ -24,12 +24,14 @@
 #include <cstdio>
 #include <cstring>
 #include <map>
+#include <mutex>
 #include <optional>
 #include <sstream>
 
 #include "hdf5_reason.hpp"
 #include "rendulic/core/cleanup.hpp"
 #include "rendulic/core/errors.hpp"
+#include "rendulic/core/log.hpp"
 #include "rendulic/core/result_paths.hpp"
 #include "rendulic/core/version.hpp"
 
@@ -177,6 +179,56 @@ bool unlocked(const fs::path& p) {
   return free;
 }
 
+// Writers that replace a results file take an flock of its folder (advisory; no lock file is
+// left behind, and HDF5's own flock is on the file itself). Two `calibrate`s of different laws
+// at once each copied the file, added their law and renamed the copy back: the second rename
+// dropped the first's law without a word. An update holds the lock from its copy to its rename;
+// a writer of a new file takes it for its rename only, so that a run ending during an update
+// lands after it. A process takes a folder's flock once, whatever number of its own writers
+// hold it (a second flock through another descriptor would wait on the first for ever).
+class FolderLock {
+ public:
+  explicit FolderLock(const fs::path& file) {
+    const fs::path dir = file.has_parent_path() ? file.parent_path() : fs::path(".");
+    std::error_code ec;
+    key_ = fs::weakly_canonical(dir, ec).string();
+    if (ec) key_ = dir.string();
+    std::lock_guard<std::mutex> guard(mutex());
+    Held& h = held()[key_];
+    if (h.count++ > 0) return;
+    h.fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    if (h.fd < 0) return;  // a folder we cannot open: no lock, as before
+    if (::flock(h.fd, LOCK_EX | LOCK_NB) == 0) return;
+    log::info(file.string(), ": waiting for another rendulic process that is replacing a file ",
+              "in its folder");
+    while (::flock(h.fd, LOCK_EX) != 0 && errno == EINTR) {
+    }
+  }
+  FolderLock(const FolderLock&) = delete;
+  FolderLock& operator=(const FolderLock&) = delete;
+  ~FolderLock() {
+    std::lock_guard<std::mutex> guard(mutex());
+    Held& h = held()[key_];
+    if (--h.count > 0) return;
+    if (h.fd >= 0) ::close(h.fd);  // closing the descriptor releases the flock
+    held().erase(key_);
+  }
+
+ private:
+  struct Held {
+    int count = 0, fd = -1;
+  };
+  static std::mutex& mutex() {
+    static std::mutex m;
+    return m;
+  }
+  static std::map<std::string, Held>& held() {
+    static std::map<std::string, Held> h;
+    return h;
+  }
+  std::string key_;
+};
+
 }  // namespace
 
 // ========================================================================================
@@ -189,6 +241,7 @@ struct ResultsWriter::Impl {
   bool committed = false;
   std::vector<fs::path> created_folders;  // innermost first, removed again if left empty
   std::vector<std::string> notes;
+  std::optional<FolderLock> lock;  // an update's, from its copy to its rename (FolderLock)
 
   ~Impl() { abandon(); }
 
@@ -466,6 +519,7 @@ ResultsWriter ResultsWriter::update(const fs::path& existing_path) {
   w.impl_ = std::make_unique<Impl>();
   Impl& m = *w.impl_;
   m.final_path = existing_path;
+  m.lock.emplace(existing_path);  // before the copy: it must hold every earlier update
   m.sweep_stale();
   m.tmp_path = temporary_for(existing_path);
   m.tmp_handle = cleanup::remove_on_death(m.tmp_path);
@@ -590,10 +644,15 @@ void ResultsWriter::commit() {
     f.close();
   });
   std::error_code ec;
-  fs::rename(m.tmp_path, m.final_path, ec);
+  {
+    std::optional<FolderLock> rename_lock;
+    if (!m.lock) rename_lock.emplace(m.final_path);
+    fs::rename(m.tmp_path, m.final_path, ec);
+  }
   if (ec)
     throw InputError(m.final_path.string() + ": cannot move results into place: " + ec.message());
   m.committed = true;
+  m.lock.reset();
   cleanup::forget(m.tmp_handle);
   m.tmp_handle = -1;
   // The saved copy of the completed stages is superseded by the whole file.

@@ -4,7 +4,7 @@
 // not ours are refused with an InputError. Faults: damaged objects, names HDF5 cannot hold, a
 // full file system (the kernel's file size limit, RLIMIT_FSIZE: a real refusal of the write,
 // and one that needs no privileges), every terminating signal, stale temporary files of
-// killed runs, a hard-link cycle, an unreadable file.
+// killed runs, a hard-link cycle, an unreadable file, two updates of one file at once.
 #include "rendulic/core/results.hpp"
 
 #include <H5Cpp.h>
@@ -221,6 +221,71 @@ TEST(Results, UpdateIsAtomicToo) {
   EXPECT_EQ(r.attr_int("/calibration/x", "converged"), 1);
   EXPECT_EQ(r.attr_string("/", "marker"), "v1");
   EXPECT_EQ(count_files(d), 1);
+}
+
+// Two updates of one file at once (two `calibrate`s of different laws): the second waits for
+// the first's rename and copies its result, instead of renaming its own copy over it. Without
+// the folder's lock the parent copied the file during the child's 0.3 s and "first" was lost.
+TEST(Results, UpdatesOfOneFileAtOnceEachKeepTheOthers) {
+  const fs::path d = fresh_dir("concurrent_update");
+  {
+    ResultsWriter w(d / "results.h5");
+    w.attr("/", "marker", std::string("v1"));
+    w.commit();
+  }
+  int ready[2];
+  ASSERT_EQ(pipe(ready), 0);
+  const pid_t child = fork();
+  if (child == 0) {
+    close(ready[0]);
+    int code = 0;
+    try {
+      ResultsWriter w = ResultsWriter::update(d / "results.h5");
+      w.attr("/calibration/first", "converged", std::int64_t{1});
+      if (write(ready[1], "x", 1) != 1) code = 2;  // the parent's update starts now
+      usleep(300000);
+      w.commit();
+    } catch (...) {
+      code = 1;
+    }
+    _exit(code);
+  }
+  close(ready[1]);
+  char c = 0;
+  ASSERT_EQ(read(ready[0], &c, 1), 1);
+  close(ready[0]);
+  {
+    ResultsWriter w = ResultsWriter::update(d / "results.h5");
+    w.attr("/calibration/second", "converged", std::int64_t{1});
+    w.commit();
+  }
+  int status = 0;
+  waitpid(child, &status, 0);
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << status;
+  ResultsReader r(d / "results.h5");
+  EXPECT_TRUE(r.exists("/calibration/first"));
+  EXPECT_TRUE(r.exists("/calibration/second"));
+  EXPECT_EQ(r.attr_string("/", "marker"), "v1");
+  EXPECT_EQ(count_files(d), 1);
+}
+
+// One process's own writers in one folder share the lock: an update held open while another
+// writer of the folder commits does not wait on itself.
+TEST(Results, AProcesssOwnWritersInOneFolderDoNotWaitOnEachOther) {
+  const fs::path d = fresh_dir("own_writers");
+  {
+    ResultsWriter w(d / "results.h5");
+    w.commit();
+  }
+  ResultsWriter update = ResultsWriter::update(d / "results.h5");
+  update.attr("/calibration/x", "converged", std::int64_t{1});
+  ResultsWriter other(d / "other.h5");
+  other.commit();
+  ResultsWriter again = ResultsWriter::update(d / "other.h5");
+  again.commit();
+  update.commit();
+  EXPECT_TRUE(ResultsReader(d / "results.h5").exists("/calibration/x"));
+  EXPECT_EQ(count_files(d), 2);
 }
 
 TEST(Results, RefusesFilesThatAreNotOurs) {
