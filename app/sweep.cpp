@@ -547,11 +547,16 @@ bool SweepOptions::IsValid(std::string* why) const {
     return false;
   };
   if (factors.empty()) return fail("sweep: no factor to sweep");
-  for (const auto& f : factors)
-    if (std::find(kSweepFactors.begin(), kSweepFactors.end(), f) == kSweepFactors.end())
-      return fail("sweep: unknown factor '" + f +
-                  "' (dt_factor, n_particles, inertial_number, relax, dt_factor_tight, method, "
-                  "path_rate)");
+  for (auto f = factors.begin(); f != factors.end(); ++f) {
+    if (std::find(kSweepFactors.begin(), kSweepFactors.end(), *f) == kSweepFactors.end()) {
+      std::string known;
+      for (const auto& k : kSweepFactors) known += (known.empty() ? "" : ", ") + k;
+      return fail("sweep: unknown factor '" + *f + "' (" + known + ")");
+    }
+    // Listed twice, a factor was swept twice: the same runs again and twice the rows.
+    if (std::find(factors.begin(), f, *f) != f)
+      return fail("sweep: factor '" + *f + "' listed twice");
+  }
   if (threads < 0) return fail("sweep: threads must be >= 0");
   if (!(target > 0 && target < 1)) return fail("sweep: target must be in (0, 1)");
   if (base_n < 50) return fail("sweep: base N must be >= 50");

@@ -100,6 +100,13 @@ TEST(SweepOptionsTest, PresetsAreValidAndBadValuesAreNamed) {
   o.factors = {"relax", "speed"};
   EXPECT_FALSE(o.IsValid(&why));
   EXPECT_NE(why.find("'speed'"), std::string::npos);
+  EXPECT_NE(why.find("(dt_factor, n_particles, inertial_number, relax, dt_factor_tight, method, "
+                     "path_rate)"),
+            std::string::npos)
+      << why;
+  o.factors = {"relax", "dt_factor", "relax"};
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_EQ(why, "sweep: factor 'relax' listed twice");
   o = SweepOptions::preset(true);
   o.n_particles = {250.5};
   EXPECT_FALSE(o.IsValid(&why));
