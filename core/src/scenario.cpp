@@ -23,6 +23,7 @@
 
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/option_table.hpp"
+#include "rendulic/core/result_paths.hpp"
 
 namespace rendulic {
 namespace {
@@ -226,6 +227,15 @@ std::string validate(const KeySpec& s, const ScenarioValue& v) {
                                                                       : std::to_string(s.max_size));
       for (double x : xs)
         if (auto r = check_number(s, x); !r.empty()) return r;
+      if (s.distinct)
+        for (std::size_t i = 0; i < xs.size(); ++i)
+          for (std::size_t j = 0; j < i; ++j)
+            if (paths::group_number(xs[j]) == paths::group_number(xs[i]))
+              return "value " + format_double(xs[i]) + " given twice" +
+                     (xs[j] == xs[i] ? std::string()
+                                     : " (as " + format_double(xs[j]) +
+                                           ": entries are told apart by 6 significant digits, "
+                                           "the names of their groups)");
       return "";
     }
     case KeyType::kStringList: {
@@ -235,6 +245,11 @@ std::string validate(const KeySpec& s, const ScenarioValue& v) {
                std::to_string(s.min_size);
       for (const auto& x : xs)
         if (auto r = check_choice(s, x); !r.empty()) return r;
+      if (s.distinct)
+        for (std::size_t i = 0; i < xs.size(); ++i)
+          if (std::find(xs.begin(), xs.begin() + static_cast<std::ptrdiff_t>(i), xs[i]) !=
+              xs.begin() + static_cast<std::ptrdiff_t>(i))
+            return "value '" + xs[i] + "' given twice";
       return "";
     }
   }
@@ -437,7 +452,9 @@ std::string ScenarioSchema::markdown() const {
     std::string help = k.help;
     std::replace(help.begin(), help.end(), '|', '/');
     out << "| `" << k.path << "` | " << type_name(k.type) << " | " << k.unit << " | `"
-        << format_value(k.default_value) << "` | " << format_range(k) << " | " << help << " |\n";
+        << format_value(k.default_value) << "` | " << format_range(k)
+        << (k.distinct ? (format_range(k).empty() ? "distinct" : ", distinct") : "") << " | "
+        << help << " |\n";
   }
   return out.str();
 }

@@ -31,13 +31,9 @@ bool ProbeOptions::IsValid(std::string* why) const {
     return false;
   };
   if (!probe_option_table().check(*this, why)) return false;
-  for (std::size_t i = 0; i < planes.size(); ++i) {
-    if (!probe_plane_named(planes[i]))
-      return fail("probes.planes: unknown plane '" + planes[i] + "' (" + kProbePlaneNames + ")");
-    if (std::find(planes.begin(), planes.begin() + static_cast<std::ptrdiff_t>(i), planes[i]) !=
-        planes.begin() + static_cast<std::ptrdiff_t>(i))
-      return fail("probes.planes: plane '" + planes[i] + "' given twice");
-  }
+  for (const auto& plane : planes)  // given twice: the table's check (KeySpec::distinct)
+    if (!probe_plane_named(plane))
+      return fail("probes.planes: unknown plane '" + plane + "' (" + kProbePlaneNames + ")");
   if (threads < 0) return fail("probes: threads must be >= 0");
   if (!relax.IsValid(why)) return false;
   if (!minimise.IsValid(why)) return false;
@@ -759,7 +755,8 @@ const OptionTable<ProbeOptions>& probe_option_table() {
            .min = 0.0,
            .max = 0.05,
            .min_open = true,
-           .min_size = 1},
+           .min_size = 1,
+           .distinct = true},
           [](ProbeOptions& o) -> std::vector<double>& { return o.amplitudes; }},
       Row{{.path = "probes.planes",
            .unit = "-",
@@ -768,7 +765,8 @@ const OptionTable<ProbeOptions>& probe_option_table() {
                    "meridian_PHI (the isotropic axis and the deviatoric direction at Lode angle "
                    "PHI in [0, 180) deg, e.g. meridian_30); other planes' envelopes are named "
                    "method_plane_amplitude (dynamic_deviatoric_5e-05).",
-           .min_size = 1},
+           .min_size = 1,
+           .distinct = true},
           [](ProbeOptions& o) -> std::vector<std::string>& { return o.planes; }},
       Row{{.path = "probes.inertial_number",
            .unit = "-",
@@ -853,7 +851,8 @@ void register_probe_keys(ScenarioSchema& schema) {
                           "linear_response stage adds the exact elastic envelopes for the same "
                           "directions and amplitudes.",
                   .choices = {"dynamic", "minimisation"},
-                  .min_size = 1});
+                  .min_size = 1,
+                  .distinct = true});
   }
   register_elastic_range_keys(schema);
 }

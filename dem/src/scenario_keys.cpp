@@ -5,7 +5,6 @@
 #include "rendulic/dem/scenario_keys.hpp"
 
 #include <limits>
-#include <set>
 #include <sstream>
 
 #include "rendulic/core/errors.hpp"
@@ -262,7 +261,8 @@ const OptionTable<DemRunOptions>& dem_run_option_table() {
            .min = 0,
            .max = 1,
            .min_open = true,
-           .max_open = true},
+           .max_open = true,
+           .distinct = true},
           [](O& o) -> std::vector<double>& { return o.branch_nu; }},
       Row{{.path = "path.type",
            .unit = "-",
@@ -359,7 +359,8 @@ const OptionTable<DemRunOptions>& dem_run_option_table() {
            .unit = "-",
            .help = "Group names /states/<label> of the snapshots, one per states.eps_dev (the "
                    "seed's figure panels a-e).",
-           .min_size = 1},
+           .min_size = 1,
+           .distinct = true},
           [](O& o) -> std::vector<std::string>& { return o.state_labels; }},
       Row{{.path = "states.kinetic_to_elastic",
            .unit = "-",
@@ -422,13 +423,10 @@ DemRunOptions dem_options_from_scenario(const Scenario& sc) {
   if (o.state_labels.size() != o.path.snapshot_eps_dev.size())
     throw InputError(where("states.labels") + ": needs one label per states.eps_dev entry (" +
                      std::to_string(o.path.snapshot_eps_dev.size()) + ")");
-  std::set<std::string> seen;
   for (const auto& l : o.state_labels) {
-    // Each label names the group /states/<label> of the results file.
+    // Each label names the group /states/<label> of the results file (KeySpec::distinct).
     if (const std::string why = invalid_object_name_reason(l); !why.empty())
       throw InputError(where("states.labels") + ": label '" + printable(l) + "' " + why);
-    if (!seen.insert(l).second)
-      throw InputError(where("states.labels") + ": duplicate label '" + l + "'");
   }
   for (double nu : o.branch_nu)
     if (!(nu > o.prepare.target_nu && nu < o.loading.target_nu))

@@ -233,6 +233,24 @@ TEST(Probe, UnknownPlaneExitsTwoWithOneLineAndWritesNothing) {
   EXPECT_FALSE(fs::exists(run_out / "results.h5"));
 }
 
+// A method, amplitude or plane given twice ran its campaign twice into one envelope group (two
+// amplitudes that print alike in the group's name too): refused in one line, nothing written.
+TEST(Probe, AMethodAmplitudeOrPlaneGivenTwiceIsRefused) {
+  const fs::path base = tiny();
+  const fs::path out = rendulic::testing::fresh_dir("app_probe/twice");
+  for (const std::string& args :
+       {std::string("--methods linear_response linear_response"),
+        std::string("--methods linear_response --amplitudes 1e-4 1.000001e-4"),
+        std::string("--methods linear_response --planes deviatoric deviatoric")}) {
+    const CliResult r =
+        probe(base.string() + ":/states/b --label b " + args + " --out " + out.string());
+    EXPECT_EQ(r.code, 2) << args << "\n" << r.err;
+    EXPECT_EQ(rendulic::testing::error_lines(r.err), 1) << r.err;
+    EXPECT_NE(r.err.find("given twice"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(out / "results.h5"));
+  }
+}
+
 // A results file's state restarts from its checkpoint as it is: its neighbour list (and, with
 // friction, the springs kept per entry) fits the dem.skin it was made with only, and each of
 // its numbers must be finite. Another skin was an internal error (exit 1), a force of inf a

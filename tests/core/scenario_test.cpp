@@ -75,6 +75,20 @@ ScenarioSchema make_schema() {
          .unit = "-",
          .help = "stages",
          .choices = {"a", "b", "c"}});
+  s.add({.path = "probes.amplitudes",
+         .type = KeyType::kDoubleList,
+         .default_value = std::vector<double>{5e-5},
+         .unit = "-",
+         .help = "amplitudes, each naming a group",
+         .min = 0,
+         .min_open = true,
+         .distinct = true});
+  s.add({.path = "probes.planes",
+         .type = KeyType::kStringList,
+         .default_value = std::vector<std::string>{"rendulic"},
+         .unit = "-",
+         .help = "planes, each naming a group",
+         .distinct = true});
   return s;
 }
 
@@ -148,6 +162,30 @@ TEST(Scenario, OutOfRangeIsNamed) {
   msg = input_error(
       [&] { Scenario::from_string("[probes]\nmethod = \"magic\"\n", "s.toml", schema); });
   EXPECT_NE(msg.find("'magic' is not one of dynamic, minimisation"), std::string::npos) << msg;
+}
+
+// A list whose entries name groups: an entry given twice, or two entries that print alike in a
+// group's name (6 significant digits), would run the same work twice into one group.
+TEST(Scenario, ADistinctListRefusesAnEntryGivenTwice) {
+  const auto schema = make_schema();
+  auto parse = [&](const std::string& text) { Scenario::from_string(text, "s.toml", schema); };
+  EXPECT_NO_THROW(parse("[probes]\namplitudes = [1e-4, 2e-4]\nplanes = [\"a\", \"b\"]\n"));
+  EXPECT_NO_THROW(parse("[probes]\namplitudes = [1e-4, 1.00001e-4]\n"));
+  auto msg = input_error([&] { parse("[probes]\namplitudes = [1e-4, 2e-4, 1e-4]\n"); });
+  EXPECT_NE(msg.find("key 'probes.amplitudes': value 0.0001 given twice"), std::string::npos)
+      << msg;
+  EXPECT_EQ(msg.find("significant"), std::string::npos) << msg;
+  msg = input_error([&] { parse("[probes]\namplitudes = [1e-4, 1.000001e-4]\n"); });
+  EXPECT_NE(msg.find("value 0.0001000001 given twice (as 0.0001: entries are told apart by 6 "
+                     "significant digits"),
+            std::string::npos)
+      << msg;
+  msg = input_error([&] { parse("[probes]\nplanes = [\"a\", \"b\", \"a\"]\n"); });
+  EXPECT_NE(msg.find("key 'probes.planes': value 'a' given twice"), std::string::npos) << msg;
+  // Lists without the flag keep repeats (two states at one strain are two states).
+  EXPECT_NO_THROW(parse("[states]\neps_dev = [0.1, 0.1]\n"));
+  const std::string md = schema.markdown();
+  EXPECT_NE(md.find("(0.0, inf), distinct"), std::string::npos) << md;
 }
 
 TEST(Scenario, SyntaxErrorNamesTheLine) {

@@ -63,14 +63,20 @@ inline std::string envelope(const std::string& state_group, const std::string& n
 inline std::string elastic_range(const std::string& state_group) {
   return state_group + kElasticRange;
 }
+// A number as it appears in a group's name: %g, 6 significant digits. Lists whose entries name
+// groups (probes.amplitudes, pressure.volume_fractions) must differ in this text (KeySpec's
+// distinct).
+inline std::string group_number(double x) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%g", x);
+  return buf;
+}
 // The name of an envelope: "<method>_<amplitude %g>", e.g. "dynamic_5e-05"; in a probe plane
 // other than the Rendulic one (docs/probes.md "Probe planes") "<method>_<plane>_<amplitude>",
 // e.g. "dynamic_deviatoric_5e-05".
 inline std::string envelope_name(const std::string& method, double amplitude,
                                  const std::string& plane = "rendulic") {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "_%g", amplitude);
-  return method + (plane == "rendulic" ? "" : "_" + plane) + buf;
+  return method + (plane == "rendulic" ? "" : "_" + plane) + "_" + group_number(amplitude);
 }
 // "/calibration/<model>".
 inline std::string calibration(const std::string& model) {
@@ -78,9 +84,7 @@ inline std::string calibration(const std::string& model) {
 }
 // "/pressure/nu<nu>", nu printed with %g (nu0.7, nu0.75).
 inline std::string pressure_branch(double nu) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%s/nu%g", kPressure, nu);
-  return buf;
+  return std::string(kPressure) + "/nu" + group_number(nu);
 }
 
 }  // namespace rendulic::paths

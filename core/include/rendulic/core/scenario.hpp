@@ -36,6 +36,10 @@ struct KeySpec {
   std::vector<std::string> choices;  // allowed strings (kString, kStringList); empty = any
   std::size_t min_size = 0;          // list length bounds
   std::size_t max_size = std::numeric_limits<std::size_t>::max();
+  // List entries must differ: each names a group or a piece of work. Numbers are told apart
+  // by their text in a group's name (paths::group_number, 6 significant digits): 1e-4 and
+  // 1.000001e-4 would write one envelope group twice.
+  bool distinct = false;
 };
 
 class ScenarioSchema {
