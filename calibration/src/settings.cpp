@@ -25,13 +25,15 @@ const OptionTable<CalibrationSettings>& calibration_option_table() {
             [](CalibrationSettings& s) -> std::string& { return s.model; }},
         Row{{.path = "calibration.states",
              .unit = "-",
-             .help = "State labels to fit (empty: every state with envelopes)."},
+             .help = "State labels to fit (empty: every state with envelopes).",
+             .distinct = true},
             [](CalibrationSettings& s) -> std::vector<std::string>& { return s.states; }},
         Row{{.path = "calibration.holdout",
              .unit = "-",
              .help = "State labels predicted but not fitted (held-out error); [\"auto\"]: with "
                      "three states or more every second one inside the path (a..e: b and d); "
-                     "[] or [\"none\"]: none."},
+                     "[] or [\"none\"]: none.",
+             .distinct = true},
             [](CalibrationSettings& s) -> std::vector<std::string>& { return s.holdout; }},
         Row{{.path = "calibration.backend",
              .unit = "-",

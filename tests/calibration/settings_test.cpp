@@ -84,6 +84,15 @@ TEST(CalibrationSettings, OutOfRangeIsRefusedNamingTheKey) {
     const std::string m = input_error([&] { calibration_plan(s); });
     EXPECT_NE(m.find("calibration.driver_scheme"), std::string::npos) << bad << ": " << m;
   }
+  // A state listed twice to fit or to hold out (`calibrate --states a,a`) is refused, not fitted
+  // once or counted twice.
+  s = {};
+  s.states = {"a", "b", "a"};
+  EXPECT_EQ(input_error([&] { calibration_plan(s); }), "calibration.states: value 'a' given twice");
+  s = {};
+  s.holdout = {"b", "b"};
+  EXPECT_EQ(input_error([&] { calibration_plan(s); }),
+            "calibration.holdout: value 'b' given twice");
 }
 
 }  // namespace
