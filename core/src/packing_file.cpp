@@ -263,15 +263,20 @@ Packing read_lammps_data(const fs::path& file) {
                        in.number(w[3], "velocity")});
       }
     }
+    // A section ends at a line that starts with a letter: the next keyword, or a line whose
+    // id is not a number (nan, x); a short section says which line ended it.
+    const std::string ended_by =
+        next.empty() ? std::string()
+                     : "; it ends at '" + next.substr(0, 40) + (next.size() > 40 ? "...'" : "'");
     if (name == "Atoms") {
       have_atoms = true;
       if (atoms.size() != n)
         in.fail("the Atoms section has " + std::to_string(atoms.size()) + " lines, the header " +
-                std::to_string(n) + " atoms");
+                std::to_string(n) + " atoms" + ended_by);
     }
     if (name == "Velocities" && vel.size() != n)
       in.fail("the Velocities section has " + std::to_string(vel.size()) + " lines, the header " +
-              std::to_string(n) + " atoms");
+              std::to_string(n) + " atoms" + ended_by);
     section = next;
   }
   if (!have_atoms) in.fail("no Atoms section");

@@ -346,6 +346,14 @@ TEST(Probe, BadPackingFilesExitTwoWithOneLine) {
                  data_file(kBox, "Atoms # sphere",
                            "1 1 0.002 2000 0.001 0.001 0.001\n1 1 0.002 2000 0.005 0.005 0.005\n"),
                  "appears twice");
+  // An atom id that is not a number ends the section as a keyword line would: the message
+  // names that line.
+  expect_refused(
+      "id_nan.data",
+      data_file(kBox, "Atoms # sphere",
+                "1 1 0.002 2000 0.001 0.001 0.001\nnan 1 0.002 2000 0.005 0.005 0.005\n"),
+      "the Atoms section has 1 lines, the header 2 atoms; it ends at 'nan 1 0.002 2000 "
+      "0.005 0.005 0.005'");
   expect_refused("short.data",
                  data_file(kBox, "Atoms # sphere", "1 1 0.002 2000 0.001 0.001 0.001\n"),
                  "the header 2 atoms");
