@@ -29,6 +29,7 @@
 #include "progress.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/log.hpp"
+#include "rendulic/core/option_table.hpp"
 #include "rendulic/core/packing_file.hpp"
 #include "rendulic/core/result_paths.hpp"
 #include "rendulic/core/results.hpp"
@@ -146,14 +147,13 @@ void print_summary(const ResultsReader& in, const std::string& group) {
 
 std::filesystem::path probe_packing(const ProbeRequest& r) {
   // What the CLI's option checks say before this runs, for callers without them (Python).
-  for (auto m = r.methods.begin(); m != r.methods.end(); ++m) {
-    if (*m != "dynamic" && *m != "minimisation" && *m != kLinear)
-      throw InputError("--methods: unknown method '" + *m +
+  for (const auto& m : r.methods)
+    if (m != "dynamic" && m != "minimisation" && m != kLinear)
+      throw InputError("--methods: unknown method '" + m +
                        "' (dynamic, minimisation, linear_response)");
-    // Twice, a method's campaign ran twice into the same groups (probes.methods refuses it too).
-    if (std::find(r.methods.begin(), m, *m) != m)
-      throw InputError("--methods: method '" + *m + "' given twice");
-  }
+  // Twice, a method's campaign ran twice into the same groups (probes.methods refuses it too).
+  if (const std::string* again = first_repeat(r.methods))
+    throw InputError("--methods: method '" + *again + "' given twice");
   if (const std::string why = invalid_object_name_reason(r.label); !why.empty())
     throw InputError("--label: label '" + r.label + "' " + why);
   if (r.directions < 0 || r.threads < 0)

@@ -16,6 +16,7 @@
 
 #include "rendulic/core/conventions.hpp"
 #include "rendulic/core/errors.hpp"
+#include "rendulic/core/option_table.hpp"
 #include "rendulic/core/result_paths.hpp"
 #include "rendulic/dem/contact.hpp"
 #include "rendulic/dem/probe_campaign.hpp"
@@ -547,16 +548,15 @@ bool SweepOptions::IsValid(std::string* why) const {
     return false;
   };
   if (factors.empty()) return fail("sweep: no factor to sweep");
-  for (auto f = factors.begin(); f != factors.end(); ++f) {
-    if (std::find(kSweepFactors.begin(), kSweepFactors.end(), *f) == kSweepFactors.end()) {
+  for (const auto& f : factors)
+    if (std::find(kSweepFactors.begin(), kSweepFactors.end(), f) == kSweepFactors.end()) {
       std::string known;
       for (const auto& k : kSweepFactors) known += (known.empty() ? "" : ", ") + k;
-      return fail("sweep: unknown factor '" + *f + "' (" + known + ")");
+      return fail("sweep: unknown factor '" + f + "' (" + known + ")");
     }
-    // Listed twice, a factor was swept twice: the same runs again and twice the rows.
-    if (std::find(factors.begin(), f, *f) != f)
-      return fail("sweep: factor '" + *f + "' listed twice");
-  }
+  // Listed twice, a factor was swept twice: the same runs again and twice the rows.
+  if (const std::string* again = first_repeat(factors))
+    return fail("sweep: factor '" + *again + "' listed twice");
   if (threads < 0) return fail("sweep: threads must be >= 0");
   if (!(target > 0 && target < 1)) return fail("sweep: target must be in (0, 1)");
   if (base_n < 50) return fail("sweep: base N must be >= 50");

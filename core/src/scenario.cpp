@@ -246,10 +246,8 @@ std::string validate(const KeySpec& s, const ScenarioValue& v) {
       for (const auto& x : xs)
         if (auto r = check_choice(s, x); !r.empty()) return r;
       if (s.distinct)
-        for (std::size_t i = 0; i < xs.size(); ++i)
-          if (std::find(xs.begin(), xs.begin() + static_cast<std::ptrdiff_t>(i), xs[i]) !=
-              xs.begin() + static_cast<std::ptrdiff_t>(i))
-            return "value '" + xs[i] + "' given twice";
+        if (const std::string* again = first_repeat(xs))
+          return "value '" + *again + "' given twice";
       return "";
     }
   }
@@ -401,6 +399,12 @@ void check_key_depth(std::string_view t, const std::string& source_name) {
 
 }  // namespace
 
+const std::string* first_repeat(const std::vector<std::string>& names) {
+  for (auto n = names.begin(); n != names.end(); ++n)
+    if (std::find(names.begin(), n, *n) != n) return &*n;
+  return nullptr;
+}
+
 std::string validate_value(const KeySpec& spec, const ScenarioValue& value) {
   return validate(spec, value);
 }
@@ -451,10 +455,10 @@ std::string ScenarioSchema::markdown() const {
     }
     std::string help = k.help;
     std::replace(help.begin(), help.end(), '|', '/');
+    std::string range = format_range(k);
+    if (k.distinct) range += range.empty() ? "distinct" : ", distinct";
     out << "| `" << k.path << "` | " << type_name(k.type) << " | " << k.unit << " | `"
-        << format_value(k.default_value) << "` | " << format_range(k)
-        << (k.distinct ? (format_range(k).empty() ? "distinct" : ", distinct") : "") << " | "
-        << help << " |\n";
+        << format_value(k.default_value) << "` | " << range << " | " << help << " |\n";
   }
   return out.str();
 }

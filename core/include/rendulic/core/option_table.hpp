@@ -23,6 +23,9 @@ namespace rendulic {
 std::string validate_value(const KeySpec& spec, const ScenarioValue& value);
 // The spec's range as a scenario error states it: "[1e-16, 0.1]", "(0, inf)", "one of a, b".
 std::string format_range(const KeySpec& spec);
+// The first entry of `names` that repeats an earlier one, or nullptr: the check behind "given
+// twice" of a distinct list of names (KeySpec::distinct), probe's --methods, sweep's --factors.
+const std::string* first_repeat(const std::vector<std::string>& names);
 
 template <class Options>
 struct OptionRow {
