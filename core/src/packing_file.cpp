@@ -107,6 +107,11 @@ void check_packing(const Packing& p) {
     if (!(p.lengths[a] > 0) || !std::isfinite(p.lengths[a]))
       throw InputError(p.origin + ": the box length along axis " + std::to_string(a) +
                        " is not a positive finite number");
+  // Each length finite is not enough: 1e300 m on every axis makes the volume, and with it the
+  // volume fraction and the pair search's cell widths, inf and NaN.
+  if (!std::isfinite(p.lengths.prod()) || !(p.lengths.prod() > 0))
+    throw InputError(
+        p.origin + ": the box volume (the product of its lengths) is not a positive finite number");
   if (!p.positions.allFinite()) throw InputError(p.origin + ": a position is not finite");
   if (p.velocities.rows() > 0 && !p.velocities.allFinite())
     throw InputError(p.origin + ": a velocity is not finite");

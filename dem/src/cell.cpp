@@ -6,6 +6,25 @@
 
 namespace rendulic::dem {
 
+std::array<int, 3> cell_list_bins(const Eigen::Vector3d& widths, double min_width, std::size_t n) {
+  const double most = std::max(65536.0, kMaxBinsPerParticle * static_cast<double>(n));
+  std::array<double, 3> b{};
+  for (int a = 0; a < 3; ++a) {
+    const double fit = std::floor(widths[a] / min_width);
+    b[a] = fit >= 1.0 ? std::min(fit, most) : 1.0;  // NaN (no width) takes one bin
+  }
+  // Coarser alike along the axes that keep more than one bin, until the total fits: an axis that
+  // would fall below one bin keeps one, and the others share the bound (at most three passes,
+  // each of which either fits or holds another axis at one bin).
+  for (double total = b[0] * b[1] * b[2]; total > most; total = b[0] * b[1] * b[2]) {
+    const double free = (b[0] > 1.0) + (b[1] > 1.0) + (b[2] > 1.0);
+    const double s = std::pow(most / total, 1.0 / free);
+    for (double& v : b)
+      if (v > 1.0) v = std::max(1.0, std::floor(v * s));
+  }
+  return {static_cast<int>(b[0]), static_cast<int>(b[1]), static_cast<int>(b[2])};
+}
+
 bool ServoOptions::IsValid(std::string* why) const {
   if (!(gain > 0 && std::isfinite(gain))) {
     if (why) *why = "servo gain must be positive";

@@ -17,6 +17,7 @@
 #include <stdexcept>
 
 #include "rendulic/core/errors.hpp"
+#include "rendulic/dem/cell.hpp"
 
 namespace rendulic::dem {
 namespace {
@@ -79,12 +80,8 @@ void NeighborList::build(const Particles& p, const Eigen::Vector3d& L, double sk
   ref_z_ = p.z;
   ref_lengths_ = L;
 
-  std::array<int, 3> nb{};
-  bool brute = false;
-  for (int a = 0; a < 3; ++a) {
-    nb[a] = static_cast<int>(std::floor(L[a] / cutoff));
-    if (nb[a] < 3) brute = true;
-  }
+  const std::array<int, 3> nb = cell_list_bins(L, cutoff, n);
+  const bool brute = *std::min_element(nb.begin(), nb.end()) < 3;
   std::vector<int> bin_of(n, 0);
   std::vector<std::int64_t> bin_start;
   std::vector<std::int32_t> bin_members;

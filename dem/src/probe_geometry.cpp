@@ -32,7 +32,8 @@ void check_packing(const PackingData& packing) {
     os << "packing: " << packing.positions.rows() << " positions but " << n << " radii";
     throw InputError(os.str());
   }
-  if (!(packing.volume() > 0.0) || !packing.cell.h.allFinite()) {
+  if (!(packing.volume() > 0.0) || !std::isfinite(packing.volume()) ||
+      !packing.cell.h.allFinite()) {
     throw InputError("packing: the cell matrix is not finite with a positive volume");
   }
   if (!packing.positions.allFinite() || !packing.radii.allFinite() ||
@@ -54,9 +55,10 @@ void find_pairs_unordered(const PackingData& packing, double skin,
   const double cutoff = 2.0 * packing.radii.maxCoeff() + skin;
   // Perpendicular width of the cell along each fractional axis: V / |h_b x h_c|.
   const double volume = packing.volume();
-  std::array<int, 3> bins{};
+  Eigen::Vector3d widths;
   for (int a = 0; a < 3; ++a) {
     const double width = volume / h.col((a + 1) % 3).cross(h.col((a + 2) % 3)).norm();
+    widths[a] = width;
     if (width < 2.0 * cutoff) {
       std::ostringstream os;
       os << "packing: cell width " << width << " m along axis " << a
@@ -64,8 +66,8 @@ void find_pairs_unordered(const PackingData& packing, double skin,
          << " m; the minimum image would be ambiguous";
       throw InputError(os.str());
     }
-    bins[a] = std::max(1, static_cast<int>(std::floor(width / cutoff)));
   }
+  const std::array<int, 3> bins = cell_list_bins(widths, cutoff, static_cast<std::size_t>(n));
   const int n_bins = bins[0] * bins[1] * bins[2];
   // Bin of each particle from its wrapped fractional coordinates; counting sort into cells.
   std::vector<int> bin_of(n);

@@ -10,6 +10,7 @@
 
 #include "rendulic/core/conventions.hpp"
 #include "rendulic/core/errors.hpp"
+#include "rendulic/dem/cell.hpp"
 
 namespace rendulic::dem {
 namespace {
@@ -120,7 +121,7 @@ DemSystem make_gas(const SystemOptions& options, const GasOptions& gas, std::uin
   Particles p = make_particles(options.material, gas.n_particles, rng);
   const double L = std::cbrt(p.total_volume() / gas.volume_fraction);
   const double r_max = *std::max_element(p.radius.begin(), p.radius.end());
-  const int nb = std::max(1, static_cast<int>(std::floor(L / (2.0 * r_max))));
+  const int nb = cell_list_bins(Eigen::Vector3d::Constant(L), 2.0 * r_max, p.size())[0];
   const double bin = L / nb;
   std::vector<std::vector<std::int32_t>> bins(static_cast<std::size_t>(nb) * nb * nb);
   std::vector<std::size_t> order(p.size());

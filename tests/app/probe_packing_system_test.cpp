@@ -322,6 +322,12 @@ TEST(Probe, BadPackingFilesExitTwoWithOneLine) {
                  data_file("0 0.01 xlo xhi\n0.01 0.01 ylo yhi\n0 0.01 zlo zhi\n", "Atoms # sphere",
                            "1 1 0.002 2000 0.001 0.001 0.001\n2 1 0.002 2000 0.005 0.005 0.005\n"),
                  "degenerate box");
+  // Each length finite, their product not: the volume fraction and the cell widths would be
+  // NaN (a segmentation fault in the pair search before).
+  expect_refused("huge.data",
+                 data_file("0 1e300 xlo xhi\n0 1e300 ylo yhi\n0 1e300 zlo zhi\n", "Atoms # sphere",
+                           "1 1 0.002 2000 0.001 0.001 0.001\n2 1 0.002 2000 0.005 0.005 0.005\n"),
+                 "the box volume (the product of its lengths) is not a positive finite number");
   expect_refused("triclinic.data",
                  data_file(kBox + "0.001 0 0 xy xz yz\n", "Atoms # sphere",
                            "1 1 0.002 2000 0.001 0.001 0.001\n2 1 0.002 2000 0.005 0.005 0.005\n"),

@@ -7,9 +7,13 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
 #include <map>
 #include <utility>
 
+#include "rendulic/dem/cell.hpp"
 #include "rendulic/dem/neighbor_list.hpp"
 #include "rendulic/dem/protocols.hpp"
 
@@ -84,6 +88,47 @@ TEST(NeighborList, NeverMissesAContactInAHotDeformingPacking) {
 // around the cell, tested in lanes where the build has them) against every pair and every
 // image: each pair within reach, r_i + h_i + r_j + h_j, listed once and with its image; none
 // beyond it; rows ascending. Pairs within 1e-9 of the reach are left to rounding.
+// Every pair (i < j) and periodic image within r_i + h_i + r_j + h_j is listed once, with that
+// image, and nothing beyond reach: the list against a search over all pairs and 27 images.
+// Returns the number of pairs within reach.
+std::size_t expect_every_pair_within_reach_listed_once(const Particles& p, const Eigen::Vector3d& L,
+                                                       const std::vector<double>& h,
+                                                       const NeighborList& list) {
+  const std::size_t n = p.size();
+  // (i, j) with i < j -> the image of j seen from i, l = x_i - x_j + s L.
+  std::map<std::pair<int, int>, Eigen::Vector3d> listed;
+  for (std::size_t r = 0; r < n; ++r)
+    for (std::int64_t e = list.offset[r]; e < list.offset[r + 1]; ++e) {
+      const int row = static_cast<int>(r), j = list.index[e];
+      if (e > list.offset[r]) {
+        EXPECT_LT(list.index[e - 1], j) << "row " << r;
+      }
+      const Eigen::Vector3d s_row = NeighborList::shift(list.shift_code[e]);
+      const bool fresh = row < j
+                             ? listed.emplace(std::pair{row, j}, s_row).second
+                             : listed.emplace(std::pair{j, row}, Eigen::Vector3d(-s_row)).second;
+      EXPECT_TRUE(fresh) << "listed twice: " << r << " " << j;
+    }
+  std::size_t within = 0;
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t j = i + 1; j < n; ++j)
+      for (std::uint8_t code = 0; code < 27; ++code) {
+        const Eigen::Vector3d sh = NeighborList::shift(code);
+        const Eigen::Vector3d l = p.position(i) - p.position(j) + sh.cwiseProduct(L);
+        const double reach = p.radius[i] + h[i] + p.radius[j] + h[j], d = l.norm();
+        const auto it = listed.find({static_cast<int>(i), static_cast<int>(j)});
+        const bool as_listed = it != listed.end() && it->second == sh;
+        if (d < reach * (1 - 1e-9)) {
+          ++within;
+          EXPECT_TRUE(as_listed) << "missing: " << i << " " << j << " image " << int(code);
+        } else if (d > reach * (1 + 1e-9)) {
+          EXPECT_FALSE(as_listed) << "beyond reach: " << i << " " << j;
+        }
+      }
+  EXPECT_EQ(within, listed.size());  // nothing listed beyond reach either
+  return within;
+}
+
 TEST(NeighborList, TheBinnedSearchListsEveryPairWithinReachOnce) {
   omp_set_num_threads(1);
   GasOptions g;
@@ -106,39 +151,84 @@ TEST(NeighborList, TheBinnedSearchListsEveryPairWithinReachOnce) {
     NeighborList list;
     list.build(p, L, skin, h, threads);
     ASSERT_GE(L.minCoeff(), 3 * (2 * r_max + skin));  // binned, not the all-pairs search
-    // (i, j) with i < j -> the image of j seen from i, l = x_i - x_j + s L.
-    std::map<std::pair<int, int>, Eigen::Vector3d> listed;
-    for (std::size_t r = 0; r < n; ++r)
-      for (std::int64_t e = list.offset[r]; e < list.offset[r + 1]; ++e) {
-        const int row = static_cast<int>(r), j = list.index[e];
-        if (e > list.offset[r]) {
-          EXPECT_LT(list.index[e - 1], j) << "row " << r;
-        }
-        const Eigen::Vector3d s_row = NeighborList::shift(list.shift_code[e]);
-        const bool fresh = row < j
-                               ? listed.emplace(std::pair{row, j}, s_row).second
-                               : listed.emplace(std::pair{j, row}, Eigen::Vector3d(-s_row)).second;
-        EXPECT_TRUE(fresh) << "listed twice: " << r << " " << j;
-      }
-    std::size_t within = 0;
-    for (std::size_t i = 0; i < n; ++i)
-      for (std::size_t j = i + 1; j < n; ++j)
-        for (std::uint8_t code = 0; code < 27; ++code) {
-          const Eigen::Vector3d sh = NeighborList::shift(code);
-          const Eigen::Vector3d l = p.position(i) - p.position(j) + sh.cwiseProduct(L);
-          const double reach = p.radius[i] + h[i] + p.radius[j] + h[j], d = l.norm();
-          const auto it = listed.find({static_cast<int>(i), static_cast<int>(j)});
-          const bool as_listed = it != listed.end() && it->second == sh;
-          if (d < reach * (1 - 1e-9)) {
-            ++within;
-            EXPECT_TRUE(as_listed) << "missing: " << i << " " << j << " image " << int(code);
-          } else if (d > reach * (1 + 1e-9)) {
-            EXPECT_FALSE(as_listed) << "beyond reach: " << i << " " << j;
-          }
-        }
-    EXPECT_EQ(within, listed.size());  // nothing listed beyond reach either
-    EXPECT_GT(within, 4 * n);
+    EXPECT_GT(expect_every_pair_within_reach_listed_once(p, L, h, list), 4 * n);
   }
+}
+
+TEST(CellListBins, AsManyAsFitInADenseCellBoundedInADiluteOne) {
+  const auto product = [](const std::array<int, 3>& b) { return double(b[0]) * b[1] * b[2]; };
+  // Dense: every bin as narrow as allowed, and no fewer than one.
+  EXPECT_EQ(cell_list_bins(Eigen::Vector3d(10.5, 20.2, 3.1), 1.0, 1000),
+            (std::array<int, 3>{10, 20, 3}));
+  EXPECT_EQ(cell_list_bins(Eigen::Vector3d(0.5, 2.0, 1.0), 1.0, 10), (std::array<int, 3>{1, 2, 1}));
+  // Dilute: at most max(2^16, 64 n) bins, alike along equal axes, never narrower than asked.
+  const Eigen::Vector3d wide = Eigen::Vector3d::Constant(1e6);
+  const std::array<int, 3> few = cell_list_bins(wide, 1.0, 10);
+  EXPECT_LE(product(few), 65536.0);
+  EXPECT_EQ(few, (std::array<int, 3>{40, 40, 40}));
+  const std::array<int, 3> many = cell_list_bins(wide, 1.0, 1000000);
+  EXPECT_LE(product(many), kMaxBinsPerParticle * 1e6);
+  EXPECT_GT(product(many), 0.9 * kMaxBinsPerParticle * 1e6);
+  // A slab: its thin axis keeps its one bin and the others share the bound.
+  const std::array<int, 3> slab = cell_list_bins(Eigen::Vector3d(1e9, 1e9, 1.5), 1.0, 10);
+  EXPECT_EQ(slab[2], 1);
+  EXPECT_LE(product(slab), 65536.0);
+  EXPECT_GE(slab[0], 200);
+  // Widths no int can count: still a bounded, positive number of bins.
+  for (const Eigen::Vector3d& w :
+       {Eigen::Vector3d(1e300, 1e300, 1e300), Eigen::Vector3d(1e300, 1.0, 1e300),
+        Eigen::Vector3d(std::numeric_limits<double>::infinity(), 5.0,
+                        std::numeric_limits<double>::quiet_NaN())}) {
+    const std::array<int, 3> b = cell_list_bins(w, 1e-3, 4);
+    for (int a = 0; a < 3; ++a) {
+      EXPECT_GE(b[a], 1);
+      if (std::isfinite(w[a])) {
+        EXPECT_GE(w[a] / b[a], 1e-3);
+      }
+    }
+    EXPECT_LE(product(b), 65536.0);
+  }
+}
+
+TEST(NeighborList, ADiluteCellIsListedCompletelyWithBoundedBins) {
+  // 40 particles 1 mm in a box of 10 m: 2.4e12 bins of one contact range each, which overflowed
+  // the bin index and asked for terabytes before the bound. Pairs in reach, some of them across
+  // the box's faces, among particles spread at random.
+  const double r = 1e-3, L0 = 10.0, skin = 3e-4;
+  const Eigen::Vector3d L = Eigen::Vector3d::Constant(L0);
+  Rng rng(4);
+  Particles p;
+  p.resize(40);
+  for (std::size_t i = 0; i < p.size(); i += 2) {
+    const Eigen::Vector3d x(rng.uniform(0, L0), rng.uniform(0, L0), rng.uniform(0, L0));
+    Eigen::Vector3d y = x + Eigen::Vector3d(rng.uniform(1.5, 2.1) * r, 0.0, 0.0);
+    p.x[i] = x[0];
+    if (i % 4 == 0) {  // across the face x = L
+      p.x[i] = L0 - rng.uniform(0.0, 1.5 * r);
+      y[0] = rng.uniform(0.0, 0.5 * r);
+    }
+    p.y[i] = x[1], p.z[i] = x[2];
+    p.x[i + 1] = y[0], p.y[i + 1] = x[1], p.z[i + 1] = x[2];
+    p.radius[i] = p.radius[i + 1] = r;
+    p.inv_mass[i] = p.inv_mass[i + 1] = 1.0;
+  }
+  const std::vector<double> h(p.size(), 0.5 * skin);
+  NeighborList list;
+  list.build(p, L, skin, h, 1);
+  EXPECT_EQ(expect_every_pair_within_reach_listed_once(p, L, h, list), p.size() / 2);
+}
+
+TEST(NeighborList, AGasFarTooDiluteForOneBinPerRangeIsMadeAndStepped) {
+  // preparation.nu_gas = 1e-9: the random insertion's bins and the list's both bounded (before,
+  // 420 GB asked for and std::bad_alloc).
+  GasOptions g;
+  g.n_particles = 60;
+  g.volume_fraction = 1e-9;
+  DemSystem s = make_gas(SystemOptions{}, g, 3);
+  ASSERT_EQ(s.particles().size(), 60u);
+  for (int k = 0; k < 10; ++k) s.step(Eigen::Vector3d::Constant(-100.0));
+  EXPECT_EQ(s.measure().contacts, 0);
+  EXPECT_NEAR(s.volume_fraction(), 1e-9, 1e-10);
 }
 
 TEST(NeighborList, HalfSkinsStayWithinTheirBounds) {

@@ -74,6 +74,22 @@ TEST(FindPairs, EqualsTheSearchOverAllPairsWithFewBinsPerAxis) {
   for (double skin : {0.0, 0.5e-3}) expect_same_pairs(random_packing(60, 16.0, 2), skin);
 }
 
+TEST(FindPairs, EqualsTheSearchOverAllPairsInADiluteCell) {
+  // 40 spheres in a cube of 1e5 r: 1e12 bins of one contact range, which overflowed the bin
+  // count, before their number was bounded (cell_list_bins). Half of them touch a partner, one
+  // pair across the cell's face.
+  PackingData p = random_packing(40, 1e5, 4);
+  const double L = p.cell.h(0, 0);
+  for (int i = 0; i + 1 < p.size(); i += 2) {
+    p.positions.row(i + 1) = p.positions.row(i);
+    p.positions(i + 1, 0) += 0.9 * (p.radii(i) + p.radii(i + 1));
+  }
+  p.positions(0, 0) = L - 0.2 * p.radii(0);
+  p.positions(1, 0) = 0.5 * p.radii(1);
+  for (double skin : {0.0, 0.5e-3}) expect_same_pairs(p, skin);
+  EXPECT_EQ(find_pairs(p, 0.0).size(), 20u);
+}
+
 TEST(FindPairs, EqualsTheSearchOverAllPairsInAShearedCell) {
   PackingData p = random_packing(600, 30.0, 3);
   Eigen::Matrix3d F = Eigen::Matrix3d::Identity();

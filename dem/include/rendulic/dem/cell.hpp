@@ -8,6 +8,7 @@
 #include <Eigen/Dense>
 #include <array>
 #include <cmath>
+#include <cstddef>
 #include <string>
 
 namespace rendulic::dem {
@@ -55,6 +56,17 @@ inline Eigen::Vector3d minimum_image_orthorhombic(const Eigen::Vector3d& h_diago
   s -= s.unaryExpr([](double v) { return std::nearbyint(v); }).eval();
   return h_diagonal.cwiseProduct(s);
 }
+
+// Bins of a cell list along each axis of a cell whose perpendicular widths are `widths`, for
+// `n` particles: as many bins as fit bins no narrower than min_width (at least one per axis),
+// but no more than kMaxBinsPerParticle per particle (and at least 2^16 in all) in a dilute cell.
+// Without that bound a few particles in a wide box (a gas of preparation.nu_gas = 1e-6, a
+// packing file from another engine) asked for billions of bins, gigabytes and an int overflow.
+// Bins wider than min_width only add candidates, so every list stays complete; dense packings
+// hold one or two particles per bin and never meet the bound. The engine's neighbour list, the
+// random gas and the probe tools' pair search all take their bins here (docs/dem.md).
+inline constexpr double kMaxBinsPerParticle = 64.0;
+std::array<int, 3> cell_list_bins(const Eigen::Vector3d& widths, double min_width, std::size_t n);
 
 // How one axis of the cell moves.
 struct AxisControl {
