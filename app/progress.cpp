@@ -66,12 +66,14 @@ void Progress::observe(double fraction) {
       const std::unique_lock<std::mutex> lock(observe_mutex_, std::try_to_lock);
       if (!lock.owns_lock()) return throw_if_stopped();
       const auto now = Clock::now();
-      if (std::chrono::duration<double>(now - observed_).count() >= kObserveEvery) {
+      {
+        const std::lock_guard<std::mutex> task_lock(mutex_);
+        task = task_;
+      }
+      if (task != observed_task_ ||
+          std::chrono::duration<double>(now - observed_).count() >= kObserveEvery) {
         observed_ = now;
-        {
-          const std::lock_guard<std::mutex> task_lock(mutex_);
-          task = task_;
-        }
+        observed_task_ = task;
         g_observer(stage_, task, std::clamp(fraction, 0.0, 1.0));
       }
     }

@@ -21,7 +21,9 @@
 namespace rendulic::app {
 
 // The observer: the stage, its current task and the fraction of that task done, at most every
-// kObserveEvery seconds per stage, from whichever thread reported (so it must be thread-safe).
+// kObserveEvery seconds per stage, from whichever thread reported (so it must be thread-safe);
+// the stage's start and the first report of each task always reach it, so a task shorter than
+// kObserveEvery (the probes of a small state on a fast machine) is seen all the same.
 // One per process; set it only while no work runs. An empty function removes it.
 using ProgressObserver =
     std::function<void(const std::string& stage, const std::string& task, double fraction)>;
@@ -76,6 +78,7 @@ class Progress {
   Clock::time_point start_, task_start_, last_;
   bool shown_ = false;
   Clock::time_point observed_{};
+  std::string observed_task_;  // the task of the observer's last report
   std::mutex observe_mutex_;
   std::mutex mutex_;
 };
