@@ -7,7 +7,6 @@
 #include <atomic>
 #include <cmath>
 #include <exception>
-#include <set>
 #include <thread>
 
 #include "cores.hpp"
@@ -15,6 +14,7 @@
 #include "rendulic/core/affine_map.hpp"
 #include "rendulic/core/conventions.hpp"
 #include "rendulic/core/errors.hpp"
+#include "rendulic/core/option_table.hpp"
 #include "rendulic/models/driver_core.hpp"
 #include "rendulic/models/law_model.hpp"
 #include "rendulic/models/paths.hpp"
@@ -34,11 +34,11 @@ ParameterSpace::ParameterSpace(const models::Law& law, const std::vector<double>
   if (values.size() != info.size())
     throw InputError(std::string(law.name()) + " takes " + std::to_string(info.size()) +
                      " parameters, got " + std::to_string(values.size()));
-  std::set<std::string> seen;
+  if (const std::string* again = first_repeat(free))
+    throw InputError("parameter '" + *again + "' listed twice");
   for (const auto& name : free) {
     const int i = law.parameter_index(name);
     if (i < 0) throw InputError("unknown parameter '" + name + "' of " + std::string(law.name()));
-    if (!seen.insert(name).second) throw InputError("parameter '" + name + "' listed twice");
     FreeParameter f;
     f.name = name;
     f.index = i;
@@ -60,7 +60,8 @@ ParameterSpace::ParameterSpace(const models::Law& law, const std::vector<double>
     free_.push_back(f);
   }
   for (const auto& [name, box] : bounds)
-    if (!seen.count(name)) throw InputError("search bounds given for '" + name + "', not free");
+    if (std::find(free.begin(), free.end(), name) == free.end())
+      throw InputError("search bounds given for '" + name + "', not free");
 }
 
 std::vector<std::string> ParameterSpace::names() const {

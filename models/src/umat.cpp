@@ -13,6 +13,7 @@
 #include <limits>
 
 #include "rendulic/core/errors.hpp"
+#include "rendulic/core/option_table.hpp"
 
 namespace rendulic::models {
 
@@ -183,10 +184,8 @@ UmatSpec load_umat_parameters_toml(const std::string& path) {
   if (s.prop_names.size() != n)
     throw InputError(path + ": 'prop_names' has " + std::to_string(s.prop_names.size()) +
                      " names for " + std::to_string(n) + " props");
-  for (std::size_t i = 0; i < n; ++i)
-    for (std::size_t j = 0; j < i; ++j)
-      if (s.prop_names[i] == s.prop_names[j])
-        throw InputError(path + ": prop name '" + s.prop_names[i] + "' given twice");
+  if (const std::string* again = first_repeat(s.prop_names))
+    throw InputError(path + ": prop name '" + *again + "' given twice");
   if (!have_statev) s.statev.assign(s.nstatv, 0.0);
   if (static_cast<int>(s.statev.size()) != s.nstatv)
     throw InputError(path + ": 'statev' has " + std::to_string(s.statev.size()) +

@@ -10,6 +10,7 @@
 
 #include <algorithm>
 
+#include "input_error.hpp"
 #include "rendulic/calibration/calibrate.hpp"
 #include "rendulic/calibration/objective.hpp"
 #include "rendulic/models/driver.hpp"
@@ -50,6 +51,22 @@ bool mentions_substeps(const std::vector<std::string>& warnings) {
   return std::any_of(warnings.begin(), warnings.end(), [](const std::string& w) {
     return w.find("driver substeps a prediction may take") != std::string::npos;
   });
+}
+
+TEST(ParameterSpaceNames, AFreeParameterListedTwiceOrUnknownIsRefusedNamingIt) {
+  const auto law = law_with("elastoplastic_fabric", testing::kElastoplasticTruth);
+  EXPECT_EQ(rendulic::testing::input_error([&] {
+              ParameterSpace(*law, law->parameters(), {"M_ss", "G", "M_ss"});
+            }),
+            "parameter 'M_ss' listed twice");
+  EXPECT_EQ(rendulic::testing::input_error([&] {
+              ParameterSpace(*law, law->parameters(), {"M_ss", "nope"});
+            }),
+            "unknown parameter 'nope' of elastoplastic_fabric");
+  EXPECT_EQ(rendulic::testing::input_error([&] {
+              ParameterSpace(*law, law->parameters(), {"M_ss"}, {{"nope", {0.0, 1.0}}});
+            }),
+            "search bounds given for 'nope', not free");
 }
 
 TEST(DriverLoad, IsTheMostSubstepsOfAnyIntegratedProbe) {

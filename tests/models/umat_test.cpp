@@ -11,6 +11,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <string>
 
@@ -271,6 +272,15 @@ TEST(Umat, MissingFileSymbolOrKeyIsAnInputError) {
   EXPECT_FALSE(input_error([&] { load_umat_parameters_toml("/nonexistent/p.toml"); }).empty());
   EXPECT_NE(input_error([&] { make_umat_law(umat_lib("hypoplastic_wu"), ""); }).find("--params"),
             std::string::npos);
+}
+
+TEST(Umat, APropNameGivenTwiceIsRefusedNamingIt) {
+  const std::filesystem::path dir = std::filesystem::path(RENDULIC_TEST_TMP) / "umat_names";
+  std::filesystem::create_directories(dir);
+  const std::filesystem::path file = dir / "twice.toml";
+  std::ofstream(file) << "props = [2e10, 2.5e9, 1.0]\nprop_names = [\"K\", \"G\", \"K\"]\n";
+  EXPECT_EQ(input_error([&] { load_umat_parameters_toml(file.string()); }),
+            file.string() + ": prop name 'K' given twice");
 }
 
 }  // namespace
