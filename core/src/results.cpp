@@ -277,11 +277,22 @@ struct ResultsWriter::Impl {
       throw InputError(dir.string() + ": cannot create output folder: not a folder");
   }
 
-  // Temporary files of runs that were killed (SIGKILL, a power cut) before they could tidy.
-  void sweep_stale() {
+  // The temporary files of writers of final_path in its folder (ours and other processes'):
+  // .NAME.tmp-PID, .NAME.tmp-PID.partial, .NAME.tmp-PID.partial-new.
+  struct Temporary {
+    fs::path path;
+    std::string pid_text, suffix;
+    long pid = 0;
+    // That process still runs, or is not ours to judge.
+    bool alive() const {
+      return pid > 0 && pid <= 0x7fffffff &&
+             (::kill(static_cast<pid_t>(pid), 0) == 0 || errno != ESRCH);
+    }
+  };
+  std::vector<Temporary> temporaries() const {
     const fs::path dir = final_path.has_parent_path() ? final_path.parent_path() : fs::path(".");
     const std::string prefix = "." + final_path.filename().string() + ".tmp-";
-    std::vector<std::pair<fs::path, std::string>> found;  // path, pid
+    std::vector<Temporary> found;
     std::error_code ec;
     for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
       const std::string name = it->path().filename().string();
@@ -291,33 +302,44 @@ struct ResultsWriter::Impl {
       while (k < rest.size() && k < 10 && std::isdigit(static_cast<unsigned char>(rest[k]))) ++k;
       const std::string suffix = rest.substr(k);
       if (k == 0 || (suffix != "" && suffix != ".partial" && suffix != ".partial-new")) continue;
-      found.emplace_back(it->path(), rest.substr(0, k));
+      found.push_back({it->path(), rest.substr(0, k), suffix, std::stol(rest.substr(0, k))});
     }
-    for (const auto& [path, pid_text] : found) {
-      const long pid = std::stol(pid_text);
-      if (pid == ::getpid()) continue;
-      if (pid > 0 && pid <= 0x7fffffff &&
-          (::kill(static_cast<pid_t>(pid), 0) == 0 || errno != ESRCH))
-        continue;  // that process still runs (or is not ours to judge)
-      const std::string suffix = path.filename().string().substr(prefix.size() + pid_text.size());
-      if (suffix.empty() && !unlocked(path)) continue;  // open in a process we cannot see
+    return found;
+  }
+
+  // Temporary files of runs that were killed (SIGKILL, a power cut) before they could tidy.
+  void sweep_stale() {
+    for (const Temporary& t : temporaries()) {
+      if (t.pid == ::getpid() || t.alive()) continue;
+      if (t.suffix.empty() && !unlocked(t.path)) continue;  // open in a process we cannot see
       std::error_code rm;
-      if (suffix == ".partial") {
+      if (t.suffix == ".partial") {
         const fs::path kept = with_suffix(final_path, ".partial");
         if (!fs::exists(kept, rm)) {
-          fs::rename(path, kept, rm);
+          fs::rename(t.path, kept, rm);
           if (!rm) {
-            notes.push_back(path.string() + ": the completed stages of a run that was killed " +
-                            "(process " + pid_text + ") are kept in " + kept.string());
+            notes.push_back(t.path.string() + ": the completed stages of a run that was killed " +
+                            "(process " + t.pid_text + ") are kept in " + kept.string());
             continue;
           }
         }
       }
-      fs::remove(path, rm);
+      fs::remove(t.path, rm);
       if (!rm)
-        notes.push_back(path.string() + ": removed, a temporary file of a run that was killed " +
-                        "(process " + pid_text + ")");
+        notes.push_back(t.path.string() + ": removed, a temporary file of a run that was killed " +
+                        "(process " + t.pid_text + ")");
     }
+  }
+
+  // A new results file at a path another live process is writing now (its temporary file open
+  // and locked, as HDF5 keeps it): two runs into one --out would each finish, the later one's
+  // file replacing the earlier's and their report.md and figures mixed in one folder. Refused
+  // before anything is written. (An update, calibrate's, waits on FolderLock instead.)
+  void refuse_another_writer() const {
+    for (const Temporary& t : temporaries())
+      if (t.suffix.empty() && t.pid != ::getpid() && t.alive() && !unlocked(t.path))
+        throw InputError(final_path.string() + ": another rendulic process (pid " + t.pid_text +
+                         ") is writing this file now; let it finish, or write elsewhere (--out)");
   }
 
   void check_names(const std::string& object, const std::string& attribute = {}) const {
@@ -504,6 +526,7 @@ ResultsWriter::ResultsWriter(const fs::path& final_path) : impl_(std::make_uniqu
   m.final_path = final_path;
   m.make_folder();
   m.sweep_stale();
+  m.refuse_another_writer();
   m.tmp_path = temporary_for(final_path);
   m.tmp_handle = cleanup::remove_on_death(m.tmp_path);
   m.open(true, "cannot create results file");
@@ -537,6 +560,7 @@ ResultsWriter ResultsWriter::resume(const fs::path& final_path) {
   m.final_path = final_path;
   m.make_folder();
   m.sweep_stale();  // a killed run's saved copy becomes FINAL.partial here
+  m.refuse_another_writer();
   const fs::path partial = with_suffix(final_path, ".partial");
   m.tmp_path = temporary_for(final_path);
   m.tmp_handle = cleanup::remove_on_death(m.tmp_path);

@@ -523,6 +523,55 @@ TEST(Results, StaleTemporariesOfKilledRunsAreTidiedByTheNextWriter) {
   EXPECT_EQ(ResultsReader(d / "results.h5.partial").read_vector("/path/time").size(), 1u);
 }
 
+TEST(Results, ASecondNewWriterOfAFileAnotherProcessIsWritingIsRefused) {
+  // Two runs into one --out each finished before: the later file replaced the earlier one and
+  // their reports and figures mixed in one folder. A child process writes results.h5 and
+  // holds it (as a run does from its first stage to its commit) until the parent lets it go.
+  const fs::path d = fresh_dir("two_writers");
+  int ready[2], go[2];
+  ASSERT_EQ(::pipe(ready), 0);
+  ASSERT_EQ(::pipe(go), 0);
+  const pid_t child = fork();
+  if (child == 0) {
+    int code = 1;
+    try {
+      ResultsWriter w(d / "results.h5");
+      w.append("/path/time", 1.0);
+      char c = 'r';
+      if (::write(ready[1], &c, 1) == 1 && ::read(go[0], &c, 1) >= 0) {
+        w.commit();
+        code = 0;
+      }
+    } catch (...) {
+    }
+    _exit(code);
+  }
+  char c = 0;
+  ASSERT_EQ(::read(ready[0], &c, 1), 1);
+  const std::string who = "(pid " + std::to_string(child) + ")";
+  const std::string refused =
+      rendulic::testing::input_error([&] { ResultsWriter w(d / "results.h5"); });
+  EXPECT_EQ(refused, (d / "results.h5").string() + ": another rendulic process " + who +
+                         " is writing this file now; let it finish, or write elsewhere (--out)");
+  EXPECT_NE(
+      rendulic::testing::input_error([&] { ResultsWriter::resume(d / "results.h5"); }).find(who),
+      std::string::npos);
+  // Another file of the folder is not that writer's.
+  {
+    ResultsWriter other(d / "other.h5");
+    other.commit();
+  }
+  ASSERT_EQ(::write(go[1], &c, 1), 1);
+  int status = 0;
+  waitpid(child, &status, 0);
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0);
+  EXPECT_EQ(ResultsReader(d / "results.h5").read_vector("/path/time").size(), 1u);
+  // Once it is done, the next writer goes ahead.
+  ResultsWriter next(d / "results.h5");
+  next.commit();
+  for (int fd : {ready[0], ready[1], go[0], go[1]}) ::close(fd);
+}
+
 TEST(Results, SummaryOfAHardLinkCycleEnds) {
   const fs::path d = fresh_dir("cycle");
   const fs::path f = small_file(d);
