@@ -179,6 +179,15 @@ bool unlocked(const fs::path& p) {
   return free;
 }
 
+// Some process holds an exclusive flock on the file, as HDF5 does while it writes it.
+bool locked_by_a_writer(const fs::path& p) {
+  const int fd = ::open(p.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK);
+  if (fd < 0) return false;
+  const bool refused = ::flock(fd, LOCK_SH | LOCK_NB) != 0 && errno == EWOULDBLOCK;
+  ::close(fd);
+  return refused;
+}
+
 // Writers that replace a results file take an flock of its folder (advisory; no lock file is
 // left behind, and HDF5's own flock is on the file itself). Two `calibrate`s of different laws
 // at once each copied the file, added their law and renamed the copy back: the second rename
@@ -859,6 +868,12 @@ ResultsReader::ResultsReader(const fs::path& path, const fs::path& shown_as)
   try {
     impl_->holder = std::make_unique<H5::H5File>(path.string(), H5F_ACC_RDONLY);
   } catch (const H5::Exception& e) {
+    // HDF5 locks a file it writes: a reader then fails with EAGAIN, which is no corruption (a
+    // notebook holding the file in h5py's "r+" or "a" mode, a run's temporary file).
+    if (locked_by_a_writer(path))
+      throw InputError(shown_as.string() +
+                       ": another program has it open for writing (HDF5's file lock); close it "
+                       "there, or wait for it to finish");
     throw InputError(shown_as.string() +
                      ": cannot open (corrupt HDF5 file?): " + detail::hdf5_reason(e));
   }

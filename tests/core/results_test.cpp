@@ -8,6 +8,7 @@
 #include "rendulic/core/results.hpp"
 
 #include <H5Cpp.h>
+#include <fcntl.h>
 #include <gtest/gtest.h>
 #include <sys/file.h>
 #include <sys/resource.h>
@@ -570,6 +571,21 @@ TEST(Results, ASecondNewWriterOfAFileAnotherProcessIsWritingIsRefused) {
   ResultsWriter next(d / "results.h5");
   next.commit();
   for (int fd : {ready[0], ready[1], go[0], go[1]}) ::close(fd);
+}
+
+TEST(Results, AFileAnotherProgramHoldsForWritingIsSaidSoNotCalledCorrupt) {
+  // h5py's "r+" in a notebook, or a run's temporary file: HDF5 keeps an exclusive flock on a
+  // file it writes, and the reader's open failed as "cannot open (corrupt HDF5 file?)".
+  const fs::path d = fresh_dir("held");
+  const fs::path f = small_file(d);
+  const int fd = ::open(f.c_str(), O_RDONLY);
+  ASSERT_EQ(flock(fd, LOCK_EX), 0);
+  EXPECT_EQ(rendulic::testing::input_error([&] { ResultsReader r(f); }),
+            f.string() +
+                ": another program has it open for writing (HDF5's file lock); close "
+                "it there, or wait for it to finish");
+  ::close(fd);
+  EXPECT_NO_THROW(ResultsReader r(f));
 }
 
 TEST(Results, SummaryOfAHardLinkCycleEnds) {
