@@ -21,6 +21,7 @@
 #include "rendulic/core/results.hpp"
 #include "rendulic/dem/probe_campaign.hpp"
 #include "rendulic/dem/probe_mpi.hpp"
+#include "report.hpp"
 
 namespace rendulic::app {
 std::filesystem::path run_scenario(const RunRequest& r) {
@@ -32,6 +33,8 @@ std::filesystem::path run_scenario(const RunRequest& r) {
   if (r.threads > 0) omp_set_num_threads(r.threads);
   const std::filesystem::path out_dir = r.out;
   const std::filesystem::path final_path = out_dir / "results.h5";
+  if (stage_requested(scenario, "report"))
+    check_report_destination(out_dir, scenario.get_bool("report.figures"));
   std::optional<ResultsWriter> writer;
   std::vector<std::string> completed;
   if (r.resume) {

@@ -833,6 +833,22 @@ std::string report_markdown(const ResultsReader& r, const std::vector<Claim>& cl
   return md.str();
 }
 
+namespace {
+std::filesystem::path report_file(const std::filesystem::path& dir) { return dir / "report.md"; }
+std::filesystem::path figures_folder(const std::filesystem::path& dir) { return dir / "figures"; }
+constexpr const char* kReportWhat = "the report";
+}  // namespace
+
+void check_report_destination(const std::filesystem::path& dir, bool with_figures) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  AtomicTextFile::refuse_folder(report_file(dir), kReportWhat);
+  if (with_figures && fs::exists(figures_folder(dir), ec) &&
+      !fs::is_directory(figures_folder(dir), ec))
+    throw InputError(figures_folder(dir).string() +
+                     ": cannot create the figures folder: a file of that name is in the way");
+}
+
 std::filesystem::path write_report(const std::filesystem::path& results_file, bool with_figures) {
   namespace fs = std::filesystem;
   const ResultsReader r(results_file);
@@ -840,14 +856,14 @@ std::filesystem::path write_report(const std::filesystem::path& results_file, bo
   std::vector<std::string> figures;
   const fs::path dir = results_file.parent_path();
   if (with_figures) {
-    plot_results(results_file, dir / "figures");
-    for (const auto& e : fs::directory_iterator(dir / "figures"))
+    plot_results(results_file, figures_folder(dir));
+    for (const auto& e : fs::directory_iterator(figures_folder(dir)))
       figures.push_back(e.path().string());
     std::sort(figures.begin(), figures.end());
   }
   // Made before the temporary file is: a damaged results file fails here and leaves nothing.
   const std::string text = report_markdown(r, claims, figures);
-  AtomicTextFile out(dir / "report.md", "the report");
+  AtomicTextFile out(report_file(dir), kReportWhat);
   out.stream() << text;
   out.commit();
   return out.path();

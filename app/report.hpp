@@ -29,5 +29,8 @@ std::string report_markdown(const ResultsReader& results, const std::vector<Clai
 // Writes DIR/report.md atomically and the figures into DIR/figures (if plotting is
 // available; otherwise the report says so). Returns the report path.
 std::filesystem::path write_report(const std::filesystem::path& results_file, bool with_figures);
+// Refuses, before a run's stages, a DIR where write_report would fail at their end: a folder
+// named report.md, or a file named figures (InputError naming it).
+void check_report_destination(const std::filesystem::path& dir, bool with_figures);
 
 }  // namespace rendulic::app

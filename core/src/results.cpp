@@ -284,6 +284,10 @@ struct ResultsWriter::Impl {
     if (ec) throw InputError(dir.string() + ": cannot create output folder: " + ec.message());
     if (!fs::is_directory(dir, ec))
       throw InputError(dir.string() + ": cannot create output folder: not a folder");
+    // Found here, not at the rename after the last stage (the whole run's work then kept only
+    // as FINAL.partial).
+    if (fs::is_directory(final_path, ec))
+      throw InputError(final_path.string() + ": is a folder (the results file is a file)");
   }
 
   // The temporary files of writers of final_path in its folder (ours and other processes'):

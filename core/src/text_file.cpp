@@ -18,6 +18,12 @@ namespace rendulic {
 
 namespace fs = std::filesystem;
 
+void AtomicTextFile::refuse_folder(const fs::path& file, const std::string& what) {
+  std::error_code ec;
+  if (fs::is_directory(file, ec))
+    throw InputError(file.string() + ": is a folder (" + what + " is a file)");
+}
+
 AtomicTextFile::AtomicTextFile(fs::path file, std::string what)
     : final_(std::move(file)), what_(std::move(what)) {
   if (final_.empty()) throw InputError("the file name of " + what_ + " is empty");
@@ -26,9 +32,7 @@ AtomicTextFile::AtomicTextFile(fs::path file, std::string what)
   name.insert(name.begin(), '.');
   name += ".tmp-" + std::to_string(::getpid());
   tmp_ = folder / name;
-  std::error_code ec;
-  if (fs::is_directory(final_, ec))
-    throw InputError(final_.string() + ": is a folder (" + what_ + " is a file)");
+  refuse_folder(final_, what_);
   handle_ = cleanup::remove_on_death(tmp_);
   const int fd = ::open(tmp_.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (fd < 0) {

@@ -109,6 +109,32 @@ TEST(Faults, AStepThatStrainsTheCellTooFarIsOneLine) {
   EXPECT_FALSE(fs::exists(d / "o" / "results.h5"));
 }
 
+TEST(Faults, AnOutputPathOfTheWrongKindIsRefusedBeforeTheStagesRun) {
+  // A folder named results.h5 or report.md, or a file named figures, failed only after the
+  // last stage: the whole run's work then kept as results.h5.partial, or results.h5 written
+  // and the report missing, exit 2.
+  const fs::path d = fresh_dir("wrong_kind");
+  const std::string run = "run " + rendulic::testing::tiny_scenario(d).string() +
+                          " --quiet --threads 1 --set run.stages=prepare,isotropic,report --out ";
+  fs::create_directories(d / "a" / "results.h5");
+  expect_refusal(rendulic(run + (d / "a").string()),
+                 (d / "a" / "results.h5").string() + ": is a folder (the results file is a file)");
+  fs::create_directories(d / "b" / "report.md");
+  expect_refusal(rendulic(run + (d / "b").string()),
+                 (d / "b" / "report.md").string() + ": is a folder (the report is a file)");
+  fs::create_directories(d / "c");
+  write_file(d / "c" / "figures", "");
+  expect_refusal(rendulic(run + (d / "c").string()),
+                 (d / "c" / "figures").string() +
+                     ": cannot create the figures folder: a file of that name is in the way");
+  for (const char* sub : {"a", "b", "c"})
+    EXPECT_EQ(std::distance(fs::directory_iterator(d / sub), fs::directory_iterator{}), 1) << sub;
+  // Without figures, a file named figures is no obstacle.
+  const CliResult plain = rendulic(run + (d / "c").string() + " --set report.figures=false");
+  EXPECT_EQ(plain.code, 0) << plain.err;
+  EXPECT_TRUE(fs::is_regular_file(d / "c" / "report.md"));
+}
+
 TEST(Faults, StateLabelsHdf5CannotHoldAreRefusedBeforeAnythingIsWritten) {
   // "." named /states itself and aborted the run with an HDF5 exception (exit 134), leaving
   // its temporary file; a NUL cut the label short.

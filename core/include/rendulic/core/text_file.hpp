@@ -18,6 +18,9 @@ class AtomicTextFile {
   // "FILE: cannot write WHAT: reason") before any work is done. `what` names the file in
   // messages ("the JSON output"). A FILE that is a folder is refused too.
   AtomicTextFile(std::filesystem::path file, std::string what);
+  // The constructor's refusal of a FILE that is a folder, for a command that checks its
+  // destinations before long work that ends in writing them (a run's report.md).
+  static void refuse_folder(const std::filesystem::path& file, const std::string& what);
   AtomicTextFile(const AtomicTextFile&) = delete;
   AtomicTextFile& operator=(const AtomicTextFile&) = delete;
   // Without commit(), removes the temporary.
