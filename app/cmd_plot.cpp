@@ -117,6 +117,21 @@ int plot_results(const std::filesystem::path& file, const std::filesystem::path&
   const std::filesystem::path script_file = plot_script_file(script);
   { ResultsReader check(file); }
   std::error_code ec;
+  // The folders made here go again if they stay empty: a plot that fails, or that finds no
+  // figure's data in the file, left an empty figures/ behind.
+  std::vector<std::filesystem::path> made;  // innermost first
+  for (std::filesystem::path d = out_dir; !d.empty() && !std::filesystem::exists(d, ec);
+       d = d.parent_path()) {
+    made.push_back(d);
+    if (d == d.parent_path()) break;
+  }
+  struct RemoveIfEmpty {
+    const std::vector<std::filesystem::path>& folders;
+    ~RemoveIfEmpty() {
+      std::error_code e;
+      for (const auto& d : folders) std::filesystem::remove(d, e);  // fails unless empty
+    }
+  } tidy{made};
   std::filesystem::create_directories(out_dir, ec);
   if (ec)
     throw InputError(out_dir.string() + ": cannot create the figures folder: " + ec.message());
@@ -148,6 +163,8 @@ int plot_results(const std::filesystem::path& file, const std::filesystem::path&
       std::istringstream notes(r.err);
       for (std::string line; std::getline(notes, line);)
         if (!line.empty()) log::info(line);
+      if (std::filesystem::is_empty(out_dir, ec))
+        log::info(file.string(), ": no figure drawn (each one's data is absent, as said above)");
       return 0;
     }
     // No such interpreter (127), or one without the modules: plot.py's exit 3, or a user's

@@ -737,7 +737,7 @@ std::string other_planes_section(const ResultsReader& r) {
 }
 
 std::string report_markdown(const ResultsReader& r, const std::vector<Claim>& claims,
-                            const std::vector<std::string>& figures) {
+                            const std::vector<std::string>& figures, bool plotted) {
   std::ostringstream md;
   md << "# rendulic run report\n\n";
   md << "- results: `" << r.path().filename().string() << "` (schema "
@@ -827,6 +827,9 @@ std::string report_markdown(const ResultsReader& r, const std::vector<Claim>& cl
       if (f.ends_with(".png"))
         md << "![" << std::filesystem::path(f).stem().string() << "](figures/"
            << std::filesystem::path(f).filename().string() << ")\n\n";
+  } else if (plotted) {
+    md << "\n(No figures: this file holds none of their data; `rendulic plot` says what each "
+          "one lacks.)\n";
   } else {
     md << "\n(No figures: run `rendulic plot` with python3-matplotlib and python3-h5py.)\n";
   }
@@ -857,12 +860,14 @@ std::filesystem::path write_report(const std::filesystem::path& results_file, bo
   const fs::path dir = results_file.parent_path();
   if (with_figures) {
     plot_results(results_file, figures_folder(dir));
-    for (const auto& e : fs::directory_iterator(figures_folder(dir)))
-      figures.push_back(e.path().string());
+    std::error_code ec;  // no folder: nothing was drawn (plot_results removes it again)
+    for (fs::directory_iterator it(figures_folder(dir), ec), end; !ec && it != end;
+         it.increment(ec))
+      figures.push_back(it->path().string());
     std::sort(figures.begin(), figures.end());
   }
   // Made before the temporary file is: a damaged results file fails here and leaves nothing.
-  const std::string text = report_markdown(r, claims, figures);
+  const std::string text = report_markdown(r, claims, figures, with_figures);
   AtomicTextFile out(report_file(dir), kReportWhat);
   out.stream() << text;
   out.commit();

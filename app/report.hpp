@@ -23,8 +23,10 @@ struct Claim {
 std::vector<Claim> evaluate_claims(const ResultsReader& results);
 
 // Markdown report: run summary, claim table, figure links, timings if present.
+// `plotted`: the figures were asked for and drawn (`figures` may then still be empty: the file
+// holds none of their data).
 std::string report_markdown(const ResultsReader& results, const std::vector<Claim>& claims,
-                            const std::vector<std::string>& figures);
+                            const std::vector<std::string>& figures, bool plotted = false);
 
 // Writes DIR/report.md atomically and the figures into DIR/figures (if plotting is
 // available; otherwise the report says so). Returns the report path.

@@ -483,6 +483,45 @@ TEST(Plot, TwoProcessesDrawTheSameFiguresAsOne) {
   EXPECT_GE(compared, 7);
 }
 
+TEST(Plot, AFolderItMadeAndDrewNothingInIsRemovedAgain) {
+  // A file without any figure's data, and a script that fails: each left an empty figures
+  // folder (and the folders above it that --out named) behind.
+  if (python().empty()) GTEST_SKIP() << "no python3 with matplotlib and h5py";
+  const fs::path dir = rendulic::testing::fresh_dir("app_plot_system/nothing");
+  {
+    rendulic::ResultsWriter w(dir / "results.h5");
+    w.attr("/material", "k_star", 1.0);
+    w.commit();
+  }
+  CliResult r = rendulic::testing::run_rendulic("plot " + (dir / "results.h5").string() +
+                                                " --out " + (dir / "a" / "b").string());
+  EXPECT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("no figure drawn"), std::string::npos) << r.out;
+  EXPECT_FALSE(fs::exists(dir / "a"));
+  const fs::path failing = write_file(dir / "fails.py",
+                                      "import sys\nprint('bad data', "
+                                      "file=sys.stderr)\nsys.exit(2)\n");
+  r = rendulic::testing::run_rendulic("plot " + (dir / "results.h5").string() + " --script " +
+                                      failing.string());
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_FALSE(fs::exists(dir / "figures"));
+  // A folder that was there before stays, empty or not.
+  fs::create_directories(dir / "mine");
+  r = rendulic::testing::run_rendulic("plot " + (dir / "results.h5").string() + " --out " +
+                                      (dir / "mine").string());
+  EXPECT_EQ(r.code, 0) << r.out;
+  EXPECT_TRUE(fs::is_directory(dir / "mine"));
+  // A run's report with nothing to draw: it read the removed folder (an internal error, exit 1).
+  r = rendulic::testing::run_rendulic(
+      "run " + rendulic::testing::tiny_scenario(dir).string() +
+      " --quiet --threads 1 --set run.stages=prepare,report --out " + (dir / "run").string());
+  EXPECT_EQ(r.code, 0) << r.out;
+  EXPECT_FALSE(fs::exists(dir / "run" / "figures"));
+  EXPECT_NE(rendulic::testing::read_file(dir / "run" / "report.md")
+                .find("this file holds none of their data"),
+            std::string::npos);
+}
+
 TEST(Plot, RefusesAFileThatIsNotOurs) {
   const fs::path dir = fs::path(RENDULIC_TEST_TMP) / "app_plot_bad";
   fs::create_directories(dir);
