@@ -26,7 +26,7 @@ std::vector<Claim> evaluate_claims(const ResultsReader& results);
 // `plotted`: the figures were asked for and drawn (`figures` may then still be empty: the file
 // holds none of their data).
 std::string report_markdown(const ResultsReader& results, const std::vector<Claim>& claims,
-                            const std::vector<std::string>& figures, bool plotted = false);
+                            const std::vector<std::string>& figures, bool plotted);
 
 // Writes DIR/report.md atomically and the figures into DIR/figures (if plotting is
 // available; otherwise the report says so). Returns the report path.
