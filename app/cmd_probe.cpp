@@ -161,6 +161,18 @@ std::filesystem::path probe_packing(const ProbeRequest& r) {
   if (r.quiet) log::set_level(log::Level::kWarning);
   // Everything is read and checked before the output folder is touched.
   const PackingSource src = packing_source(r.packing);
+  {
+    // The probes' results.h5 replaces the file at --out whole: probing a state of DIR/results.h5
+    // into DIR replaced the run it came from by one state's envelopes, without a word.
+    const std::filesystem::path target = std::filesystem::path(r.out) / "results.h5";
+    std::error_code ec;
+    if (std::filesystem::equivalent(src.file, target, ec))
+      throw InputError("--out " + r.out +
+                       ": its results.h5 is the file the packing is read from (" +
+                       src.file.string() +
+                       "), which the probes' results would replace; give "
+                       "another --out");
+  }
   const Packing packing = read_packing(src);
   Scenario sc = probe_scenario(src, r);
   const bool from_results = src.format == PackingFormat::kResultsState;

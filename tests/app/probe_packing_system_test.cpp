@@ -251,6 +251,25 @@ TEST(Probe, AMethodAmplitudeOrPlaneGivenTwiceIsRefused) {
   }
 }
 
+// Probing a state of DIR/results.h5 into DIR replaced the run's file by the probes' one (one
+// state's envelopes), exit 0: refused in one line, the file untouched.
+TEST(Probe, OutputIntoTheResultsFileItReadsFromIsRefused) {
+  const fs::path dir = rendulic::testing::fresh_dir("app_probe/into_itself");
+  fs::copy_file(tiny(), dir / "results.h5");
+  const std::string before = rendulic::testing::read_file(dir / "results.h5");
+  const CliResult r = probe((dir / "results.h5").string() +
+                            ":/states/b --methods linear_response --out " + dir.string());
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_EQ(rendulic::testing::error_lines(r.err), 1) << r.err;
+  EXPECT_NE(r.err.find("is the file the packing is read from"), std::string::npos) << r.err;
+  EXPECT_EQ(rendulic::testing::read_file(dir / "results.h5"), before);
+  // Another folder is fine.
+  EXPECT_EQ(probe((dir / "results.h5").string() + ":/states/b --methods linear_response --out " +
+                  (dir / "elsewhere").string())
+                .code,
+            0);
+}
+
 // A results file's state restarts from its checkpoint as it is: its neighbour list (and, with
 // friction, the springs kept per entry) fits the dem.skin it was made with only, and each of
 // its numbers must be finite. Another skin was an internal error (exit 1), a force of inf a
