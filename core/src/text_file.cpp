@@ -7,8 +7,10 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
+#include <fstream>
 #include <utility>
 
 #include "rendulic/core/cleanup.hpp"
@@ -33,6 +35,17 @@ AtomicTextFile::AtomicTextFile(fs::path file, std::string what)
   name += ".tmp-" + std::to_string(::getpid());
   tmp_ = folder / name;
   refuse_folder(final_, what_);
+  {
+    // No text output replaces an HDF5 file: `export --lammps out/results.h5` replaced the run's
+    // results by a LAMMPS data file, `calibrate --out` of the results file failed only after
+    // the calibration. HDF5's signature opens every file rendulic writes.
+    static constexpr char kSignature[8] = {'\x89', 'H', 'D', 'F', '\r', '\n', '\x1a', '\n'};
+    char head[8] = {};
+    std::ifstream in(final_, std::ios::binary);
+    if (in.read(head, sizeof head) && std::equal(head, head + 8, kSignature))
+      throw InputError(final_.string() + ": is an HDF5 file (a results file?), which " + what_ +
+                       " would replace; give another name");
+  }
   handle_ = cleanup::remove_on_death(tmp_);
   const int fd = ::open(tmp_.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (fd < 0) {

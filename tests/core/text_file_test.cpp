@@ -16,6 +16,7 @@
 #include <string>
 
 #include "rendulic/core/errors.hpp"
+#include "rendulic/core/results.hpp"
 
 namespace {
 namespace fs = std::filesystem;
@@ -81,6 +82,35 @@ TEST(AtomicTextFile, APlaceThatCannotBeWrittenIsRefusedAtOnceNamingIt) {
   } catch (const rendulic::InputError& e) {
     EXPECT_NE(std::string(e.what()).find("is a folder"), std::string::npos) << e.what();
   }
+}
+
+TEST(AtomicTextFile, AnHdf5FileIsNeverReplacedByText) {
+  // `rendulic export out/results.h5 --state a --lammps out/results.h5` replaced the run's
+  // results by a LAMMPS data file, exit 0.
+  const fs::path d = fresh("hdf5");
+  {
+    rendulic::ResultsWriter w(d / "results.h5");
+    w.append("/path/time", 1.0);
+    w.commit();
+  }
+  const std::string before = contents(d / "results.h5");
+  try {
+    rendulic::AtomicTextFile f(d / "results.h5", "the LAMMPS data file");
+    FAIL() << "an HDF5 file was to be replaced";
+  } catch (const rendulic::InputError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              (d / "results.h5").string() +
+                  ": is an HDF5 file (a results file?), which the LAMMPS data file would replace; "
+                  "give another name");
+  }
+  EXPECT_EQ(contents(d / "results.h5"), before);
+  EXPECT_TRUE(only_file_is(d, "results.h5"));
+  // Text that only begins like the signature is replaced as any text is.
+  std::ofstream(d / "a.txt", std::ios::binary) << "\x89HDF";
+  rendulic::AtomicTextFile f(d / "a.txt", "the test text");
+  f.stream() << "text\n";
+  f.commit();
+  EXPECT_EQ(contents(d / "a.txt"), "text\n");
 }
 
 // The child's exit status: 0 refused with the expected message and the earlier file intact,
