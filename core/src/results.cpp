@@ -170,22 +170,25 @@ std::string copy_whole_file(const fs::path& from, const fs::path& to) {
   return why;
 }
 
-// Nobody holds HDF5's lock on the file (HDF5 1.10 keeps an flock while a file is open).
-bool unlocked(const fs::path& p) {
+// What an flock of `operation` (LOCK_EX or LOCK_SH, not waiting) on the file meets: HDF5 1.10
+// keeps an exclusive flock on a file while it writes it, a shared one while it reads it.
+enum class FlockTry { kGranted, kHeldElsewhere, kCannotTry };
+FlockTry try_flock(const fs::path& p, int operation) {
   const int fd = ::open(p.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK);
-  if (fd < 0) return false;
-  const bool free = ::flock(fd, LOCK_EX | LOCK_NB) == 0;
-  ::close(fd);
-  return free;
+  if (fd < 0) return FlockTry::kCannotTry;
+  FlockTry got = FlockTry::kGranted;
+  if (::flock(fd, operation | LOCK_NB) != 0)
+    got = errno == EWOULDBLOCK ? FlockTry::kHeldElsewhere : FlockTry::kCannotTry;
+  ::close(fd);  // releases what was granted
+  return got;
 }
+
+// Nobody has the file open through HDF5.
+bool unlocked(const fs::path& p) { return try_flock(p, LOCK_EX) == FlockTry::kGranted; }
 
 // Some process holds an exclusive flock on the file, as HDF5 does while it writes it.
 bool locked_by_a_writer(const fs::path& p) {
-  const int fd = ::open(p.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK);
-  if (fd < 0) return false;
-  const bool refused = ::flock(fd, LOCK_SH | LOCK_NB) != 0 && errno == EWOULDBLOCK;
-  ::close(fd);
-  return refused;
+  return try_flock(p, LOCK_SH) == FlockTry::kHeldElsewhere;
 }
 
 // Writers that replace a results file take an flock of its folder (advisory; no lock file is
@@ -321,8 +324,10 @@ struct ResultsWriter::Impl {
   }
 
   // Temporary files of runs that were killed (SIGKILL, a power cut) before they could tidy.
-  void sweep_stale() {
-    for (const Temporary& t : temporaries()) {
+  // Returns the listing it worked from (what it removed or renamed was never a live writer's).
+  std::vector<Temporary> sweep_stale() {
+    std::vector<Temporary> found = temporaries();
+    for (const Temporary& t : found) {
       if (t.pid == ::getpid() || t.alive()) continue;
       if (t.suffix.empty() && !unlocked(t.path)) continue;  // open in a process we cannot see
       std::error_code rm;
@@ -342,14 +347,15 @@ struct ResultsWriter::Impl {
         notes.push_back(t.path.string() + ": removed, a temporary file of a run that was killed " +
                         "(process " + t.pid_text + ")");
     }
+    return found;
   }
 
   // A new results file at a path another live process is writing now (its temporary file open
   // and locked, as HDF5 keeps it): two runs into one --out would each finish, the later one's
   // file replacing the earlier's and their report.md and figures mixed in one folder. Refused
   // before anything is written. (An update, calibrate's, waits on FolderLock instead.)
-  void refuse_another_writer() const {
-    for (const Temporary& t : temporaries())
+  void refuse_another_writer(const std::vector<Temporary>& listed) const {
+    for (const Temporary& t : listed)
       if (t.suffix.empty() && t.pid != ::getpid() && t.alive() && !unlocked(t.path))
         throw InputError(final_path.string() + ": another rendulic process (pid " + t.pid_text +
                          ") is writing this file now; let it finish, or write elsewhere (--out)");
@@ -538,8 +544,7 @@ ResultsWriter::ResultsWriter(const fs::path& final_path) : impl_(std::make_uniqu
   Impl& m = *impl_;
   m.final_path = final_path;
   m.make_folder();
-  m.sweep_stale();
-  m.refuse_another_writer();
+  m.refuse_another_writer(m.sweep_stale());
   m.tmp_path = temporary_for(final_path);
   m.tmp_handle = cleanup::remove_on_death(m.tmp_path);
   m.open(true, "cannot create results file");
@@ -572,8 +577,8 @@ ResultsWriter ResultsWriter::resume(const fs::path& final_path) {
   Impl& m = *w.impl_;
   m.final_path = final_path;
   m.make_folder();
-  m.sweep_stale();  // a killed run's saved copy becomes FINAL.partial here
-  m.refuse_another_writer();
+  // A killed run's saved copy becomes FINAL.partial here.
+  m.refuse_another_writer(m.sweep_stale());
   const fs::path partial = with_suffix(final_path, ".partial");
   m.tmp_path = temporary_for(final_path);
   m.tmp_handle = cleanup::remove_on_death(m.tmp_path);
