@@ -90,8 +90,9 @@ void register_run_keys(ScenarioSchema& schema) {
               .help =
                   "Stages to run, executed in the fixed order prepare, isotropic, path, "
                   "states, elastic_range, probes, linear_response, pressure, fits, calibration, "
-                  "report.",
-              .choices = names});
+                  "report; each at most once.",
+              .choices = names,
+              .distinct = true});
   schema.add({.path = "report.figures",
               .type = KeyType::kBool,
               .default_value = true,

@@ -192,6 +192,9 @@ TEST(Faults, ValidationGapsAreClosedBeforeAnythingIsWritten) {
   const std::string before = read_file(out / "results.h5");
   expect_refusal(rendulic(run + "run.stages=[]"), "run.stages (--set): no stage that computes");
   expect_refusal(rendulic(run + "run.stages=report"), "run.stages (--set): no stage that computes");
+  // A stage named twice ran once, without a word, where every other list of names refuses it.
+  expect_refusal(rendulic(run + "run.stages=[prepare,isotropic,prepare]"),
+                 "key 'run.stages': value 'prepare' given twice");
   EXPECT_EQ(read_file(out / "results.h5"), before);
 }
 
