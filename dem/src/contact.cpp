@@ -100,11 +100,24 @@ double stability_limit(const Material& m) {
 }
 
 void check_time_step(const Material& m, double factor, const std::string& key) {
-  const double tc = contact_time(m.contact(), smallest_reduced_mass(m));
-  if (!std::isfinite(tc))
-    throw InputError(key +
-                     ": the smallest pair is overdamped (gamma too large for k), no "
-                     "contact time to derive a time step from");
+  const double m_red = smallest_reduced_mass(m);
+  // Named with its numbers: the culprit is a radius, density, gamma or k, not dt_factor.
+  if (!(m_red > 0) || !std::isfinite(m_red)) {
+    std::ostringstream s;
+    s << key << ": the smallest sphere (radius " << m.r_min() << " m, density " << m.density
+      << " kg/m^3) has a mass of " << 2.0 * m_red
+      << " kg, not a positive finite number; give radii and density in SI units";
+    throw InputError(s.str());
+  }
+  const double tc = contact_time(m.contact(), m_red);
+  if (!std::isfinite(tc)) {
+    std::ostringstream s;
+    s << key << ": the smallest pair (radius " << m.r_min() << " m, reduced mass " << m_red
+      << " kg) is overdamped: material.gamma = " << m.gamma
+      << " kg/s is at least 2 sqrt(k m) = " << 2.0 * std::sqrt(m.k * m_red)
+      << " kg/s, so there is no contact time to derive a time step from";
+    throw InputError(s.str());
+  }
   const double dt = factor * tc;
   const double limit = stability_limit(m);
   if (!(factor > 0) || !(dt < limit)) {

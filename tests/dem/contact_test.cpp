@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <sstream>
 
 #include "dem_helpers.hpp"
 #include "input_error.hpp"
@@ -79,6 +80,27 @@ TEST(Contact, TimeStepBeyondStabilityIsRefused) {
   EXPECT_NO_THROW(check_time_step(mat, 1.0 / 50, "dem.dt_factor"));
   const std::string what = input_error([&] { check_time_step(mat, 0.5, "dem.dt_factor"); });
   EXPECT_NE(what.find("dem.dt_factor"), std::string::npos) << what;
+}
+
+// The culprit of a pair with no contact time is the material, not dt_factor: the message said
+// "gamma too large for k" for radii so small that the mass was 0 (from a packing file in
+// metres taken for millimetres) and named neither the radius nor the bound on gamma.
+TEST(Contact, APairWithNoContactTimeIsRefusedWithTheNumbersThatCauseIt) {
+  Material mat;
+  mat.gamma = 1e9;
+  const double m_red = 0.5 * mat.sphere_mass(mat.r_min());
+  const std::string damped = input_error([&] { check_time_step(mat, 0.02, "dem.dt_factor"); });
+  EXPECT_NE(damped.find("material.gamma = 1e+09 kg/s is at least 2 sqrt(k m)"), std::string::npos)
+      << damped;
+  std::ostringstream bound;
+  bound << 2.0 * std::sqrt(mat.k * m_red) << " kg/s";
+  EXPECT_NE(damped.find(bound.str()), std::string::npos) << damped;
+  Material tiny;
+  tiny.r_mean = 1e-200;  // r^3 underflows to 0
+  const std::string zero = input_error([&] { check_time_step(tiny, 0.02, "dem.dt_factor"); });
+  EXPECT_NE(zero.find("has a mass of 0 kg, not a positive finite number"), std::string::npos)
+      << zero;
+  EXPECT_NE(zero.find("radius 5e-201 m"), std::string::npos) << zero;
 }
 
 // A ring of four equal spheres on the x axis, each pressed on its two neighbours (one of them
