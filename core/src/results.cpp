@@ -26,6 +26,7 @@
 #include <map>
 #include <mutex>
 #include <optional>
+#include <set>
 #include <sstream>
 
 #include "hdf5_reason.hpp"
@@ -243,8 +244,45 @@ class FolderLock {
 
 }  // namespace
 
+// One writer per results file in this process. Writers of one file share the temporary's
+// name (.NAME.tmp-PID) and refuse_another_writer skips their own pid: two Python threads given
+// one output both failed, the first on HDF5's "unable to truncate a file which is already
+// open" and the second when the first's tidying removed the temporary it was writing.
+class WriterClaim {
+ public:
+  explicit WriterClaim(const fs::path& final_path) {
+    std::error_code ec;
+    key_ = fs::weakly_canonical(fs::absolute(final_path, ec), ec).string();
+    if (ec) key_ = fs::absolute(final_path).lexically_normal().string();
+    std::lock_guard<std::mutex> guard(mutex());
+    if (!claimed().insert(key_).second)
+      throw InputError(final_path.string() +
+                       ": another writer in this process (another thread) is writing this "
+                       "file now; give each its own output");
+  }
+  WriterClaim(const WriterClaim&) = delete;
+  WriterClaim& operator=(const WriterClaim&) = delete;
+  ~WriterClaim() {
+    std::lock_guard<std::mutex> guard(mutex());
+    claimed().erase(key_);
+  }
+
+ private:
+  static std::mutex& mutex() {
+    static std::mutex m;
+    return m;
+  }
+  static std::set<std::string>& claimed() {
+    static std::set<std::string> c;
+    return c;
+  }
+  std::string key_;
+};
+
 // ========================================================================================
 struct ResultsWriter::Impl {
+  // Taken before anything in the folder is made or tidied, and given up after abandon().
+  std::optional<WriterClaim> claim;
   fs::path final_path, tmp_path;
   fs::path partial_copy, partial_new;  // the saved copy of the completed stages, and its next
   std::string partial_completed;       // what the saved copy holds; empty: no copy
@@ -542,6 +580,7 @@ struct ResultsWriter::Impl {
 ResultsWriter::ResultsWriter(const fs::path& final_path) : impl_(std::make_unique<Impl>()) {
   detail::quiet_hdf5();
   Impl& m = *impl_;
+  m.claim.emplace(final_path);
   m.final_path = final_path;
   m.make_folder();
   m.refuse_another_writer(m.sweep_stale());
@@ -559,6 +598,7 @@ ResultsWriter ResultsWriter::update(const fs::path& existing_path) {
   ResultsWriter w;
   w.impl_ = std::make_unique<Impl>();
   Impl& m = *w.impl_;
+  m.claim.emplace(existing_path);
   m.final_path = existing_path;
   m.lock.emplace(existing_path);  // before the copy: it must hold every earlier update
   m.sweep_stale();
@@ -575,6 +615,7 @@ ResultsWriter ResultsWriter::resume(const fs::path& final_path) {
   ResultsWriter w;
   w.impl_ = std::make_unique<Impl>();
   Impl& m = *w.impl_;
+  m.claim.emplace(final_path);
   m.final_path = final_path;
   m.make_folder();
   // A killed run's saved copy becomes FINAL.partial here.
@@ -701,6 +742,7 @@ void ResultsWriter::commit() {
   for (const fs::path& p : {m.partial_new, m.partial_copy})
     if (!p.empty()) fs::remove(p, ec);
   for (int h : {m.partial_handle, m.partial_new_handle}) cleanup::forget(h);
+  m.claim.reset();  // nothing of this writer's is left in the folder
 }
 
 bool ResultsWriter::save_partial(const std::string& completed) {

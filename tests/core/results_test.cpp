@@ -573,6 +573,49 @@ TEST(Results, ASecondNewWriterOfAFileAnotherProcessIsWritingIsRefused) {
   for (int fd : {ready[0], ready[1], go[0], go[1]}) ::close(fd);
 }
 
+TEST(Results, ASecondWriterOfAFileThisProcessIsWritingIsRefusedAndTheFirstCompletes) {
+  // Two Python threads given one output: the writers share the temporary's name (one pid), so
+  // the second failed on HDF5's "unable to truncate a file which is already open", and its
+  // tidying removed the first's temporary, which then failed too ("no such file").
+  const fs::path d = fresh_dir("two_threads");
+  {
+    ResultsWriter earlier(d / "results.h5");
+    earlier.append("/path/time", 0.5);
+    earlier.commit();
+  }
+  ResultsWriter first(d / "results.h5");
+  first.append("/path/time", 1.0);
+  const std::string refused = (d / "results.h5").string() +
+                              ": another writer in this process (another thread) is writing "
+                              "this file now; give each its own output";
+  EXPECT_EQ(rendulic::testing::input_error([&] { ResultsWriter w(d / "results.h5"); }), refused);
+  // The same file by another spelling of its path.
+  const fs::path alias = d / "." / "results.h5";
+  EXPECT_EQ(rendulic::testing::input_error([&] { ResultsWriter w(alias); }),
+            alias.string() + refused.substr((d / "results.h5").string().size()));
+  EXPECT_NE(rendulic::testing::input_error([&] {
+              ResultsWriter::resume(d / "results.h5");
+            }).find("another writer in this process"),
+            std::string::npos);
+  EXPECT_NE(rendulic::testing::input_error([&] {
+              ResultsWriter::update(d / "results.h5");
+            }).find("another writer in this process"),
+            std::string::npos);
+  first.append("/path/time", 2.0);
+  first.commit();
+  EXPECT_EQ(ResultsReader(d / "results.h5").read_vector("/path/time"),
+            (std::vector<double>{1.0, 2.0}));
+  for (const auto& e : fs::directory_iterator(d))
+    EXPECT_EQ(e.path().filename(), "results.h5") << "left behind: " << e.path();
+  // Once the first is gone, the file is free again.
+  {
+    ResultsWriter next = ResultsWriter::update(d / "results.h5");
+    next.commit();
+  }
+  ResultsWriter again(d / "results.h5");
+  again.commit();
+}
+
 TEST(Results, AFileAnotherProgramHoldsForWritingIsSaidSoNotCalledCorrupt) {
   // h5py's "r+" in a notebook, or a run's temporary file: HDF5 keeps an exclusive flock on a
   // file it writes, and the reader's open failed as "cannot open (corrupt HDF5 file?)".
