@@ -15,6 +15,7 @@
 #include <fcntl.h>
 #include <signal.h>
 #include <sys/file.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -342,6 +343,22 @@ struct ResultsWriter::Impl {
       return pid > 0 && pid <= 0x7fffffff &&
              (::kill(static_cast<pid_t>(pid), 0) == 0 || errno != ESRCH);
     }
+    // That process has the file open. HDF5_USE_FILE_LOCKING=FALSE (common on cluster file
+    // systems) leaves a writer's temporary without HDF5's flock; /proc says so of a process of
+    // ours (another user's is not readable: false, and the flock alone decides).
+    bool held_open() const {
+      struct stat file {};
+      if (::stat(path.c_str(), &file) != 0) return false;
+      const fs::path fds = fs::path("/proc") / pid_text / "fd";
+      std::error_code ec;
+      for (fs::directory_iterator it(fds, ec), end; !ec && it != end; it.increment(ec)) {
+        struct stat open {};
+        if (::stat(it->path().c_str(), &open) == 0 && open.st_dev == file.st_dev &&
+            open.st_ino == file.st_ino)
+          return true;
+      }
+      return false;
+    }
   };
   std::vector<Temporary> temporaries() const {
     const fs::path dir = final_path.has_parent_path() ? final_path.parent_path() : fs::path(".");
@@ -388,13 +405,15 @@ struct ResultsWriter::Impl {
     return found;
   }
 
-  // A new results file at a path another live process is writing now (its temporary file open
-  // and locked, as HDF5 keeps it): two runs into one --out would each finish, the later one's
-  // file replacing the earlier's and their report.md and figures mixed in one folder. Refused
-  // before anything is written. (An update, calibrate's, waits on FolderLock instead.)
+  // A new results file at a path another live process is writing now (its temporary file
+  // locked, as HDF5 keeps it, or open in that process): two runs into one --out would each finish,
+  // the later one's file replacing the earlier's and their report.md and figures mixed in one
+  // folder. Refused before anything is written. (An update, calibrate's, waits on FolderLock
+  // instead.)
   void refuse_another_writer(const std::vector<Temporary>& listed) const {
     for (const Temporary& t : listed)
-      if (t.suffix.empty() && t.pid != ::getpid() && t.alive() && !unlocked(t.path))
+      if (t.suffix.empty() && t.pid != ::getpid() && t.alive() &&
+          (!unlocked(t.path) || t.held_open()))
         throw InputError(final_path.string() + ": another rendulic process (pid " + t.pid_text +
                          ") is writing this file now; let it finish, or write elsewhere (--out)");
   }

@@ -12,6 +12,7 @@
 #include <gtest/gtest.h>
 #include <sys/file.h>
 #include <sys/resource.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -524,11 +525,11 @@ TEST(Results, StaleTemporariesOfKilledRunsAreTidiedByTheNextWriter) {
   EXPECT_EQ(ResultsReader(d / "results.h5.partial").read_vector("/path/time").size(), 1u);
 }
 
-TEST(Results, ASecondNewWriterOfAFileAnotherProcessIsWritingIsRefused) {
-  // Two runs into one --out each finished before: the later file replaced the earlier one and
-  // their reports and figures mixed in one folder. A child process writes results.h5 and
-  // holds it (as a run does from its first stage to its commit) until the parent lets it go.
-  const fs::path d = fresh_dir("two_writers");
+// A child process writes results.h5 and holds it (as a run does from its first stage to its
+// commit) while the parent tries to write it too. With `hdf5_locking` false the child drops
+// HDF5's flock on its temporary, as HDF5_USE_FILE_LOCKING=FALSE leaves it (HDF5 reads that
+// variable once, when the library starts, so setting it in a forked child does nothing).
+void expect_refused_beside_a_writing_child(const fs::path& d, bool hdf5_locking) {
   int ready[2], go[2];
   ASSERT_EQ(::pipe(ready), 0);
   ASSERT_EQ(::pipe(go), 0);
@@ -538,6 +539,16 @@ TEST(Results, ASecondNewWriterOfAFileAnotherProcessIsWritingIsRefused) {
     try {
       ResultsWriter w(d / "results.h5");
       w.append("/path/time", 1.0);
+      if (!hdf5_locking) {
+        struct stat tmp {};
+        ::stat((d / (".results.h5.tmp-" + std::to_string(::getpid()))).c_str(), &tmp);
+        for (const auto& e : fs::directory_iterator("/proc/self/fd")) {
+          struct stat open {};
+          if (::stat(e.path().c_str(), &open) == 0 && open.st_ino == tmp.st_ino &&
+              open.st_dev == tmp.st_dev)
+            ::flock(std::stoi(e.path().filename().string()), LOCK_UN);
+        }
+      }
       char c = 'r';
       if (::write(ready[1], &c, 1) == 1 && ::read(go[0], &c, 1) >= 0) {
         w.commit();
@@ -549,6 +560,10 @@ TEST(Results, ASecondNewWriterOfAFileAnotherProcessIsWritingIsRefused) {
   }
   char c = 0;
   ASSERT_EQ(::read(ready[0], &c, 1), 1);
+  const fs::path temporary = d / (".results.h5.tmp-" + std::to_string(child));
+  const int fd = ::open(temporary.c_str(), O_RDONLY);
+  EXPECT_EQ(flock(fd, LOCK_SH | LOCK_NB) == 0, !hdf5_locking) << "HDF5's flock not as assumed";
+  ::close(fd);
   const std::string who = "(pid " + std::to_string(child) + ")";
   const std::string refused =
       rendulic::testing::input_error([&] { ResultsWriter w(d / "results.h5"); });
@@ -570,7 +585,16 @@ TEST(Results, ASecondNewWriterOfAFileAnotherProcessIsWritingIsRefused) {
   // Once it is done, the next writer goes ahead.
   ResultsWriter next(d / "results.h5");
   next.commit();
-  for (int fd : {ready[0], ready[1], go[0], go[1]}) ::close(fd);
+  for (int f : {ready[0], ready[1], go[0], go[1]}) ::close(f);
+}
+
+TEST(Results, ASecondNewWriterOfAFileAnotherProcessIsWritingIsRefused) {
+  // Two runs into one --out each finished before: the later file replaced the earlier one and
+  // their reports and figures mixed in one folder.
+  expect_refused_beside_a_writing_child(fresh_dir("two_writers"), true);
+  // Under HDF5_USE_FILE_LOCKING=FALSE (set on many clusters) the writer's temporary has no
+  // flock, and both runs went ahead again.
+  expect_refused_beside_a_writing_child(fresh_dir("two_writers_unlocked"), false);
 }
 
 TEST(Results, ASecondWriterOfAFileThisProcessIsWritingIsRefusedAndTheFirstCompletes) {
