@@ -187,6 +187,22 @@ ResumePlan resume_plan(const Scenario& scenario, const ResultsReader& kept) {
   return plan;
 }
 
+bool holds_every_stage(const Scenario& scenario, const std::filesystem::path& results) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(results, ec)) return false;
+  try {
+    const ResultsReader file(results);
+    if (!file.has_attr("/", "scenario") || file.attr_string("/", "scenario") != scenario.to_toml())
+      return false;
+    for (const auto& s : stages())
+      if (stage_requested(scenario, s.name) && s.run && !file.has_attr(paths::kTimings, s.name))
+        return false;
+    return true;
+  } catch (const InputError&) {
+    return false;  // damaged, or not ours: a plain run replaces it
+  }
+}
+
 void run_pipeline(const Scenario& scenario, ResultsWriter& out, const RunContext& ctx,
                   const std::vector<std::string>& completed_before) {
   std::string completed;

@@ -43,6 +43,9 @@ struct ResumePlan {
   std::string why_not;
 };
 ResumePlan resume_plan(const Scenario& scenario, const ResultsReader& kept);
+// Whether `results` is a whole run of `scenario`: ours, the same scenario text, and every
+// requested stage that computes in it. A file that is not readable is not one.
+bool holds_every_stage(const Scenario& scenario, const std::filesystem::path& results);
 // Stages that read the committed results file (the report), run after commit().
 void run_post_commit(const Scenario& scenario, const std::filesystem::path& results,
                      const RunContext& ctx);

@@ -220,6 +220,35 @@ INSTANTIATE_TEST_SUITE_P(EachStage, Resume,
                          ::testing::Values("states", "probes", "linear_response", "fits",
                                            "calibration"));
 
+std::string bytes(const fs::path& f) {
+  std::ifstream in(f, std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(in)), {});
+}
+
+// A batch job requeued after its run had finished ran every stage again. --resume of a whole
+// run of the same scenario, with nothing kept to resume, now runs none and keeps the file; a
+// file of another scenario is still replaced by a plain run.
+TEST(Resume, OfAFinishedRunRunsNoStageAndKeepsItsFile) {
+  uninterrupted();
+  const fs::path dir = rendulic::testing::fresh_dir("app_resume/finished");
+  fs::copy_file(kRoot / "uninterrupted" / "results.h5", dir / "results.h5");
+  const std::string before = bytes(dir / "results.h5");
+  const std::string command =
+      "run " + scenario().string() + " --out " + dir.string() + " --resume --threads 1";
+  const auto same = rendulic::testing::run_rendulic(command, false);
+  EXPECT_EQ(same.code, 0) << same.err;
+  EXPECT_NE(same.err.find("resume: " + (dir / "results.h5").string() +
+                          " already holds every stage of this scenario; nothing to run"),
+            std::string::npos)
+      << same.err;
+  EXPECT_EQ(same.err.find("started"), std::string::npos) << same.err;
+  EXPECT_TRUE(bytes(dir / "results.h5") == before) << "the file changed";
+  const auto other = rendulic::testing::run_rendulic(command + " --set run.seed=2", false);
+  EXPECT_EQ(other.code, 0) << other.err;
+  EXPECT_NE(other.err.find("[prepare] started"), std::string::npos) << other.err;
+  EXPECT_FALSE(bytes(dir / "results.h5") == before) << "the file did not change";
+}
+
 TEST(ResumeRefusal, AnotherScenariosKeptStagesAreRefused) {
   const fs::path dir = rendulic::testing::fresh_dir("app_resume/other");
   run(dir, "probes");
