@@ -11,14 +11,26 @@
 #include <string>
 #include <type_traits>
 
+#include "rendulic/core/errors.hpp"
 #include "rendulic/core/option_table.hpp"
 
 namespace rendulic::app {
 
-// The check of --threads (0: every core) wherever a command runs work: a count, refused in
-// counts ("Value -1 not in range 0 to 4096"). CLI11's NonNegativeNumber printed the largest
-// double, 309 digits, as the upper end of its range.
-inline CLI::Validator thread_count() { return CLI::Range(0, 4096); }
+// The range of a thread count (0: every core), on the command line and from Python.
+inline constexpr int kMaxThreads = 4096;
+
+// The check of --threads wherever a command runs work: a count, refused in counts ("Value -1
+// not in range 0 to 4096"). CLI11's NonNegativeNumber printed the largest double, 309 digits,
+// as the upper end of its range.
+inline CLI::Validator thread_count() { return CLI::Range(0, kMaxThreads); }
+
+// The same check where the count does not come through CLI11 (rendulic.run, rendulic.probe):
+// a million threads crashed the interpreter inside the OpenMP runtime.
+inline void check_thread_count(int threads) {
+  if (threads < 0 || threads > kMaxThreads)
+    throw InputError("threads = " + std::to_string(threads) + " is out of range [0, " +
+                     std::to_string(kMaxThreads) + "] (0: every core)");
+}
 
 // The check of a number that must be positive (zero_allowed: not negative), for options with no
 // scenario key behind them; refused on a short line for the same reason as thread_count().

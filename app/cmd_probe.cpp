@@ -156,8 +156,8 @@ std::filesystem::path probe_packing(const ProbeRequest& r) {
     throw InputError("--methods: method '" + *again + "' given twice");
   if (const std::string why = invalid_object_name_reason(r.label); !why.empty())
     throw InputError("--label: label '" + r.label + "' " + why);
-  if (r.directions < 0 || r.threads < 0)
-    throw InputError("--directions and --threads must not be negative");
+  if (r.directions < 0) throw InputError("--directions must not be negative");
+  check_thread_count(r.threads);
   if (r.quiet) log::set_level(log::Level::kWarning);
   // Everything is read and checked before the output folder is touched.
   const PackingSource src = packing_source(r.packing);

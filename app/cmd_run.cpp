@@ -25,7 +25,7 @@
 
 namespace rendulic::app {
 std::filesystem::path run_scenario(const RunRequest& r) {
-  if (r.threads < 0) throw InputError("--threads must not be negative");
+  check_thread_count(r.threads);
   if (r.quiet) log::set_level(log::Level::kWarning);
   Scenario scenario = Scenario::from_file(r.scenario, scenario_schema());
   for (const auto& s : r.sets) scenario.apply_override(s);

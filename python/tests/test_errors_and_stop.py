@@ -45,6 +45,17 @@ def test_out_of_range_value_has_the_cli_message(tiny_toml, tmp_path):
                                         "--out", tmp_path / "out")
 
 
+def test_a_thread_count_out_of_range_is_an_input_error(tiny_toml, cli_run, tmp_path):
+    # CLI11 bounds --threads on the command line; from Python a million threads crashed the
+    # interpreter inside the OpenMP runtime (exit 139).
+    for call in (lambda: rendulic.run(tiny_toml, tmp_path / "out", threads=10**6),
+                 lambda: rendulic.probe(f"{cli_run}:/states/a", tmp_path / "out", threads=-1)):
+        with pytest.raises(rendulic.InputError, match=r"threads = (1000000|-1) is out of range "
+                                                      r"\[0, 4096\] \(0: every core\)"):
+            call()
+    assert not (tmp_path / "out").exists()
+
+
 def test_model_input_errors_have_the_file_readers_messages():
     state = {"stress": np.eye(3) * 1e6}
     with pytest.raises(rendulic.InputError, match="unknown parameter 'Kx' for model "
