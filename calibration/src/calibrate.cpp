@@ -255,6 +255,16 @@ CalibrationSummary calibrate(const CalibrationData& data, const CalibrationOptio
   SolverOptions so = options.solver;
   so.likelihood = options.likelihood_weights;
   out.fit = solve(objective, z0, so);
+  // A law that cannot be evaluated at its start parameters for a reason it gives (a UMAT's NaN
+  // or inf, its PNEWDT cuts) has nothing to fit: the calibration exited 0 with a cost of inf,
+  // inf standard errors written to the results file and a place in the model selection.
+  if (!std::isfinite(out.fit.cost)) {
+    std::vector<double> r(objective.num_residuals());
+    if (!objective.residuals(z0.data(), r.data()) && !objective.failure().empty())
+      throw InputError(
+          "calibration of " + options.model +
+          ": the model cannot be evaluated at its start parameters: " + objective.failure());
+  }
 
   // Global start where the local fit is poor (docs/calibration.md "Global start").
   out.global_start = "not needed";

@@ -7,6 +7,7 @@
 #include <atomic>
 #include <cmath>
 #include <exception>
+#include <mutex>
 #include <thread>
 
 #include "cores.hpp"
@@ -209,6 +210,14 @@ struct Objective::Impl {
   // writes its own residuals (docs/calibration.md "When to stop").
   static constexpr int kPath = -1, kNoPart = -2;
   mutable std::atomic<int> fail_part{kNoPart}, fail_probe{0};
+  // Why the last failed evaluation failed, where the law says (a UMAT's driver: its NaN, its
+  // PNEWDT cuts); evaluations run side by side, hence the lock.
+  mutable std::mutex failure_mutex;
+  mutable std::string failure;
+  void note_failure(const std::string& why) const {
+    std::lock_guard<std::mutex> lock(failure_mutex);
+    failure = why;
+  }
   bool count(bool ok, const std::atomic<bool>& on_limit) const {
     ++evaluations;
     if (!ok) ++failed;
@@ -724,12 +733,13 @@ class UmatKernel final : public KernelBase {
   }
 
   bool integrate(const models::UmatLaw& law, const models::UmatState& y, const Eigen::Matrix3d& de,
-                 const Schedules& sc, models::UmatState* end) const {
+                 const Schedules& sc, models::UmatState* end, const std::string& where) const {
     models::UmatSchedule* s = sc.take();
     // A replay must use the recorded increments: a missing schedule is a failed evaluation.
     if (sc.all && sc.replay && !s) return false;
     const models::StepResult res = law.integrate(y, de, o_->options.step, end, s);
     if (sc.on_limit && res.on_substep_limit) *sc.on_limit = true;
+    if (!res.success) o_->note_failure(where + ": " + res.reason);
     return res.success;
   }
 
@@ -745,7 +755,9 @@ class UmatKernel final : public KernelBase {
       Eigen::Matrix3d ds;
       if (integrated) {
         models::UmatState end;
-        if (!integrate(law, us, env.strain_tensor(i), sc, &end)) return false;
+        if (!integrate(law, us, env.strain_tensor(i), sc, &end,
+                       "state '" + s.label + "', probe " + std::to_string(i + 1)))
+          return false;
         ds = end.point.stress - st.stress;
       } else {
         models::LawRate r;
@@ -765,7 +777,8 @@ class UmatKernel final : public KernelBase {
     states->assign(1, y.point);
     for (std::size_t k = 1; k < d.eps_dev.size(); ++k) {
       models::UmatState next;
-      if (!integrate(law, y, d.increment(k), sc, &next)) return false;
+      if (!integrate(law, y, d.increment(k), sc, &next, "path, step " + std::to_string(k)))
+        return false;
       y = std::move(next);
       states->push_back(y.point);
     }
@@ -1016,6 +1029,11 @@ bool Objective::integrated() const { return impl_->any_integrated; }
 
 DriverLoad Objective::driver_load(const std::vector<double>& p) const {
   return impl_->kernel->driver_load(p.data());
+}
+
+std::string Objective::failure() const {
+  std::lock_guard<std::mutex> lock(impl_->failure_mutex);
+  return impl_->failure;
 }
 
 EvaluationTally Objective::tally() const {

@@ -7,6 +7,8 @@
 
 #include <cmath>
 #include <iostream>
+#include <limits>
+#include <memory>
 
 #include "rendulic/calibration/calibrate.hpp"
 #include "rendulic/calibration/selection.hpp"
@@ -94,6 +96,38 @@ TEST(UmatCalibration, HypoplasticUmatRecoversTheBuiltInFit) {
         << umat.score.blocks[b].id;
   }
   EXPECT_NEAR(umat.fitted_misfit / builtin.fitted_misfit, 1.0, 1e-3);
+}
+
+// A UMAT that returns NaN from its first increment (the example UMAT's PROPS(6), nan_beyond,
+// at 1e-12) cannot be fitted: the calibration said "cost inf", exited 0 and wrote inf standard
+// errors. It is an InputError that says where and what the UMAT returned.
+TEST(UmatCalibration, AUmatThatCannotBeEvaluatedAtItsStartIsAnInputError) {
+  models::UmatSpec spec = models::load_umat_parameters_toml(
+      std::string(RENDULIC_SOURCE_DIR) + "/data/umat/hypoplastic_wu_params.toml");
+  spec.props.insert(spec.props.end(), {0.0, 1e-12});  // no PNEWDT; NaN beyond |eps| 1e-12
+  spec.prop_names.insert(spec.prop_names.end(), {"dstran_max", "nan_beyond"});
+  const double inf = std::numeric_limits<double>::infinity();
+  spec.lower.insert(spec.lower.end(), {-inf, -inf});
+  spec.upper.insert(spec.upper.end(), {inf, inf});
+  models::set_session_umat(std::make_shared<const models::UmatLaw>(
+      std::string(RENDULIC_UMAT_DIR) + "/hypoplastic_wu.so", spec));
+  CalibrationOptions o;
+  o.model = "umat";
+  std::string what;
+  try {
+    calibrate(soft_packing_data(), o);
+  } catch (const InputError& e) {
+    what = e.what();
+  }
+  models::set_session_umat(nullptr);
+  EXPECT_EQ(what.rfind("calibration of umat: the model cannot be evaluated at its start "
+                       "parameters: ",
+                       0),
+            0u)
+      << what;
+  EXPECT_NE(what.find("the UMAT returned NaN or inf in STRESS at increment KINC = 1"),
+            std::string::npos)
+      << what;
 }
 
 // The calibration stage's keys: model umat with calibration.umat and calibration.umat_params

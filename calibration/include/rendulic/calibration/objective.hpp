@@ -208,6 +208,9 @@ class Objective {
   DriverLoad driver_load(const std::vector<double>& p) const;
   // Evaluations so far (thread-safe: the fit's two starts share the objective).
   EvaluationTally tally() const;
+  // Where and why the last failed evaluation failed, if the law says (a UMAT: "state 'a',
+  // probe 3: the UMAT returned NaN or inf in STRESS ..."); "" for the built-in laws.
+  std::string failure() const;
 
   struct Impl;
 
