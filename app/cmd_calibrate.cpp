@@ -76,7 +76,8 @@ int run_calibrate(const CalibrateArgs& a) {
       if (!f.empty() &&
           std::all_of(f.begin(), f.end(), [](unsigned char c) { return std::isdigit(c); })) {
         const auto& info = models::session_umat()->parameter_info();
-        const std::size_t i = std::stoul(f);
+        // Only the digits' count bounds it: stoul of 99999999999999999999999 threw (exit 1).
+        const std::size_t i = f.size() > 9 ? 0 : std::stoul(f);
         if (i < 1 || i > info.size())
           throw InputError("--free " + f + ": the UMAT has PROPS(1.." +
                            std::to_string(info.size()) + ")");

@@ -70,6 +70,9 @@ TEST(UmatCalibrateCli, BadUmatInputExitsTwoWithOneLine) {
   } cases[] = {
       {base + " --params " + params(), "--umat"},
       {base + " --umat " + lib() + " --params " + params() + " --free 3", "--free 3"},
+      // Beyond an unsigned long: "internal error: stoul", exit 1.
+      {base + " --umat " + lib() + " --params " + params() + " --free 99999999999999999999999",
+       "--free 99999999999999999999999: the UMAT has PROPS(1..2)"},
       {base + " --umat " + lib() + " --params " + (dir / "no_bounds.toml").string(),
        "no free props"},
       {"calibrate --no-write --results " + file.string() + " --model isotropic_elastic --umat " +
