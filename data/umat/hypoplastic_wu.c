@@ -6,7 +6,9 @@
  * and the exact Jacobian of that update as DDSDDE (docs/umat.md).
  * PROPS(1..4) = c1..c4; optional PROPS(5) > 0: the largest |DSTRAN| accepted (a larger one gets
  * PNEWDT = 0.5); optional PROPS(6) > 0: the UMAT returns NaN once |STRAN + DSTRAN| exceeds it
- * (a model failing mid-path). STATEV is bookkeeping the tests read back: STATEV(1) = largest
+ * (a model failing mid-path); optional PROPS(7) > 0: the new stress goes through a static
+ * buffer, as in a Fortran UMAT with SAVE or COMMON variables, which is not thread-safe (a test
+ * that the adapter calls one UMAT at a time). STATEV is bookkeeping the tests read back: STATEV(1) = largest
  * accepted |DSTRAN|, STATEV(2) = STRAN(1) + DSTRAN(1); with NSTATV >= 7 STATEV(NSTATV) sums
  * DSTRAN(1) over the accepted increments.
  * Build: cc -O2 -fPIC -shared hypoplastic_wu.c -lm -o hypoplastic_wu.so */
@@ -84,7 +86,15 @@ void umat(double* stress, double* statev, double* ddsdde, double* sse, double* s
     const int a = kRow[i], b = kCol[i];
     dT[i] = c1 * trT * D[a][b] + c2 * trTD / trT * T[a][b] + N[a][b] * norm;
   }
-  for (int i = 0; i < 6; ++i) stress[i] += dT[i];
+  if (*nprops >= 7 && props[6] > 0.0) {
+    static double saved[6];
+    for (int i = 0; i < 6; ++i) saved[i] = stress[i] + dT[i];
+    for (volatile int k = 0; k < 20000; ++k) {
+    }
+    for (int i = 0; i < 6; ++i) stress[i] = saved[i];
+  } else {
+    for (int i = 0; i < 6; ++i) stress[i] += dT[i];
+  }
   if (*nprops >= 6 && props[5] > 0.0 && total > props[5]) stress[0] = NAN;
   if (*nstatv >= 1 && norm > statev[0]) statev[0] = norm;
   if (*nstatv >= 2) statev[1] = stran[0] + dstran[0];

@@ -11,6 +11,7 @@
 #include <cmath>
 #include <filesystem>
 #include <limits>
+#include <mutex>
 
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/option_table.hpp"
@@ -272,10 +273,16 @@ UmatCall UmatLaw::call(const UmatState& start, const Eigen::Matrix3d& d_eps, dou
   const int noel = 1, npt = 1, layer = 1, kspt = 1;
   // KSTEP, or JSTEP(4) in the newer interface: step 1, general procedure, not perturbation.
   const int kstep[4] = {1, 1, 0, 0};
-  lib_->entry()(stress, statev.data(), ddsdde, &sse, &spd, &scd, &rpl, ddsddt, drplde, &drpldt,
-                stran, dstran, time, &dtime, &temp, &dtemp, predef, dpred, cmname, &ndi, &nshr,
-                &ntens, &nstatv, params_.data(), &nprops, coords, drot, &pnewdt, &celent, f0.data(),
-                f1.data(), &noel, &npt, &layer, &kspt, kstep, &kinc, sizeof cmname);
+  {
+    // A UMAT need not be thread-safe (Fortran SAVE and COMMON): two Python threads calling
+    // model_envelope at once got envelopes off by 100x. One call at a time, in any library.
+    static std::mutex one_call_at_a_time;
+    const std::lock_guard<std::mutex> lock(one_call_at_a_time);
+    lib_->entry()(stress, statev.data(), ddsdde, &sse, &spd, &scd, &rpl, ddsddt, drplde, &drpldt,
+                  stran, dstran, time, &dtime, &temp, &dtemp, predef, dpred, cmname, &ndi, &nshr,
+                  &ntens, &nstatv, params_.data(), &nprops, coords, drot, &pnewdt, &celent,
+                  f0.data(), f1.data(), &noel, &npt, &layer, &kspt, kstep, &kinc, sizeof cmname);
+  }
   c.pnewdt = pnewdt;
   const auto bad = [&](const char* what) {
     c.finite = false;

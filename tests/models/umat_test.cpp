@@ -14,6 +14,7 @@
 #include <fstream>
 #include <iostream>
 #include <string>
+#include <thread>
 
 #include "ellipse_of.hpp"
 #include "input_error.hpp"
@@ -258,6 +259,30 @@ TEST(Umat, NanFromTheUmatNamesTheIncrement) {
   EXPECT_NE(p.reason.find("STRESS"), std::string::npos) << p.reason;
   EXPECT_NE(p.reason.find("KINC = "), std::string::npos) << p.reason;
   EXPECT_EQ(p.reason.rfind("step 2 of 10", 0), 0u) << p.reason;  // |eps| passes 1.5e-3 in step 2
+}
+
+// A UMAT need not be thread-safe: with PROPS(7) the example UMAT keeps its new stress in a static
+// buffer (as Fortran SAVE variables do). Two threads computing envelopes of two states at once
+// got each other's stresses (envelopes 100x off); the adapter makes the calls take turns.
+TEST(Umat, CallsFromTwoThreadsAtOnceTakeTurns) {
+  UmatSpec spec = spec_of("hypoplastic_wu");
+  spec.props.insert(spec.props.end(), {0.0, 0.0, 1.0});  // no PNEWDT, no NaN, a SAVE buffer
+  spec.prop_names.insert(spec.prop_names.end(), {"dstran_max", "nan_beyond", "saved"});
+  spec.lower.insert(spec.lower.end(), {0.0, 0.0, 0.0});
+  spec.upper.insert(spec.upper.end(), {1.0, 1.0, 1.0});
+  const UmatLaw law(umat_lib("hypoplastic_wu"), spec);
+  const MaterialState a = isotropic(law, 1e5), b = sheared(law);
+  EnvelopeOptions o = options(EnvelopeMethod::kIntegrated, 5e-5);
+  o.directions = 360;
+  const EnvelopeRecord serial_a = model_envelope(law, a, o), serial_b = model_envelope(law, b, o);
+  for (int round = 0; round < 3; ++round) {
+    EnvelopeRecord at_once_a, at_once_b;
+    std::thread other([&] { at_once_b = model_envelope(law, b, o); });
+    at_once_a = model_envelope(law, a, o);
+    other.join();
+    EXPECT_TRUE(rows_of(at_once_a.stress) == rows_of(serial_a.stress)) << "round " << round;
+    EXPECT_TRUE(rows_of(at_once_b.stress) == rows_of(serial_b.stress)) << "round " << round;
+  }
 }
 
 TEST(Umat, MissingFileSymbolOrKeyIsAnInputError) {
