@@ -20,6 +20,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <mutex>
 #include <optional>
 #include <sstream>
 #include <thread>
@@ -308,10 +309,36 @@ struct PendingError {
   }
 };
 
+// The progress observer, the stop flag (app/progress.hpp) and the log level are the process's:
+// two calls in two threads at once swapped each other's callbacks, and one's stop stopped the
+// other. So long calls take turns, and one started from a progress callback (which would reset
+// the outer call's observer when it ends) is refused.
+std::mutex& long_work_turn() {
+  static std::mutex m;
+  return m;
+}
+thread_local bool in_long_work = false;
+
 // Runs `work` without the GIL, with progress reported to `callback(stage, task, fraction)` (or
 // None) and Ctrl-C honoured. `quiet` silences the info lines on stderr for this call only.
 template <class Work>
 auto long_work(const py::object& callback, bool quiet, Work&& work) {
+  if (in_long_work)
+    throw std::runtime_error(
+        "rendulic.run and rendulic.probe cannot be called from a progress callback: the call "
+        "that reports is still running");
+  std::unique_lock<std::mutex> turn(long_work_turn(), std::try_to_lock);
+  if (!turn.owns_lock()) {
+    log::info(
+        "waiting for another rendulic.run or rendulic.probe of this process (another "
+        "thread) to finish");
+    py::gil_scoped_release release;  // the running call's callback needs the GIL
+    turn.lock();
+  }
+  in_long_work = true;
+  struct Leave {
+    ~Leave() { in_long_work = false; }
+  } leave;
   PendingError pending;
   const std::thread::id owner = std::this_thread::get_id();
   app::clear_stop();

@@ -141,3 +141,55 @@ def test_callback_raising_during_the_probes_stops_them(cli_run, tmp_path):
                        directions=16, threads=1, quiet=True, progress=progress)
     assert seen[-1][:2] == ("probes", "dynamic") and seen[-1][2] < 1.0
     assert not (tmp_path / "out" / "results.h5").exists()
+
+
+def test_a_progress_callback_cannot_start_another_run(tiny_toml, tmp_path):
+    # A nested call ended by clearing the process's progress observer and stop flag: the outer
+    # run then went on without its callback and without Ctrl-C, and wrote its results.
+    errors = []
+
+    def progress(stage, task, fraction):
+        if not errors:
+            try:
+                rendulic.run(tiny_toml, tmp_path / "inner", threads=1, quiet=True)
+            except RuntimeError as e:
+                errors.append(str(e))
+        elif stage == "states":
+            raise LookupError("the outer callback still works")
+
+    with pytest.raises(LookupError, match="the outer callback still works"):
+        rendulic.run(tiny_toml, tmp_path / "outer", threads=1, quiet=True, progress=progress)
+    assert errors == ["rendulic.run and rendulic.probe cannot be called from a progress "
+                      "callback: the call that reports is still running"]
+    assert not (tmp_path / "inner").exists()
+    assert not (tmp_path / "outer" / "results.h5").exists()
+
+
+def test_runs_in_two_threads_take_turns_each_with_its_callback(tiny_toml, tmp_path):
+    # The observer and the stop flag are the process's: one thread's raising callback stopped
+    # the other thread's run ("stopped on request"), and one callback got the other's reports.
+    seen = {"a": [], "b": []}
+    outcome = {}
+
+    def run(name, raise_at):
+        def progress(stage, task, fraction):
+            seen[name].append(stage)
+            if stage == raise_at:
+                raise LookupError(name)
+        try:
+            rendulic.run(tiny_toml, tmp_path / name, threads=1, quiet=True, progress=progress)
+            outcome[name] = "finished"
+        except LookupError as e:
+            outcome[name] = f"stopped by {e}"
+
+    threads = [threading.Thread(target=run, args=("a", "prepare")),
+               threading.Thread(target=run, args=("b", None))]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert outcome == {"a": "stopped by a", "b": "finished"}
+    assert seen["a"] == ["prepare"]
+    assert {"prepare", "states", "probes", "calibration"} <= set(seen["b"])
+    assert (tmp_path / "b" / "results.h5").exists()
+    assert not (tmp_path / "a" / "results.h5").exists()
