@@ -8,7 +8,9 @@
  * PNEWDT = 0.5); optional PROPS(6) > 0: the UMAT returns NaN once |STRAN + DSTRAN| exceeds it
  * (a model failing mid-path); optional PROPS(7) > 0: the new stress goes through a static
  * buffer, as in a Fortran UMAT with SAVE or COMMON variables, which is not thread-safe (a test
- * that the adapter calls one UMAT at a time). STATEV is bookkeeping the tests read back: STATEV(1) = largest
+ * that the adapter calls one UMAT at a time); optional PROPS(8) > 0: no law, but STRESS(1..3) =
+ * PROPS(8) for DTIME = 1 and -PROPS(8) for shorter increments, finite but, at 1e160, beyond the
+ * range of their squares (a test of the driver's error estimate). STATEV is bookkeeping the tests read back: STATEV(1) = largest
  * accepted |DSTRAN|, STATEV(2) = STRAN(1) + DSTRAN(1); with NSTATV >= 7 STATEV(NSTATV) sums
  * DSTRAN(1) over the accepted increments.
  * Build: cc -O2 -fPIC -shared hypoplastic_wu.c -lm -o hypoplastic_wu.so */
@@ -39,6 +41,11 @@ void umat(double* stress, double* statev, double* ddsdde, double* sse, double* s
   (void)time, (void)dtime, (void)temp, (void)dtemp, (void)predef, (void)dpred, (void)cmname;
   (void)ndi, (void)nshr, (void)ntens, (void)coords, (void)drot, (void)celent, (void)dfgrd0;
   (void)dfgrd1, (void)noel, (void)npt, (void)layer, (void)kspt, (void)kstep, (void)kinc;
+  if (*nprops >= 8 && props[7] > 0.0) {
+    for (int i = 0; i < 36; ++i) ddsdde[i] = i % 7 == 0 ? 1.0 : 0.0;
+    for (int i = 0; i < 3; ++i) stress[i] = (*dtime >= 1.0 ? 1.0 : -1.0) * props[7];
+    return;
+  }
   const double c1 = props[0], c2 = props[1], c3 = props[2], c4 = props[3];
   double T[3][3], D[3][3], E[3][3], T2[3][3], S2[3][3], N[3][3];
   tensor(stress, 1.0, T);

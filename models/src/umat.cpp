@@ -348,6 +348,19 @@ Matrix6d UmatLaw::tangent(const MaterialState& state, const Eigen::Matrix3d& d_e
   return c.finite ? c.tangent : Matrix6d::Constant(std::numeric_limits<double>::quiet_NaN());
 }
 
+namespace {
+// A step-doubling increment whose finite stresses overflow its arithmetic (norms of 1e160).
+UmatCall overflowed(int kinc) {
+  UmatCall c;
+  c.finite = false;
+  c.reason =
+      "the UMAT's stresses are too large for the driver (its error estimate or the "
+      "extrapolated STRESS is not finite) at increment KINC = " +
+      std::to_string(kinc);
+  return c;
+}
+}  // namespace
+
 StepResult UmatLaw::integrate(const UmatState& start, const Eigen::Matrix3d& d_eps,
                               const StepOptions& o, UmatState* end_state,
                               UmatSchedule* schedule) const {
@@ -378,6 +391,7 @@ StepResult UmatLaw::integrate(const UmatState& start, const Eigen::Matrix3d& d_e
         const UmatCall full = call(y, de, h, kinc);
         c = full.finite ? call(c.end, 0.5 * de, 0.5 * h, kinc) : full;
         if (c.finite) c.end.point.stress += c.end.point.stress - full.end.point.stress;
+        if (c.finite && !c.end.point.stress.allFinite()) c = overflowed(kinc);
       }
       res.rate_evaluations += doubling ? 3 : 1;
       if (!c.finite) {
@@ -429,13 +443,20 @@ StepResult UmatLaw::integrate(const UmatState& start, const Eigen::Matrix3d& d_e
       }
       pnewdt = std::min({pnewdt, a.pnewdt, b.pnewdt});
       const Eigen::Matrix3d diff = b.end.point.stress - full.end.point.stress;
-      err = diff.norm() / std::max(b.end.point.stress.norm(), o.stress_floor);
+      // stableNorm: finite stresses of 1e160 overflowed norm()'s sum of squares (err NaN).
+      err = diff.stableNorm() / std::max(b.end.point.stress.stableNorm(), o.stress_floor);
       kept = std::move(b);
       // Local extrapolation of the stress (Richardson, for a first-order update: 2 halves - 1
       // full), as modified Euler keeps its second-order value over the Euler one it measures
       // the error by; an exact UMAT is unchanged. STATEV stay those of the two halves: they
       // may be discrete (flags, counters), where an extrapolation has no meaning.
       kept.end.point.stress += diff;
+      // Stresses near the largest double overflow the difference itself: an error estimate of
+      // NaN passed the tolerance test (NaN > tol is false) and the step was kept as exact.
+      if (!std::isfinite(err) || !kept.end.point.stress.allFinite()) {
+        res.reason = overflowed(kinc).reason + ", fraction " + fmt(t) + " of the strain increment";
+        break;
+      }
     } else {
       kept = std::move(full);
     }

@@ -285,6 +285,33 @@ TEST(Umat, CallsFromTwoThreadsAtOnceTakeTurns) {
   }
 }
 
+// A UMAT whose finite stresses (1e160 Pa, PROPS(8) of the example UMAT) change sign with the
+// increment size: their squares overflowed norm(), the error estimate was NaN, which passed the
+// tolerance test, and the first step was kept as exact (error estimate 0, stress -3e160). The
+// estimate is now finite and rejects it; a stress that overflows the difference itself is a
+// failure that says so.
+TEST(Umat, StressesBeyondTheRangeOfTheirSquaresAreStillErrorControlled) {
+  UmatSpec spec = spec_of("hypoplastic_wu");
+  spec.props.insert(spec.props.end(), {0.0, 0.0, 0.0, 1e160});
+  spec.prop_names.insert(spec.prop_names.end(), {"dstran_max", "nan_beyond", "saved", "huge"});
+  spec.lower.insert(spec.lower.end(), {0.0, 0.0, 0.0, 0.0});
+  spec.upper.insert(spec.upper.end(), {1.0, 1.0, 1.0, 1e300});
+  const UmatLaw law(umat_lib("hypoplastic_wu"), spec);
+  UmatState end;
+  const StepResult r =
+      law.integrate(law.umat_state(isotropic(law, 1e5)), probe_strain(30.0, 5e-5), {}, &end);
+  ASSERT_TRUE(r.success) << r.reason;
+  EXPECT_GT(r.rejected, 0);
+  EXPECT_EQ(end.point.stress(0, 0), 1e160);  // compression positive: STRESS(1) = -1e160
+  spec.props.back() = 1.7e308;               // the difference of two such stresses is not finite
+  const UmatLaw beyond(umat_lib("hypoplastic_wu"), spec);
+  const StepResult b = beyond.integrate(beyond.umat_state(isotropic(beyond, 1e5)),
+                                        probe_strain(30.0, 5e-5), {}, &end);
+  EXPECT_FALSE(b.success);
+  EXPECT_NE(b.reason.find("the UMAT's stresses are too large for the driver"), std::string::npos)
+      << b.reason;
+}
+
 TEST(Umat, MissingFileSymbolOrKeyIsAnInputError) {
   const UmatSpec spec = spec_of("hypoplastic_wu");
   EXPECT_NE(input_error([&] { UmatLaw("/nonexistent/umat.so", spec); }).find("no such file"),
