@@ -11,6 +11,7 @@
 #include <cerrno>
 #include <cstring>
 #include <fstream>
+#include <iostream>
 #include <utility>
 
 #include "rendulic/core/cleanup.hpp"
@@ -26,22 +27,52 @@ void AtomicTextFile::refuse_folder(const fs::path& file, const std::string& what
     throw InputError(file.string() + ": is a folder (" + what + " is a file)");
 }
 
+namespace {
+// The file a name stands for: a symbolic link followed (to its target, which may not exist yet),
+// at most 40 deep as the kernel does.
+fs::path followed(fs::path p) {
+  std::error_code ec;
+  for (int depth = 0; depth < 40 && fs::is_symlink(fs::symlink_status(p, ec)); ++depth) {
+    const fs::path target = fs::read_symlink(p, ec);
+    if (ec) break;
+    p = target.is_absolute() ? target : p.parent_path() / target;
+  }
+  return p;
+}
+}  // namespace
+
 AtomicTextFile::AtomicTextFile(fs::path file, std::string what)
     : final_(std::move(file)), what_(std::move(what)) {
   if (final_.empty()) throw InputError("the file name of " + what_ + " is empty");
-  const fs::path folder = final_.has_parent_path() ? final_.parent_path() : fs::path(".");
-  std::string name = final_.filename().string();
+  // A link is written through, not replaced by a file: `--out link.json` broke the link and
+  // left its target as it was. A device, a FIFO or a socket is written to as it is, without a
+  // temporary: `--out /dev/null` (as root) replaced the system's /dev/null with a file, and a
+  // FIFO hung in the check below, which read it.
+  // /dev/stdout and /proc/self/fd/N are links the kernel resolves, which a path cannot name.
+  std::error_code ec;
+  const fs::file_status st = fs::status(final_, ec);
+  const std::string abs = fs::absolute(final_, ec).lexically_normal().string();
+  direct_ = (fs::exists(st) && !fs::is_regular_file(st) && !fs::is_directory(st)) ||
+            abs.starts_with("/dev/") || abs.starts_with("/proc/");
+  target_ = direct_ ? final_ : followed(final_);
+  refuse_folder(target_, what_);
+  if (direct_) {
+    if (::access(target_.c_str(), W_OK) != 0)
+      throw InputError(final_.string() + ": cannot write " + what_ + ": " + std::strerror(errno));
+    return;
+  }
+  const fs::path folder = target_.has_parent_path() ? target_.parent_path() : fs::path(".");
+  std::string name = target_.filename().string();
   name.insert(name.begin(), '.');
   name += ".tmp-" + std::to_string(::getpid());
   tmp_ = folder / name;
-  refuse_folder(final_, what_);
   {
     // No text output replaces an HDF5 file: `export --lammps out/results.h5` replaced the run's
     // results by a LAMMPS data file, `calibrate --out` of the results file failed only after
     // the calibration. HDF5's signature opens every file rendulic writes.
     static constexpr char kSignature[8] = {'\x89', 'H', 'D', 'F', '\r', '\n', '\x1a', '\n'};
     char head[8] = {};
-    std::ifstream in(final_, std::ios::binary);
+    std::ifstream in(target_, std::ios::binary);
     if (in.read(head, sizeof head) && std::equal(head, head + 8, kSignature))
       throw InputError(final_.string() + ": is an HDF5 file (a results file?), which " + what_ +
                        " would replace; give another name");
@@ -58,13 +89,42 @@ AtomicTextFile::AtomicTextFile(fs::path file, std::string what)
 
 AtomicTextFile::~AtomicTextFile() {
   std::error_code ec;
-  if (!done_) fs::remove(tmp_, ec);
+  if (!done_ && !tmp_.empty()) fs::remove(tmp_, ec);
   cleanup::forget(handle_);
 }
 
 void AtomicTextFile::flush() {
+  if (direct_) return;  // a device or a FIFO takes the text once, at commit()
+  write_to(tmp_, O_TRUNC, true);
+  flushed_ = true;
+}
+
+namespace {
+// The descriptor a name of this process's own streams stands for (/dev/stdout, /dev/fd/2,
+// /proc/self/fd/1), or -1. Opened by name, a regular file behind it got a second description at
+// offset 0, and the text overwrote what the command had printed before.
+int own_descriptor(const fs::path& p) {
+  const std::string s = p.lexically_normal().string();
+  if (s == "/dev/stdout") return 1;
+  if (s == "/dev/stderr") return 2;
+  for (const char* prefix : {"/dev/fd/", "/proc/self/fd/"}) {
+    const std::string rest = s.starts_with(prefix) ? s.substr(std::strlen(prefix)) : "";
+    if (!rest.empty() && rest.size() < 6 &&
+        std::all_of(rest.begin(), rest.end(), [](char c) { return c >= '0' && c <= '9'; }))
+      return std::stoi(rest);
+  }
+  return -1;
+}
+}  // namespace
+
+void AtomicTextFile::write_to(const fs::path& file, int flags, bool sync) {
   const std::string text = text_.str();
-  const int fd = ::open(tmp_.c_str(), O_WRONLY | O_TRUNC | O_CLOEXEC);
+  const int own = direct_ ? own_descriptor(fs::absolute(file)) : -1;
+  if (own >= 0) {
+    std::cout.flush();  // what the command printed before comes first
+    std::cerr.flush();
+  }
+  const int fd = own >= 0 ? own : ::open(file.c_str(), O_WRONLY | flags | O_CLOEXEC);
   int err = fd < 0 ? errno : 0;
   for (std::size_t at = 0; err == 0 && at < text.size();) {
     const ssize_t n = ::write(fd, text.data() + at, text.size() - at);
@@ -74,20 +134,24 @@ void AtomicTextFile::flush() {
     else
       at += static_cast<std::size_t>(n);
   }
-  if (err == 0 && ::fsync(fd) != 0) err = errno;
-  if (fd >= 0 && ::close(fd) != 0 && err == 0) err = errno;
+  if (err == 0 && sync && ::fsync(fd) != 0) err = errno;
+  if (fd >= 0 && own < 0 && ::close(fd) != 0 && err == 0) err = errno;
   std::error_code ec;
   if (err != 0) {
-    fs::remove(tmp_, ec);
+    if (!direct_) fs::remove(tmp_, ec);
     throw InputError(final_.string() + ": cannot write " + what_ + ": " + std::strerror(err));
   }
-  flushed_ = true;
 }
 
 void AtomicTextFile::commit() {
+  if (direct_) {
+    write_to(target_, 0, false);
+    done_ = true;
+    return;
+  }
   if (!flushed_) flush();
   std::error_code ec;
-  fs::rename(tmp_, final_, ec);
+  fs::rename(tmp_, target_, ec);
   if (ec) {
     const std::string why = ec.message();
     fs::remove(tmp_, ec);

@@ -4,9 +4,11 @@
 // child process so that this test's own output is not limited.
 #include "rendulic/core/text_file.hpp"
 
+#include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/resource.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -64,6 +66,57 @@ TEST(AtomicTextFile, WithoutCommitTheEarlierFileStaysAndNoTemporaryIsLeft) {
   }
   EXPECT_EQ(contents(d / "a.txt"), "earlier\n");
   EXPECT_TRUE(only_file_is(d, "a.txt"));
+}
+
+// `--out link.json` replaced the link by a file and left its target as it was.
+TEST(AtomicTextFile, ALinkIsWrittenThroughAndKept) {
+  const fs::path d = fresh("link");
+  fs::create_directories(d / "real");
+  std::ofstream(d / "real" / "a.txt") << "earlier\n";
+  fs::create_symlink("real/a.txt", d / "link.txt");
+  fs::create_symlink("real/new.txt", d / "dangling.txt");
+  for (const char* name : {"link.txt", "dangling.txt"}) {
+    rendulic::AtomicTextFile f(d / name, "the test text");
+    f.stream() << "later\n";
+    f.commit();
+    EXPECT_TRUE(fs::is_symlink(d / name)) << name;
+  }
+  EXPECT_EQ(contents(d / "real" / "a.txt"), "later\n");
+  EXPECT_EQ(contents(d / "real" / "new.txt"), "later\n");
+}
+
+// A FIFO (and a device: `--out /dev/null` as root replaced the system's /dev/null by a file)
+// is written to as it is. On a FIFO the check for an HDF5 signature read it and hung. A child
+// writes, killed by an alarm if it hangs; the parent reads without blocking.
+TEST(AtomicTextFile, AFifoIsWrittenToAsItIsAndStaysAFifo) {
+  const fs::path d = fresh("fifo");
+  const fs::path fifo = d / "out.txt";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0644), 0);
+  const int reader = ::open(fifo.c_str(), O_RDONLY | O_NONBLOCK);
+  ASSERT_GE(reader, 0);
+  const pid_t child = fork();
+  if (child == 0) {
+    ::alarm(5);
+    try {
+      rendulic::AtomicTextFile f(fifo, "the test text");
+      f.stream() << "through the fifo\n";
+      f.commit();
+    } catch (...) {
+      _exit(1);
+    }
+    _exit(0);
+  }
+  int status = 0;
+  waitpid(child, &status, 0);
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "status " << status;
+  char buf[64] = {};
+  const ssize_t n = ::read(reader, buf, sizeof buf - 1);
+  ::close(reader);
+  EXPECT_EQ(std::string(buf, n > 0 ? static_cast<std::size_t>(n) : 0), "through the fifo\n");
+  struct stat st {};
+  ASSERT_EQ(::stat(fifo.c_str(), &st), 0);
+  EXPECT_TRUE(S_ISFIFO(st.st_mode));
+  EXPECT_TRUE(only_file_is(d, "out.txt"));
 }
 
 TEST(AtomicTextFile, APlaceThatCannotBeWrittenIsRefusedAtOnceNamingIt) {

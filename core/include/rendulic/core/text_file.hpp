@@ -3,7 +3,9 @@
 // full disk, a file-size limit or a signal leaves the earlier file as it was and no half-written
 // one; the temporary is removed on failure and on death by a signal (core/cleanup.hpp). Used by
 // every text file the commands write: calibrate --out, report.md, the sweep's CSVs, exported
-// LAMMPS data files and bench's pair lines.
+// LAMMPS data files and bench's pair lines. A symbolic link is written through (its target
+// replaced, the link kept); a device, FIFO or socket (/dev/stdout, /dev/null) is written to as
+// it is, once, at commit().
 #pragma once
 
 #include <filesystem>
@@ -41,10 +43,16 @@ class AtomicTextFile {
   const std::filesystem::path& path() const { return final_; }
 
  private:
-  std::filesystem::path final_, tmp_;
+  // Writes the text into `file` (opened with O_WRONLY | flags), fsynced if `sync`.
+  void write_to(const std::filesystem::path& file, int flags, bool sync);
+
+  // The name given, and the file it stands for (a symbolic link followed).
+  std::filesystem::path final_, target_, tmp_;
   std::string what_;
   std::ostringstream text_;
   int handle_ = -1;
+  // A device, FIFO or socket: written as it is, without a temporary.
+  bool direct_ = false;
   bool flushed_ = false, done_ = false;
 };
 
