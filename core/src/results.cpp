@@ -35,6 +35,7 @@
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/log.hpp"
 #include "rendulic/core/result_paths.hpp"
+#include "rendulic/core/text_file.hpp"
 #include "rendulic/core/version.hpp"
 
 namespace rendulic {
@@ -599,11 +600,11 @@ struct ResultsWriter::Impl {
 ResultsWriter::ResultsWriter(const fs::path& final_path) : impl_(std::make_unique<Impl>()) {
   detail::quiet_hdf5();
   Impl& m = *impl_;
-  m.claim.emplace(final_path);
-  m.final_path = final_path;
+  m.final_path = link_target(final_path);
+  m.claim.emplace(m.final_path);
   m.make_folder();
   m.refuse_another_writer(m.sweep_stale());
-  m.tmp_path = temporary_for(final_path);
+  m.tmp_path = temporary_for(m.final_path);
   m.tmp_handle = cleanup::remove_on_death(m.tmp_path);
   m.open(true, "cannot create results file");
   attr("/", "schema", kSchema);
@@ -617,11 +618,11 @@ ResultsWriter ResultsWriter::update(const fs::path& existing_path) {
   ResultsWriter w;
   w.impl_ = std::make_unique<Impl>();
   Impl& m = *w.impl_;
-  m.claim.emplace(existing_path);
-  m.final_path = existing_path;
-  m.lock.emplace(existing_path);  // before the copy: it must hold every earlier update
+  m.final_path = link_target(existing_path);
+  m.claim.emplace(m.final_path);
+  m.lock.emplace(m.final_path);  // before the copy: it must hold every earlier update
   m.sweep_stale();
-  m.tmp_path = temporary_for(existing_path);
+  m.tmp_path = temporary_for(m.final_path);
   m.tmp_handle = cleanup::remove_on_death(m.tmp_path);
   if (const std::string why = copy_whole_file(existing_path, m.tmp_path); !why.empty())
     throw InputError(existing_path.string() + ": cannot copy for update: " + why);
@@ -634,13 +635,13 @@ ResultsWriter ResultsWriter::resume(const fs::path& final_path) {
   ResultsWriter w;
   w.impl_ = std::make_unique<Impl>();
   Impl& m = *w.impl_;
-  m.claim.emplace(final_path);
-  m.final_path = final_path;
+  m.final_path = link_target(final_path);
+  m.claim.emplace(m.final_path);
   m.make_folder();
   // A killed run's saved copy becomes FINAL.partial here.
   m.refuse_another_writer(m.sweep_stale());
-  const fs::path partial = with_suffix(final_path, ".partial");
-  m.tmp_path = temporary_for(final_path);
+  const fs::path partial = with_suffix(m.final_path, ".partial");
+  m.tmp_path = temporary_for(m.final_path);
   m.tmp_handle = cleanup::remove_on_death(m.tmp_path);
   if (!fs::exists(partial)) {
     m.open(true, "cannot create results file");

@@ -27,10 +27,7 @@ void AtomicTextFile::refuse_folder(const fs::path& file, const std::string& what
     throw InputError(file.string() + ": is a folder (" + what + " is a file)");
 }
 
-namespace {
-// The file a name stands for: a symbolic link followed (to its target, which may not exist yet),
-// at most 40 deep as the kernel does.
-fs::path followed(fs::path p) {
+fs::path link_target(fs::path p) {
   std::error_code ec;
   for (int depth = 0; depth < 40 && fs::is_symlink(fs::symlink_status(p, ec)); ++depth) {
     const fs::path target = fs::read_symlink(p, ec);
@@ -39,7 +36,6 @@ fs::path followed(fs::path p) {
   }
   return p;
 }
-}  // namespace
 
 AtomicTextFile::AtomicTextFile(fs::path file, std::string what)
     : final_(std::move(file)), what_(std::move(what)) {
@@ -54,7 +50,7 @@ AtomicTextFile::AtomicTextFile(fs::path file, std::string what)
   const std::string abs = fs::absolute(final_, ec).lexically_normal().string();
   direct_ = (fs::exists(st) && !fs::is_regular_file(st) && !fs::is_directory(st)) ||
             abs.starts_with("/dev/") || abs.starts_with("/proc/");
-  target_ = direct_ ? final_ : followed(final_);
+  target_ = direct_ ? final_ : link_target(final_);
   refuse_folder(target_, what_);
   if (direct_) {
     if (::access(target_.c_str(), W_OK) != 0)

@@ -640,6 +640,36 @@ TEST(Results, ASecondWriterOfAFileThisProcessIsWritingIsRefusedAndTheFirstComple
   again.commit();
 }
 
+// `fit --results link.h5` and `calibrate --results link.h5` renamed the updated copy onto the
+// link: the link became a file and the file it pointed to never got the fits.
+TEST(Results, AWriterOfALinkWritesItsTargetAndKeepsTheLink) {
+  const fs::path d = fresh_dir("link");
+  fs::create_directories(d / "real");
+  {
+    ResultsWriter w(d / "real" / "results.h5");
+    w.append("/path/time", 1.0);
+    w.commit();
+  }
+  fs::create_symlink("real/results.h5", d / "link.h5");
+  {
+    ResultsWriter u = ResultsWriter::update(d / "link.h5");
+    u.append("/path/time", 2.0);
+    u.commit();
+  }
+  EXPECT_TRUE(fs::is_symlink(d / "link.h5"));
+  EXPECT_EQ(ResultsReader(d / "real" / "results.h5").read_vector("/path/time"),
+            (std::vector<double>{1.0, 2.0}));
+  {
+    ResultsWriter w(d / "link.h5");  // a new file, through the link
+    w.append("/path/time", 3.0);
+    w.commit();
+  }
+  EXPECT_TRUE(fs::is_symlink(d / "link.h5"));
+  EXPECT_EQ(ResultsReader(d / "real" / "results.h5").read_vector("/path/time"),
+            (std::vector<double>{3.0}));
+  EXPECT_EQ(count_files(d), 2);  // the link and the folder: no temporary left
+}
+
 TEST(Results, AFileAnotherProgramHoldsForWritingIsSaidSoNotCalledCorrupt) {
   // h5py's "r+" in a notebook, or a run's temporary file: HDF5 keeps an exclusive flock on a
   // file it writes, and the reader's open failed as "cannot open (corrupt HDF5 file?)".

@@ -14,6 +14,11 @@
 
 namespace rendulic {
 
+// The file a name stands for: a symbolic link followed to its target (which may not exist yet),
+// at most 40 deep as the kernel does; any other name as it is. Writers that replace a file by
+// renaming onto it replace the target, so that the link stays.
+std::filesystem::path link_target(std::filesystem::path p);
+
 class AtomicTextFile {
  public:
   // Creates the temporary now, so that a place that cannot be written is refused (InputError,
