@@ -733,6 +733,12 @@ void ResultsWriter::append(const std::string& path, const Eigen::Matrix3d& tenso
   impl_->append_row(path, {3, 3}, rm.data());
 }
 
+void ResultsWriter::remove(const std::string& path) {
+  impl_->guarded(path, {}, [&] {
+    if (link_exists(impl_->id(), path)) checked(H5Ldelete(impl_->id(), path.c_str(), H5P_DEFAULT));
+  });
+}
+
 void ResultsWriter::create_group(const std::string& path) {
   impl_->guarded(path, {}, [&] { ensure_group(impl_->id(), path).close(); });
 }

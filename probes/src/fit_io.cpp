@@ -14,6 +14,9 @@
 namespace rendulic {
 
 void write_envelope_fit(ResultsWriter& out, const std::string& g, const EnvelopeFit& f) {
+  // A refit replaces the whole group: an earlier fit's line_p_value, stderr or error stayed
+  // beside the new shape, and the report read them.
+  out.remove(g);
   out.attr(g, "shape", to_string(f.shape));
   out.attr(g, "center", std::vector<double>{f.center.x(), f.center.y()});
   out.attr(g, "semi_axes", std::vector<double>{f.a, f.b});
@@ -88,6 +91,7 @@ FitAllSummary fit_state_envelopes(const ResultsReader& in, ResultsWriter& out,
       record = read_envelope(in, g);
     } catch (const InputError& e) {  // malformed envelope: say so in the file, go on
       for (const char* fit_group : {paths::kFitStress, paths::kFitFabric}) {
+        out.remove(g + fit_group);
         out.attr(g + fit_group, "shape", "none");
         out.attr(g + fit_group, "error", std::string(e.what()));
         ++summary.failed;
@@ -106,6 +110,7 @@ FitAllSummary fit_state_envelopes(const ResultsReader& in, ResultsWriter& out,
         write_envelope_fit(out, g + fit_group, fit_envelope(env, options));
         ++summary.fitted;
       } catch (const InputError& e) {  // degenerate envelope: say so in the file
+        out.remove(g + fit_group);
         out.attr(g + fit_group, "shape", "none");
         out.attr(g + fit_group, "error", std::string(e.what()));
         ++summary.failed;

@@ -95,5 +95,31 @@ TEST(FitIo, FitAllEnvelopesOfAFile) {
   EXPECT_EQ(r.read_pairs("/states/s1/envelopes/elastic/stress_star").size(), 36u);
 }
 
+// A refit replaces each fit group whole: an earlier failed fit's `error` stayed beside a new
+// ellipse, and an earlier auto fit's line_p_value beside a refit of a given shape.
+TEST(FitIo, ARefitKeepsNothingOfTheEarlierFit) {
+  const fs::path path = fresh("refit.h5");
+  test::TrueEllipse e{{0.0, 0.0}, 1e-3, 2e-5, 35.26};
+  const Envelope stress = test::ellipse_envelope(e, 36, 0.0, 1, true);
+  const std::string g = "/states/s1/envelopes/elastic";
+  {
+    ResultsWriter w(path);
+    w.attr(g, "amplitude", 5e-5);
+    w.write(g + "/theta_deg", stress.theta_deg);
+    w.write(g + "/stress_star", stress.response);
+    w.attr(g + "/fit_stress", "shape", "none");
+    w.attr(g + "/fit_stress", "error", "an earlier failure");
+    w.attr(g + "/fit_stress", "line_p_value", 0.5);
+    w.commit();
+  }
+  FitOptions o;
+  o.shape = FitShape::kEllipse;
+  EXPECT_EQ(fit_all_envelopes(path, o).fitted, 1);
+  ResultsReader r(path);
+  EXPECT_EQ(r.attr_string(g + "/fit_stress", "shape"), "ellipse");
+  for (const char* stale : {"error", "line_p_value"})
+    EXPECT_FALSE(r.has_attr(g + "/fit_stress", stale)) << stale;
+}
+
 }  // namespace
 }  // namespace rendulic

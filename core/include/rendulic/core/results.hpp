@@ -59,6 +59,9 @@ class ResultsWriter {
   void append(const std::string& path, const Eigen::Matrix3d& tensor);
 
   void create_group(const std::string& path);
+  // Removes the object at `path` (a group with all it holds), if there is one: a group written
+  // again from scratch keeps none of its earlier attributes.
+  void remove(const std::string& path);
   // Flushes, closes, renames the temporary file onto the final path. Once only.
   void commit();
 
