@@ -26,6 +26,42 @@
 #include "rendulic/core/result_paths.hpp"
 
 namespace rendulic {
+
+// A TOML basic string that parses back to exactly `s`: every control character escaped
+// (a raw one is not TOML, and a NUL would cut the text short wherever it is stored as a C
+// string, as in the results file).
+std::string toml_quoted(const std::string& s) {
+  std::string out = "\"";
+  for (char c : s) {
+    switch (c) {
+      case '"':
+        out += "\\\"";
+        break;
+      case '\\':
+        out += "\\\\";
+        break;
+      case '\n':
+        out += "\\n";
+        break;
+      case '\t':
+        out += "\\t";
+        break;
+      case '\r':
+        out += "\\r";
+        break;
+      default:
+        if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) {
+          char buf[8];
+          std::snprintf(buf, sizeof buf, "\\u%04X", static_cast<unsigned>(c));
+          out += buf;
+        } else {
+          out += c;
+        }
+    }
+  }
+  return out + "\"";
+}
+
 namespace {
 
 const char* type_name(KeyType t) {
@@ -69,47 +105,12 @@ std::string format_double(double v) {
   return s;
 }
 
-// A TOML basic string that parses back to exactly `s`: every control character escaped
-// (a raw one is not TOML, and a NUL would cut the text short wherever it is stored as a C
-// string, as in the results file).
-std::string quote(const std::string& s) {
-  std::string out = "\"";
-  for (char c : s) {
-    switch (c) {
-      case '"':
-        out += "\\\"";
-        break;
-      case '\\':
-        out += "\\\\";
-        break;
-      case '\n':
-        out += "\\n";
-        break;
-      case '\t':
-        out += "\\t";
-        break;
-      case '\r':
-        out += "\\r";
-        break;
-      default:
-        if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) {
-          char buf[8];
-          std::snprintf(buf, sizeof buf, "\\u%04X", static_cast<unsigned>(c));
-          out += buf;
-        } else {
-          out += c;
-        }
-    }
-  }
-  return out + "\"";
-}
-
 std::string format_value(const ScenarioValue& v) {
   struct Visitor {
     std::string operator()(bool b) const { return b ? "true" : "false"; }
     std::string operator()(std::int64_t i) const { return std::to_string(i); }
     std::string operator()(double d) const { return format_double(d); }
-    std::string operator()(const std::string& s) const { return quote(s); }
+    std::string operator()(const std::string& s) const { return toml_quoted(s); }
     std::string operator()(const std::vector<double>& xs) const {
       std::string out = "[";
       for (std::size_t i = 0; i < xs.size(); ++i) out += (i ? ", " : "") + format_double(xs[i]);
@@ -117,7 +118,7 @@ std::string format_value(const ScenarioValue& v) {
     }
     std::string operator()(const std::vector<std::string>& xs) const {
       std::string out = "[";
-      for (std::size_t i = 0; i < xs.size(); ++i) out += (i ? ", " : "") + quote(xs[i]);
+      for (std::size_t i = 0; i < xs.size(); ++i) out += (i ? ", " : "") + toml_quoted(xs[i]);
       return out + "]";
     }
   };

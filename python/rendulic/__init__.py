@@ -265,7 +265,8 @@ def _arg(x, what: str):
     for k, v in items:
         try:
             out[k] = np.asarray(v, dtype=float)
-        except (TypeError, ValueError):
+        except (TypeError, ValueError, OverflowError):
+            shown = repr(v) if len(repr(v)) <= 60 else repr(v)[:57] + "..."
             raise InputError(f"{what}: '{k}' must be a number or a 3x3 array of numbers, "
-                             f"got {v!r}") from None
+                             f"got {shown}") from None
     return out

@@ -415,7 +415,8 @@ std::string toml_of(const py::dict& d) {
   std::ostringstream out;
   for (const auto& [k, v] : d) {
     const std::string key = py::str(k);
-    out << '"' << key << "\" = ";
+    // Quoted as TOML quotes it: {'K" = 5e7\n"G': 1e8} set K and G without a word.
+    out << toml_quoted(key) << " = ";
     const py::array_t<double, py::array::c_style | py::array::forcecast> a =
         py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(v);
     if (!a) throw InputError("'" + key + "' must be a number or an array of numbers");
@@ -452,12 +453,28 @@ std::vector<std::string> sets_of(const py::object& sets) {
   if (sets.is_none()) return out;
   if (py::isinstance<py::dict>(sets)) {
     // A value as the scenario's TOML spells it: text quoted, lists bracketed, booleans lower.
+    // numpy's scalars and arrays as Python's own numbers and lists (json knows no np.int64).
     const py::object json = py::module_::import("json");
-    for (const auto& [k, v] : sets.cast<py::dict>())
-      out.push_back(std::string(py::str(k)) + "=" + std::string(py::str(json.attr("dumps")(v))));
+    for (const auto& [k, v] : sets.cast<py::dict>()) {
+      py::object plain = py::reinterpret_borrow<py::object>(v);
+      if (py::hasattr(plain, "tolist")) plain = plain.attr("tolist")();
+      std::string text;
+      try {
+        text = py::str(json.attr("dumps")(plain));
+      } catch (py::error_already_set&) {
+        throw py::type_error("sets: the value of '" + std::string(py::str(k)) +
+                             "' is not a number, a text, a boolean or a list of them");
+      }
+      out.push_back(std::string(py::str(k)) + "=" + text);
+    }
     return out;
   }
-  return sets.cast<std::vector<std::string>>();
+  // A text is a sequence too: "k=v" would be cast letter by letter.
+  if (!py::isinstance<py::str>(sets) && py::isinstance<py::sequence>(sets)) try {
+      return sets.cast<std::vector<std::string>>();
+    } catch (const py::cast_error&) {
+    }
+  throw py::type_error("sets: expected a dict {key: value} or a list of 'key=value' texts");
 }
 
 std::vector<Eigen::Vector2d> points_of(const py::object& x, const char* what) {
@@ -540,7 +557,13 @@ PYBIND11_MODULE(_rendulic, m) {
          bool use_theta) {
         Envelope env;
         env.response = points_of(points, "points");
-        if (!theta_deg.is_none()) env.theta_deg = theta_deg.cast<std::vector<double>>();
+        if (!theta_deg.is_none()) {
+          const auto t =
+              py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(theta_deg);
+          if (!t || t.ndim() != 1)
+            throw InputError("theta_deg: expected a sequence of numbers (degrees)");
+          env.theta_deg.assign(t.data(), t.data() + t.size());
+        }
         if (!strain.is_none()) env.strain = points_of(strain, "strain");
         env.amplitude = amplitude;
         FitOptions o;

@@ -79,6 +79,26 @@ def test_model_input_errors_have_the_file_readers_messages():
         rendulic.fit_envelope(np.ones((6, 2)), shape="ellipsoid")
 
 
+def test_odd_keys_and_argument_types_are_named_not_misread(tiny_toml, tmp_path):
+    state = {"stress": np.eye(3) * 1e6}
+    # A key was written into the TOML text unquoted: this one set K and G without a word.
+    with pytest.raises(rendulic.InputError, match="unknown parameter 'K\" = 5e7"):
+        rendulic.model_envelope("isotropic_elastic", state, {'K" = 5e7\n"G': 1e8})
+    # numpy's integers are numbers (json knew no np.int64); a text is not a list of settings.
+    with pytest.raises(rendulic.InputError, match="dem.n_particles=10: .*out of range"):
+        rendulic.run(tiny_toml, tmp_path / "out", sets={"dem.n_particles": np.int64(10)})
+    for sets in ("dem.n_particles=100", [1, 2]):
+        with pytest.raises(TypeError, match="sets: expected a dict"):
+            rendulic.run(tiny_toml, tmp_path / "out", sets=sets)
+    with pytest.raises(TypeError, match="sets: the value of 'dem.seed' is not a number"):
+        rendulic.run(tiny_toml, tmp_path / "out", sets={"dem.seed": object()})
+    with pytest.raises(rendulic.InputError, match="theta_deg: expected a sequence of numbers"):
+        rendulic.fit_envelope(np.ones((8, 2)), theta_deg="abc")
+    with pytest.raises(rendulic.InputError, match="'volume_fraction' must be a number"):
+        rendulic.material_point_path("isotropic_elastic", dict(state, volume_fraction=10**400))
+    assert not (tmp_path / "out").exists()
+
+
 def test_progress_callback_raising_stops_the_run(tiny_toml, tmp_path):
     calls = []
 

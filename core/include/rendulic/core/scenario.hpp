@@ -42,6 +42,10 @@ struct KeySpec {
   bool distinct = false;
 };
 
+// A TOML basic string (quotes included) that parses back to exactly `s`, control characters
+// escaped: for values, and for keys that are not bare (Python's parameter dictionaries).
+std::string toml_quoted(const std::string& s);
+
 class ScenarioSchema {
  public:
   // Declares a key; a duplicate path or a default that violates its own range is a bug and
