@@ -1,6 +1,8 @@
 // Isotropic compression and undrained axisymmetric paths through a law (paths.hpp).
 #include "rendulic/models/paths.hpp"
 
+#include <cstdio>
+
 #include "rendulic/models/umat.hpp"
 
 namespace rendulic::models {
@@ -39,6 +41,10 @@ PathSeries run_path(const Law& law, const MaterialState& start, const Eigen::Mat
     }
     y = r.end;
     eps += de;
+    if (const std::string bad = volume_fraction_problem(y.volume_fraction); !bad.empty()) {
+      s.reason = "step " + std::to_string(k + 1) + " of " + std::to_string(o.steps) + ": " + bad;
+      return s;
+    }
     s.max_error_estimate = std::max(s.max_error_estimate, r.error_estimate);
     s.total_substeps += r.substeps;
     record(&s, eps, y);
@@ -49,9 +55,20 @@ PathSeries run_path(const Law& law, const MaterialState& start, const Eigen::Mat
 
 }  // namespace
 
+std::string volume_fraction_problem(double nu) {
+  // A packing cannot be compressed beyond solid (the state files' own range is [0, 1), 0 for a
+  // state that gives none): material_point_path(kind="isotropic", end=50) returned 3e21.
+  if (nu >= 0.0 && nu < 1.0) return "";
+  char text[32];
+  std::snprintf(text, sizeof text, "%g", nu);
+  return std::string("the volume fraction reached ") + text +
+         ", outside [0, 1): the path strains the packing beyond what it can take";
+}
+
 bool PathOptions::IsValid(std::string* why) const {
-  if (steps < 1) {
-    if (why) *why = "steps must be >= 1";
+  // Each step is kept (strain, stress, fabric, ...): 2^31 steps asked for ~700 GB.
+  if (steps < 1 || steps > kMaxSteps) {
+    if (why) *why = "steps must be in [1, " + std::to_string(kMaxSteps) + "]";
     return false;
   }
   return step.IsValid(why);

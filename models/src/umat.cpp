@@ -531,6 +531,10 @@ PathSeries UmatLaw::run_path(const MaterialState& start, const Eigen::Matrix3d& 
       return s;
     }
     y = std::move(next);
+    if (const std::string bad = volume_fraction_problem(y.point.volume_fraction); !bad.empty()) {
+      s.reason = "step " + std::to_string(k + 1) + " of " + std::to_string(o.steps) + ": " + bad;
+      return s;
+    }
     s.max_error_estimate = std::max(s.max_error_estimate, r.error_estimate);
     s.total_substeps += r.substeps;
     record();

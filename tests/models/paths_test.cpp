@@ -38,6 +38,30 @@ TEST(Paths, IsotropicElasticClosedForms) {
   EXPECT_LT(und.strain.back()(0, 0), 0.0);  // axial extension along x
 }
 
+// A path that compresses a packing beyond solid stops there (material_point_path(kind=
+// "isotropic", end=50) returned a volume fraction of 3e21), and 2^31 steps (~700 GB of series)
+// are refused before any is run. A state without a volume fraction (0) runs as before.
+TEST(Paths, APathBeyondSolidOrWithoutBoundOnItsStepsIsRefused) {
+  auto law = make_law("isotropic_elastic");
+  PathOptions o;
+  o.steps = 200;
+  const MaterialState dense =
+      law->make_state(Eigen::Matrix3d::Identity() * 1e8, Eigen::Matrix3d::Identity() * 2.0, 0.6);
+  const PathSeries beyond = isotropic_compression_path(*law, dense, 50.0, o);
+  EXPECT_FALSE(beyond.success);
+  EXPECT_NE(beyond.reason.find("step 3 of 200: the volume fraction reached 1.2702, outside [0, 1)"),
+            std::string::npos)
+      << beyond.reason;
+  EXPECT_TRUE(isotropic_compression_path(*law, dense, 0.5, o).success);  // nu 0.6 e^0.5 < 1
+  const MaterialState unknown =
+      law->make_state(Eigen::Matrix3d::Identity() * 1e8, Eigen::Matrix3d::Identity() * 2.0, 0.0);
+  EXPECT_TRUE(undrained_axisymmetric_path(*law, unknown, -0.05, o).success);
+  o.steps = PathOptions::kMaxSteps + 1;
+  std::string why;
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_EQ(why, "steps must be in [1, 1000000]");
+}
+
 TEST(Paths, EveryLawRunsBothPaths) {
   for (const std::string& name : law_names()) {
     auto law = make_law(name);

@@ -11,7 +11,12 @@
 
 namespace rendulic::models {
 
+// "" for a volume fraction a path may reach, else why not (outside [0, 1)); both path drivers
+// (the laws' and a UMAT's) stop there.
+std::string volume_fraction_problem(double nu);
+
 struct PathOptions {
+  static constexpr int kMaxSteps = 1000000;
   int steps = 200;  // recorded, equal strain steps; each is integrated with error control
   StepOptions step;
   bool IsValid(std::string* why) const;
