@@ -46,10 +46,23 @@ Subcommand add_export(CLI::App& parent) {
             }
             const Packing p = read_results_state(o->results, group);
             const ResultsReader in(o->results);
-            const double k = in.attr_double(paths::kMaterial, "k");
-            const double gamma = in.attr_double(paths::kMaterial, "gamma");
-            const double density = in.attr_double(paths::kMaterial, "density");
-            const double dt = in.attr_double(paths::kMaterial, "dt");
+            // Written into the data file and the pair settings: NaN, a negative stiffness or
+            // density went out as `pair_coeff * * hooke nan ...` with exit 0.
+            const auto material = [&](const char* key, bool zero_allowed) {
+              const double v = in.attr_double(paths::kMaterial, key);
+              if (!std::isfinite(v) || v < 0.0 || (v == 0.0 && !zero_allowed)) {
+                std::ostringstream why;
+                why << o->results << ":" << paths::kMaterial << "@" << key << " is " << v
+                    << ", not a "
+                    << (zero_allowed ? "finite number >= 0" : "positive finite number");
+                throw InputError(why.str());
+              }
+              return v;
+            };
+            const double k = material("k", false);
+            const double gamma = material("gamma", true);
+            const double density = material("density", false);
+            const double dt = material("dt", false);
             std::ostringstream title;
             title << std::setprecision(17) << "rendulic state " << group << " of " << o->results
                   << " (N = " << p.size() << ", nu = " << p.volume_fraction() << ", k = " << k

@@ -164,6 +164,12 @@ CalibrationData load_calibration_data(const std::filesystem::path& file,
     s.eps_dev = r.has_attr(g, "eps_dev") ? r.attr_double(g, "eps_dev") : 0.0;
     if (!s.stress.allFinite() || !s.fabric.allFinite())
       throw InputError(name + ": state '" + l + "' has non-finite stress or fabric");
+    // The laws' density terms read them: NaN or 1e300 changed the fit without a word.
+    if (!(s.volume_fraction >= 0.0 && s.volume_fraction < 1.0))
+      throw InputError(name + ":" + g + "@volume_fraction is " + std::to_string(s.volume_fraction) +
+                       ", outside [0, 1)");
+    if (!std::isfinite(s.eps_dev))
+      throw InputError(name + ":" + g + "@eps_dev is not a finite number");
     for (const auto& e : r.children(paths::envelopes(g))) {
       // An envelope that could not be measured (e.g. no linear response of an unstable
       // network) carries only an `error` attribute: there is nothing to fit.

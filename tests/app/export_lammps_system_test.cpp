@@ -5,6 +5,7 @@
 // not installed).
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <regex>
@@ -94,6 +95,30 @@ TEST(Export, RefusesAStateThatIsNotThere) {
   EXPECT_EQ(rendulic::testing::error_lines(r.err), 1) << r.err;
   EXPECT_NE(r.err.find("/states/zz"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(dir / "z.data"));
+}
+
+// A stored material that is not one (NaN, negative): export wrote `pair_coeff * * hooke nan`
+// and atoms of density -5 with exit 0.
+TEST(Export, AMaterialValueThatIsNotOneIsRefusedNamingIt) {
+  const fs::path dir = rendulic::testing::fresh_dir("app_export/material");
+  for (const auto& [key, value] :
+       {std::pair<const char*, double>{"k", std::nan("")}, {"density", -5.0}, {"dt", INFINITY}}) {
+    const fs::path results = dir / (std::string(key) + ".h5");
+    fs::copy_file(rendulic::testing::tiny_results(kRoot), results,
+                  fs::copy_options::overwrite_existing);
+    {
+      rendulic::ResultsWriter w = rendulic::ResultsWriter::update(results);
+      w.attr(rendulic::paths::kMaterial, key, value);
+      w.commit();
+    }
+    const auto r = run_rendulic(
+        "export " + results.string() + " --state a --lammps " + (dir / "x.data").string(), false);
+    EXPECT_EQ(r.code, 2) << key;
+    EXPECT_EQ(rendulic::testing::error_lines(r.err), 1) << r.err;
+    EXPECT_NE(r.err.find(results.string() + ":/material@" + key + " is "), std::string::npos)
+        << r.err;
+    EXPECT_FALSE(fs::exists(dir / "x.data"));
+  }
 }
 
 // A disk that refuses bytes (here a file-size limit of 4 KiB, SIGXFSZ ignored as a full disk

@@ -14,6 +14,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -218,6 +219,16 @@ TEST(Faults, DamagedResultsFilesAreOneLineNeverACrash) {
   expect_refusal(
       rendulic("calibrate --no-write --no-path --model isotropic_elastic --results " + typed),
       typed + ": /material @k_star: is not a number");
+  // A state's volume fraction the laws' density terms read: NaN changed the fit, exit 0.
+  const std::string nu = damaged("nu", [](H5::H5File& h) {
+    H5::Group s = h.openGroup("/states/s1");
+    if (s.attrExists("volume_fraction")) s.removeAttr("volume_fraction");
+    const double nan = std::nan("");
+    s.createAttribute("volume_fraction", H5::PredType::NATIVE_DOUBLE, H5::DataSpace(H5S_SCALAR))
+        .write(H5::PredType::NATIVE_DOUBLE, &nan);
+  });
+  expect_refusal(rendulic("calibrate --no-write --model isotropic_elastic --results " + nu),
+                 nu + ":/states/s1@volume_fraction is nan, outside [0, 1)");
   // /states stored as a dataset.
   const std::string states = damaged("states", [](H5::H5File& h) {
     h.unlink("/states");
