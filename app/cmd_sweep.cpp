@@ -78,7 +78,12 @@ Subcommand add_sweep(CLI::App& parent) {
             if (!o->path_rates.empty()) so.path_rates = o->path_rates;
             check_sweep_inputs(scenario, so);
             if (o->threads > 0) omp_set_num_threads(o->threads);
+            // Refused before the sweep, not after it: an empty --out wrote into the current
+            // folder, and a folder named sweep.csv failed once every point had run.
+            if (o->out.empty()) throw InputError("sweep --out: the output folder name is empty");
             const std::filesystem::path dir = o->out;
+            for (const char* name : {"sweep.csv", "sweep_path.csv"})
+              AtomicTextFile::refuse_folder(dir / name, "the sweep's table");
             // Only now, every input checked, does anything touch the disk.
             ResultsWriter out(dir / "sweep.h5");
             if (o->quiet) log::set_level(log::Level::kWarning);

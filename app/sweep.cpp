@@ -583,6 +583,14 @@ bool SweepOptions::IsValid(std::string* why) const {
 void check_sweep_inputs(const Scenario& scenario, const SweepOptions& options) {
   std::string why;
   if (!options.IsValid(&why)) throw InputError(why);
+  // Swept values stand for scenario keys and are held to their ranges: --path-rates 1e308 ran,
+  // 'ok', with an inertial number of inf written to sweep.h5.
+  Scenario held = scenario;
+  for (double rate : options.path_rates) try {
+      held.set("path.rate", rate);
+    } catch (const InputError& e) {
+      throw InputError(std::string("sweep --path-rates: ") + e.what());
+    }
   const Sweeper check(scenario, options, {});  // its constructor checks the scenario's keys
   (void)check;
 }

@@ -146,7 +146,9 @@ TEST(Sweep, BadInputExitsTwoWithOneLineAndWritesNothing) {
   for (const std::string& args :
        {std::string("--factors bogus"), std::string("--target 2"),
         std::string("--set dem.dt_factor=0.5"), std::string("--set probes.amplitudes=[0.002]"),
-        std::string("--set no.such_key=1"), std::string("--threads -1")}) {
+        std::string("--set no.such_key=1"), std::string("--threads -1"),
+        // Beyond path.rate's range: it ran, 'ok', with an inertial number of inf.
+        std::string("--factors path_rate --path-rates 1e308")}) {
     const fs::path out = root / ("o" + std::to_string(k++));
     const auto r = run_rendulic("sweep " + kQuick + " --quick --out " + out.string() + " " + args);
     EXPECT_EQ(r.code, 2) << args << ": " << r.out;
@@ -157,6 +159,18 @@ TEST(Sweep, BadInputExitsTwoWithOneLineAndWritesNothing) {
       run_rendulic("sweep /no/such/scenario.toml --quick --out " + (root / "x").string());
   EXPECT_EQ(r.code, 2) << r.out;
   EXPECT_FALSE(fs::exists(root / "x"));
+  // Outputs that cannot be put in place are refused before the sweep, not after every point
+  // has run; an empty --out wrote into the current folder.
+  fs::create_directories(root / "csv" / "sweep.csv");
+  const auto csv = run_rendulic("sweep " + kQuick + " --quick --factors path_rate --out " +
+                                (root / "csv").string());
+  EXPECT_EQ(csv.code, 2) << csv.out;
+  EXPECT_NE(csv.out.find("sweep.csv: is a folder"), std::string::npos) << csv.out;
+  EXPECT_FALSE(fs::exists(root / "csv" / "sweep.h5"));
+  const auto empty = run_rendulic("sweep " + kQuick + " --quick --out ''");
+  EXPECT_EQ(empty.code, 2) << empty.out;
+  EXPECT_NE(empty.out.find("sweep --out: the output folder name is empty"), std::string::npos)
+      << empty.out;
 }
 
 }  // namespace
