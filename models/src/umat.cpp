@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cctype>
 #include <cmath>
 #include <filesystem>
 #include <limits>
@@ -139,7 +140,7 @@ std::vector<double> numbers(const toml::node& node, const std::string& key,
 UmatSpec load_umat_parameters_toml(const std::string& path) {
   const toml::table tbl = parse(path);
   UmatSpec s;
-  bool have_props = false, have_statev = false;
+  bool have_props = false, have_statev = false, have_names = false;
   const toml::table* bounds = nullptr;
   for (const auto& [k, node] : tbl) {
     const std::string key(k.str());
@@ -149,10 +150,19 @@ UmatSpec load_umat_parameters_toml(const std::string& path) {
     } else if (key == "prop_names") {
       const toml::array* a = node.as_array();
       if (!a) throw InputError(path + ": key 'prop_names' must be an array of strings");
+      have_names = true;
       for (const auto& x : *a) {
         const std::optional<std::string> n = x.value<std::string>();
         if (!n || n->empty())
           throw InputError(path + ": key 'prop_names' must hold non-empty strings");
+        // Names are given back on the command line (--free K,G; --value K=1): a comma, a space
+        // or an '=' split them there, and digits alone read as a PROPS index.
+        const bool letter =
+            std::isalpha(static_cast<unsigned char>(n->front())) || n->front() == '_';
+        if (!letter || !std::all_of(n->begin(), n->end(),
+                                    [](unsigned char c) { return std::isalnum(c) || c == '_'; }))
+          throw InputError(path + ": prop name '" + printable(*n) +
+                           "' must be letters, digits and '_', starting with a letter or '_'");
         s.prop_names.push_back(*n);
       }
     } else if (key == "nstatv") {
@@ -180,7 +190,7 @@ UmatSpec load_umat_parameters_toml(const std::string& path) {
   if (!have_props || s.props.empty())
     throw InputError(path + ": missing key 'props' (the UMAT's PROPS, at least one)");
   const std::size_t n = s.props.size();
-  if (s.prop_names.empty())
+  if (!have_names)  // an empty list given is refused below, as any other count that is wrong
     for (std::size_t i = 0; i < n; ++i) s.prop_names.push_back("prop" + std::to_string(i + 1));
   if (s.prop_names.size() != n)
     throw InputError(path + ": 'prop_names' has " + std::to_string(s.prop_names.size()) +

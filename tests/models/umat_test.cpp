@@ -333,6 +333,20 @@ TEST(Umat, APropNameGivenTwiceIsRefusedNamingIt) {
   std::ofstream(file) << "props = [2e10, 2.5e9, 1.0]\nprop_names = [\"K\", \"G\", \"K\"]\n";
   EXPECT_EQ(input_error([&] { load_umat_parameters_toml(file.string()); }),
             file.string() + ": prop name 'K' given twice");
+  // An empty list fell back to prop1, prop2, ...; a name with a comma was accepted and then
+  // split by --free ("unknown parameter 'bad name'").
+  std::ofstream(file) << "props = [2e10, 2.5e9]\nprop_names = []\n";
+  EXPECT_EQ(input_error([&] { load_umat_parameters_toml(file.string()); }),
+            file.string() + ": 'prop_names' has 0 names for 2 props");
+  for (const char* bad : {"K,G", "bad name", "E=1", "3"}) {
+    std::ofstream(file) << "props = [2e10, 2.5e9]\nprop_names = [\"" << bad << "\", \"G2\"]\n";
+    EXPECT_EQ(input_error([&] { load_umat_parameters_toml(file.string()); }),
+              file.string() + ": prop name '" + bad +
+                  "' must be letters, digits and '_', starting with a letter or '_'");
+  }
+  std::ofstream(file) << "props = [2e10, 2.5e9]\n";  // no names: prop1, prop2
+  EXPECT_EQ(load_umat_parameters_toml(file.string()).prop_names,
+            (std::vector<std::string>{"prop1", "prop2"}));
 }
 
 }  // namespace
