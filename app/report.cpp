@@ -64,7 +64,6 @@ struct StateInfo {
 FitInfo read_fit(const ResultsReader& r, const std::string& g) {
   FitInfo f;
   if (!r.exists(g)) return f;
-  f.present = true;
   if (r.has_attr(g, "shape")) f.shape = r.attr_string(g, "shape");
   if (r.has_attr(g, "center")) {
     const auto c = r.attr_doubles(g, "center");
@@ -76,6 +75,10 @@ FitInfo read_fit(const ResultsReader& r, const std::string& g) {
   }
   if (r.has_attr(g, "inclination_deg")) f.incl = r.attr_double(g, "inclination_deg");
   if (r.has_attr(g, "converged")) f.converged = r.attr_int(g, "converged") != 0;
+  // A group that says the envelope could not be fitted (shape "none", an `error`) holds no
+  // fit: read as one, its NaN axes turned claims C1, C4 and C5 into "does not hold" where
+  // nothing was measured.
+  f.present = !f.shape.empty() && f.shape != "none" && std::isfinite(f.a);
   return f;
 }
 

@@ -287,6 +287,33 @@ TEST(Faults, AnEnvelopeWithoutStressPairsIsNotMeasuredNotReadOutOfBounds) {
   }
 }
 
+// Fits that could not be made (shape "none", an error) were read as fits with NaN axes: C1
+// said "does not hold" with every value n/a. Nothing was measured, and the report says so
+// (here every elastic envelope of every state: the claims fall back from one to the next).
+TEST(Faults, ClaimsOnEnvelopesThatCouldNotBeFittedAreNotMeasured) {
+  const fs::path f = calibratable("unfitted");
+  {
+    H5::H5File h(f.string(), H5F_ACC_RDWR);
+    for (int s = 1; s <= 5; ++s)
+      for (const char* e : {"dynamic_5e-05", "linear_response_5e-05"}) {
+        const std::string g = "/states/s" + std::to_string(s) + "/envelopes/" + e + "/fit_stress";
+        if (H5Lexists(h.getId(), g.c_str(), H5P_DEFAULT) > 0) h.unlink(g);
+        H5::Group fit = h.createGroup(g);
+        const H5::StrType text(H5::PredType::C_S1, H5T_VARIABLE);
+        for (const auto& [name, value] :
+             {std::pair<const char*, std::string>{"shape", "none"}, {"error", "degenerate"}})
+          fit.createAttribute(name, text, H5::DataSpace(H5S_SCALAR)).write(text, value);
+      }
+  }
+  const CliResult r = rendulic("report --no-figures " + f.string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  const std::string md = read_file(f.parent_path() / "report.md");
+  EXPECT_NE(md.find("| C1 | Elastic stress envelope: an ellipse centred at the origin (|centre|/a "
+                    "< 0.05) | - | **not measured** |"),
+            std::string::npos)
+      << md;
+}
+
 TEST(Faults, CalibrateOutToAPathItCannotWriteTouchesNothing) {
   // It used to rewrite results.h5 first and then fail on --out with exit 2.
   const fs::path f = calibratable("out");
