@@ -86,11 +86,16 @@ int run_calibrate(const CalibrateArgs& a) {
   for (const auto& kv : split_commas(a.values)) {
     const auto eq = kv.find('=');
     if (eq == std::string::npos) throw InputError("--value '" + kv + "': expected name=number");
+    const std::string name = kv.substr(0, eq), number = kv.substr(eq + 1);
+    // K=1,K=2 kept the last without a word; std::stod also read 0x10 as sixteen.
+    if (opt.values.count(name)) throw InputError("--value: parameter '" + name + "' given twice");
     try {
+      if (number.find_first_of("xXpP") != std::string::npos)
+        throw std::invalid_argument("hexadecimal");
       std::size_t used = 0;
-      const double v = std::stod(kv.substr(eq + 1), &used);
-      if (used != kv.size() - eq - 1) throw std::invalid_argument("trailing characters");
-      opt.values[kv.substr(0, eq)] = v;
+      const double v = std::stod(number, &used);
+      if (used != number.size()) throw std::invalid_argument("trailing characters");
+      opt.values[name] = v;
     } catch (const std::exception&) {
       throw InputError("--value '" + kv + "': not a number");
     }

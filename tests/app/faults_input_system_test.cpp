@@ -314,6 +314,18 @@ TEST(Faults, ClaimsOnEnvelopesThatCouldNotBeFittedAreNotMeasured) {
       << md;
 }
 
+// calibrate --value: a parameter given twice kept the last value without a word, and 0x10 was
+// read as sixteen (std::stod takes hexadecimal).
+TEST(Faults, CalibrateValuesGivenTwiceOrNotDecimalAreRefused) {
+  const fs::path f = calibratable("values");
+  const std::string calibrate =
+      "calibrate --no-write --no-path --model isotropic_elastic --results " + f.string() +
+      " --value ";
+  expect_refusal(rendulic(calibrate + "K=1e10,K=2e10"), "--value: parameter 'K' given twice");
+  expect_refusal(rendulic(calibrate + "K=0x10"), "--value 'K=0x10': not a number");
+  expect_refusal(rendulic(calibrate + "K=1e10x"), "--value 'K=1e10x': not a number");
+}
+
 TEST(Faults, CalibrateOutToAPathItCannotWriteTouchesNothing) {
   // It used to rewrite results.h5 first and then fail on --out with exit 2.
   const fs::path f = calibratable("out");
