@@ -122,6 +122,10 @@ bool StepOptions::IsValid(std::string* why) const {
   if (!(tolerance > 0.0 && tolerance < 1.0)) return fail("tolerance must be in (0, 1)");
   if (fixed_substeps < 1) return fail("fixed_substeps must be >= 1");
   if (max_substeps < 1) return fail("max_substeps must be >= 1");
+  // The cap holds fixed substeps too: --substeps 2000000000 ran for ever, 36 probes of 2e9.
+  if ((scheme == Scheme::kExplicitEuler || !adaptive) && fixed_substeps > max_substeps)
+    return fail("fixed_substeps (" + std::to_string(fixed_substeps) +
+                ") must not exceed max_substeps (" + std::to_string(max_substeps) + ")");
   if (!(min_fraction > 0.0 && min_fraction < 1.0)) return fail("min_fraction must be in (0, 1)");
   if (!(stress_floor > 0.0)) return fail("stress_floor must be > 0");
   if ((scheme == Scheme::kBogackiShampine || scheme == Scheme::kAuto) && !adaptive)

@@ -34,6 +34,24 @@ double rel_error(const MaterialState& a, const MaterialState& ref) {
   return (a.stress - ref.stress).norm() / ref.stress.norm();
 }
 
+// Fixed substeps are held to the substep cap as adaptive ones are: `envelope --scheme explicit
+// --substeps 2000000000` ran for ever (36 probes of 2e9 substeps each).
+TEST(Driver, FixedSubstepsBeyondTheCapAreInvalid) {
+  StepOptions o;
+  o.scheme = Scheme::kExplicitEuler;
+  o.fixed_substeps = o.max_substeps;
+  std::string why;
+  EXPECT_TRUE(o.IsValid(&why)) << why;
+  o.fixed_substeps = o.max_substeps + 1;
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_EQ(why, "fixed_substeps (100001) must not exceed max_substeps (100000)");
+  o.scheme = Scheme::kModifiedEuler;
+  o.adaptive = false;
+  EXPECT_FALSE(o.IsValid(&why));
+  o.adaptive = true;  // adaptive modified Euler ignores fixed_substeps
+  EXPECT_TRUE(o.IsValid(&why)) << why;
+}
+
 TEST(Driver, LinearLawIsExactInOneExplicitStep) {
   auto law = make_law("isotropic_elastic");
   const MaterialState s = law->make_state(Eigen::Matrix3d::Zero(), Eigen::Matrix3d::Zero(), 0.64);
