@@ -359,6 +359,13 @@ Matrix6d UmatLaw::tangent(const MaterialState& state, const Eigen::Matrix3d& d_e
 }
 
 namespace {
+// The Frobenius norm without overflow of its squares (up to the largest double). Eigen 3.4's
+// stableNorm() of a 3x3 matrix fails its own block assertion in a build with assertions.
+double scaled_norm(const Eigen::Matrix3d& m) {
+  const double s = m.cwiseAbs().maxCoeff();
+  return s > 0.0 && std::isfinite(s) ? s * (m / s).norm() : s;
+}
+
 // A step-doubling increment whose finite stresses overflow its arithmetic (norms of 1e160).
 UmatCall overflowed(int kinc) {
   UmatCall c;
@@ -453,8 +460,8 @@ StepResult UmatLaw::integrate(const UmatState& start, const Eigen::Matrix3d& d_e
       }
       pnewdt = std::min({pnewdt, a.pnewdt, b.pnewdt});
       const Eigen::Matrix3d diff = b.end.point.stress - full.end.point.stress;
-      // stableNorm: finite stresses of 1e160 overflowed norm()'s sum of squares (err NaN).
-      err = diff.stableNorm() / std::max(b.end.point.stress.stableNorm(), o.stress_floor);
+      // Scaled: finite stresses of 1e160 overflowed norm()'s sum of squares (err NaN).
+      err = scaled_norm(diff) / std::max(scaled_norm(b.end.point.stress), o.stress_floor);
       kept = std::move(b);
       // Local extrapolation of the stress (Richardson, for a first-order update: 2 halves - 1
       // full), as modified Euler keeps its second-order value over the Euler one it measures
