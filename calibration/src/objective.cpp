@@ -732,14 +732,19 @@ class UmatKernel final : public KernelBase {
     return law;
   }
 
+  // `state`: the label of the state probed (probe `index`, from 1), or nullptr on the path (step
+  // `index`); named only when the integration fails, every evaluation integrates many times.
   bool integrate(const models::UmatLaw& law, const models::UmatState& y, const Eigen::Matrix3d& de,
-                 const Schedules& sc, models::UmatState* end, const std::string& where) const {
+                 const Schedules& sc, models::UmatState* end, const std::string* state,
+                 std::size_t index) const {
     models::UmatSchedule* s = sc.take();
     // A replay must use the recorded increments: a missing schedule is a failed evaluation.
     if (sc.all && sc.replay && !s) return false;
     const models::StepResult res = law.integrate(y, de, o_->options.step, end, s);
     if (sc.on_limit && res.on_substep_limit) *sc.on_limit = true;
-    if (!res.success) o_->note_failure(where + ": " + res.reason);
+    if (!res.success)
+      o_->note_failure((state ? "state '" + *state + "', probe " : std::string("path, step ")) +
+                       std::to_string(index) + ": " + res.reason);
     return res.success;
   }
 
@@ -755,9 +760,7 @@ class UmatKernel final : public KernelBase {
       Eigen::Matrix3d ds;
       if (integrated) {
         models::UmatState end;
-        if (!integrate(law, us, env.strain_tensor(i), sc, &end,
-                       "state '" + s.label + "', probe " + std::to_string(i + 1)))
-          return false;
+        if (!integrate(law, us, env.strain_tensor(i), sc, &end, &s.label, i + 1)) return false;
         ds = end.point.stress - st.stress;
       } else {
         models::LawRate r;
@@ -777,8 +780,7 @@ class UmatKernel final : public KernelBase {
     states->assign(1, y.point);
     for (std::size_t k = 1; k < d.eps_dev.size(); ++k) {
       models::UmatState next;
-      if (!integrate(law, y, d.increment(k), sc, &next, "path, step " + std::to_string(k)))
-        return false;
+      if (!integrate(law, y, d.increment(k), sc, &next, nullptr, k)) return false;
       y = std::move(next);
       states->push_back(y.point);
     }
