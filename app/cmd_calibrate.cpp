@@ -21,6 +21,7 @@
 #include "rendulic/calibration/calibrate.hpp"
 #include "rendulic/calibration/report.hpp"
 #include "rendulic/calibration/settings.hpp"
+#include "rendulic/core/decimal.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/log.hpp"
 #include "rendulic/core/result_paths.hpp"
@@ -87,18 +88,11 @@ int run_calibrate(const CalibrateArgs& a) {
     const auto eq = kv.find('=');
     if (eq == std::string::npos) throw InputError("--value '" + kv + "': expected name=number");
     const std::string name = kv.substr(0, eq), number = kv.substr(eq + 1);
-    // K=1,K=2 kept the last without a word; std::stod also read 0x10 as sixteen.
+    // K=1,K=2 kept the last without a word.
     if (opt.values.count(name)) throw InputError("--value: parameter '" + name + "' given twice");
-    try {
-      if (number.find_first_of("xXpP") != std::string::npos)
-        throw std::invalid_argument("hexadecimal");
-      std::size_t used = 0;
-      const double v = std::stod(number, &used);
-      if (used != number.size()) throw std::invalid_argument("trailing characters");
-      opt.values[name] = v;
-    } catch (const std::exception&) {
-      throw InputError("--value '" + kv + "': not a number");
-    }
+    const std::optional<double> v = decimal_number(number);
+    if (!v) throw InputError("--value '" + printable(kv) + "': not a finite decimal number");
+    opt.values[name] = *v;
   }
   // Made now, so that an --out that cannot be written is refused before the calibration runs
   // and before results.h5 is touched.

@@ -16,6 +16,7 @@
 #include <numeric>
 #include <sstream>
 
+#include "rendulic/core/decimal.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/result_paths.hpp"
 #include "rendulic/core/results.hpp"
@@ -52,12 +53,9 @@ class Lines {
     throw InputError(file_.string() + ":" + std::to_string(number_) + ": " + printable(why));
   }
   double number(const std::string& text, const char* what) const {
-    errno = 0;
-    char* end = nullptr;
-    const double v = std::strtod(text.c_str(), &end);
-    if (text.empty() || *end != '\0' || errno == ERANGE || !std::isfinite(v))
-      fail(std::string(what) + " '" + text + "' is not a finite number");
-    return v;
+    const std::optional<double> v = decimal_number(text);
+    if (!v) fail(std::string(what) + " '" + text + "' is not a finite number");
+    return *v;
   }
   long long integer(const std::string& text, const char* what) const {
     errno = 0;

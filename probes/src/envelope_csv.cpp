@@ -1,13 +1,12 @@
 // CSV reader of one envelope (docs/fitting.md "The fit command"); see envelope_csv.hpp.
 #include "rendulic/probes/envelope_csv.hpp"
 
-#include <cerrno>
-#include <cmath>
-#include <cstdlib>
 #include <fstream>
+#include <optional>
 #include <sstream>
 #include <vector>
 
+#include "rendulic/core/decimal.hpp"
 #include "rendulic/core/errors.hpp"
 
 namespace rendulic {
@@ -68,14 +67,11 @@ Envelope parse_envelope_csv(const std::string& text, const std::string& name) {
       const std::string& f = fields[static_cast<std::size_t>(col)];
       const std::string& cname = header[static_cast<std::size_t>(col)];
       if (f.empty()) throw InputError(where + ": column '" + cname + "' is empty");
-      char* end = nullptr;
-      errno = 0;
-      const double v = std::strtod(f.c_str(), &end);
-      if (end != f.c_str() + f.size())
-        throw InputError(where + ": column '" + cname + "': '" + f + "' is not a number");
-      if (!std::isfinite(v) || errno == ERANGE)
-        throw InputError(where + ": column '" + cname + "': '" + f + "' is not finite");
-      return v;
+      const std::optional<double> v = decimal_number(f);
+      if (!v)
+        throw InputError(where + ": column '" + cname + "': '" + printable(f) +
+                         "' is not a finite decimal number");
+      return *v;
     };
     env.response.emplace_back(number(ix), number(iy));
     if (it >= 0) env.theta_deg.push_back(number(it));
@@ -87,6 +83,8 @@ Envelope parse_envelope_csv(const std::string& text, const std::string& name) {
 
 Envelope read_envelope_csv(const std::filesystem::path& path) {
   std::error_code ec;
+  if (std::filesystem::is_directory(path, ec))
+    throw InputError(path.string() + ": is a folder, not a CSV file");
   if (!std::filesystem::is_regular_file(path, ec))
     throw InputError(path.string() + ": no such file");
   std::ifstream in(path, std::ios::binary);

@@ -314,16 +314,16 @@ TEST(Faults, ClaimsOnEnvelopesThatCouldNotBeFittedAreNotMeasured) {
       << md;
 }
 
-// calibrate --value: a parameter given twice kept the last value without a word, and 0x10 was
-// read as sixteen (std::stod takes hexadecimal).
+// calibrate --value: a parameter given twice kept the last value without a word, 0x10 was read
+// as sixteen (std::stod takes hexadecimal), and nan was "outside its bounds".
 TEST(Faults, CalibrateValuesGivenTwiceOrNotDecimalAreRefused) {
   const fs::path f = calibratable("values");
   const std::string calibrate =
       "calibrate --no-write --no-path --model isotropic_elastic --results " + f.string() +
       " --value ";
   expect_refusal(rendulic(calibrate + "K=1e10,K=2e10"), "--value: parameter 'K' given twice");
-  expect_refusal(rendulic(calibrate + "K=0x10"), "--value 'K=0x10': not a number");
-  expect_refusal(rendulic(calibrate + "K=1e10x"), "--value 'K=1e10x': not a number");
+  for (const std::string v : {"K=0x10", "K=1e10x", "K=nan", "K=inf", "K=1e400", "K="})
+    expect_refusal(rendulic(calibrate + v), "--value '" + v + "': not a finite decimal number");
 }
 
 TEST(Faults, CalibrateOutToAPathItCannotWriteTouchesNothing) {

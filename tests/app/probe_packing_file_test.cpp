@@ -48,6 +48,32 @@ TEST(PackingFile, DataFileIsReadRelativeToItsBoxOrderedByIdAndWrapped) {
   EXPECT_NEAR(p.mean_radius(), 0.2, 1e-15);
 }
 
+// Another engine may write a velocity that underflowed (a subnormal, strtod's ERANGE): it is a
+// number, read as it is; it used to be refused as "not a finite number".
+TEST(PackingFile, ASubnormalNumberIsReadAsItIs) {
+  const fs::path f = write("subnormal.data",
+                           "LAMMPS data file\n\n1 atoms\n1 atom types\n\n"
+                           "0 1 xlo xhi\n0 1 ylo yhi\n0 1 zlo zhi\n\n"
+                           "Atoms # sphere\n\n1 1 0.2 2000 0.5 0.5 0.5 0 0 0\n\n"
+                           "Velocities\n\n1 1e-320 -4.9e-324 1e-400 0 0 0\n");
+  const Packing p = rendulic::read_packing(rendulic::packing_source(f.string()));
+  ASSERT_EQ(p.size(), 1u);
+  EXPECT_EQ(p.velocities(0, 0), 1e-320);
+  EXPECT_EQ(p.velocities(0, 1), -4.9e-324);
+  EXPECT_EQ(p.velocities(0, 2), 0.0);
+  const fs::path bad = write("hex.data",
+                             "LAMMPS data file\n\n1 atoms\n1 atom types\n\n"
+                             "0 1 xlo xhi\n0 1 ylo yhi\n0 1 zlo zhi\n\n"
+                             "Atoms # sphere\n\n1 1 0x1p-2 2000 0.5 0.5 0.5 0 0 0\n");
+  try {
+    rendulic::read_packing(rendulic::packing_source(bad.string()));
+    ADD_FAILURE() << "a hexadecimal diameter was read";
+  } catch (const rendulic::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("'0x1p-2' is not a finite number"), std::string::npos)
+        << e.what();
+  }
+}
+
 TEST(PackingFile, DumpGivesItsLastSnapshotInAnyCoordinateColumns) {
   const std::string head =
       "ITEM: TIMESTEP\n{T}\nITEM: NUMBER OF ATOMS\n2\n"

@@ -97,6 +97,23 @@ TEST(FitCli, LineAndCircleAndText) {
   EXPECT_NE(rt.out.find("undefined (circle)"), std::string::npos) << rt.out;
 }
 
+// A value below the smallest normal double is a number (strtod's ERANGE for it is not an
+// error): it used to be refused as "not finite". A leading + is a number too.
+TEST(FitCli, ASubnormalValueIsReadAsTheNumberItIs) {
+  const CmdResult ref =
+      run_fit("--in " + write_csv("zero.csv", "x,y\n1,0\n0,1\n-1,0\n0,-1\n0.7,0.7\n").string() +
+              " --json --ignore-theta");
+  const CmdResult sub = run_fit(
+      "--in " +
+      write_csv("subnormal.csv", "x,y\n1,1e-320\n0,1\n-1,-4.9e-324\n0,-1\n+0.7,0.7\n").string() +
+      " --json --ignore-theta");
+  ASSERT_EQ(ref.code, 0) << ref.err;
+  ASSERT_EQ(sub.code, 0) << sub.err;
+  for (const char* key : {"center", "semi_axes"})
+    for (int i = 0; i < 2; ++i)
+      EXPECT_NEAR(json_number(sub.out, key, i), json_number(ref.out, key, i), 1e-12) << key;
+}
+
 void expect_input_error(const std::string& args, const std::string& reason) {
   const CmdResult r = run_fit(args);
   EXPECT_EQ(r.code, 2) << args << "\n" << r.out << r.err;
@@ -112,7 +129,11 @@ TEST(FitCli, BadInputExits2WithAReason) {
   expect_input_error("--in " + write_csv("no_y.csv", "x,z\n1,2\n").string(), "'x' and 'y'");
   expect_input_error("--in " + write_csv("nan.csv", "x,y\n1,2\n3,nan\n4,5\n").string(),
                      "nan.csv:3: column 'y'");
-  expect_input_error("--in " + write_csv("text.csv", "x,y\n1,2\n3,abc\n").string(), "not a number");
+  for (const char* bad : {"abc", "0x10", "1e400", "-inf", "1e5e"})
+    expect_input_error(
+        "--in " + write_csv("text.csv", std::string("x,y\n1,2\n3,") + bad + "\n").string(),
+        std::string("text.csv:3: column 'y': '") + bad + "' is not a finite decimal number");
+  expect_input_error("--in " + dir().string(), "is a folder, not a CSV file");
   expect_input_error("--in " + write_csv("short.csv", "x,y\n1,2\n3\n").string(),
                      "expected 2 fields");
   const fs::path four = write_csv("four.csv", "x,y\n1,0\n0,1\n-1,0\n0,-0.5\n");
