@@ -312,16 +312,20 @@ Subcommand add_bench(CLI::App& parent) {
                 "builds, other); in --json the field phases_us_per_step");
   sub->add_flag("--load", o->load,
                 "also time every figure beside a busy loop (a child process), side by side");
-  sub->add_option("--lammps", o->lammps_dir,
-                  "write the prepared states as LAMMPS data files (nuNN.data) and the timed "
-                  "contact laws as LAMMPS pair lines (nuNN.pair; with --friction also "
-                  "nuNN-friction.pair) into DIR (bench/lammps_compare.sh)");
+  auto* lammps =
+      sub->add_option("--lammps", o->lammps_dir,
+                      "write the prepared states as LAMMPS data files (nuNN.data) and the timed "
+                      "contact laws as LAMMPS pair lines (nuNN.pair; with --friction also "
+                      "nuNN-friction.pair) into DIR (bench/lammps_compare.sh)");
   sub->add_option("--particles", o->n_particles, "number of particles")
       ->capture_default_str()
       ->check(CLI::Range(std::int64_t{100}, std::int64_t{10000000}));
-  sub->add_option("--threads", o->threads, "fixed team sizes to time (the default is added)")
+  sub->add_option("--threads", o->threads,
+                  "fixed team sizes to time, distinct (--threads 1 2 or 1,2; the default is "
+                  "added)")
       ->capture_default_str()
-      ->check(CLI::Range(1, 1024));
+      ->delimiter(',')
+      ->check(CLI::Range(1, kMaxThreads));
   sub->add_option("--seconds", o->seconds,
                   "wall time of each state's first timed run, whose steps every figure of the "
                   "state then times")
@@ -345,8 +349,15 @@ Subcommand add_bench(CLI::App& parent) {
       ->capture_default_str()
       ->check(CLI::Range(1, 100));
   return {
-      sub, [o]() -> int {
+      sub, [o, lammps]() -> int {
         const int all_cores = omp_get_max_threads();
+        // An empty DIR wrote nothing and said nothing; a size given twice was timed twice.
+        if (lammps->count() > 0 && o->lammps_dir.empty())
+          throw InputError("bench --lammps: the folder name is empty");
+        std::vector<std::string> sizes;
+        for (const int t : o->threads) sizes.push_back(std::to_string(t));
+        if (const std::string* again = first_repeat(sizes))
+          throw InputError("bench --threads: " + *again + " given twice");
         if (o->rolling_friction > 0 && !(o->friction > 0))
           throw InputError(
               "bench: --rolling-friction needs --friction > 0 (rotations exist only with "

@@ -7,7 +7,10 @@
 
 #include <map>
 #include <nlohmann/json.hpp>
+#include <set>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "cli_runner.hpp"
 
@@ -93,6 +96,24 @@ TEST(Bench, PhasesSayWhereAStepGoesPerThreadOfTheTeam) {
       run_rendulic("bench --particles 1000 --repetitions 1 --steps 20 --threads 1 --phases", false);
   ASSERT_EQ(text.code, 0) << text.err;
   EXPECT_NE(text.out.find("where a step goes"), std::string::npos) << text.out;
+}
+
+// --threads took "1 2" but refused "1,2", and timed a size given twice twice; --lammps "" wrote
+// no file and said nothing.
+TEST(Bench, TeamSizesAreDistinctTakeCommasAndTheLammpsFolderIsNamed) {
+  std::map<double, std::set<int>> sizes;
+  for (const auto& row : bench_json("--repetitions 1 --steps 5 --threads 2,1"))
+    sizes[row.at("volume_fraction").get<double>()].insert(row.at("threads").get<int>());
+  EXPECT_EQ(sizes.size(), 2u);
+  for (const auto& [nu, s] : sizes) EXPECT_EQ(s, (std::set<int>{0, 1, 2})) << nu;
+  for (const auto& [args, reason] : std::vector<std::pair<std::string, std::string>>{
+           {"--threads 1 1", "bench --threads: 1 given twice"},
+           {"--threads 2,1,2", "bench --threads: 2 given twice"},
+           {"--lammps \"\"", "bench --lammps: the folder name is empty"}}) {
+    const auto r = run_rendulic("bench --particles 200 --steps 1 --repetitions 1 " + args);
+    EXPECT_EQ(r.code, 2) << args << "\n" << r.out;
+    EXPECT_EQ(r.out, "rendulic: " + reason + "\n") << args;
+  }
 }
 
 TEST(Bench, StepsFixesTheSpanOfEveryFigure) {
