@@ -238,6 +238,16 @@ double one_contact_flip(const ResultsReader& r, double nu) {
   const double n = static_cast<double>(r.attr_int(paths::kMaterial, "n_particles"));
   const double w = r.attr_double(paths::kMaterial, "w"),
                rm = r.attr_double(paths::kMaterial, "r_mean");
+  // A damaged file's n_particles = -5 made every flip ratio of C2 negative, without a word.
+  const auto refuse = [&](const char* key, double v, const char* wanted) {
+    std::ostringstream why;
+    why << r.path().string() << ":" << paths::kMaterial << "@" << key << " is " << v << ", not "
+        << wanted;
+    throw InputError(why.str());
+  };
+  if (!(n >= 1.0)) refuse("n_particles", n, "a positive count");
+  if (!(w >= 1.0 && std::isfinite(w))) refuse("w", w, "a finite ratio >= 1");
+  if (!(rm > 0.0 && std::isfinite(rm))) refuse("r_mean", rm, "a positive finite radius");
   const double r_min = 2.0 * rm / (1.0 + w), r_max = w * r_min;
   const double r3 = w > 1.0 ? (std::pow(r_max, 4) - std::pow(r_min, 4)) / (4.0 * (r_max - r_min))
                             : std::pow(rm, 3);

@@ -2,6 +2,7 @@
 // docs/results.md).
 #include "rendulic/core/envelope_io.hpp"
 
+#include <cmath>
 #include <limits>
 #include <optional>
 #include <sstream>
@@ -67,6 +68,14 @@ EnvelopeRecord read_envelope(const ResultsReader& in, const std::string& group) 
   env.name = group.substr(group.find_last_of('/') + 1);
   env.amplitude = in.has_attr(group, "amplitude") ? in.attr_double(group, "amplitude")
                                                   : std::numeric_limits<double>::quiet_NaN();
+  // Readers divide by it and sort envelopes into elastic and plastic by it: 0 made the report
+  // call an envelope elastic and its stiffness inf, without a word. (An envelope that could not
+  // be measured may have no amplitude: NaN, nothing to divide.)
+  if (in.has_attr(group, "amplitude") && !(env.amplitude > 0.0 && std::isfinite(env.amplitude))) {
+    std::ostringstream why;
+    why << where << ": @amplitude is " << env.amplitude << ", not a positive finite strain";
+    throw InputError(why.str());
+  }
   if (in.has_attr(group, "method")) env.method = in.attr_string(group, "method");
   if (in.has_attr(group, "k_star")) env.k_star = in.attr_double(group, "k_star");
   if (in.has_attr(group, "plane")) {

@@ -958,7 +958,11 @@ ResultsReader::ResultsReader(const fs::path& path, const fs::path& shown_as)
   try {
     schema = attr_string("/", "schema");
   } catch (const InputError&) {
-    throw InputError(shown_as.string() + ": not a rendulic results file (no schema attribute)");
+    // An integer @schema was reported as "no schema attribute".
+    throw InputError(
+        shown_as.string() + ": not a rendulic results file (" +
+        (has_attr("/", "schema") ? "its schema attribute is not one text" : "no schema attribute") +
+        ")");
   }
   if (schema != kSchema && schema != kSchemaPrevious)
     throw InputError(shown_as.string() + ": schema '" + shown(schema) + "' is not " + kSchema +

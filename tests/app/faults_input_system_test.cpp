@@ -229,6 +229,28 @@ TEST(Faults, DamagedResultsFilesAreOneLineNeverACrash) {
   });
   expect_refusal(rendulic("calibrate --no-write --model isotropic_elastic --results " + nu),
                  nu + ":/states/s1@volume_fraction is nan, outside [0, 1)");
+  // An envelope's amplitude of 0 made the report call it elastic, with an infinite stiffness;
+  // a particle count of -5 made C2's flip ratios negative: both exit 0, without a word.
+  const std::string amplitude = damaged("amplitude", [](H5::H5File& h) {
+    const double zero = 0.0;
+    h.openGroup("/states/s1/envelopes/dynamic_5e-05")
+        .openAttribute("amplitude")
+        .write(H5::PredType::NATIVE_DOUBLE, &zero);
+  });
+  const std::string zero_amplitude =
+      amplitude +
+      ": envelope /states/s1/envelopes/dynamic_5e-05: @amplitude is 0, not a positive finite "
+      "strain";
+  expect_refusal(rendulic("report --no-figures " + amplitude), zero_amplitude);
+  expect_refusal(
+      rendulic("calibrate --no-write --no-path --model isotropic_elastic --results " + amplitude),
+      zero_amplitude);
+  const std::string count = damaged("count", [](H5::H5File& h) {
+    const std::int64_t n = -5;
+    h.openGroup("/material").openAttribute("n_particles").write(H5::PredType::NATIVE_INT64, &n);
+  });
+  expect_refusal(rendulic("report --no-figures " + count),
+                 count + ":/material@n_particles is -5, not a positive count");
   // /states stored as a dataset.
   const std::string states = damaged("states", [](H5::H5File& h) {
     h.unlink("/states");

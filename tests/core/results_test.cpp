@@ -309,6 +309,20 @@ TEST(Results, RefusesFilesThatAreNotOurs) {
   EXPECT_THROW(ResultsReader(d / "truncated.h5"), InputError);
   const std::string what = input_error([&] { ResultsReader r(d / "text.h5"); });
   EXPECT_NE(what.find("not an HDF5 file"), std::string::npos) << what;
+  // An HDF5 file of another program, and one whose schema is a number (reported as no schema
+  // at all).
+  H5::H5File((d / "other.h5").string(), H5F_ACC_TRUNC).close();
+  EXPECT_EQ(input_error([&] { ResultsReader r(d / "other.h5"); }),
+            (d / "other.h5").string() + ": not a rendulic results file (no schema attribute)");
+  {
+    H5::H5File h((d / "number.h5").string(), H5F_ACC_TRUNC);
+    const int two = 2;
+    h.createAttribute("schema", H5::PredType::NATIVE_INT, H5::DataSpace(H5S_SCALAR))
+        .write(H5::PredType::NATIVE_INT, &two);
+  }
+  EXPECT_EQ(input_error([&] { ResultsReader r(d / "number.h5"); }),
+            (d / "number.h5").string() +
+                ": not a rendulic results file (its schema attribute is not one text)");
 }
 
 // Runs `fn` in a child process (for limits and signals that must not touch the test runner);
