@@ -134,9 +134,6 @@ ceres::CostFunction* distance_cost(const Eigen::Vector2d& p, double t) {
 // Classical 95%-efficiency tuning constants (in units of the noise sigma) for Gaussian data.
 constexpr double kHuberK = 1.345;
 constexpr double kCauchyK = 2.385;
-// Smallest loss scale relative to the normalized data size: exact data (MAD = 0) must not
-// make every point an outlier.
-constexpr double kMinLossScale = 1e-8;
 
 std::unique_ptr<ceres::LossFunction> make_loss(FitLoss loss, double scale) {
   switch (loss) {

@@ -133,6 +133,19 @@ EnvelopeFit select_shape(const Envelope& env, const FitOptions& options) {
   std::string why;
   if (!options.IsValid(&why)) throw InputError(why);
   if (!env.IsValid(&why)) throw InputError(why);
+  // A given scale is in data units: 1e308 went into the fit as inf, 1e-320 failed it and the
+  // message blamed the data.
+  if (options.loss != FitLoss::kNone && options.loss_scale > 0.0) {
+    const double size = fit_detail::normalize(env.response).scale;
+    const double ratio = options.loss_scale / size;
+    if (size > 0.0 && !(ratio >= fit_detail::kMinLossScale && ratio <= fit_detail::kMaxLossScale)) {
+      std::ostringstream msg;
+      msg << "fit: loss_scale " << options.loss_scale << " is " << ratio
+          << " times the data's size " << size << "; give one within " << fit_detail::kMinLossScale
+          << " to " << fit_detail::kMaxLossScale << " times it (0: automatic)";
+      throw InputError(msg.str());
+    }
+  }
   switch (options.shape) {
     case FitShape::kEllipse:
       return fit_ellipse(env, options);

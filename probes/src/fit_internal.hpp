@@ -80,6 +80,12 @@ struct Normalized {
 };
 Normalized normalize(const std::vector<Eigen::Vector2d>& points);
 
+// The range of a robust loss scale relative to the normalized data size. Below it, exact data
+// (MAD = 0) would make every point an outlier; a given scale beyond its inverse discounts no
+// point (that is --loss none), and its square, which the losses take, overflows near 1e154.
+constexpr double kMinLossScale = 1e-8;
+constexpr double kMaxLossScale = 1.0 / kMinLossScale;
+
 // Result of the latent-angle least-squares fit of an ellipse (5 parameters cx, cy, a, b, phi)
 // or a circle (3 parameters cx, cy, r), in normalized units, before folding to a >= b >= 0.
 struct CurveFit {

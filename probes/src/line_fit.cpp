@@ -64,8 +64,9 @@ EnvelopeFit fit_line(const Envelope& env, const FitOptions& options) {
   if (options.loss != FitLoss::kNone) {
     const double k = options.loss == FitLoss::kHuber ? kHuberK : kCauchyK;
     for (int it = 0; it < kIrlsIterations; ++it) {
-      loss_scale = options.loss_scale > 0.0 ? options.loss_scale / nz.scale
-                                            : std::max(1e-8, k * fit_detail::mad_scale(tls.h));
+      loss_scale = options.loss_scale > 0.0
+                       ? options.loss_scale / nz.scale
+                       : std::max(fit_detail::kMinLossScale, k * fit_detail::mad_scale(tls.h));
       for (std::size_t i = 0; i < n; ++i) {
         const double u = std::abs(tls.h[i]) / loss_scale;
         w[i] = options.loss == FitLoss::kHuber ? (u <= 1.0 ? 1.0 : 1.0 / u) : 1.0 / (1.0 + u * u);

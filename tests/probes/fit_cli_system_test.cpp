@@ -143,6 +143,14 @@ TEST(FitCli, BadInputExits2WithAReason) {
       "--in " + write_csv("same.csv", "x,y\n1,1\n1,1\n1,1\n1,1\n1,1\n1,1\n").string(),
       "all points coincide");
   const fs::path ok = write_csv("ok.csv", "x,y\n1,0\n0,1\n-1,0\n0,-1\n0.7,0.7\n");
+  // In data units (this file's size is 1): 1e308 went into the fit as inf, 1e-320 failed it
+  // and the message blamed the data.
+  for (const char* scale : {"1e308", "1e-320", "1e9", "1e-9"})
+    expect_input_error("--in " + ok.string() + " --loss huber --loss-scale " + scale,
+                       "times the data's size 0.978162; give one within 1e-08 to 1e+08");
+  for (const char* scale : {"1e7", "1e-7"})
+    EXPECT_EQ(run_fit("--in " + ok.string() + " --loss cauchy --loss-scale " + scale).code, 0)
+        << scale;
   EXPECT_EQ(run_fit("--in " + ok.string() + " --shape hyperbola").code, 2);
   EXPECT_EQ(run_fit("--in " + ok.string() + " --loss l1").code, 2);
   EXPECT_EQ(run_fit("").code, 2);
