@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "commands.hpp"
+#include "rendulic/calibration/report.hpp"
 #include "rendulic/core/conventions.hpp"
 #include "rendulic/core/envelope_io.hpp"
 #include "rendulic/core/errors.hpp"
@@ -821,12 +822,10 @@ std::string report_markdown(const ResultsReader& r, const std::vector<Claim>& cl
          << " | "
          << (r.has_attr(g, "held_out_misfit") ? fmt(r.attr_double(g, "held_out_misfit")) : "-")
          << " | ";
-      const std::vector<double> p = r.read_vector(g + datasets::kParams);
-      const std::vector<double> se = r.read_vector(g + datasets::kStderr);
-      const std::vector<std::string> names = r.attr_strings(g, "param_names");
-      for (std::size_t i = 0; i < p.size() && i < names.size(); ++i)
-        md << (i ? ", " : "") << names[i] << " = " << fmt(p[i])
-           << (i < se.size() && se[i] > 0 ? " +- " + fmt(se[i]) : "");
+      const calibration::StoredParameters p = calibration::read_parameters(r, g);
+      for (std::size_t i = 0; i < p.names.size(); ++i)
+        md << (i ? ", " : "") << p.names[i] << " = " << fmt(p.values[i])
+           << (i < p.stderr_.size() && p.stderr_[i] > 0 ? " +- " + fmt(p.stderr_[i]) : "");
       md << " |\n";
     }
     md << "\nA standard error of inf marks a parameter the data do not determine; fixed "

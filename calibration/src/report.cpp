@@ -5,6 +5,8 @@
 #include <nlohmann/json.hpp>
 
 #include "rendulic/core/envelope_io.hpp"
+#include "rendulic/core/errors.hpp"
+#include "rendulic/core/option_table.hpp"
 #include "rendulic/core/result_paths.hpp"
 
 namespace rendulic::calibration {
@@ -245,6 +247,24 @@ void write_calibration(ResultsWriter& out, const CalibrationSummary& s) {
       write_envelope(out, paths::envelope(sg, pe.name), record);
     }
   }
+}
+
+StoredParameters read_parameters(const ResultsReader& in, const std::string& group) {
+  StoredParameters p;
+  p.names = in.attr_strings(group, "param_names");
+  p.values = in.read_vector(group + datasets::kParams);
+  if (in.exists(group + datasets::kStderr)) p.stderr_ = in.read_vector(group + datasets::kStderr);
+  const std::string where = in.path().string() + ": " + group;
+  if (const std::string* again = first_repeat(p.names))
+    throw InputError(where + " @param_names: '" + *again + "' given twice");
+  const auto refuse = [&](const char* dataset, std::size_t n) {
+    throw InputError(where + dataset + " holds " + std::to_string(n) + " values for " +
+                     std::to_string(p.names.size()) + " names in @param_names");
+  };
+  if (p.values.size() != p.names.size()) refuse(datasets::kParams, p.values.size());
+  if (!p.stderr_.empty() && p.stderr_.size() != p.names.size())
+    refuse(datasets::kStderr, p.stderr_.size());
+  return p;
 }
 
 bool read_model_score(const ResultsReader& in, const std::string& model, ModelScore* score) {

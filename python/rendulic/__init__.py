@@ -115,6 +115,26 @@ def _envelope(d: dict) -> Envelope:
     return Envelope(**d)
 
 
+class _TextChecked:
+    """The C++ reader, with a name or text of the file that is not UTF-8 raised as InputError
+    naming the file and the bytes (pybind11 raised a bare UnicodeDecodeError converting it)."""
+
+    def __init__(self, reader):
+        self._reader = reader
+        self.path = reader.path
+
+    def __getattr__(self, name):
+        method = getattr(self._reader, name)
+
+        def call(*args):
+            try:
+                return method(*args)
+            except UnicodeDecodeError as e:
+                raise InputError(f"{self.path}: a name or text in the file is not UTF-8: "
+                                 f"{bytes(e.object)!r}") from None
+        return call
+
+
 class Results:
     """A results file (docs/results.md), read through the same reader as the CLI.
 
@@ -124,7 +144,7 @@ class Results:
     """
 
     def __init__(self, path: str | os.PathLike):
-        self._r = _rendulic._Reader(os.fspath(path))
+        self._r = _TextChecked(_rendulic._Reader(os.fspath(path)))
 
     @property
     def file(self) -> str:

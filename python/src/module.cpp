@@ -27,6 +27,7 @@
 
 #include "commands.hpp"
 #include "progress.hpp"
+#include "rendulic/calibration/report.hpp"
 #include "rendulic/calibration/solver.hpp"
 #include "rendulic/core/cleanup.hpp"
 #include "rendulic/core/envelope_io.hpp"
@@ -205,6 +206,13 @@ class Reader {
                        (root.empty() ? "" : " under " + root) +
                        " (states: " + joined(states(root)) + ")");
     py::dict d = datasets_of(in_, g);
+    // A State has a 3x3 stress and fabric: a missing one was a KeyError, one of shape (0, 3) a
+    // State that no tensor formula can take.
+    for (const char* tensor : {datasets::kStress, datasets::kFabric}) {
+      if (!in_.exists(g + tensor))
+        throw InputError(path() + ": state '" + label + "' has no " + (tensor + 1));
+      d[py::str(tensor + 1)] = matrix_of(in_.read_tensor(g + tensor));
+    }
     d["label"] = label;
     d["attributes"] = attrs_of(in_, g);
     return d;
@@ -247,14 +255,11 @@ class Reader {
       py::dict m;
       py::dict a = attrs_of(in_, g);
       m["attributes"] = a;
-      const std::vector<std::string> names = in_.attr_strings(g, "param_names");
-      const std::vector<double> params = in_.read_vector(g + datasets::kParams);
+      const calibration::StoredParameters stored = calibration::read_parameters(in_, g);
       py::dict p, se;
-      for (std::size_t i = 0; i < names.size() && i < params.size(); ++i)
-        p[py::str(names[i])] = params[i];
-      if (in_.exists(g + datasets::kStderr)) {
-        const std::vector<double> s = in_.read_vector(g + datasets::kStderr);
-        for (std::size_t i = 0; i < names.size() && i < s.size(); ++i) se[py::str(names[i])] = s[i];
+      for (std::size_t i = 0; i < stored.names.size(); ++i) {
+        p[py::str(stored.names[i])] = stored.values[i];
+        if (!stored.stderr_.empty()) se[py::str(stored.names[i])] = stored.stderr_[i];
       }
       m["params"] = p;
       m["stderr"] = se;

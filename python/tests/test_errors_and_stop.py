@@ -213,3 +213,54 @@ def test_runs_in_two_threads_take_turns_each_with_its_callback(tiny_toml, tmp_pa
     assert {"prepare", "states", "probes", "calibration"} <= set(seen["b"])
     assert (tmp_path / "b" / "results.h5").exists()
     assert not (tmp_path / "a" / "results.h5").exists()
+
+
+def test_damaged_results_files_are_input_errors(cli_run, tmp_path):
+    # Each was a bare UnicodeDecodeError, a KeyError, a State of shape (0, 3), or parameters
+    # paired by position with the extra ones dropped and a repeated name overwritten.
+    import shutil
+    h5py = pytest.importorskip("h5py")
+
+    def damaged(name, damage):
+        f = tmp_path / f"{name}.h5"
+        shutil.copy(cli_run, f)
+        with h5py.File(f, "r+") as h:
+            damage(h)
+        return rendulic.Results(f)
+
+    def foreign_name(h):
+        h.move("/states/a", b"/states/\xffa")
+    with pytest.raises(rendulic.InputError, match=r"a name or text in the file is not UTF-8: "
+                                                  r"b'\\xffa'"):
+        damaged("name", foreign_name).states()
+
+    def flat_stress(h):
+        del h["/states/a/stress"]
+        h.create_dataset("/states/a/stress", shape=(0, 3), dtype="f8")
+    with pytest.raises(rendulic.InputError, match=r"/states/a/stress.*is not 3x3"):
+        damaged("flat", flat_stress).state("a")
+
+    def no_fabric(h):
+        del h["/states/a/fabric"]
+    with pytest.raises(rendulic.InputError, match=r"state 'a' has no fabric"):
+        damaged("no_fabric", no_fabric).state("a")
+
+    models = [m for m in h5py.File(cli_run, "r")["/calibration"]
+              if "param_names" in h5py.File(cli_run, "r")[f"/calibration/{m}"].attrs]
+    assert models
+    group = f"/calibration/{models[0]}"
+
+    def repeated(h):
+        names = [n.decode() if isinstance(n, bytes) else n for n in h[group].attrs["param_names"]]
+        assert len(names) >= 2
+        h[group].attrs["param_names"] = [names[0]] * len(names)
+    with pytest.raises(rendulic.InputError, match=rf"{group} @param_names: '.*' given twice"):
+        damaged("repeated", repeated).calibration()
+
+    def short(h):
+        params = h[f"{group}/params"][()]
+        del h[f"{group}/params"]
+        h[f"{group}/params"] = params[:-1]
+    with pytest.raises(rendulic.InputError,
+                       match=rf"{group}/params holds \d+ values for \d+ names in @param_names"):
+        damaged("short", short).calibration()
