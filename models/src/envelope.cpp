@@ -3,6 +3,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <sstream>
 
 #include "rendulic/core/errors.hpp"
 #include "rendulic/models/umat.hpp"
@@ -62,6 +64,38 @@ EnvelopeRecord model_envelope(const Law& law, const MaterialState& state,
     env.fabric.push_back(rendulic_pair(d_fabric));
     env.d_stress.push_back(d_stress);
     env.d_fabric.push_back(d_fabric);
+  }
+  // An integrated probe's response is end stress minus start stress: when the increments are
+  // near the rounding of the stress itself, the difference is rounding noise (amplitude 1e-18
+  // on 1e5 Pa gave a lopsided envelope, 1e-300 a zero one, both "within tolerance"). The rate
+  // method takes no difference; a law whose response is zero is exactly zero either way.
+  if (options.method == EnvelopeMethod::kIntegrated) {
+    double largest = 0.0;
+    // Largest entries, not norms: the squares of increments near 1e-300 underflow to zero.
+    for (const auto& ds : env.d_stress) largest = std::max(largest, ds.lpNorm<Eigen::Infinity>());
+    const double rounding =
+        std::numeric_limits<double>::epsilon() * state.stress.lpNorm<Eigen::Infinity>();
+    const double wanted = rounding / options.step.tolerance;
+    bool unresolved = largest < wanted;
+    if (unresolved && largest == 0.0) {
+      const Eigen::Matrix3d de = probe_strain(theta(0), options.amplitude);
+      LawRate r;
+      if (umat) {
+        unresolved =
+            umat->rate_checked(state, de, &r, &why) && r.d_stress.lpNorm<Eigen::Infinity>() > 0.0;
+      } else {
+        unresolved = law.rate(state, de).d_stress.lpNorm<Eigen::Infinity>() > 0.0;
+      }
+    }
+    if (unresolved) {
+      std::ostringstream msg;
+      msg << "amplitude " << options.amplitude << ": the largest stress increment, " << largest
+          << " Pa, is below the rounding of the stress (" << rounding
+          << " Pa) divided by the tolerance " << options.step.tolerance
+          << ": the integrated envelope would be rounding noise; use a larger amplitude or the "
+             "rate method";
+      throw InputError(msg.str());
+    }
   }
   env.attributes["max_error_estimate"] = max_error_estimate;
   env.attributes["within_tolerance"] = within_tolerance ? 1.0 : 0.0;

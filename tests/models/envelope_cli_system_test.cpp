@@ -159,6 +159,35 @@ void expect_input_error(const std::string& args, const std::vector<std::string>&
   for (const auto& m : mentions) EXPECT_NE(r.err.find(m), std::string::npos) << r.err;
 }
 
+// An integrated probe's response is a difference of stresses: at amplitudes whose increments
+// are near the stress's rounding it was noise (1e-18: a lopsided envelope; 1e-300: zero), both
+// exit 0 "within tolerance". The rate method takes no difference and stays exact. (1e-300 gives
+// increments of exactly zero: the law's rate then says whether zero is its answer.)
+TEST(EnvelopeCli, AnIntegratedEnvelopeBelowTheStressRoundingIsRefused) {
+  const std::string state = " --state " + data("isotropic_state.toml");
+  for (const char* amplitude : {"1e-18", "1e-300"}) {
+    const CliRun r =
+        rendulic("envelope --model hypoplastic_wu --amplitude " + std::string(amplitude) + state);
+    EXPECT_EQ(r.code, 2) << amplitude << ": " << r.out << r.err;
+    EXPECT_NE(r.err.find(std::string("amplitude ") + amplitude + ": the largest stress increment"),
+              std::string::npos)
+        << r.err;
+    EXPECT_NE(r.err.find("would be rounding noise; use a larger amplitude or the rate method"),
+              std::string::npos)
+        << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+    EXPECT_TRUE(r.out.empty()) << r.out;
+    const CliRun rate =
+        rendulic("envelope --model hypoplastic_wu --method rate --json --amplitude " +
+                 std::string(amplitude) + state);
+    ASSERT_EQ(rate.code, 0) << rate.err;
+    double largest = 0.0;
+    for (double x : numbers_of(rate.out, "stress")) largest = std::max(largest, std::abs(x));
+    EXPECT_GT(largest, 0.0) << amplitude;
+  }
+  EXPECT_EQ(rendulic("envelope --model hypoplastic_wu --amplitude 1e-9" + state).code, 0);
+}
+
 TEST(EnvelopeCli, BadInputExitsTwoNamingTheCulprit) {
   const std::string state = " --state " + data("isotropic_state.toml") + " --amplitude 5e-5";
   const fs::path unknown = write("unknown.toml", "B = 1e10\nkappa = 3\n");
