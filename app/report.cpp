@@ -274,8 +274,8 @@ constexpr double kTroughFrom = 0.125, kTroughTo = 0.375;  // -eps_dev 0.04-0.12 
 // probes (the same relaxation error acts on both).
 constexpr double kKinematicNoiseFactor = 3.0;
 
-// "Model selection" (docs/calibration.md "Model selection"): the common yardstick per law,
-// the held-out score, the information criterion, how each fit stopped, and the sentence of
+// "Model selection" (docs/calibration.md "Likelihood and model selection"): the common yardstick
+// per law, the held-out score, the information criterion, how each fit stopped, and the sentence of
 // /calibration `selection`; parameters at a bound or undetermined are named.
 std::string model_selection_markdown(const ResultsReader& r) {
   if (!r.has_attr(paths::kCalibration, "selection")) return "";
@@ -360,7 +360,8 @@ std::string model_selection_markdown(const ResultsReader& r) {
         "normalised by its data scale only; the DEM noise row is the data's own roughness on "
         "the same scale. Held-out score: geometric mean of max(misfit, noise) over the held-out "
         "states' blocks. BIC: -2 ln L + k ln N with the block variances profiled "
-        "(docs/calibration.md \"Model selection\"); laws without fabric are compared on the "
+        "(docs/calibration.md \"Likelihood and model selection\"); laws without fabric are "
+        "compared on the "
         "stress blocks only. Rule: "
      << r.attr_string(paths::kCalibration, "selection_rule") << ".\n";
   if (!flags.empty()) {

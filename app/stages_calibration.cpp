@@ -58,7 +58,7 @@ void run_calibration_stage(const Scenario& scenario, ResultsWriter& out, const R
       log::warning("calibration of ", m, " failed: ", e.what());
     }
   }
-  // Which law this scene needs (docs/calibration.md "Model selection").
+  // Which law this scene needs (docs/calibration.md "Likelihood and model selection").
   if (!scores.empty()) {
     const Selection sel = select_model(scores);
     write_selection(out, sel);

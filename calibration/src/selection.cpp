@@ -1,5 +1,5 @@
 // The common yardstick, the likelihood and the selection rule (selection.hpp;
-// docs/calibration.md "One yardstick" and "Model selection").
+// docs/calibration.md "One yardstick" and "Likelihood and model selection").
 #include "rendulic/calibration/selection.hpp"
 
 #include <algorithm>
