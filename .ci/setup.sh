@@ -17,7 +17,7 @@ pkgs=(g++ make cmake pkg-config git ca-certificates
       libnlopt-dev libnlopt-cxx-dev libhdf5-dev hdf5-tools libsuitesparse-dev
       libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev libtomlplusplus-dev nlohmann-json3-dev
       python3 python3-matplotlib python3-h5py python3-numpy clang-format gfortran
-      python3-dev pybind11-dev python3-pytest lammps)
+      python3-dev pybind11-dev python3-pytest lammps locales)
 mpi=${RENDULIC_MPI:-ON}
 if [ "$mpi" = "ON" ]; then pkgs+=(libopenmpi-dev openmpi-bin); fi
 

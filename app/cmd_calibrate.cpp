@@ -91,7 +91,7 @@ int run_calibrate(const CalibrateArgs& a) {
     // K=1,K=2 kept the last without a word.
     if (opt.values.count(name)) throw InputError("--value: parameter '" + name + "' given twice");
     const std::optional<double> v = decimal_number(number);
-    if (!v) throw InputError("--value '" + printable(kv) + "': not a finite decimal number");
+    if (!v) throw InputError("--value '" + printable(kv) + "': " + not_a_decimal_number(number));
     opt.values[name] = *v;
   }
   // Made now, so that an --out that cannot be written is refused before the calibration runs

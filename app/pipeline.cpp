@@ -4,7 +4,6 @@
 
 #include <algorithm>
 #include <chrono>
-#include <cstdio>
 #include <functional>
 #include <string>
 #include <vector>
@@ -12,6 +11,7 @@
 #include "packing_system.hpp"
 #include "progress.hpp"
 #include "rendulic/calibration/settings.hpp"
+#include "rendulic/core/decimal.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/log.hpp"
 #include "rendulic/core/result_paths.hpp"
@@ -126,10 +126,7 @@ void check_friction(const Scenario& scenario) {
   if (asked.empty()) return;
   std::string list;
   for (const std::string& a : asked) list += (list.empty() ? "" : "; ") + a;
-  char mu_text[32];
-  std::snprintf(mu_text, sizeof mu_text, "%g", mu);
-  throw InputError(std::string("dem.friction = ") + mu_text + " (" +
-                   scenario.origin("dem.friction") +
+  throw InputError("dem.friction = " + decimal_g(mu) + " (" + scenario.origin("dem.friction") +
                    "): the energy minimisation models frictionless contacts only, but " + list +
                    "; use the dynamic method or dem.friction = 0");
 }

@@ -54,7 +54,7 @@ class Lines {
   }
   double number(const std::string& text, const char* what) const {
     const std::optional<double> v = decimal_number(text);
-    if (!v) fail(std::string(what) + " '" + text + "' is not a finite number");
+    if (!v) fail(std::string(what) + " " + not_a_decimal_number(text));
     return *v;
   }
   long long integer(const std::string& text, const char* what) const {

@@ -21,6 +21,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "rendulic/core/decimal.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/option_table.hpp"
 #include "rendulic/core/result_paths.hpp"
@@ -92,28 +93,25 @@ const char* node_type_name(const toml::node& n) {
   return "date/time";
 }
 
-// Shortest round-trip text of a double that TOML reads back as a float.
-std::string format_double(double v) {
-  if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
-  char buf[40];
-  for (int prec = 6; prec <= 17; ++prec) {
-    std::snprintf(buf, sizeof buf, "%.*g", prec, v);
-    if (std::strtod(buf, nullptr) == v) break;
-  }
-  std::string s = buf;
+}  // namespace
+
+std::string toml_number(double v) {
+  std::string s = decimal_text(v);
   if (s.find_first_of(".eEn") == std::string::npos) s += ".0";
   return s;
 }
+
+namespace {
 
 std::string format_value(const ScenarioValue& v) {
   struct Visitor {
     std::string operator()(bool b) const { return b ? "true" : "false"; }
     std::string operator()(std::int64_t i) const { return std::to_string(i); }
-    std::string operator()(double d) const { return format_double(d); }
+    std::string operator()(double d) const { return toml_number(d); }
     std::string operator()(const std::string& s) const { return toml_quoted(s); }
     std::string operator()(const std::vector<double>& xs) const {
       std::string out = "[";
-      for (std::size_t i = 0; i < xs.size(); ++i) out += (i ? ", " : "") + format_double(xs[i]);
+      for (std::size_t i = 0; i < xs.size(); ++i) out += (i ? ", " : "") + toml_number(xs[i]);
       return out + "]";
     }
     std::string operator()(const std::vector<std::string>& xs) const {
@@ -139,7 +137,7 @@ std::string format_range(const KeySpec& s) {
   std::string out;
   out += lo ? (s.min_open ? "(" : "[") : "(";
   auto num = [&](double x) {
-    return s.type == KeyType::kInt ? std::to_string(static_cast<long long>(x)) : format_double(x);
+    return s.type == KeyType::kInt ? std::to_string(static_cast<long long>(x)) : toml_number(x);
   };
   out += lo ? num(s.min) : std::string("-inf");
   out += ", ";
@@ -152,10 +150,10 @@ namespace {
 
 // Range check of one number; returns the reason or "".
 std::string check_number(const KeySpec& s, double x) {
-  if (!std::isfinite(x)) return "must be a finite number, got " + format_double(x);
+  if (!std::isfinite(x)) return "must be a finite number, got " + toml_number(x);
   const bool below = s.min_open ? !(x > s.min) : x < s.min;
   const bool above = s.max_open ? !(x < s.max) : x > s.max;
-  if (below || above) return "value " + format_double(x) + " is out of range " + format_range(s);
+  if (below || above) return "value " + toml_number(x) + " is out of range " + format_range(s);
   return "";
 }
 
@@ -232,9 +230,9 @@ std::string validate(const KeySpec& s, const ScenarioValue& v) {
         for (std::size_t i = 0; i < xs.size(); ++i)
           for (std::size_t j = 0; j < i; ++j)
             if (paths::group_number(xs[j]) == paths::group_number(xs[i]))
-              return "value " + format_double(xs[i]) + " given twice" +
+              return "value " + toml_number(xs[i]) + " given twice" +
                      (xs[j] == xs[i] ? std::string()
-                                     : " (as " + format_double(xs[j]) +
+                                     : " (as " + toml_number(xs[j]) +
                                            ": entries are told apart by 6 significant digits, "
                                            "the names of their groups)");
       return "";

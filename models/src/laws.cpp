@@ -1,9 +1,9 @@
 // Parameter tables (names, units, defaults, bounds) of the four laws, the Law base methods and
 // the registry (law.hpp; defaults and sources are discussed in docs/models.md).
 #include <cmath>
-#include <cstdio>
 #include <limits>
 
+#include "rendulic/core/decimal.hpp"
 #include "rendulic/models/elastic_laws.hpp"
 #include "rendulic/models/elastoplastic_fabric.hpp"
 #include "rendulic/models/hypoplastic_wu.hpp"
@@ -152,11 +152,7 @@ MaterialState Law::make_state(const Eigen::Matrix3d& stress, const Eigen::Matrix
 }
 
 // Numbers in messages: shortest readable form (1e+13, not 10000000000000.000000).
-std::string format_g(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%g", v);
-  return buf;
-}
+std::string format_g(double v) { return decimal_g(v); }
 
 std::vector<std::string> law_names() {
   return {std::string(IsotropicElastic::kName), std::string(AnisotropicElastic::kName),

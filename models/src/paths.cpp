@@ -1,8 +1,7 @@
 // Isotropic compression and undrained axisymmetric paths through a law (paths.hpp).
 #include "rendulic/models/paths.hpp"
 
-#include <cstdio>
-
+#include "rendulic/core/decimal.hpp"
 #include "rendulic/models/umat.hpp"
 
 namespace rendulic::models {
@@ -59,9 +58,7 @@ std::string volume_fraction_problem(double nu) {
   // A packing cannot be compressed beyond solid (the state files' own range is [0, 1), 0 for a
   // state that gives none): material_point_path(kind="isotropic", end=50) returned 3e21.
   if (nu >= 0.0 && nu < 1.0) return "";
-  char text[32];
-  std::snprintf(text, sizeof text, "%g", nu);
-  return std::string("the volume fraction reached ") + text +
+  return "the volume fraction reached " + decimal_g(nu) +
          ", outside [0, 1): the path strains the packing beyond what it can take";
 }
 

@@ -68,9 +68,7 @@ Envelope parse_envelope_csv(const std::string& text, const std::string& name) {
       const std::string& cname = header[static_cast<std::size_t>(col)];
       if (f.empty()) throw InputError(where + ": column '" + cname + "' is empty");
       const std::optional<double> v = decimal_number(f);
-      if (!v)
-        throw InputError(where + ": column '" + cname + "': '" + printable(f) +
-                         "' is not a finite decimal number");
+      if (!v) throw InputError(where + ": column '" + cname + "': " + not_a_decimal_number(f));
       return *v;
     };
     env.response.emplace_back(number(ix), number(iy));

@@ -35,6 +35,7 @@
 #include "rendulic/core/log.hpp"
 #include "rendulic/core/result_paths.hpp"
 #include "rendulic/core/results.hpp"
+#include "rendulic/core/scenario.hpp"
 #include "rendulic/models/paths.hpp"
 #include "rendulic/probes/envelope.hpp"
 #include "rendulic/probes/envelope_fit.hpp"
@@ -402,17 +403,6 @@ auto long_work(const py::object& callback, bool quiet, Work&& work) {
 }
 
 // ---- inputs -------------------------------------------------------------------------------
-
-// A number as TOML reads it back exactly (nan and inf included, which the readers refuse).
-std::string toml_number(double v) {
-  if (std::isnan(v)) return "nan";
-  if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
-  char buf[40];
-  std::snprintf(buf, sizeof buf, "%.17g", v);
-  std::string s = buf;
-  if (s.find_first_of(".eE") == std::string::npos) s += ".0";
-  return s;
-}
 
 // A dictionary of numbers (law parameters) or of a state's stress, fabric (3x3) and
 // volume_fraction as TOML text, checked afterwards by the same readers as a file.

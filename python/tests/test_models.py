@@ -1,6 +1,10 @@
 """Model envelopes and material-point paths: the CLI's numbers, and closed forms of the linear
 isotropic law (docs/models.md section 1: D = diag(3K, 2G) in the (iso, dev) frame)."""
 import json
+import locale
+import os
+import shutil
+import subprocess
 
 import numpy as np
 import pytest
@@ -44,6 +48,42 @@ def test_model_envelope_equals_cli_envelope(tmp_path):
                                         tmp_path / "p.toml" if params else None,
                                         amplitude=1e-4, directions=12)
         np.testing.assert_array_equal(again["stress"], env["stress"])
+
+
+@pytest.fixture
+def comma_locale(tmp_path_factory):
+    """A locale whose decimal separator is a comma, as a session may set for its figures
+    (docs/python.md "Locales"), compiled from Debian's locale sources (package locales) into a
+    folder of the test's own; restored afterwards."""
+    if not os.path.exists("/usr/share/i18n/locales/de_DE") or not shutil.which("localedef"):
+        pytest.skip("no locale sources (Debian package locales): no locale with a decimal comma")
+    folder = tmp_path_factory.mktemp("locales")
+    subprocess.run(["localedef", "-i", "de_DE", "-f", "UTF-8", str(folder / "de_DE.UTF-8")],
+                   check=True, capture_output=True)
+    before, path = locale.setlocale(locale.LC_ALL), os.environ.get("LOCPATH")
+    os.environ["LOCPATH"] = str(folder)
+    try:
+        locale.setlocale(locale.LC_ALL, "de_DE.UTF-8")
+        assert locale.localeconv()["decimal_point"] == ","
+        yield
+    finally:
+        locale.setlocale(locale.LC_ALL, before)
+        if path is None:
+            os.environ.pop("LOCPATH", None)
+        else:
+            os.environ["LOCPATH"] = path
+
+
+# The parameters and the state reach the library as TOML text: printf wrote "1,2e+06" under
+# such a locale and the call was refused ("state:1: ... saw ','").
+def test_a_decimal_comma_locale_changes_no_number(comma_locale):
+    env = rendulic.model_envelope("isotropic_elastic", STATE, PARAMS, amplitude=1e-4,
+                                  directions=12)
+    locale.setlocale(locale.LC_NUMERIC, "C")
+    ref = rendulic.model_envelope("isotropic_elastic", STATE, PARAMS, amplitude=1e-4,
+                                  directions=12)
+    for key in ("strain", "stress", "fabric"):
+        np.testing.assert_array_equal(env[key], ref[key])
 
 
 def test_linear_envelope_fit_has_the_closed_form_axes():

@@ -345,7 +345,8 @@ TEST(Faults, CalibrateValuesGivenTwiceOrNotDecimalAreRefused) {
       " --value ";
   expect_refusal(rendulic(calibrate + "K=1e10,K=2e10"), "--value: parameter 'K' given twice");
   for (const std::string v : {"K=0x10", "K=1e10x", "K=nan", "K=inf", "K=1e400", "K="})
-    expect_refusal(rendulic(calibrate + v), "--value '" + v + "': not a finite decimal number");
+    expect_refusal(rendulic(calibrate + v),
+                   "--value '" + v + "': '" + v.substr(2) + "' is not a finite decimal number");
 }
 
 TEST(Faults, CalibrateOutToAPathItCannotWriteTouchesNothing) {

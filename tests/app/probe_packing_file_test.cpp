@@ -69,7 +69,8 @@ TEST(PackingFile, ASubnormalNumberIsReadAsItIs) {
     rendulic::read_packing(rendulic::packing_source(bad.string()));
     ADD_FAILURE() << "a hexadecimal diameter was read";
   } catch (const rendulic::InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("'0x1p-2' is not a finite number"), std::string::npos)
+    EXPECT_NE(std::string(e.what()).find("'0x1p-2' is not a finite decimal number"),
+              std::string::npos)
         << e.what();
   }
 }

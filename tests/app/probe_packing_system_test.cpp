@@ -354,7 +354,7 @@ TEST(Probe, BadPackingFilesExitTwoWithOneLine) {
   expect_refused("nan.data",
                  data_file(kBox, "Atoms # sphere",
                            "1 1 0.002 2000 0.001 nan 0.001\n2 1 0.002 2000 0.005 0.005 0.005\n"),
-                 "not a finite number");
+                 "'nan' is not a finite decimal number");
   expect_refused(
       "atomic.data",
       data_file(kBox, "Atoms # atomic", "1 1 0.001 0.001 0.001\n2 1 0.005 0.005 0.005\n"),

@@ -13,11 +13,11 @@
 
 #include <Eigen/Dense>
 #include <cmath>
-#include <cstdio>
-#include <cstdlib>
 #include <numbers>
 #include <optional>
 #include <string>
+
+#include "rendulic/core/decimal.hpp"
 
 namespace rendulic {
 
@@ -130,9 +130,8 @@ inline ProbePlane deviatoric_plane() {
 }
 // Isotropic compression at 0 deg, the deviatoric direction at 90 deg (M a multiple of 4).
 inline ProbePlane meridian_plane(double lode_deg) {
-  char name[48];
-  std::snprintf(name, sizeof name, "meridian_%g", lode_deg);
-  return {name, Eigen::Vector3d::Constant(1.0 / kSqrt3), deviatoric_direction(lode_deg), 0.0};
+  return {"meridian_" + decimal_g(lode_deg), Eigen::Vector3d::Constant(1.0 / kSqrt3),
+          deviatoric_direction(lode_deg), 0.0};
 }
 // The plane of a name of kProbePlaneNames (a meridian's angle as written, e.g. meridian_30);
 // nullopt for any other name.
@@ -142,11 +141,9 @@ inline std::optional<ProbePlane> probe_plane_named(const std::string& name) {
   const std::string prefix = "meridian_";
   if (name.size() <= prefix.size() || name.compare(0, prefix.size(), prefix) != 0)
     return std::nullopt;
-  const char* begin = name.c_str() + prefix.size();
-  char* end = nullptr;
-  const double lode = std::strtod(begin, &end);
-  if (end == begin || *end != '\0' || !(lode >= 0.0 && lode < 180.0)) return std::nullopt;
-  ProbePlane plane = meridian_plane(lode);
+  const std::optional<double> lode = decimal_number(name.substr(prefix.size()));
+  if (!lode || !(*lode >= 0.0 && *lode < 180.0)) return std::nullopt;
+  ProbePlane plane = meridian_plane(*lode);
   if (plane.name != name) return std::nullopt;  // one spelling per plane, so one envelope name
   return plane;
 }

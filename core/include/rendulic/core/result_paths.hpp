@@ -9,9 +9,10 @@
 #pragma once
 
 #include <cstddef>
-#include <cstdio>
 #include <string>
 #include <string_view>
+
+#include "rendulic/core/decimal.hpp"
 
 namespace rendulic {
 
@@ -66,11 +67,7 @@ inline std::string elastic_range(const std::string& state_group) {
 // A number as it appears in a group's name: %g, 6 significant digits. Lists whose entries name
 // groups (probes.amplitudes, pressure.volume_fractions) must differ in this text (KeySpec's
 // distinct).
-inline std::string group_number(double x) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%g", x);
-  return buf;
-}
+inline std::string group_number(double x) { return decimal_g(x); }
 // The name of an envelope: "<method>_<amplitude %g>", e.g. "dynamic_5e-05"; in a probe plane
 // other than the Rendulic one (docs/probes.md "Probe planes") "<method>_<plane>_<amplitude>",
 // e.g. "dynamic_deviatoric_5e-05".

@@ -45,6 +45,9 @@ struct KeySpec {
 // A TOML basic string (quotes included) that parses back to exactly `s`, control characters
 // escaped: for values, and for keys that are not bare (Python's parameter dictionaries).
 std::string toml_quoted(const std::string& s);
+// A TOML float that parses back to exactly `v` (decimal_text, ".0" added to an integer's
+// digits; inf and nan as TOML spells them, which the scenario's checks refuse).
+std::string toml_number(double v);
 
 class ScenarioSchema {
  public:
