@@ -142,7 +142,7 @@ fs::path with_suffix(const fs::path& p, const char* suffix) { return p.string() 
 std::string copy_whole_file(const fs::path& from, const fs::path& to) {
   const int in = ::open(from.c_str(), O_RDONLY | O_CLOEXEC);
   if (in < 0) return std::strerror(errno);
-  const int out = ::open(to.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  const int out = ::open(to.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
   if (out < 0) {
     const int e = errno;
     ::close(in);
@@ -601,6 +601,7 @@ ResultsWriter::ResultsWriter(const fs::path& final_path) : impl_(std::make_uniqu
   detail::quiet_hdf5();
   Impl& m = *impl_;
   m.final_path = link_target(final_path);
+  refuse_read_only(m.final_path, final_path, "the results file");
   m.claim.emplace(m.final_path);
   m.make_folder();
   m.refuse_another_writer(m.sweep_stale());
@@ -619,6 +620,7 @@ ResultsWriter ResultsWriter::update(const fs::path& existing_path) {
   w.impl_ = std::make_unique<Impl>();
   Impl& m = *w.impl_;
   m.final_path = link_target(existing_path);
+  refuse_read_only(m.final_path, existing_path, "the results file");
   m.claim.emplace(m.final_path);
   m.lock.emplace(m.final_path);  // before the copy: it must hold every earlier update
   m.sweep_stale();
@@ -636,6 +638,7 @@ ResultsWriter ResultsWriter::resume(const fs::path& final_path) {
   w.impl_ = std::make_unique<Impl>();
   Impl& m = *w.impl_;
   m.final_path = link_target(final_path);
+  refuse_read_only(m.final_path, final_path, "the results file");
   m.claim.emplace(m.final_path);
   m.make_folder();
   // A killed run's saved copy becomes FINAL.partial here.
@@ -756,6 +759,7 @@ void ResultsWriter::commit() {
   {
     std::optional<FolderLock> rename_lock;
     if (!m.lock) rename_lock.emplace(m.final_path);
+    keep_mode(m.final_path, m.tmp_path);
     fs::rename(m.tmp_path, m.final_path, ec);
   }
   if (ec)

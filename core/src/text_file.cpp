@@ -5,6 +5,7 @@
 #include "rendulic/core/text_file.hpp"
 
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -25,6 +26,22 @@ void AtomicTextFile::refuse_folder(const fs::path& file, const std::string& what
   std::error_code ec;
   if (fs::is_directory(file, ec))
     throw InputError(file.string() + ": is a folder (" + what + " is a file)");
+}
+
+void refuse_read_only(const fs::path& target, const fs::path& shown, const std::string& what) {
+  std::error_code ec;
+  if (fs::exists(fs::symlink_status(target, ec)) && ::access(target.c_str(), W_OK) != 0)
+    throw InputError(shown.string() + ": cannot write " + what + ": " + std::strerror(errno));
+}
+
+void keep_mode(const fs::path& existing, const fs::path& replacement) {
+  struct stat st {};
+  if (::stat(existing.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) return;
+  // Owner only as root, group where this user belongs to it; a refusal keeps this process's,
+  // and the permissions are given whatever the owner became.
+  [[maybe_unused]] const int owned = ::chown(
+      replacement.c_str(), ::geteuid() == 0 ? st.st_uid : static_cast<uid_t>(-1), st.st_gid);
+  [[maybe_unused]] const int moded = ::chmod(replacement.c_str(), st.st_mode & 07777);
 }
 
 fs::path link_target(fs::path p) {
@@ -52,6 +69,7 @@ AtomicTextFile::AtomicTextFile(fs::path file, std::string what)
             abs.starts_with("/dev/") || abs.starts_with("/proc/");
   target_ = direct_ ? final_ : link_target(final_);
   refuse_folder(target_, what_);
+  if (!direct_) refuse_read_only(target_, final_, what_);
   if (direct_) {
     if (::access(target_.c_str(), W_OK) != 0)
       throw InputError(final_.string() + ": cannot write " + what_ + ": " + std::strerror(errno));
@@ -74,7 +92,7 @@ AtomicTextFile::AtomicTextFile(fs::path file, std::string what)
                        " would replace; give another name");
   }
   handle_ = cleanup::remove_on_death(tmp_);
-  const int fd = ::open(tmp_.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  const int fd = ::open(tmp_.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
   if (fd < 0) {
     const int err = errno;
     cleanup::forget(handle_);
@@ -146,6 +164,7 @@ void AtomicTextFile::commit() {
     return;
   }
   if (!flushed_) flush();
+  keep_mode(target_, tmp_);
   std::error_code ec;
   fs::rename(tmp_, target_, ec);
   if (ec) {

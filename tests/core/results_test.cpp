@@ -731,5 +731,60 @@ TEST(Results, AnUnreadableFileIsSaidToBeUnreadable) {
   EXPECT_EQ(WEXITSTATUS(status), 0) << "3: another message, 4: no error, 5: cannot drop root";
 }
 
+// A rename onto a file makes it the temporary's: `fit --results` turned a results file of mode
+// 600 into one of 644, readable by all (docs/usage.md "Results are atomic").
+TEST(Results, AnUpdateKeepsTheFilesPermissions) {
+  const fs::path d = fresh_dir("mode");
+  const fs::path f = small_file(d);
+  for (const fs::perms mode : {fs::perms::owner_read | fs::perms::owner_write,
+                               fs::perms::owner_read | fs::perms::owner_write |
+                                   fs::perms::group_read | fs::perms::group_write}) {
+    fs::permissions(f, mode);
+    ResultsWriter u = ResultsWriter::update(f);
+    u.attr("/", "note", std::string("updated"));
+    u.commit();
+    EXPECT_EQ(fs::status(f).permissions(), mode);
+    fs::permissions(f, mode);
+    ResultsWriter w(f);  // a new file over it
+    w.attr("/", "note", std::string("new"));
+    w.commit();
+    EXPECT_EQ(fs::status(f).permissions(), mode);
+  }
+}
+
+// A file this user may not write (chmod a-w, or another user's) is refused before any work:
+// the rename onto it needed only the folder's permission, and it was replaced without a word.
+// Root writes any file, so the check runs as nobody.
+TEST(Results, AFileThisUserMayNotWriteIsRefusedAndStaysAsItWas) {
+  const fs::path d = fresh_dir("read_only");
+  const fs::path f = small_file(d);
+  fs::permissions(d, fs::perms::all);
+  fs::permissions(f, fs::perms::owner_read | fs::perms::group_read | fs::perms::others_read);
+  const std::string before = [&] {
+    std::ifstream in(f, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  }();
+  const std::string expected = f.string() + ": cannot write the results file: Permission denied";
+  const int status = in_child([&] {
+    if (geteuid() == 0 && setuid(65534) != 0) _exit(5);
+    int refused = 0;
+    for (int kind = 0; kind < 3; ++kind) {
+      try {
+        if (kind == 0) ResultsWriter::update(f);
+        if (kind == 1) ResultsWriter w(f);
+        if (kind == 2) ResultsWriter::resume(f);
+      } catch (const InputError& e) {
+        refused += std::string(e.what()) == expected;
+      }
+    }
+    _exit(refused == 3 ? 0 : 3);
+  });
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 0) << "3: not refused or another message, 5: cannot drop root";
+  std::ifstream in(f, std::ios::binary);
+  EXPECT_TRUE(std::string(std::istreambuf_iterator<char>(in), {}) == before);
+  EXPECT_EQ(count_files(d), 1);
+}
+
 }  // namespace
 }  // namespace rendulic

@@ -137,6 +137,60 @@ TEST(AtomicTextFile, APlaceThatCannotBeWrittenIsRefusedAtOnceNamingIt) {
   }
 }
 
+// The replaced file keeps its permissions (a rename makes it the temporary's: 600 became 644);
+// a new one gets 666 less the umask, as every other program's file (it got 644 whatever the
+// umask said).
+TEST(AtomicTextFile, ReplacingKeepsThePermissionsAndANewFileFollowsTheUmask) {
+  const fs::path d = fresh("mode");
+  const mode_t umask_before = ::umask(002);
+  {
+    rendulic::AtomicTextFile f(d / "a.txt", "the test text");
+    f.stream() << "one";
+    f.commit();
+  }
+  EXPECT_EQ(fs::status(d / "a.txt").permissions(),
+            fs::perms::owner_read | fs::perms::owner_write | fs::perms::group_read |
+                fs::perms::group_write | fs::perms::others_read);
+  ::umask(umask_before);
+  fs::permissions(d / "a.txt", fs::perms::owner_read | fs::perms::owner_write);
+  {
+    rendulic::AtomicTextFile f(d / "a.txt", "the test text");
+    f.stream() << "two";
+    f.commit();
+  }
+  EXPECT_EQ(contents(d / "a.txt"), "two");
+  EXPECT_EQ(fs::status(d / "a.txt").permissions(), fs::perms::owner_read | fs::perms::owner_write);
+}
+
+// A file this user may not write is refused at once, not replaced (as root: run as nobody).
+TEST(AtomicTextFile, AFileThisUserMayNotWriteIsRefusedAtOnce) {
+  const fs::path d = fresh("read_only");
+  { std::ofstream(d / "a.txt") << "kept"; }
+  fs::permissions(d, fs::perms::all);
+  fs::permissions(d / "a.txt", fs::perms::owner_read | fs::perms::others_read);
+  const pid_t child = fork();
+  if (child == 0) {
+    if (geteuid() == 0 && setuid(65534) != 0) _exit(5);
+    try {
+      rendulic::AtomicTextFile f(d / "a.txt", "the test text");
+      f.stream() << "replaced";
+      f.commit();
+    } catch (const rendulic::InputError& e) {
+      _exit(std::string(e.what()) ==
+                    (d / "a.txt").string() + ": cannot write the test text: Permission denied"
+                ? 0
+                : 3);
+    }
+    _exit(4);
+  }
+  int status = 0;
+  waitpid(child, &status, 0);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 0) << "3: another message, 4: replaced, 5: cannot drop root";
+  EXPECT_EQ(contents(d / "a.txt"), "kept");
+  EXPECT_TRUE(only_file_is(d, "a.txt"));
+}
+
 TEST(AtomicTextFile, AnHdf5FileIsNeverReplacedByText) {
   // `rendulic export out/results.h5 --state a --lammps out/results.h5` replaced the run's
   // results by a LAMMPS data file, exit 0.

@@ -19,6 +19,20 @@ namespace rendulic {
 // renaming onto it replace the target, so that the link stays.
 std::filesystem::path link_target(std::filesystem::path p);
 
+// Two rules of every writer that replaces a file by renaming a temporary onto it (this class
+// and ResultsWriter, docs/usage.md "Results are atomic"), since a rename needs only the
+// folder's permission and makes the file the temporary's:
+// - a `target` that exists and that this process may not write (access(W_OK): a user's
+//   chmod a-w; root may write any) is refused before any work, InputError "SHOWN: cannot write
+//   WHAT: reason" (a protected results file was replaced without a word);
+void refuse_read_only(const std::filesystem::path& target, const std::filesystem::path& shown,
+                      const std::string& what);
+// - the `replacement` gets the permissions of `existing` (and its owner and group where this
+//   process may give them) just before the rename: a results file of mode 600 became 644,
+//   readable by all, after `rendulic fit --results`. A new file gets 666 less the umask, as
+//   every other program's.
+void keep_mode(const std::filesystem::path& existing, const std::filesystem::path& replacement);
+
 class AtomicTextFile {
  public:
   // Creates the temporary now, so that a place that cannot be written is refused (InputError,
