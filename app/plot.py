@@ -11,6 +11,7 @@
 # with Debian's python3-matplotlib and python3-h5py.
 import math
 import os
+import stat
 import sys
 import textwrap
 
@@ -80,8 +81,22 @@ def save(fig, out, name, ctx, description=None):
         # Whole or not at all, as every file rendulic writes (docs/usage.md "Results are
         # atomic"): a full disk must not leave a truncated figure under its name.
         tmp = os.path.join(out, f".{name}.{ext}.tmp-{os.getpid()}")
+        # A figure the user may not write is not replaced, and a replaced one keeps its
+        # permissions (owner and group where allowed), as the binary's files (same page).
+        try:
+            before = os.stat(path)
+        except FileNotFoundError:
+            before = None
+        if before is not None and not os.access(path, os.W_OK):
+            raise OSError(f"{path}: cannot write the figure: Permission denied")
         try:
             fig.savefig(tmp, format=ext, dpi=PNG_DPI, bbox_inches=box, metadata=md)
+            if before is not None:
+                try:
+                    os.chown(tmp, before.st_uid if os.geteuid() == 0 else -1, before.st_gid)
+                except OSError:
+                    pass
+                os.chmod(tmp, stat.S_IMODE(before.st_mode))
             os.replace(tmp, path)
         except BaseException:
             try:
