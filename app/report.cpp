@@ -859,6 +859,7 @@ void check_report_destination(const std::filesystem::path& dir, bool with_figure
   namespace fs = std::filesystem;
   std::error_code ec;
   AtomicTextFile::refuse_folder(report_file(dir), kReportWhat);
+  refuse_read_only(link_target(report_file(dir)), report_file(dir), kReportWhat);
   if (with_figures && fs::exists(figures_folder(dir), ec) &&
       !fs::is_directory(figures_folder(dir), ec))
     throw InputError(figures_folder(dir).string() +
