@@ -23,8 +23,6 @@ using rendulic::testing::have_lammps;
 using rendulic::testing::run_command;
 using rendulic::testing::run_rendulic;
 
-const fs::path kRoot = fs::path(RENDULIC_TEST_TMP) / "app_export";
-
 // The LAMMPS input of docs/interop.md "Checking a state in LAMMPS": read the data file, the pair
 // settings `rendulic export` printed, the virial stress after `run 0`, printed in full.
 std::string lammps_input(const std::string& pair_lines) {
@@ -39,7 +37,7 @@ std::string lammps_input(const std::string& pair_lines) {
 }
 
 TEST(Export, DataFileHoldsTheStoredStateExactlyAndLammpsReproducesItsStress) {
-  const fs::path results = rendulic::testing::tiny_results(kRoot);
+  const fs::path results = rendulic::testing::tiny_results();
   const fs::path dir = rendulic::testing::fresh_dir("app_export/state_a");
   const fs::path data = dir / "a.data";
   const auto r =
@@ -87,7 +85,7 @@ TEST(Export, DataFileHoldsTheStoredStateExactlyAndLammpsReproducesItsStress) {
 }
 
 TEST(Export, RefusesAStateThatIsNotThere) {
-  const fs::path results = rendulic::testing::tiny_results(kRoot);
+  const fs::path results = rendulic::testing::tiny_results();
   const fs::path dir = rendulic::testing::fresh_dir("app_export/missing");
   const auto r = run_rendulic(
       "export " + results.string() + " --state zz --lammps " + (dir / "z.data").string(), false);
@@ -104,8 +102,7 @@ TEST(Export, AMaterialValueThatIsNotOneIsRefusedNamingIt) {
   for (const auto& [key, value] :
        {std::pair<const char*, double>{"k", std::nan("")}, {"density", -5.0}, {"dt", INFINITY}}) {
     const fs::path results = dir / (std::string(key) + ".h5");
-    fs::copy_file(rendulic::testing::tiny_results(kRoot), results,
-                  fs::copy_options::overwrite_existing);
+    fs::copy_file(rendulic::testing::tiny_results(), results, fs::copy_options::overwrite_existing);
     {
       rendulic::ResultsWriter w = rendulic::ResultsWriter::update(results);
       w.attr(rendulic::paths::kMaterial, key, value);
@@ -125,7 +122,7 @@ TEST(Export, AMaterialValueThatIsNotOneIsRefusedNamingIt) {
 // sends none): one line naming the file, and an earlier export of the same name left whole.
 // Before AtomicTextFile the data file was written in place and 4 KiB of it stayed.
 TEST(Export, ADiskThatRefusesBytesLeavesTheEarlierDataFileWhole) {
-  const fs::path results = rendulic::testing::tiny_results(kRoot);
+  const fs::path results = rendulic::testing::tiny_results();
   const fs::path dir = rendulic::testing::fresh_dir("app_export/limit");
   const fs::path data = dir / "a.data";
   std::ofstream(data) << "an earlier export\n";

@@ -46,7 +46,7 @@ fs::path fresh_dir(const std::string& name) {
 fs::path tiny_scenario() { return rendulic::testing::tiny_scenario(kRoot); }
 
 // The real results file of the tiny run, made once per build (tiny_run.hpp).
-fs::path base_results() { return rendulic::testing::tiny_results(kRoot); }
+fs::path base_results() { return rendulic::testing::tiny_results(); }
 
 // --- the damaged-file walk -------------------------------------------------------------
 

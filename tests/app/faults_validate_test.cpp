@@ -45,7 +45,7 @@ TEST(FaultsValidate, MinimisationProbesWithoutEquilibriumExitTwoAndKeepTheStages
 
 TEST(FaultsValidate, EveryDamageWithEverySubcommand) {
   const fs::path dir = fs::path(RENDULIC_TEST_TMP) / "app_faults_validate";
-  rendulic::testing::walk_damaged_copies(rendulic::testing::tiny_results(dir),
+  rendulic::testing::walk_damaged_copies(rendulic::testing::tiny_results(),
                                          "app_faults_validate/walk", dir / "walk-outcomes.txt",
                                          rendulic::testing::Coverage::every_command);
 }

@@ -92,7 +92,7 @@ std::string unit_of(const H5::H5File& f, const std::string& path) {
 }
 
 TEST(Units, EveryFloatDatasetOfARunCarriesItsUnit) {
-  const fs::path file = rendulic::testing::tiny_results(kRoot);
+  const fs::path file = rendulic::testing::tiny_results();
   ASSERT_TRUE(fs::exists(file));
   const H5::H5File f(file.string(), H5F_ACC_RDONLY);
   Seen seen;
@@ -120,7 +120,7 @@ TEST(Units, EveryFloatDatasetOfARunCarriesItsUnit) {
 }
 
 TEST(Units, FloatAttributesWithAUnitSayIt) {
-  const rendulic::ResultsReader r(rendulic::testing::tiny_results(kRoot));
+  const rendulic::ResultsReader r(rendulic::testing::tiny_results());
   EXPECT_EQ(r.attr_string("/material", "k_units"), "N/m");
   EXPECT_EQ(r.attr_string("/material", "k_star_units"), "Pa");
   EXPECT_EQ(r.attr_string("/material", "dt_units"), "s");
@@ -129,7 +129,7 @@ TEST(Units, FloatAttributesWithAUnitSayIt) {
 }
 
 TEST(Lists, AreStringArraysAndModelEnvelopesAreStarred) {
-  const fs::path file = rendulic::testing::tiny_results(kRoot);
+  const fs::path file = rendulic::testing::tiny_results();
   const H5::H5File f(file.string(), H5F_ACC_RDONLY);
   const std::string g = "/calibration/isotropic_elastic";
   for (const char* name : {"param_names", "free", "fitted_states", "yardstick_blocks"}) {
@@ -165,7 +165,7 @@ TEST(Lists, AreStringArraysAndModelEnvelopesAreStarred) {
 TEST(Refit, AResultsFileIsFittedAgainInPlace) {
   const fs::path dir = rendulic::testing::fresh_dir("app_output_system/refit");
   const fs::path file = dir / "results.h5";
-  fs::copy_file(rendulic::testing::tiny_results(kRoot), file);
+  fs::copy_file(rendulic::testing::tiny_results(), file);
   const std::string env = "/states/a/envelopes/dynamic_5e-05";  // elastic: an ellipse
   Eigen::MatrixXd pairs_before;
   {

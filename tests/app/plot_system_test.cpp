@@ -54,7 +54,6 @@ fs::path write_file(const fs::path& p, const std::string& text) {
 // point (dynamic probes, their fits, the exact linear response).
 fs::path tiny_results() {
   return rendulic::testing::tiny_results(
-      kRoot,
       "--set run.stages=prepare,isotropic,path,states,probes,linear_response,fits,"
       "calibration");
 }

@@ -39,7 +39,7 @@ namespace paths = rendulic::paths;
 
 const fs::path kRoot = fs::path(RENDULIC_TEST_TMP) / "app_probe";
 
-fs::path tiny() { return rendulic::testing::tiny_results(kRoot); }
+fs::path tiny() { return rendulic::testing::tiny_results(); }
 
 CliResult probe(const std::string& args) {
   return run_rendulic("probe " + args + " --quiet --threads 1", false);
