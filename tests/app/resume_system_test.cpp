@@ -228,13 +228,13 @@ std::string bytes(const fs::path& f) {
 // A batch job requeued after its run had finished ran every stage again. --resume of a whole
 // run of the same scenario, with nothing kept to resume, now runs none and keeps the file; a
 // file of another scenario is still replaced by a plain run.
+// The shared tiny run (tiny_run.hpp) is such a run, resumed with the scenario file it read.
 TEST(Resume, OfAFinishedRunRunsNoStageAndKeepsItsFile) {
-  uninterrupted();
   const fs::path dir = rendulic::testing::fresh_dir("app_resume/finished");
-  fs::copy_file(kRoot / "uninterrupted" / "results.h5", dir / "results.h5");
+  fs::copy_file(rendulic::testing::tiny_results(), dir / "results.h5");
   const std::string before = bytes(dir / "results.h5");
-  const std::string command =
-      "run " + scenario().string() + " --out " + dir.string() + " --resume --threads 1";
+  const std::string command = "run " + rendulic::testing::tiny_run_scenario().string() + " --out " +
+                              dir.string() + " --resume --threads 1";
   const auto same = rendulic::testing::run_rendulic(command, false);
   EXPECT_EQ(same.code, 0) << same.err;
   EXPECT_NE(same.err.find("resume: " + (dir / "results.h5").string() +

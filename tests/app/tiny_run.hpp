@@ -64,15 +64,25 @@ inline std::filesystem::path tiny_scenario(const std::filesystem::path& root) {
   return s;
 }
 
+// The shared tiny run of the extra command-line arguments `args`: its folder in
+// RENDULIC_TEST_TMP/tiny_run, one per `args`, and the scenario file it reads, beside it (the
+// stored scenario names that file: a resumed run must read the same one).
+inline std::filesystem::path tiny_run_dir(const std::string& args = "") {
+  return std::filesystem::path(RENDULIC_TEST_TMP) / "tiny_run" /
+         (args.empty() ? "base" : "args-" + std::to_string(std::hash<std::string>{}(args)));
+}
+inline std::filesystem::path tiny_run_scenario(const std::string& args = "") {
+  const std::filesystem::path dir = tiny_run_dir(args);
+  return dir.parent_path() / (dir.filename().string() + "-scenario") / "tiny.toml";
+}
+
 // The results file of the tiny run with the extra command-line arguments `args` (e.g. --set
-// overrides), in RENDULIC_TEST_TMP/tiny_run, one folder per `args`: made once per build and
-// shared through a lock by every test (each its own process under ctest) that reads it.
+// overrides): made once per build and shared through a lock by every test (each its own
+// process under ctest) that reads it.
 inline std::filesystem::path tiny_results(const std::string& args = "") {
   namespace fs = std::filesystem;
-  const fs::path root = fs::path(RENDULIC_TEST_TMP) / "tiny_run";
-  const std::string key =
-      args.empty() ? "base" : "args-" + std::to_string(std::hash<std::string>{}(args));
-  const fs::path dir = root / key, f = dir / "results.h5";
+  const fs::path dir = tiny_run_dir(args), f = dir / "results.h5", root = dir.parent_path();
+  const std::string key = dir.filename().string();
   fs::create_directories(root);
   const int lock =
       ::open((root / ("." + key + ".lock")).c_str(), O_CREAT | O_RDWR | O_CLOEXEC, 0644);
@@ -80,8 +90,9 @@ inline std::filesystem::path tiny_results(const std::string& args = "") {
   std::error_code ec;
   if (!fs::exists(f) || fs::last_write_time(f, ec) < fs::last_write_time(RENDULIC_EXE, ec)) {
     fs::remove_all(dir);
-    const CliResult r = run_rendulic("run " + tiny_scenario(root / (key + "-scenario")).string() +
-                                     " " + args + " --quiet --threads 1 --out " + dir.string());
+    const fs::path scenario = tiny_run_scenario(args);
+    const CliResult r = run_rendulic("run " + tiny_scenario(scenario.parent_path()).string() + " " +
+                                     args + " --quiet --threads 1 --out " + dir.string());
     EXPECT_EQ(r.code, 0) << r.out;
   }
   flock(lock, LOCK_UN);
