@@ -24,6 +24,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <limits>
 #include <map>
 #include <mutex>
 #include <optional>
@@ -849,6 +850,8 @@ struct ResultsReader::Impl {
       return fn();
     } catch (const H5::Exception& e) {
       fail(object, "cannot be read (" + detail::hdf5_reason(e) + ")");
+    } catch (const std::bad_alloc&) {
+      fail(object, "holds more than this machine's memory can take");
     }
   }
 
@@ -904,12 +907,31 @@ struct ResultsReader::Impl {
       std::vector<hsize_t> d(space.getSimpleExtentNdims());
       space.getSimpleExtentDims(d.data());
       hsize_t n = 1;
-      for (auto x : d) n *= x;
+      for (auto x : d) {
+        if (x != 0 && n > std::numeric_limits<hsize_t>::max() / x)
+          fail(p, "declares more values than can be counted");
+        n *= x;
+      }
+      expect_bytes_for(ds, p, n);
       std::vector<double> data(n);
       if (n) ds.read(data.data(), H5::PredType::NATIVE_DOUBLE);
       if (dims) *dims = d;
       return data;
     });
+  }
+  // A damaged or foreign file may declare more values than it holds (an extent grown over
+  // chunks never written reads as fill values): refused before memory is asked for them. We
+  // write every value, unfiltered; a compressed copy (h5repack) is allowed deflate's ratio
+  // (at most about 1000:1) and then some.
+  void expect_bytes_for(const H5::DataSet& ds, const std::string& p, hsize_t n) const {
+    const hsize_t stored = ds.getStorageSize(), size = ds.getDataType().getSize();
+    const bool filtered = ds.getCreatePlist().getNfilters() > 0;
+    const long double needed = static_cast<long double>(n) * size;
+    const long double room = filtered ? 4096.0L * stored + (1 << 20) : stored;
+    if (needed > room)
+      fail(p, "declares " + std::to_string(n) + " values but holds the bytes of " +
+                  std::to_string(stored / std::max<hsize_t>(size, 1)) +
+                  " (a damaged or unfinished file)");
   }
   void expect_shape(const std::string& p, const std::vector<hsize_t>& d,
                     std::initializer_list<long> tail) const {

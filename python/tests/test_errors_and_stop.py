@@ -240,6 +240,16 @@ def test_damaged_results_files_are_input_errors(cli_run, tmp_path):
     with pytest.raises(rendulic.InputError, match=r"/states/a/stress.*is not 3x3"):
         damaged("flat", flat_stress).state("a")
 
+    # Grown over chunks never written: a MemoryError (the reader asked for 24 TiB).
+    def grown(h):
+        del h["/states/a/positions"]
+        h.create_dataset("/states/a/positions", shape=(2**40, 3), maxshape=(None, 3),
+                         chunks=(64, 3), dtype="f8")
+    with pytest.raises(rendulic.InputError,
+                       match=r"/states/a/positions: declares 3298534883328 values but holds "
+                             r"the bytes of 0 \(a damaged or unfinished file\)"):
+        damaged("grown", grown).state("a")
+
     def no_fabric(h):
         del h["/states/a/fabric"]
     with pytest.raises(rendulic.InputError, match=r"state 'a' has no fabric"):

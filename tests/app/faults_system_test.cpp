@@ -2,7 +2,8 @@
 // every subcommand that reads a results file walked over damaged copies of a real one (every
 // group, dataset and attribute missing, wrongly typed or empty in turn, each with one command:
 // damage_walk.hpp; the walk with every command is in faults_validate_test.cpp), a full disk under a
-// run and under `calibrate`, a late stage that fails, a signal in the middle of a run and in
+// run and under `calibrate`, a dataset declaring more values than the file holds, a late stage
+// that fails, a signal in the middle of a run and in
 // the middle of the figures, stale temporary files of killed runs, the stored scenario
 // replayed. The real file comes from a tiny run (N = 250 at fast rates, about 3 s of CPU),
 // made once per build and shared by the tests through a lock.
@@ -87,6 +88,37 @@ class SmallDisk {
   fs::path dir_;
   bool mounted_ = false;
 };
+
+// A state's positions grown over chunks never written, declaring 2^40 rows (a damaged or
+// unfinished file): `export` and `probe` ended in "internal error: std::bad_alloc", exit 1.
+TEST(FaultsSystem, ADatasetDeclaringMoreValuesThanItHoldsIsOneLine) {
+  const fs::path d = fresh_dir("declared");
+  const fs::path f = d / "results.h5";
+  fs::copy_file(base_results(), f);
+  {
+    H5::H5File h(f.string(), H5F_ACC_RDWR);
+    const std::string p = "/states/a/positions";
+    h.unlink(p);
+    const hsize_t dims[2] = {hsize_t{1} << 40, 3}, max[2] = {H5S_UNLIMITED, 3}, chunk[2] = {64, 3};
+    H5::DSetCreatPropList plist;
+    plist.setChunk(2, chunk);
+    h.createDataSet(p, H5::PredType::NATIVE_DOUBLE, H5::DataSpace(2, dims, max), plist);
+  }
+  const std::string before = read_file(f);
+  for (const std::string& command :
+       {"export " + f.string() + " --state a --lammps " + (d / "a.data").string(),
+        "probe " + f.string() + ":/states/a --out " + (d / "probed").string()}) {
+    const CliResult r = rendulic::testing::run_rendulic(command, false);
+    EXPECT_EQ(r.code, 2) << command << "\n" << r.err;
+    EXPECT_EQ(rendulic::testing::error_lines(r.err), 1) << r.err;
+    EXPECT_NE(r.err.find(f.string() + ": /states/a/positions: declares 3298534883328 values"),
+              std::string::npos)
+        << r.err;
+  }
+  EXPECT_FALSE(fs::exists(d / "a.data"));
+  EXPECT_FALSE(fs::exists(d / "probed" / "results.h5"));
+  EXPECT_EQ(read_file(f), before);
+}
 
 TEST(FaultsSystem, ARunOnAFullDiskFailsInOneLineAndLeavesNoTemporary) {
   const fs::path d = fresh_dir("full_run");

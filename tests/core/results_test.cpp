@@ -388,6 +388,58 @@ TEST(Results, EveryHdf5FailureOfTheReaderIsOneInputErrorNamingFileAndObject) {
   EXPECT_NO_THROW(r.summary());
 }
 
+// A dataset whose extent was grown over chunks never written (a damaged or unfinished file; HDF5
+// reads them as fill values) declared 2^40 values: the reader asked for 8 TiB and the commands
+// ended in "internal error: std::bad_alloc", exit 1. It is refused by what the file holds,
+// while a compressed copy (h5repack's deflate), whose bytes are far fewer than its values, is
+// read as it was written.
+TEST(Results, ADatasetDeclaringMoreValuesThanItHoldsIsRefusedACompressedOneIsRead) {
+  const fs::path d = fresh_dir("declared");
+  const fs::path f = small_file(d);
+  const hsize_t rows = 100000;
+  std::vector<double> values(rows);
+  for (hsize_t i = 0; i < rows; ++i) values[i] = i % 7 == 0 ? 0.25 * static_cast<double>(i) : 0.0;
+  {
+    H5::H5File h(f.string(), H5F_ACC_RDWR);
+    auto chunked = [&](const char* name, std::vector<hsize_t> dims, int deflate) {
+      std::vector<hsize_t> max(dims.size(), H5S_UNLIMITED), chunk(dims);
+      chunk[0] = 64;
+      H5::DSetCreatPropList plist;
+      plist.setChunk(static_cast<int>(chunk.size()), chunk.data());
+      if (deflate) plist.setDeflate(deflate);
+      return h.createDataSet(name, H5::PredType::NATIVE_DOUBLE,
+                             H5::DataSpace(static_cast<int>(dims.size()), dims.data(), max.data()),
+                             plist);
+    };
+    chunked("/path/grown", {hsize_t{1} << 40}, 0);
+    chunked("/path/grown_rows", {hsize_t{1} << 33, 3}, 0);
+    // 64 values written, then the extent grown to a million.
+    H5::DataSet part = chunked("/path/part", {64}, 0);
+    part.write(values.data(), H5::PredType::NATIVE_DOUBLE);
+    const hsize_t million = 1000000;
+    part.extend(&million);
+    chunked("/path/deflated", {rows}, 9).write(values.data(), H5::PredType::NATIVE_DOUBLE);
+  }
+  const ResultsReader r(f);
+  EXPECT_EQ(input_error([&] { r.read_vector("/path/grown"); }),
+            f.string() +
+                ": /path/grown: declares 1099511627776 values but holds the bytes of 0 "
+                "(a damaged or unfinished file)");
+  EXPECT_EQ(input_error([&] { r.read_matrix("/path/grown_rows"); }),
+            f.string() +
+                ": /path/grown_rows: declares 25769803776 values but holds the bytes "
+                "of 0 (a damaged or unfinished file)");
+  EXPECT_EQ(input_error([&] { r.read_vector("/path/part"); }),
+            f.string() +
+                ": /path/part: declares 1000000 values but holds the bytes of 64 (a "
+                "damaged or unfinished file)");
+  // Deflate's ratio: most values are zeros, so the bytes are far fewer than the values'.
+  const H5::DataSet deflated = H5::H5File(f.string(), H5F_ACC_RDONLY).openDataSet("/path/deflated");
+  ASSERT_LT(deflated.getStorageSize(), rows * sizeof(double) / 4);
+  EXPECT_EQ(r.read_vector("/path/deflated"), values);
+  EXPECT_EQ(r.read_vector("/path/time"), (std::vector<double>{1, 2, 3}));
+}
+
 TEST(Results, NamesHdf5CannotHoldAreRefusedBeforeWriting) {
   // A state label "." named the group itself; a NUL cut the name short.
   const fs::path d = fresh_dir("names");
