@@ -374,10 +374,11 @@ Packing read_lammps_dump(const fs::path& file) {
     const int c_v = column({"vx"});
     const bool has_v = c_v >= 0 && column({"vy"}) >= 0 && column({"vz"}) >= 0;
     const auto n = static_cast<std::size_t>(n_atoms);
-    std::vector<long long> ids(n);
-    Eigen::MatrixXd x(static_cast<Eigen::Index>(n), 3), v;
-    std::vector<double> r(n);
-    if (has_v) v.resize(static_cast<Eigen::Index>(n), 3);
+    // Grown line by line: the header's count is not trusted with memory (a damaged count of
+    // 10^12 asked for 40 TB before the first line was read).
+    std::vector<long long> ids;
+    std::vector<Eigen::Vector3d> x, v;
+    std::vector<double> r;
     for (std::size_t k = 0; k < n; ++k) {
       if (!in.next(line))
         in.fail("the snapshot ends after " + std::to_string(k) + " of " + std::to_string(n) +
@@ -386,28 +387,28 @@ Packing read_lammps_dump(const fs::path& file) {
       if (w.size() != cols.size())
         in.fail("a line of " + std::to_string(w.size()) + " columns; ITEM: ATOMS names " +
                 std::to_string(cols.size()));
-      ids[k] = c_id >= 0 ? in.integer(w[static_cast<std::size_t>(c_id)], "atom id")
-                         : static_cast<long long>(k);
-      r[k] = c_r >= 0 ? in.number(w[static_cast<std::size_t>(c_r)], "radius")
-                      : in.number(w[static_cast<std::size_t>(c_d)], "diameter") / 2;
+      ids.push_back(c_id >= 0 ? in.integer(w[static_cast<std::size_t>(c_id)], "atom id")
+                              : static_cast<long long>(k));
+      r.push_back(c_r >= 0 ? in.number(w[static_cast<std::size_t>(c_r)], "radius")
+                           : in.number(w[static_cast<std::size_t>(c_d)], "diameter") / 2);
+      Eigen::Vector3d xk, vk;
       for (int a = 0; a < 3; ++a) {
         double q = in.number(w[static_cast<std::size_t>(c_x[a])], "position");
         q = scaled ? q * p.lengths[a] : q - lo[a];
-        x(static_cast<Eigen::Index>(k), a) = wrap(q, p.lengths[a]);
-        if (has_v)
-          v(static_cast<Eigen::Index>(k), a) =
-              in.number(w[static_cast<std::size_t>(c_v + a)], "velocity");
+        xk[a] = wrap(q, p.lengths[a]);
+        if (has_v) vk[a] = in.number(w[static_cast<std::size_t>(c_v + a)], "velocity");
       }
+      x.push_back(xk);
+      if (has_v) v.push_back(vk);
     }
     const std::vector<std::size_t> order = order_by_id(ids, file);
     p.positions.resize(static_cast<Eigen::Index>(n), 3);
     p.radii.resize(n);
     p.velocities.resize(has_v ? static_cast<Eigen::Index>(n) : 0, 3);
     for (std::size_t k = 0; k < n; ++k) {
-      const auto src = static_cast<Eigen::Index>(order[k]);
-      p.positions.row(static_cast<Eigen::Index>(k)) = x.row(src);
+      p.positions.row(static_cast<Eigen::Index>(k)) = x[order[k]];
       p.radii[k] = r[order[k]];
-      if (has_v) p.velocities.row(static_cast<Eigen::Index>(k)) = v.row(src);
+      if (has_v) p.velocities.row(static_cast<Eigen::Index>(k)) = v[order[k]];
     }
     any = true;
   }

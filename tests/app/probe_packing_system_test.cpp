@@ -337,6 +337,13 @@ TEST(Probe, BadPackingFilesExitTwoWithOneLine) {
       "ITEM: TIMESTEP\n0\nITEM: NUMBER OF ATOMS\n1\nITEM: BOX BOUNDS pp ff pp\n0 1\n0 1\n"
       "0 1\nITEM: ATOMS id radius x y z\n1 0.1 0.5 0.5 0.5\n",
       "periodic on every axis");
+  // A damaged count: the reader asked for memory for 10^12 atoms before reading one (an
+  // internal error, std::bad_alloc, exit 1).
+  expect_refused(
+      "count.dump",
+      "ITEM: TIMESTEP\n0\nITEM: NUMBER OF ATOMS\n1000000000000\nITEM: BOX BOUNDS pp pp pp\n"
+      "0 1\n0 1\n0 1\nITEM: ATOMS id radius x y z\n1 0.1 0.5 0.5 0.5\n",
+      "the snapshot ends after 1 of 1000000000000 atoms");
   expect_refused("degenerate.data",
                  data_file("0 0.01 xlo xhi\n0.01 0.01 ylo yhi\n0 0.01 zlo zhi\n", "Atoms # sphere",
                            "1 1 0.002 2000 0.001 0.001 0.001\n2 1 0.002 2000 0.005 0.005 0.005\n"),
