@@ -4,8 +4,10 @@
 // escapes uncaught: an exception of any type (HDF5's are not std::exception) unwinds, so the
 // destructors remove temporary files, and signals tidy up through cleanup.hpp.
 #include <CLI/CLI.hpp>
+#include <cerrno>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <iostream>
 #include <vector>
 
@@ -13,6 +15,7 @@
 #include "rendulic/calibration/solver.hpp"
 #include "rendulic/core/cleanup.hpp"
 #include "rendulic/core/errors.hpp"
+#include "rendulic/core/log.hpp"
 #include "rendulic/core/version.hpp"
 
 namespace {
@@ -25,10 +28,24 @@ namespace {
   std::fflush(nullptr);
   std::_Exit(code);
 }
+
+// A command's output on stdout that could not all be written (a full disk under `fit --json >
+// fit.json`, /dev/full) was lost with exit 0: the stream's failure is one line and exit 2.
+int with_stdout_written(int code) {
+  errno = 0;  // the flush that fails sets it
+  std::cout.flush();
+  if (std::fflush(stdout) == 0 && !std::ferror(stdout) && !std::cout.bad()) return code;
+  const int err = errno;
+  std::string line = "rendulic: standard output: cannot write";
+  if (err != 0) line.append(": ").append(std::strerror(err));
+  std::cerr << line << "\n";
+  return code == 0 ? rendulic::kExitInput : code;
+}
 }  // namespace
 
 int main(int argc, char** argv) {
   using namespace rendulic;
+  log::keep_standard_streams_open();
   cleanup::install_handlers();
   calibration::quiet_solver_logging();
   CLI::App cli{"rendulic: calibrate constitutive models of granular soils from DEM envelopes"};
@@ -41,18 +58,18 @@ int main(int argc, char** argv) {
   try {
     cli.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
-    return cli.exit(e);
+    return with_stdout_written(cli.exit(e));
   } catch (const CLI::CallForAllHelp& e) {
-    return cli.exit(e);
+    return with_stdout_written(cli.exit(e));
   } catch (const CLI::CallForVersion& e) {
-    return cli.exit(e);
+    return with_stdout_written(cli.exit(e));
   } catch (const CLI::ParseError& e) {
     std::cerr << "rendulic: " << e.what() << " (see rendulic --help)\n";
     return kExitInput;
   }
   try {
     for (const auto& sub : subs)
-      if (sub.app->parsed()) return sub.action();
+      if (sub.app->parsed()) return with_stdout_written(sub.action());
   } catch (const InputError& e) {
     std::cerr << "rendulic: " << printable(e.what()) << "\n";
     fail_with(kExitInput);

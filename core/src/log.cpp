@@ -1,7 +1,11 @@
 // The logging facility of core/log.hpp (docs/usage.md "Progress and messages").
 #include "rendulic/core/log.hpp"
 
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <atomic>
+#include <cerrno>
 #include <cstdio>
 #include <mutex>
 
@@ -61,6 +65,17 @@ void clear_live() {
   std::fputs("\r\033[K", stderr);
   std::fflush(stderr);
   g_live.clear();
+}
+
+void keep_standard_streams_open() {
+  for (int fd = 0; fd <= 2; ++fd) {
+    if (::fcntl(fd, F_GETFD) != -1 || errno != EBADF) continue;
+    const int null = ::open("/dev/null", (fd == 0 ? O_RDONLY : O_WRONLY));
+    if (null >= 0 && null != fd) {  // the lower ones are open, so this is rare
+      ::dup2(null, fd);
+      ::close(null);
+    }
+  }
 }
 
 }  // namespace rendulic::log

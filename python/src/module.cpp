@@ -503,6 +503,7 @@ PYBIND11_MODULE(_rendulic, m) {
   using namespace rendulic;
   using namespace rendulic::python;
   m.doc() = "rendulic's C++ core (docs/python.md); use the package `rendulic`";
+  log::keep_standard_streams_open();  // before any file of ours is opened (log.hpp)
 
   // The library's tidying-up on fatal signals (temporary results files removed, completed
   // stages kept) is wanted, but SIGINT stays Python's: it becomes KeyboardInterrupt, and the

@@ -274,3 +274,21 @@ def test_damaged_results_files_are_input_errors(cli_run, tmp_path):
     with pytest.raises(rendulic.InputError,
                        match=rf"{group}/params holds \d+ values for \d+ names in @param_names"):
         damaged("short", short).calibration()
+
+
+def test_closed_standard_streams_keep_the_results_file_whole(tiny_toml, tmp_path):
+    # A session whose parent closed its stdout and stderr: the next file opened takes their
+    # numbers, and a results file that took one received the messages meant for them.
+    import subprocess
+    import sys
+    out = tmp_path / "out"
+    code = ("import rendulic\n"
+            f"rendulic.run({str(tiny_toml)!r}, {str(out)!r}, threads=1)\n")
+
+    def close_standard_streams():
+        os.close(1)
+        os.close(2)
+    r = subprocess.run([sys.executable, "-c", code], preexec_fn=close_standard_streams)
+    assert r.returncode == 0
+    results = rendulic.Results(out / "results.h5")
+    assert results.calibration()

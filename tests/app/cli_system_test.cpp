@@ -1,6 +1,7 @@
 // End-to-end tests of the `rendulic` executable's foundation behaviour: exit codes,
 // one-line errors naming the culprit, nothing written on bad input, the effective scenario
-// stored in the results file, `inspect` on good and bad files. Runs the real binary.
+// stored in the results file, `inspect` on good and bad files, standard streams that are full
+// or closed. Runs the real binary.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
@@ -13,6 +14,7 @@
 
 #include "cli_runner.hpp"
 #include "rendulic/core/results.hpp"
+#include "tiny_run.hpp"
 
 namespace {
 namespace fs = std::filesystem;
@@ -211,6 +213,35 @@ TEST(Cli, InspectRefusesFilesThatAreNotOurs) {
   EXPECT_NE(r.out.find("not an HDF5 file"), std::string::npos) << r.out;
   EXPECT_EQ(lines(r.out), 1);
   EXPECT_FALSE(fs::exists(d / "report.md"));
+}
+
+// Output that stdout could not take (a full disk under `rendulic keys > keys.md`; /dev/full
+// here) was lost with exit 0.
+TEST(Cli, OutputThatStdoutCannotTakeIsOneLineAndExitTwo) {
+  if (!fs::exists("/dev/full")) GTEST_SKIP() << "no /dev/full";
+  for (const char* args : {"keys", "--version", "run --help"}) {
+    const CmdResult r = rendulic::testing::run_rendulic(std::string(args) + " > /dev/full", false);
+    EXPECT_EQ(r.code, 2) << args;
+    EXPECT_EQ(lines(r.err), 1) << r.err;
+    EXPECT_NE(r.err.find("rendulic: standard output: cannot write"), std::string::npos) << r.err;
+  }
+}
+
+// A run whose parent closed its stdout and stderr (`>&- 2>&-`): the results file took one of
+// their numbers and the calibration's summary was written into it (HDF5 then read "bad object
+// header version number"), exit 0. Closed standard streams are /dev/null now.
+TEST(Cli, ARunWithItsStandardStreamsClosedKeepsItsResultsFileWhole) {
+  const fs::path d = fresh_dir("closed_streams");
+  const fs::path scen = rendulic::testing::tiny_scenario(d);
+  const CmdResult r =
+      rendulic::testing::run_command("(" + std::string(RENDULIC_EXE) + " run " + scen.string() +
+                                     " --threads 1 --out " + (d / "out").string() + " >&- 2>&-)");
+  EXPECT_EQ(r.code, 0) << r.out;
+  EXPECT_EQ(r.out, "");
+  const CmdResult inspect = rendulic("inspect " + (d / "out" / "results.h5").string());
+  EXPECT_EQ(inspect.code, 0) << inspect.out;
+  const rendulic::ResultsReader results(d / "out" / "results.h5");
+  EXPECT_TRUE(results.has_attr("/timings", "calibration"));
 }
 
 TEST(Cli, KeysReferenceMatchesTheDocs) {

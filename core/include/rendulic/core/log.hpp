@@ -58,4 +58,10 @@ void debug(const First& first, const Parts&... parts) {
 void live(std::string_view text);
 void clear_live();
 
+// Opens /dev/null on any of descriptors 0, 1 and 2 that is closed (a parent that closed them:
+// `2>&-`, some batch systems). Called first by the executable and the Python module: the next
+// file opened takes the lowest free number, and a results file that took 2 received the log
+// lines (a run with stdout and stderr closed wrote its messages into results.h5, exit 0).
+void keep_standard_streams_open();
+
 }  // namespace rendulic::log
