@@ -5,19 +5,13 @@
 // values and never sees TOML.
 #include "rendulic/core/scenario.hpp"
 
-#include <fcntl.h>
-#include <sys/stat.h>
 #include <toml++/toml.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <cctype>
-#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <cstring>
-#include <fstream>
 #include <sstream>
 #include <stdexcept>
 
@@ -25,6 +19,7 @@
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/option_table.hpp"
 #include "rendulic/core/result_paths.hpp"
+#include "rendulic/core/text_file.hpp"
 
 namespace rendulic {
 
@@ -470,34 +465,8 @@ Scenario::Scenario(const ScenarioSchema& schema) : schema_(&schema) {
 }
 
 Scenario Scenario::from_file(const std::string& path, const ScenarioSchema& schema) {
-  // Opened without blocking and checked on the open descriptor: a FIFO must not hang the
-  // run, a folder or a device (/dev/zero) is not a scenario, and a file too large to be one
-  // is refused before it is read.
-  const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
-  if (fd < 0) throw InputError(path + ": cannot read scenario file: " + std::strerror(errno));
-  struct FdCloser {
-    int fd;
-    ~FdCloser() { ::close(fd); }
-  } closer{fd};
-  struct stat st {};
-  if (::fstat(fd, &st) != 0)
-    throw InputError(path + ": cannot read scenario file: " + std::strerror(errno));
-  if (S_ISDIR(st.st_mode)) throw InputError(path + ": is a folder, not a scenario file");
-  if (!S_ISREG(st.st_mode))
-    throw InputError(path + ": not a regular file (a scenario is a TOML text file)");
   constexpr std::size_t kMaxBytes = std::size_t{1} << 20;  // scenarios are a few kB
-  std::string text;
-  char buf[65536];
-  for (;;) {
-    const ssize_t n = ::read(fd, buf, sizeof buf);
-    if (n < 0 && errno == EINTR) continue;
-    if (n < 0) throw InputError(path + ": cannot read scenario file: " + std::strerror(errno));
-    if (n == 0) break;
-    text.append(buf, static_cast<std::size_t>(n));
-    if (text.size() > kMaxBytes)
-      throw InputError(path + ": larger than 1 MiB, not a scenario file");
-  }
-  return from_string(text, path, schema);
+  return from_string(read_input_text(path, "scenario file", kMaxBytes), path, schema);
 }
 
 Scenario Scenario::from_string(std::string_view text, const std::string& source_name,

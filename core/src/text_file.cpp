@@ -22,6 +22,35 @@ namespace rendulic {
 
 namespace fs = std::filesystem;
 
+std::string read_input_text(const std::string& path, const std::string& what,
+                            std::size_t max_bytes) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+  if (fd < 0) throw InputError(path + ": cannot read " + what + ": " + std::strerror(errno));
+  struct FdCloser {
+    int fd;
+    ~FdCloser() { ::close(fd); }
+  } closer{fd};
+  struct stat st {};
+  if (::fstat(fd, &st) != 0)
+    throw InputError(path + ": cannot read " + what + ": " + std::strerror(errno));
+  if (S_ISDIR(st.st_mode)) throw InputError(path + ": is a folder, not a " + what);
+  if (!S_ISREG(st.st_mode))
+    throw InputError(path + ": not a regular file (a " + what + " is a text file)");
+  std::string text;
+  char buf[65536];
+  for (;;) {
+    const ssize_t n = ::read(fd, buf, sizeof buf);
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) throw InputError(path + ": cannot read " + what + ": " + std::strerror(errno));
+    if (n == 0) break;
+    text.append(buf, static_cast<std::size_t>(n));
+    if (text.size() > max_bytes)
+      throw InputError(path + ": larger than " + std::to_string(max_bytes >> 20) + " MiB, not a " +
+                       what);
+  }
+  return text;
+}
+
 void AtomicTextFile::refuse_folder(const fs::path& file, const std::string& what) {
   std::error_code ec;
   if (fs::is_directory(file, ec))

@@ -6,19 +6,24 @@
 #include <cmath>
 
 #include "rendulic/core/errors.hpp"
+#include "rendulic/core/text_file.hpp"
+#include "toml_input.hpp"
 
 namespace rendulic::models {
-namespace {
 
-// A file, or (text given) TOML text that `path` names in messages.
-toml::table parse(const std::string& path, const std::string* text = nullptr) {
+toml::table parse_toml_input(const std::string& path, const std::string& what,
+                             const std::string* text) {
+  constexpr std::size_t kMaxBytes = std::size_t{1} << 20;  // a few lines of numbers
+  const std::string read = text ? std::string() : read_input_text(path, what, kMaxBytes);
   try {
-    return text ? toml::parse(*text, path) : toml::parse_file(path);
+    return toml::parse(text ? *text : read, path);
   } catch (const toml::parse_error& e) {
     const auto& where = e.source().begin;
     throw InputError(path + ":" + std::to_string(where.line) + ": " + std::string(e.description()));
   }
 }
+
+namespace {
 
 double number(const toml::node& node, const std::string& key, const std::string& path) {
   const std::optional<double> v = node.value<double>();
@@ -58,7 +63,7 @@ MaterialState load_state_toml(const std::string& path, const Law& law) {
 
 void parse_parameters_toml(const std::string& text, const std::string& path, Law* law,
                            bool from_text) {
-  const toml::table tbl = parse(path, from_text ? &text : nullptr);
+  const toml::table tbl = parse_toml_input(path, "parameter file", from_text ? &text : nullptr);
   std::vector<double> values = law->parameters();
   for (const auto& [k, node] : tbl) {
     const std::string key(k.str());
@@ -83,7 +88,7 @@ void parse_parameters_toml(const std::string& text, const std::string& path, Law
 
 MaterialState parse_state_toml(const std::string& text, const std::string& path, const Law& law,
                                bool from_text) {
-  const toml::table tbl = parse(path, from_text ? &text : nullptr);
+  const toml::table tbl = parse_toml_input(path, "state file", from_text ? &text : nullptr);
   Eigen::Matrix3d stress, fabric = Eigen::Matrix3d::Zero();
   double nu = 0.0;
   bool have_stress = false;

@@ -16,6 +16,7 @@
 
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/option_table.hpp"
+#include "toml_input.hpp"
 
 namespace rendulic::models {
 
@@ -112,15 +113,6 @@ Matrix6d mandel_tangent(const double* ddsdde) {
 
 std::string fmt(double v) { return format_g(v); }
 
-toml::table parse(const std::string& path) {
-  try {
-    return toml::parse_file(path);
-  } catch (const toml::parse_error& e) {
-    throw InputError(path + ":" + std::to_string(e.source().begin.line) + ": " +
-                     std::string(e.description()));
-  }
-}
-
 std::vector<double> numbers(const toml::node& node, const std::string& key,
                             const std::string& path) {
   const toml::array* a = node.as_array();
@@ -138,7 +130,7 @@ std::vector<double> numbers(const toml::node& node, const std::string& key,
 }  // namespace
 
 UmatSpec load_umat_parameters_toml(const std::string& path) {
-  const toml::table tbl = parse(path);
+  const toml::table tbl = parse_toml_input(path, "parameter file");
   UmatSpec s;
   bool have_props = false, have_statev = false, have_names = false;
   const toml::table* bounds = nullptr;

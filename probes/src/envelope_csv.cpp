@@ -1,13 +1,13 @@
 // CSV reader of one envelope (docs/fitting.md "The fit command"); see envelope_csv.hpp.
 #include "rendulic/probes/envelope_csv.hpp"
 
-#include <fstream>
 #include <optional>
 #include <sstream>
 #include <vector>
 
 #include "rendulic/core/decimal.hpp"
 #include "rendulic/core/errors.hpp"
+#include "rendulic/core/text_file.hpp"
 
 namespace rendulic {
 namespace {
@@ -80,16 +80,10 @@ Envelope parse_envelope_csv(const std::string& text, const std::string& name) {
 }
 
 Envelope read_envelope_csv(const std::filesystem::path& path) {
-  std::error_code ec;
-  if (std::filesystem::is_directory(path, ec))
-    throw InputError(path.string() + ": is a folder, not a CSV file");
-  if (!std::filesystem::is_regular_file(path, ec))
-    throw InputError(path.string() + ": no such file");
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path.string() + ": cannot be read");
-  std::ostringstream text;
-  text << in.rdbuf();
-  return parse_envelope_csv(text.str(), path.string());
+  // An envelope of 3600 directions is about half a MiB; 256 MiB leaves room for any other
+  // program's many more rows, and refuses a stray huge file before it fills the memory.
+  constexpr std::size_t kMaxBytes = std::size_t{256} << 20;
+  return parse_envelope_csv(read_input_text(path.string(), "CSV file", kMaxBytes), path.string());
 }
 
 }  // namespace rendulic

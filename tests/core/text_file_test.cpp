@@ -1,3 +1,5 @@
+// read_input_text (core/text_file.hpp): a user's input file read whole, anything else refused in
+// one line without being read or waited on.
 // AtomicTextFile (core/text_file.hpp; docs/usage.md "Results are atomic"): the text reaches the
 // final name whole or not at all. A file-size limit (RLIMIT_FSIZE, with SIGXFSZ ignored) makes
 // the disk refuse bytes as a full one does, without needing a small mount; it is set in a
@@ -42,6 +44,36 @@ bool only_file_is(const fs::path& dir, const std::string& name) {
     ++n;
   }
   return n == 1;
+}
+
+// The law parameter and state files were read with toml++'s parse_file: a FIFO hung `rendulic
+// envelope`, a folder or /dev/zero read as an empty file ("missing key 'stress'").
+TEST(InputText, AFileIsReadWholeAndAnythingElseIsRefusedInOneLine) {
+  const fs::path d = fresh("input");
+  std::ofstream(d / "a.toml") << "K = 1.5e7\n";
+  EXPECT_EQ(rendulic::read_input_text((d / "a.toml").string(), "parameter file", 1 << 20),
+            "K = 1.5e7\n");
+  auto refusal = [](const std::string& path, std::size_t max_bytes = 1 << 20) {
+    try {
+      rendulic::read_input_text(path, "parameter file", max_bytes);
+    } catch (const rendulic::InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("(read)");
+  };
+  EXPECT_EQ(refusal(d.string()), d.string() + ": is a folder, not a parameter file");
+  EXPECT_EQ(refusal("/dev/zero"),
+            "/dev/zero: not a regular file (a parameter file is a text file)");
+  const fs::path fifo = d / "fifo.toml";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  EXPECT_EQ(refusal(fifo.string()),
+            fifo.string() + ": not a regular file (a parameter file is a text file)");
+  EXPECT_EQ(refusal((d / "none.toml").string()),
+            (d / "none.toml").string() + ": cannot read parameter file: No such file or directory");
+  std::ofstream(d / "big.toml") << std::string((1 << 20) + 1, '#');
+  EXPECT_EQ(refusal((d / "big.toml").string()),
+            (d / "big.toml").string() + ": larger than 1 MiB, not a parameter file");
+  EXPECT_EQ(refusal((d / "big.toml").string(), 2 << 20), "(read)");
 }
 
 TEST(AtomicTextFile, CommitPutsTheWholeTextUnderTheFinalName) {

@@ -227,6 +227,12 @@ TEST(EnvelopeCli, BadInputExitsTwoNamingTheCulprit) {
   expect_input_error(
       "envelope --model isotropic_elastic --state /nonexistent/s.toml --amplitude 1e-4",
       {"/nonexistent/s.toml"});
+  // Read as empty files before ("missing key 'stress'"); a FIFO hung the command.
+  expect_input_error("envelope --model isotropic_elastic --amplitude 1e-4 --state " +
+                         fs::path(data("isotropic_state.toml")).parent_path().string(),
+                     {"is a folder, not a state file"});
+  expect_input_error("envelope --model anisotropic_elastic --params /dev/zero" + state,
+                     {"/dev/zero: not a regular file (a parameter file is a text file)"});
   // A state where the law is undefined (hypoplasticity in tension).
   const fs::path tension = write("tension.toml",
                                  "stress = [[-1.0e5, 0.0, 0.0], [0.0, -1.0e5, "

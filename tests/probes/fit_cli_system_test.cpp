@@ -123,7 +123,8 @@ void expect_input_error(const std::string& args, const std::string& reason) {
 }
 
 TEST(FitCli, BadInputExits2WithAReason) {
-  expect_input_error("--in " + (dir() / "missing.csv").string(), "no such file");
+  expect_input_error("--in " + (dir() / "missing.csv").string(),
+                     "missing.csv: cannot read CSV file: No such file or directory");
   expect_input_error("--in " + write_csv("empty.csv", "").string(), "empty file");
   expect_input_error("--in " + write_csv("header_only.csv", "x,y\n").string(), "no data rows");
   expect_input_error("--in " + write_csv("no_y.csv", "x,z\n1,2\n").string(), "'x' and 'y'");

@@ -1,4 +1,6 @@
-// A text output written whole or not at all (docs/usage.md "Results are atomic"): the text goes
+// Text files in and out. In: a user's input file read whole, refused in one line when it is not
+// one (read_input_text). Out: a text output written whole or not at all (docs/usage.md "Results
+// are atomic"): the text goes
 // to a temporary file beside the final one (.NAME.tmp-PID), which commit() renames onto it. A
 // full disk, a file-size limit or a signal leaves the earlier file as it was and no half-written
 // one; the temporary is removed on failure and on death by a signal (core/cleanup.hpp). Used by
@@ -13,6 +15,16 @@
 #include <string>
 
 namespace rendulic {
+
+// The text of a user's input file (a scenario, law parameters, a material state, an envelope
+// CSV), read whole. Opened without blocking and checked on the open descriptor: a FIFO must not
+// hang the command, a folder or a device (/dev/zero) is not such a file, and one larger than
+// `max_bytes` (a whole number of MiB) is refused before it is read. Each refusal is an
+// InputError naming the file and `what` ("scenario file"): "PATH: cannot read WHAT: REASON",
+// "PATH: is a folder, not a WHAT", "PATH: not a regular file (a WHAT is a text file)", "PATH:
+// larger than N MiB, not a WHAT".
+std::string read_input_text(const std::string& path, const std::string& what,
+                            std::size_t max_bytes);
 
 // The file a name stands for: a symbolic link followed to its target (which may not exist yet),
 // at most 40 deep as the kernel does; any other name as it is. Writers that replace a file by
