@@ -4,12 +4,15 @@
 #include "rendulic/models/umat.hpp"
 
 #include <dlfcn.h>
+#include <sys/stat.h>
 #include <toml++/toml.h>
 
 #include <algorithm>
 #include <array>
 #include <cctype>
+#include <cerrno>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <limits>
 #include <mutex>
@@ -37,9 +40,19 @@ using UmatEntry = void (*)(double* stress, double* statev, double* ddsdde, doubl
 class UmatLibrary {
  public:
   explicit UmatLibrary(const std::string& path) {
-    std::error_code ec;
-    if (!std::filesystem::is_regular_file(path, ec))
-      throw InputError("--umat " + path + ": no such file");
+    // Checked before dlopen, which would block on a FIFO and call a folder "cannot read file
+    // data"; the words are read_input_text's (docs/usage.md, the paragraph on text inputs).
+    struct stat st {};
+    if (::stat(path.c_str(), &st) != 0) {
+      std::string m = "--umat " + path;
+      m += errno == ENOENT ? std::string(": no such file")
+                           : ": " + std::string(std::strerror(errno));
+      throw InputError(m);
+    }
+    if (S_ISDIR(st.st_mode))
+      throw InputError("--umat " + path + ": is a folder, not a UMAT library");
+    if (!S_ISREG(st.st_mode))
+      throw InputError("--umat " + path + ": not a regular file (a UMAT library is a .so file)");
     // RTLD_LOCAL: two UMAT libraries in one process keep their own symbols.
     handle_ = ::dlopen(std::filesystem::absolute(path).c_str(), RTLD_NOW | RTLD_LOCAL);
     if (!handle_) {

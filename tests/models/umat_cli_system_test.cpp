@@ -1,8 +1,9 @@
 // `rendulic envelope --model umat --umat PATH.so` run as a user would (docs/umat.md): the JSON
 // envelope of the hypoplastic UMAT equals the built-in law's, both methods; a missing file, a
-// library without a UMAT entry, a UMAT without --umat and a UMAT returning NaN exit 2 with one
-// line that names the culprit.
+// folder, a device or a FIFO in its place, a library without a UMAT entry, a UMAT without --umat
+// and a UMAT returning NaN exit 2 with one line that names the culprit.
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -65,10 +66,15 @@ TEST(UmatCli, BadUmatInputExitsTwoWithOneLine) {
   const std::string base = envelope_args("integrated") + " --model umat --params " + params;
   // NaN once |STRAN + DSTRAN| exceeds 1e-4: the probes of amplitude 2e-4 run into it.
   std::ofstream(d / "nan.toml") << "props = [-101.2, -962.1, -877.7, 1229.2, 0.0, 1e-4]\n";
+  // dlopen would block on a FIFO and call a folder "cannot read file data": each is refused first.
+  ASSERT_EQ(::mkfifo((d / "fifo.so").c_str(), 0600), 0);
   const struct {
     std::string args, culprit;
   } cases[] = {
       {base + " --umat " + (d / "missing.so").string(), "missing.so: no such file"},
+      {base + " --umat " + d.string(), d.string() + ": is a folder, not a UMAT library"},
+      {base + " --umat /dev/zero", "/dev/zero: not a regular file (a UMAT library is a .so file)"},
+      {base + " --umat " + (d / "fifo.so").string(), "fifo.so: not a regular file"},
       {base + " --umat " + lib("no_entry"), "exports no UMAT entry"},
       {envelope_args("rate") + " --model umat --params " + params, "--umat"},
       {envelope_args("rate") + " --model umat --umat " + lib("hypoplastic_wu"), "--params"},
@@ -84,7 +90,7 @@ TEST(UmatCli, BadUmatInputExitsTwoWithOneLine) {
     EXPECT_EQ(error_lines(r.err), 1) << r.err;
     EXPECT_NE(r.err.find(c.culprit), std::string::npos) << r.err;
   }
-  const auto nan = run_rendulic(cases[5].args, false);
+  const auto nan = run_rendulic(cases[8].args, false);
   EXPECT_NE(nan.err.find("KINC = "), std::string::npos) << nan.err;
   EXPECT_NE(nan.err.find("probe theta = "), std::string::npos) << nan.err;
 }
