@@ -8,7 +8,6 @@
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
-#include <sys/file.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -175,23 +174,13 @@ void expect_same(const Contents& a, const Contents& b) {
     if (!a.count(k)) ADD_FAILURE() << k << " only in the resumed run";
 }
 
-// The uninterrupted run, made once per build and shared by the tests (each is its own process
-// under ctest) through a lock, as tiny_run.hpp does.
+// The uninterrupted run, made once per build and shared by the tests (tiny_run.hpp's made_once).
 const Contents& uninterrupted() {
   static const Contents c = [] {
-    const fs::path dir = kRoot / "uninterrupted", f = dir / "results.h5";
-    fs::create_directories(kRoot);
-    const int lock =
-        ::open((kRoot / ".uninterrupted.lock").c_str(), O_CREAT | O_RDWR | O_CLOEXEC, 0644);
-    flock(lock, LOCK_EX);
-    std::error_code ec;
-    if (!fs::exists(f) || fs::last_write_time(f, ec) < fs::last_write_time(RENDULIC_EXE, ec)) {
-      fs::remove_all(dir);
-      EXPECT_EQ(run(dir, ""), 0);
-    }
-    Contents out = contents(f);
-    flock(lock, LOCK_UN);
-    ::close(lock);
+    Contents out;
+    rendulic::testing::made_once(
+        kRoot / "uninterrupted", [](const fs::path& dir) { EXPECT_EQ(run(dir, ""), 0); },
+        [&](const fs::path& f) { out = contents(f); });
     return out;
   }();
   return c;

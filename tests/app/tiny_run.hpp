@@ -76,28 +76,39 @@ inline std::filesystem::path tiny_run_scenario(const std::string& args = "") {
   return dir.parent_path() / (dir.filename().string() + "-scenario") / "tiny.toml";
 }
 
-// The results file of the tiny run with the extra command-line arguments `args` (e.g. --set
-// overrides): made once per build and shared through a lock by every test (each its own
-// process under ctest) that reads it.
-inline std::filesystem::path tiny_results(const std::string& args = "") {
+// Makes `dir`/results.h5 with `make(dir)` once per build (again when the binary is newer than
+// it), under a lock beside `dir`, for every test (each its own process under ctest) that reads
+// it; `read(file)` runs under the same lock. Returns the file.
+inline std::filesystem::path made_once(
+    const std::filesystem::path& dir, const std::function<void(const std::filesystem::path&)>& make,
+    const std::function<void(const std::filesystem::path&)>& read =
+        [](const std::filesystem::path&) {}) {
   namespace fs = std::filesystem;
-  const fs::path dir = tiny_run_dir(args), f = dir / "results.h5", root = dir.parent_path();
-  const std::string key = dir.filename().string();
+  const fs::path f = dir / "results.h5", root = dir.parent_path();
   fs::create_directories(root);
-  const int lock =
-      ::open((root / ("." + key + ".lock")).c_str(), O_CREAT | O_RDWR | O_CLOEXEC, 0644);
+  const int lock = ::open((root / ("." + dir.filename().string() + ".lock")).c_str(),
+                          O_CREAT | O_RDWR | O_CLOEXEC, 0644);
   flock(lock, LOCK_EX);
   std::error_code ec;
   if (!fs::exists(f) || fs::last_write_time(f, ec) < fs::last_write_time(RENDULIC_EXE, ec)) {
     fs::remove_all(dir);
-    const fs::path scenario = tiny_run_scenario(args);
-    const CliResult r = run_rendulic("run " + tiny_scenario(scenario.parent_path()).string() + " " +
-                                     args + " --quiet --threads 1 --out " + dir.string());
-    EXPECT_EQ(r.code, 0) << r.out;
+    make(dir);
   }
+  read(f);
   flock(lock, LOCK_UN);
   ::close(lock);
   return f;
+}
+
+// The results file of the tiny run with the extra command-line arguments `args` (e.g. --set
+// overrides), shared by every test that reads it (made_once).
+inline std::filesystem::path tiny_results(const std::string& args = "") {
+  return made_once(tiny_run_dir(args), [&](const std::filesystem::path& dir) {
+    const std::filesystem::path scenario = tiny_run_scenario(args);
+    const CliResult r = run_rendulic("run " + tiny_scenario(scenario.parent_path()).string() + " " +
+                                     args + " --quiet --threads 1 --out " + dir.string());
+    EXPECT_EQ(r.code, 0) << r.out;
+  });
 }
 
 }  // namespace rendulic::testing
