@@ -436,23 +436,30 @@ std::string ScenarioSchema::suggest(std::string_view path) const {
 }
 
 std::string ScenarioSchema::markdown() const {
-  std::ostringstream out;
-  std::string current;
-  for (const auto& k : keys_) {
+  // One table per section, in the order the sections first appear: keys of one section are
+  // registered by more than one Options struct (run.description after report.*).
+  const auto section = [](const KeySpec& k) {
     const auto dot = k.path.find('.');
-    const std::string top = dot == std::string::npos ? "(top level)" : k.path.substr(0, dot);
-    if (top != current) {
-      current = top;
-      out << "\n## [" << top << "]\n\n"
-          << "| key | type | unit | default | range | meaning |\n"
-          << "|---|---|---|---|---|---|\n";
+    return dot == std::string::npos ? std::string("(top level)") : k.path.substr(0, dot);
+  };
+  std::vector<std::string> sections;
+  for (const auto& k : keys_)
+    if (std::find(sections.begin(), sections.end(), section(k)) == sections.end())
+      sections.push_back(section(k));
+  std::ostringstream out;
+  for (const auto& top : sections) {
+    out << "\n## [" << top << "]\n\n"
+        << "| key | type | unit | default | range | meaning |\n"
+        << "|---|---|---|---|---|---|\n";
+    for (const auto& k : keys_) {
+      if (section(k) != top) continue;
+      std::string help = k.help;
+      std::replace(help.begin(), help.end(), '|', '/');
+      std::string range = format_range(k);
+      if (k.distinct) range += range.empty() ? "distinct" : ", distinct";
+      out << "| `" << k.path << "` | " << type_name(k.type) << " | " << k.unit << " | `"
+          << format_value(k.default_value) << "` | " << range << " | " << help << " |\n";
     }
-    std::string help = k.help;
-    std::replace(help.begin(), help.end(), '|', '/');
-    std::string range = format_range(k);
-    if (k.distinct) range += range.empty() ? "distinct" : ", distinct";
-    out << "| `" << k.path << "` | " << type_name(k.type) << " | " << k.unit << " | `"
-        << format_value(k.default_value) << "` | " << range << " | " << help << " |\n";
   }
   return out.str();
 }

@@ -261,6 +261,9 @@ TEST(Scenario, MarkdownReferenceListsEveryKey) {
   const auto schema = make_schema();
   const std::string md = schema.markdown();
   for (const auto& k : schema.keys()) EXPECT_NE(md.find("`" + k.path + "`"), std::string::npos);
+  // One table per section, though run.big and run.description come after output.report.
+  EXPECT_EQ(md.find("## [run]"), md.rfind("## [run]")) << md;
+  EXPECT_LT(md.find("`run.description`"), md.find("## [output]")) << md;
   EXPECT_NE(md.find("kg/s^2"), std::string::npos);
   EXPECT_NE(md.find("(0.0, inf)"), std::string::npos);
 }
