@@ -22,8 +22,8 @@ bool fail(std::string* why, const std::string& m) {
 
 bool GasOptions::IsValid(std::string* why) const {
   if (n_particles < 2) return fail(why, "n_particles must be at least 2");
-  if (!(volume_fraction > 0 && volume_fraction <= 0.4))
-    return fail(why, "gas volume fraction must be in (0, 0.4] (random insertion)");
+  if (!(volume_fraction >= kGasVolumeFractionMin && volume_fraction <= kGasVolumeFractionMax))
+    return fail(why, "gas volume fraction must be in [1e-6, 0.4]");
   if (!(velocity >= 0 && std::isfinite(velocity))) return fail(why, "gas velocity must be >= 0");
   return true;
 }

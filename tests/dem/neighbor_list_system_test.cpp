@@ -219,16 +219,22 @@ TEST(NeighborList, ADiluteCellIsListedCompletelyWithBoundedBins) {
 }
 
 TEST(NeighborList, AGasFarTooDiluteForOneBinPerRangeIsMadeAndStepped) {
-  // preparation.nu_gas = 1e-9: the random insertion's bins and the list's both bounded (before,
-  // 420 GB asked for and std::bad_alloc).
+  // The sparsest gas, preparation.nu_gas = 1e-6: bins of 2 r_max would number ~10^7; the
+  // random insertion's bins and the list's are both bounded (before, at 1e-9, 420 GB asked for
+  // and std::bad_alloc).
   GasOptions g;
   g.n_particles = 60;
-  g.volume_fraction = 1e-9;
+  g.volume_fraction = kGasVolumeFractionMin;
   DemSystem s = make_gas(SystemOptions{}, g, 3);
   ASSERT_EQ(s.particles().size(), 60u);
   for (int k = 0; k < 10; ++k) s.step(Eigen::Vector3d::Constant(-100.0));
   EXPECT_EQ(s.measure().contacts, 0);
-  EXPECT_NEAR(s.volume_fraction(), 1e-9, 1e-10);
+  EXPECT_NEAR(s.volume_fraction(), 1e-6, 1e-7);
+  // Sparser is refused: compressing 1e-300 to nu0 had not ended after 30 s at N = 250.
+  g.volume_fraction = 1e-300;
+  std::string why;
+  EXPECT_FALSE(g.IsValid(&why));
+  EXPECT_EQ(why, "gas volume fraction must be in [1e-6, 0.4]");
 }
 
 TEST(NeighborList, HalfSkinsStayWithinTheirBounds) {

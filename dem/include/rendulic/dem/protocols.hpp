@@ -29,6 +29,10 @@ using ProgressFn = std::function<void(double)>;
 // Called with every recorded sample.
 using SampleFn = std::function<void(const Measures&)>;
 
+// The random gas's volume fraction: random insertion needs room (0.4), and a sparser gas than
+// 1e-6 only lengthens the compression to nu0 (its neighbour list is rebuilt almost every step:
+// 1e-60 took 45 s at N = 250 where 1e-6 takes 1 s; 1e-300 had not ended after 30 s).
+inline constexpr double kGasVolumeFractionMin = 1e-6, kGasVolumeFractionMax = 0.4;
 struct GasOptions {
   std::size_t n_particles = 9261;
   double volume_fraction = 0.3;
