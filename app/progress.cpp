@@ -32,6 +32,7 @@ std::function<bool()> stop_checker() {
 }
 
 std::string human_seconds(double s) {
+  constexpr double kYear = 365.25 * 86400;
   char buf[48];
   if (!std::isfinite(s) || s < 0) return "?";
   if (s < 60) {
@@ -39,11 +40,21 @@ std::string human_seconds(double s) {
   } else if (s < 3600) {
     const int m = static_cast<int>(s / 60);
     std::snprintf(buf, sizeof buf, "%d min %02d s", m, static_cast<int>(s - 60 * m));
-  } else {
+  } else if (s < 2 * 86400) {
     const int h = static_cast<int>(s / 3600);
     std::snprintf(buf, sizeof buf, "%d h %02d min", h, static_cast<int>((s - 3600 * h) / 60));
+  } else if (s < 2 * kYear) {
+    std::snprintf(buf, sizeof buf, "%.0f days", s / 86400);
+  } else {
+    std::snprintf(buf, sizeof buf, "%.3g years", s / kYear);
   }
   return buf;
+}
+
+std::string time_left(double fraction, double spent) {
+  if (!(fraction > 0) || (fraction <= 1e-3 && spent < kPaceAfter)) return "?";
+  const double f = std::min(fraction, 1.0);
+  return human_seconds(spent * (1 - f) / f);
 }
 
 Progress::Progress(const RunContext& ctx, std::string stage)
@@ -125,8 +136,7 @@ void Progress::show_locked(double fraction, const std::string& detail, Clock::ti
   shown_ = true;
   const double f = std::clamp(fraction, 0.0, 1.0);
   const double spent = std::chrono::duration<double>(now - from).count();
-  // The remaining time, if the rest goes at the pace so far.
-  const std::string left = f > 1e-3 ? human_seconds(spent * (1 - f) / f) : std::string("?");
+  const std::string left = time_left(f, spent);
   char pct[16];
   std::snprintf(pct, sizeof pct, "%5.1f%%", 100 * f);
   std::string text = "[" + stage_ + "] " + task_ + (detail.empty() ? "" : " " + detail) + " " +

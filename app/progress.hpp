@@ -43,8 +43,13 @@ void throw_if_stopped();
 // The check a probe campaign takes (dem::ProbeOptions::stop).
 std::function<bool()> stop_checker();
 
-// "12 s", "3 min 05 s", "1 h 02 min": a duration for people.
+// "12 s", "3 min 05 s", "1 h 02 min", "3 days", "35 years": a duration for people.
 std::string human_seconds(double seconds);
+// The time a task still needs if the rest goes at the pace so far ("?" while unknown): from
+// 0.1 % done, or from kPaceAfter seconds in however little is done, so that a stage of years (a
+// mistyped rate) says so instead of "?" for ever.
+inline constexpr double kPaceAfter = 5.0;
+std::string time_left(double fraction, double spent_seconds);
 
 class Progress {
  public:

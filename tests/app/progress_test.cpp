@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include <limits>
 #include <string>
 #include <tuple>
 #include <vector>
@@ -46,6 +47,21 @@ TEST_F(ProgressObserverTest, EveryTaskIsSeenAtItsFirstReportAndTheRestIsPaced) {
   EXPECT_EQ(seen.back(), Report("probes", "minimisation", 0.5));
   progress(0.75);
   EXPECT_EQ(seen.size(), 3u);
+}
+
+// A stage of decades (preparation.rate = 1e-3 instead of 1e3) said "about ? left" at 0.0 % for
+// as long as anyone watched; and 1e14 s of hours overflowed an int.
+TEST(Progress, TimeLeftIsKnownAfterAFewSecondsHoweverLittleIsDone) {
+  EXPECT_EQ(time_left(0.0, 100.0), "?");
+  EXPECT_EQ(time_left(1e-4, kPaceAfter / 2), "?");  // too early to say
+  EXPECT_EQ(time_left(0.5, 10.0), "10 s");
+  EXPECT_EQ(time_left(1e-8, 14.0), "44.4 years");
+  EXPECT_EQ(time_left(1.0, 3.0), "0 s");
+  EXPECT_EQ(human_seconds(3725.0), "1 h 02 min");
+  EXPECT_EQ(human_seconds(47 * 3600.0), "47 h 00 min");
+  EXPECT_EQ(human_seconds(3 * 86400.0), "3 days");
+  EXPECT_EQ(human_seconds(1e14), "3.17e+06 years");
+  EXPECT_EQ(human_seconds(std::numeric_limits<double>::infinity()), "?");
 }
 
 }  // namespace
