@@ -3,9 +3,12 @@
 #include "rendulic/core/errors.hpp"
 
 #include <algorithm>
+#include <cerrno>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <exception>
+#include <string>
 
 #include "hdf5_reason.hpp"
 
@@ -19,6 +22,8 @@ namespace {
 // buffer, not a std::string: HDF5 may fail again while it shuts down at exit, after the
 // thread's objects are destroyed.
 thread_local char g_last_reason[512];
+// The last failure was HDF5's file driver meeting a file system without file locks.
+thread_local bool g_locks_refused = false;
 
 void set_reason(const char* text, std::size_t n) {
   n = std::min(n, sizeof g_last_reason - 1);
@@ -29,6 +34,22 @@ void set_reason(const char* text, std::size_t n) {
 herr_t collect(unsigned, const H5E_error2_t* err, void* data) {
   auto* found = static_cast<int*>(data);  // 0: nothing yet, 1: a description, 2: a reason
   if (!err || !err->desc || !*err->desc || *found == 2) return 0;
+  // A file system without locks (NFS without a lock daemon, some Lustre mounts) refuses
+  // HDF5's flock with ENOLCK or EOPNOTSUPP (ENOSYS HDF5 passes over itself). HDF5 only reads
+  // such a file with its locking off, which its user must ask for.
+  const char* lock = "unable to lock file, errno = ";
+  if (std::strncmp(err->desc, lock, std::strlen(lock)) == 0) {
+    const int e = std::atoi(err->desc + std::strlen(lock));
+    if (e == ENOLCK || e == EOPNOTSUPP || e == ENOSYS) {
+      const std::string why = std::string("this file system refuses file locks (") +
+                              std::strerror(e) +
+                              "); set HDF5_USE_FILE_LOCKING=FALSE to use it without them";
+      set_reason(why.c_str(), why.size());
+      g_locks_refused = true;
+      *found = 2;
+      return 0;
+    }
+  }
   // The file drivers put the system's reason in their description.
   const char* key = "error message = '";
   if (const char* at = std::strstr(err->desc, key)) {
@@ -49,6 +70,7 @@ herr_t collect(unsigned, const H5E_error2_t* err, void* data) {
 herr_t record_reason(hid_t stack_id, void*) {
   int found = 0;
   g_last_reason[0] = '\0';
+  g_locks_refused = false;
   H5Ewalk2(stack_id, H5E_WALK_UPWARD, collect, &found);
   return 0;
 }
@@ -64,7 +86,12 @@ void quiet_hdf5() {
   (void)done;
 }
 
-void forget_hdf5_reason() { g_last_reason[0] = '\0'; }
+void forget_hdf5_reason() {
+  g_last_reason[0] = '\0';
+  g_locks_refused = false;
+}
+
+bool hdf5_refused_locks() { return g_locks_refused; }
 
 std::string hdf5_reason() {
   return g_last_reason[0] ? std::string(g_last_reason) : std::string("HDF5 error");

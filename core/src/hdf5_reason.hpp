@@ -22,5 +22,8 @@ void forget_hdf5_reason();
 // doesn't exist"), else "HDF5 error" (or the exception's own message).
 std::string hdf5_reason();
 std::string hdf5_reason(const H5::Exception& e);
+// The last failed call failed because the file system refuses file locks (the reason then says
+// so and names HDF5_USE_FILE_LOCKING=FALSE): no sign of a damaged file.
+bool hdf5_refused_locks();
 
 }  // namespace rendulic::detail

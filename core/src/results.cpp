@@ -215,6 +215,9 @@ class FolderLock {
     h.fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
     if (h.fd < 0) return;  // a folder we cannot open: no lock, as before
     if (::flock(h.fd, LOCK_EX | LOCK_NB) == 0) return;
+    // A file system without locks (ENOLCK, EOPNOTSUPP): no lock, as for a folder we cannot
+    // open; it said before that it waited for another process.
+    if (errno != EWOULDBLOCK) return;
     log::info(file.string(), ": waiting for another rendulic process that is replacing a file ",
               "in its folder");
     while (::flock(h.fd, LOCK_EX) != 0 && errno == EINTR) {
@@ -977,8 +980,11 @@ ResultsReader::ResultsReader(const fs::path& path, const fs::path& shown_as)
       throw InputError(shown_as.string() +
                        ": another program has it open for writing (HDF5's file lock); close it "
                        "there, or wait for it to finish");
+    const std::string why = detail::hdf5_reason(e);
     throw InputError(shown_as.string() +
-                     ": cannot open (corrupt HDF5 file?): " + detail::hdf5_reason(e));
+                     (detail::hdf5_refused_locks() ? ": cannot open: "
+                                                   : ": cannot open (corrupt HDF5 file?): ") +
+                     why);
   }
   std::string schema;
   try {
