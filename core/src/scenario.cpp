@@ -298,7 +298,8 @@ ScenarioValue convert(const KeySpec& s, const toml::node& n) {
         else if (auto d = e.as_floating_point())
           xs.push_back(d->get());
         else
-          throw std::string("expected a list of numbers, found a ") + node_type_name(e);
+          throw std::string("expected a list of numbers, found ") + article(node_type_name(e)) +
+              node_type_name(e);
       }
       return xs;
     }
@@ -310,7 +311,8 @@ ScenarioValue convert(const KeySpec& s, const toml::node& n) {
         if (auto str = e.as_string())
           xs.push_back(str->get());
         else
-          throw std::string("expected a list of strings, found a ") + node_type_name(e);
+          throw std::string("expected a list of strings, found ") + article(node_type_name(e)) +
+              node_type_name(e);
       }
       return xs;
     }

@@ -180,6 +180,10 @@ TEST(Scenario, ADistinctListRefusesAnEntryGivenTwice) {
                      "significant digits"),
             std::string::npos)
       << msg;
+  msg = input_error([&] { parse("[run]\nstages = [\"prepare\", 3]\n"); });
+  EXPECT_NE(msg.find("expected a list of strings, found an integer"), std::string::npos) << msg;
+  msg = input_error([&] { parse("[probes]\namplitudes = [1e-4, \"x\"]\n"); });
+  EXPECT_NE(msg.find("expected a list of numbers, found a string"), std::string::npos) << msg;
   msg = input_error([&] { parse("[probes]\nplanes = [\"a\", \"b\", \"a\"]\n"); });
   EXPECT_NE(msg.find("key 'probes.planes': value 'a' given twice"), std::string::npos) << msg;
   // Lists without the flag keep repeats (two states at one strain are two states).
