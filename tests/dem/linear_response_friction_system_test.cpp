@@ -10,6 +10,8 @@
 //    springs and couples in the Jacobian, and the response without them is clearly another one;
 //    the same with the dynamic probes at t_c / 10 (probes.dt_factor = 0.1, as frictional.toml's
 //    probes);
+//  - contacts at the Coulomb limit: the lattice in simple shear, its springs at, below and beyond
+//    mu f_n, counted as such;
 //  - the stage's path: the campaign gives a frictional envelope with its Coulomb attributes,
 //    and the minimisation probes still refuse the packing with one line.
 // The same comparison without rolling resistance, on a packing with contacts at the Coulomb
@@ -76,6 +78,66 @@ TEST(LinearResponseFriction, SimpleCubicLatticeClosedForm) {
   EXPECT_NEAR(shear(0, 0), 0.0, tol);
   // No relaxation: the lattice deforms affinely.
   EXPECT_LE((lr.stiffness - lr.affine_stiffness).cwiseAbs().maxCoeff(), tol);
+}
+
+// Contacts at the Coulomb limit, which the default suite otherwise meets in no packing (the
+// validation's has three): the lattice above in simple shear, every x contact's spring along y
+// and every y contact's along x, which keeps each sphere's forces and torques balanced. At
+// |k_t xi| = mu f_n those 2/3 of the contacts are counted at the limit and the response says it
+// depends on the direction; at 0.99 mu f_n (outside the tolerance of 1e-3) none is; a spring
+// beyond the limit is held at it, as the engine holds it (the reference stress, in closed form,
+// says so).
+TEST(LinearResponseFriction, ASimpleShearedLatticeAtTheCoulombLimitSaysSo) {
+  const int m = 3;
+  const double r = 1e-3, delta = 1e-5, L = 2 * r - delta, k = 1e8, k_t = 2.0 / 7.0 * k;
+  const double mu = 0.5, f_n = k * delta;
+  Eigen::MatrixX3d x(m * m * m, 3);
+  auto index = [&](int a, int b, int c) { return (a * m + b) * m + c; };
+  for (int a = 0; a < m; ++a)
+    for (int b = 0; b < m; ++b)
+      for (int c = 0; c < m; ++c) x.row(index(a, b, c)) << a * L, b * L, c * L;
+  const int p = m * m * m;
+  const PackingData packing = PackingData::orthorhombic(x, Eigen::VectorXd::Constant(p, r),
+                                                        Eigen::Vector3d::Constant(m * L));
+  LinearResponseOptions lo;
+  lo.k = k;
+  lo.min_contacts = rattler_min_contacts(true);
+  for (const double of_limit : {1.0, 0.99, 1.5}) {
+    LinearFriction fr;
+    fr.k_t = k_t;
+    fr.mu = mu;
+    const double s = of_limit * mu * f_n / k_t;
+    for (int a = 0; a < m; ++a)
+      for (int b = 0; b < m; ++b)
+        for (int c = 0; c < m; ++c) {
+          const int i = index(a, b, c);
+          // The +x and +y neighbours; the pair is stored from its lower index, which flips
+          // the contact's direction and so the spring's sign.
+          for (const auto& [j, along] :
+               {std::pair{index((a + 1) % m, b, c), Eigen::Vector3d::UnitY().eval()},
+                std::pair{index(a, (b + 1) % m, c), Eigen::Vector3d::UnitX().eval()}}) {
+            const double sign = i < j ? 1.0 : -1.0;
+            fr.springs.push_back({std::min(i, j), std::max(i, j), sign * s * along});
+          }
+        }
+    const LinearResponse lr = linear_response(packing, lo, fr);
+    ASSERT_TRUE(lr.ok) << of_limit << ": " << lr.message;
+    EXPECT_EQ(lr.n_backbone_contacts, 3 * p);
+    const int at_limit = of_limit >= 1.0 ? 2 * p : 0;
+    EXPECT_EQ(lr.n_coulomb_limit, at_limit) << of_limit;
+    EXPECT_NEAR(lr.coulomb_limit_fraction, at_limit / (3.0 * p), 1e-12) << of_limit;
+    EXPECT_EQ(lr.direction_dependent(), at_limit > 0) << of_limit;
+    EXPECT_TRUE(lr.stiffness.allFinite());
+    // Closed form of the reference stress, eq. 1 over the cell's 3 p contacts of branch L:
+    // f_n / L^2 on the diagonal, the held tangential force over L^2 in xy, symmetric.
+    const double tol = 1e-9 * f_n / (L * L);
+    EXPECT_NEAR(lr.stress(0, 0), f_n / (L * L), tol);
+    EXPECT_NEAR(std::abs(lr.stress(0, 1)), std::min(of_limit, 1.0) * mu * f_n / (L * L), tol)
+        << of_limit;
+    EXPECT_NEAR(lr.stress(0, 1), lr.stress(1, 0), tol);
+    EXPECT_NEAR(lr.stress(0, 2), 0.0, tol);
+    EXPECT_LE(lr.residual_force_ratio, 1e-9);
+  }
 }
 
 // With rolling resistance (docs/physics.md): the linear response against the engine's dynamic
