@@ -19,10 +19,23 @@ namespace rendulic::app {
 // The range of a thread count (0: every core), on the command line and from Python.
 inline constexpr int kMaxThreads = 4096;
 
-// The check of --threads wherever a command runs work: a count, refused in counts ("Value -1
-// not in range 0 to 4096"). CLI11's NonNegativeNumber printed the largest double, 309 digits,
-// as the upper end of its range.
-inline CLI::Validator thread_count() { return CLI::Range(0, kMaxThreads); }
+// The check of a whole number in [lo, hi]: "Value -1 not in range 0 to 4096", and "Value abc is
+// not a whole number" where CLI11's Range said "Value abc not in range 0 to 4096".
+inline CLI::Validator integer_in_range(std::int64_t lo, std::int64_t hi) {
+  const CLI::Range range(lo, hi);
+  return CLI::Validator(
+      [range](std::string& text) -> std::string {
+        std::int64_t v = 0;
+        if (!CLI::detail::lexical_cast(text, v))
+          return "Value " + text + " is not a whole number (digits only)";
+        return range(text);
+      },
+      range.get_description());
+}
+
+// The check of --threads wherever a command runs work: a count, refused in counts. CLI11's
+// NonNegativeNumber printed the largest double, 309 digits, as the upper end of its range.
+inline CLI::Validator thread_count() { return integer_in_range(0, kMaxThreads); }
 
 // The same check where the count does not come through CLI11 (rendulic.run, rendulic.probe):
 // a million threads crashed the interpreter inside the OpenMP runtime.

@@ -319,13 +319,13 @@ Subcommand add_bench(CLI::App& parent) {
                       "nuNN-friction.pair) into DIR (bench/lammps_compare.sh)");
   sub->add_option("--particles", o->n_particles, "number of particles")
       ->capture_default_str()
-      ->check(CLI::Range(std::int64_t{100}, std::int64_t{10000000}));
+      ->check(integer_in_range(100, 10000000));
   sub->add_option("--threads", o->threads,
                   "fixed team sizes to time, distinct (--threads 1 2 or 1,2; the default is "
                   "added)")
       ->capture_default_str()
       ->delimiter(',')
-      ->check(CLI::Range(1, kMaxThreads));
+      ->check(integer_in_range(1, kMaxThreads));
   sub->add_option("--seconds", o->seconds,
                   "wall time of each state's first timed run, whose steps every figure of the "
                   "state then times")
@@ -334,7 +334,7 @@ Subcommand add_bench(CLI::App& parent) {
   sub->add_option("--steps", o->steps,
                   "the steps every figure times instead (after 100 warm-up steps, as "
                   "bench/lammps_compare.sh has LAMMPS do)")
-      ->check(CLI::Range(std::int64_t{1}, std::int64_t{100000000}));
+      ->check(integer_in_range(1, 100000000));
   sub->add_option("--friction", o->friction,
                   "also time 1 thread with Coulomb friction mu (dem.friction) on the same states, "
                   "beside the frictionless engine, wall and CPU time")
@@ -347,7 +347,7 @@ Subcommand add_bench(CLI::App& parent) {
                   "rounds, each timing every setting once (idle: the best is reported; loaded: "
                   "the mean)")
       ->capture_default_str()
-      ->check(CLI::Range(1, 100));
+      ->check(integer_in_range(1, 100));
   return {
       sub, [o, lammps]() -> int {
         const int all_cores = omp_get_max_threads();

@@ -56,13 +56,13 @@ Subcommand add_sweep(CLI::App& parent) {
       ->capture_default_str();
   sub->add_option("--path-seeds", o->path_seeds,
                   "path_rate: independent packings per rate (seeds run.seed, run.seed + 1, ...)")
-      ->check(CLI::Range(1, 64));
+      ->check(integer_in_range(1, 64));
   sub->add_option("--path-rates", o->path_rates, "path_rate: the rates to run (1/s, D_xx)")
       ->delimiter(',')
       ->check(positive_number());
   sub->add_option("--base-n", o->base_n,
                   "N of the base point and of the path_rate runs (default: 1000, --quick 250)")
-      ->check(CLI::Range(50, 5000000));
+      ->check(integer_in_range(50, 5000000));
   sub->add_flag("--quiet", o->quiet, "no progress lines");
   return {sub, [o]() -> int {
             Scenario scenario = o->scenario.empty()

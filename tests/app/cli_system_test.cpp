@@ -75,6 +75,22 @@ TEST(Cli, ARealOptionThatIsNotFiniteIsRefusedNamingIt) {
   EXPECT_NE(r.out.find("cannot create the --lammps folder"), std::string::npos) << r.out;
 }
 
+// A count that is not a whole number was called out of range ("Value abc not in range 0 to
+// 4096", CLI11's Range); a count out of range still says the range.
+TEST(Cli, ACountThatIsNotAWholeNumberIsCalledSo) {
+  for (const auto& [args, said] : std::vector<std::pair<std::string, std::string>>{
+           {"run x.toml --threads abc", "--threads: Value abc is not a whole number (digits only)"},
+           {"run x.toml --threads 2.5", "--threads: Value 2.5 is not a whole number (digits only)"},
+           {"bench --repetitions x", "--repetitions: Value x is not a whole number (digits only)"},
+           {"run x.toml --threads -1", "--threads: Value -1 not in range 0 to 4096"},
+           {"sweep --path-seeds 0", "--path-seeds: Value 0 not in range 1 to 64"}}) {
+    const CmdResult r = rendulic(args);
+    EXPECT_EQ(r.code, 2) << args << "\n" << r.out;
+    EXPECT_EQ(lines(r.out), 1) << args << "\n" << r.out;
+    EXPECT_NE(r.out.find(said), std::string::npos) << args << "\n" << r.out;
+  }
+}
+
 TEST(Cli, BadScenarioExits2NamingTheKeyAndWritesNothing) {
   const fs::path d = fresh_dir("bad_scenario");
   struct Case {
