@@ -9,12 +9,14 @@
 #include <sstream>
 
 #include "commands.hpp"
+#include "rendulic/core/decimal.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/log.hpp"
 #include "rendulic/core/packing_file.hpp"
 #include "rendulic/core/result_paths.hpp"
 #include "rendulic/core/results.hpp"
 #include "rendulic/dem/contact.hpp"
+#include "stages.hpp"
 
 namespace rendulic::app {
 namespace {
@@ -86,6 +88,22 @@ Subcommand add_export(CLI::App& parent) {
               m.gamma_r_ratio = in.attr_double(paths::kMaterial, "gamma_r_ratio");
             }
             std::cout << dem::lammps_pair_lines(m);
+            // `rendulic probe` of a data file takes <r> and w from its radii (the sample's mean
+            // radius, not the distribution's) and the rest of the material from the defaults:
+            // the keys that give it the run's material, hence the run's k* and time step.
+            const Scenario defaults(scenario_schema());
+            std::string sets;
+            for (const auto& [attribute, key] : kMaterialAttributes) {
+              if (!in.has_attr(paths::kMaterial, attribute)) continue;
+              const double v = in.attr_double(paths::kMaterial, attribute);
+              const std::string k = key;
+              if (k == "material.r_mean" || k == "material.w" || v != defaults.get_double(k))
+                sets += " --set " + k + "=" + decimal_text(v);
+            }
+            log::info("to probe ", o->lammps,
+                      " with the run's material (a data file has neither <r> nor w, which set k* "
+                      "and the time step): rendulic probe ",
+                      o->lammps, sets);
             return 0;
           }};
 }

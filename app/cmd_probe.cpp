@@ -62,11 +62,9 @@ Scenario probe_scenario(const PackingSource& src, const ProbeRequest& o) {
         log::warning("the scenario stored in ", src.file.string(),
                      " does not parse with this version (", e.what(),
                      "); the defaults and the file's /material are used");
-        for (const char* key : {"k", "gamma", "gamma_b", "density", "r_mean", "w", "dt_factor"})
-          if (in.has_attr(paths::kMaterial, key))
-            sc.set(
-                std::string(key) == "dt_factor" ? "dem.dt_factor" : std::string("material.") + key,
-                in.attr_double(paths::kMaterial, key));
+        for (const auto& [attribute, key] : kMaterialAttributes)
+          if (in.has_attr(paths::kMaterial, attribute))
+            sc.set(key, in.attr_double(paths::kMaterial, attribute));
       }
     }
   }

@@ -51,6 +51,27 @@ void write_state(ResultsWriter& out, const std::string& group, const dem::DemSys
 
 // /material (docs/results.md): the contact law, density, size distribution and time step.
 void write_material(ResultsWriter& out, const dem::SystemOptions& system, std::int64_t n_particles);
+// The attributes of /material that hold a scenario key's value, and the key (k_star, dt and
+// n_particles are derived or belong to the run); friction's and rolling's are there only when
+// they are on. Read back where a file's stored scenario is not at hand.
+struct MaterialAttribute {
+  const char* attribute;
+  const char* key;
+};
+inline constexpr MaterialAttribute kMaterialAttributes[] = {
+    {"k", "material.k"},
+    {"gamma", "material.gamma"},
+    {"gamma_b", "material.gamma_b"},
+    {"density", "material.density"},
+    {"r_mean", "material.r_mean"},
+    {"w", "material.w"},
+    {"dt_factor", "dem.dt_factor"},
+    {"friction", "dem.friction"},
+    {"k_t_ratio", "dem.k_t_ratio"},
+    {"gamma_t_ratio", "dem.gamma_t_ratio"},
+    {"rolling_friction", "dem.rolling_friction"},
+    {"k_r_ratio", "dem.k_r_ratio"},
+    {"gamma_r_ratio", "dem.gamma_r_ratio"}};
 
 // DEM (stages_dem.cpp).
 void stage_prepare(const Scenario&, ResultsWriter&, const RunContext&, DemRunSession&);
