@@ -88,6 +88,44 @@ TEST(Probe, AResultsFileStateGivesTheStoredEnvelopesAndFits) {
   EXPECT_EQ(again.attr_int(g, "minimise_iterations"), 0);  // at rest as stored: nothing moved
 }
 
+// A results file whose stored scenario does not parse (written by another version): the probes
+// take the material from /material, here with k doubled, which doubles every stress increment
+// of the linear response (the positions at rest do not depend on k) and says so in a warning.
+TEST(Probe, AStoredScenarioThatDoesNotParseLeavesTheStoredMaterial) {
+  const fs::path base = tiny();
+  const fs::path dir = rendulic::testing::fresh_dir("app_probe/old_scenario");
+  const fs::path copy = dir / "old.h5";
+  fs::copy_file(base, copy);
+  {
+    H5::H5File h(copy.string(), H5F_ACC_RDWR);
+    h.removeAttr("scenario");
+    const std::string text = "[dem]\nkey_of_another_version = 1\n";
+    const H5::StrType type(H5::PredType::C_S1, H5T_VARIABLE);
+    h.createAttribute("scenario", type, H5::DataSpace(H5S_SCALAR)).write(type, text);
+    const double k = 2 * ResultsReader(base).attr_double(paths::kMaterial, "k");
+    h.openGroup(paths::kMaterial).openAttribute("k").write(H5::PredType::NATIVE_DOUBLE, &k);
+  }
+  const std::string args = ":a --methods linear_response --directions 6 --out ";
+  const CliResult ref = probe(base.string() + args + (dir / "ref").string());
+  ASSERT_EQ(ref.code, 0) << ref.err;
+  const CliResult old = probe(copy.string() + args + (dir / "old").string());
+  ASSERT_EQ(old.code, 0) << old.err;
+  EXPECT_NE(old.err.find("warning: the scenario stored in " + copy.string() +
+                         " does not parse with this version"),
+            std::string::npos)
+      << old.err;
+  const ResultsReader a(dir / "ref" / "results.h5"), b(dir / "old" / "results.h5");
+  const std::string g = paths::state("a");
+  EXPECT_EQ(b.attr_double(paths::kMaterial, "k"), 2 * a.attr_double(paths::kMaterial, "k"));
+  for (const std::string& name : a.children(paths::envelopes(g))) {
+    std::vector<Eigen::Matrix3d> doubled = a.read_tensors(paths::envelope(g, name) + ds::kDStress);
+    for (auto& t : doubled) t *= 2;
+    EXPECT_LE(relative_difference(doubled, b.read_tensors(paths::envelope(g, name) + ds::kDStress)),
+              1e-9)
+        << name;
+  }
+}
+
 // The state as a LAMMPS dump in another layout than LAMMPS writes: atoms in reverse order,
 // radius instead of diameter, scaled coordinates, an extra column.
 void write_dump(const rendulic::Packing& p, const fs::path& file) {
