@@ -133,10 +133,21 @@ void check_friction(const Scenario& scenario) {
 }  // namespace
 
 void check_stages_available(const Scenario& scenario) {
-  // A run that computes nothing would replace an existing results.h5 with an empty file.
-  bool computes = false;
-  for (const auto& s : stages())
-    computes = computes || (stage_requested(scenario, s.name) && s.run);
+  // A run that computes nothing would replace an existing results.h5 with an empty file; so
+  // would one of fits or calibration alone (`--set run.stages=fits` wrote a file of nothing in
+  // place of the run's): they read what the DEM stages before them wrote.
+  bool computes = false, reads_the_run = false;
+  for (const auto& s : stages()) {
+    if (!stage_requested(scenario, s.name) || !s.run) continue;
+    const bool reader = std::string(s.name) == "fits" || std::string(s.name) == "calibration";
+    computes = computes || !reader;
+    reads_the_run = reads_the_run || reader;
+  }
+  if (!computes && reads_the_run)
+    throw InputError("run.stages (" + scenario.origin("run.stages") +
+                     "): fits and calibration read what the DEM stages before them wrote; for an "
+                     "existing file use `rendulic fit --results FILE.h5` or `rendulic calibrate "
+                     "--results FILE.h5`");
   if (!computes)
     throw InputError("run.stages (" + scenario.origin("run.stages") +
                      "): no stage that computes anything; the report of an existing file is "

@@ -125,12 +125,13 @@ EnvelopeRecord calibration_envelope(const ResultsReader& r, const std::string& g
 
 }  // namespace
 
-CalibrationData load_calibration_data(const std::filesystem::path& file,
-                                      const LoadOptions& options) {
+CalibrationData load_calibration_data(const std::filesystem::path& file, const LoadOptions& options,
+                                      const std::filesystem::path& shown_as) {
   std::string why;
   if (!options.IsValid(&why)) throw InputError("calibration data: " + why);
-  const ResultsReader r(file);
-  const std::string name = file.string();
+  const std::filesystem::path& shown = shown_as.empty() ? file : shown_as;
+  const ResultsReader r(file, shown);
+  const std::string name = shown.string();
   CalibrationData data;
   data.source = name;
   if (!r.exists(paths::kMaterial)) throw InputError(name + ": no /material group");

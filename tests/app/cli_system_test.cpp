@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <string>
 #include <vector>
 
@@ -132,23 +133,50 @@ TEST(Cli, BadOverrideExits2NamingTheKey) {
 }
 
 TEST(Cli, StageFailingMidRunLeavesNoResultsFile) {
-  // The calibration stage needs states; alone it fails after the results file was opened.
+  // The calibration stage needs states: after a small preparation it fails with the results
+  // file open, naming that file as the user will have it (it named the run's temporary file).
   const fs::path d = fresh_dir("mid_run");
-  const fs::path scen = write_file(d / "s.toml", "[run]\nstages = [\"calibration\"]\n");
-  // --quiet: without it the run first prints its plan (one line), then the error.
-  const CmdResult r = rendulic("run " + scen.string() + " --quiet --out " + (d / "out").string());
+  const fs::path scen = write_file(d / "s.toml",
+                                   "[run]\nstages = [\"prepare\", \"calibration\"]\n[dem]\n"
+                                   "n_particles = 64\n[preparation]\nrate = 20000.0\n"
+                                   "gamma_b = 5.0\n[relax]\ntime_cap = 1e-4\n");
+  const fs::path out = d / "out";
+  const CmdResult r = rendulic("run " + scen.string() + " --out " + out.string());
   EXPECT_EQ(r.code, 2) << r.out;
-  EXPECT_EQ(lines(r.out), 1) << r.out;
-  const CmdResult loud = rendulic("run " + scen.string() + " --out " + (d / "out").string());
-  EXPECT_EQ(loud.code, 2) << loud.out;
-  // The plan, the stage's start (docs/usage.md "Progress and messages"), the one-line error.
-  EXPECT_EQ(lines(loud.out), 3) << loud.out;
-  EXPECT_NE(loud.out.find("[calibration] started"), std::string::npos) << loud.out;
-  EXPECT_NE(loud.out.find("stages calibration"), std::string::npos) << loud.out;
-  EXPECT_FALSE(fs::exists(d / "out" / "results.h5"));
-  if (fs::exists(d / "out")) {
-    EXPECT_TRUE(fs::is_empty(d / "out")) << "no temporary left behind";
+  // The plan and the stages' starts (docs/usage.md "Progress and messages"), then one line.
+  EXPECT_NE(r.out.find("stages prepare, calibration"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("[calibration] started"), std::string::npos) << r.out;
+  const std::string last = r.out.substr(r.out.rfind('\n', r.out.size() - 2) + 1);
+  EXPECT_EQ(last, "rendulic: " + (out / "results.h5").string() +
+                      ": no /states group (no relaxed states); completed stages (prepare) kept "
+                      "in " +
+                      (out / "results.h5.partial").string() + "\n")
+      << r.out;
+  EXPECT_FALSE(fs::exists(out / "results.h5"));
+  for (const auto& e : fs::directory_iterator(out))
+    EXPECT_EQ(e.path().filename(), "results.h5.partial") << "no temporary left behind";
+}
+
+// fits or calibration without the stages they read: refused before anything is written, and
+// an earlier results.h5 is kept (`--set run.stages=fits` replaced it by a file of nothing).
+TEST(Cli, ARunOfOnlyFitsOrCalibrationIsRefusedAndKeepsTheFile) {
+  const fs::path d = fresh_dir("only_fits");
+  const fs::path scen = write_file(d / "s.toml", "[run]\nstages = [\"prepare\"]\n");
+  const fs::path out = d / "out";
+  fs::create_directories(out);
+  const fs::path kept = write_file(out / "results.h5", "an earlier run's file\n");
+  for (const std::string stages : {"fits", "calibration", "[fits,calibration,report]"}) {
+    const CmdResult r =
+        rendulic("run " + scen.string() + " --out " + out.string() + " --set run.stages=" + stages);
+    EXPECT_EQ(r.code, 2) << stages << ": " << r.out;
+    EXPECT_EQ(lines(r.out), 1) << r.out;
+    EXPECT_NE(r.out.find("fits and calibration read what the DEM stages before them wrote; for "
+                         "an existing file use `rendulic fit --results FILE.h5`"),
+              std::string::npos)
+        << r.out;
   }
+  std::ifstream in(kept);
+  EXPECT_EQ(std::string((std::istreambuf_iterator<char>(in)), {}), "an earlier run's file\n");
 }
 
 TEST(Cli, EffectiveScenarioIsStoredAndInspectable) {
