@@ -36,6 +36,7 @@ struct Stage {
   const char* name;
   StageFn run;  // empty for a stage that only reads the committed file
   PostFn post;  // runs on the committed file instead (the report reads what was written)
+  bool reads_the_run = false;  // works on what the DEM stages before it wrote
 };
 
 void report_stage(const Scenario& scenario, const std::filesystem::path& results,
@@ -56,10 +57,18 @@ const std::vector<Stage>& stages() {
       {"probes", stage_probes},
       {"linear_response", stage_linear_response},
       {"pressure", stage_pressure},
-      {"fits", [](const Scenario& sc, ResultsWriter& out, const RunContext& ctx,
-                  DemRunSession&) { stage_fits(sc, out, ctx); }},
-      {"calibration", [](const Scenario& sc, ResultsWriter& out, const RunContext& ctx,
-                         DemRunSession&) { run_calibration_stage(sc, out, ctx); }},
+      {"fits",
+       [](const Scenario& sc, ResultsWriter& out, const RunContext& ctx, DemRunSession&) {
+         stage_fits(sc, out, ctx);
+       },
+       {},
+       true},
+      {"calibration",
+       [](const Scenario& sc, ResultsWriter& out, const RunContext& ctx, DemRunSession&) {
+         run_calibration_stage(sc, out, ctx);
+       },
+       {},
+       true},
       {"report", {}, report_stage},
   };
   return table;
@@ -139,9 +148,8 @@ void check_stages_available(const Scenario& scenario) {
   bool computes = false, reads_the_run = false;
   for (const auto& s : stages()) {
     if (!stage_requested(scenario, s.name) || !s.run) continue;
-    const bool reader = std::string(s.name) == "fits" || std::string(s.name) == "calibration";
-    computes = computes || !reader;
-    reads_the_run = reads_the_run || reader;
+    computes = computes || !s.reads_the_run;
+    reads_the_run = reads_the_run || s.reads_the_run;
   }
   if (!computes && reads_the_run)
     throw InputError("run.stages (" + scenario.origin("run.stages") +
