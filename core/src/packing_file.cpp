@@ -150,8 +150,8 @@ PackingSource packing_source(const std::string& argument) {
     return s;
   }
   s.file = argument;
-  if (!fs::exists(s.file)) throw InputError(argument + ": no such packing file");
-  if (!fs::is_regular_file(s.file)) throw InputError(argument + ": not a file");
+  refuse_unless_regular_file(s.file, argument, "packing file",
+                             "a LAMMPS data or dump file, or FILE.h5:/states/LABEL");
   std::ifstream in(s.file);
   std::string first;
   std::getline(in, first);

@@ -951,12 +951,7 @@ ResultsReader::ResultsReader(const fs::path& path, const fs::path& shown_as)
     : impl_(std::make_unique<Impl>()) {
   detail::quiet_hdf5();
   impl_->path = shown_as;
-  std::error_code ec;
-  const fs::file_status st = fs::status(path, ec);
-  if (ec && ec != std::errc::no_such_file_or_directory)
-    throw InputError(shown_as.string() + ": cannot read: " + ec.message());
-  if (!fs::exists(st)) throw InputError(shown_as.string() + ": no such file");
-  if (!fs::is_regular_file(st)) throw InputError(shown_as.string() + ": not a regular file");
+  refuse_unless_regular_file(path, shown_as.string(), "results file", "an HDF5 file");
   {
     // Open it ourselves first: HDF5 reports an unreadable file as "not HDF5".
     const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK);

@@ -33,9 +33,7 @@ std::string read_input_text(const std::string& path, const std::string& what,
   struct stat st {};
   if (::fstat(fd, &st) != 0)
     throw InputError(path + ": cannot read " + what + ": " + std::strerror(errno));
-  if (S_ISDIR(st.st_mode)) throw InputError(path + ": is a folder, not a " + what);
-  if (!S_ISREG(st.st_mode))
-    throw InputError(path + ": not a regular file (a " + what + " is a text file)");
+  refuse_unless_regular_mode(st.st_mode, path, what, "a text file");
   std::string text;
   char buf[65536];
   for (;;) {
@@ -49,6 +47,23 @@ std::string read_input_text(const std::string& path, const std::string& what,
                        what);
   }
   return text;
+}
+
+void refuse_unless_regular_mode(unsigned mode, const std::string& shown, const std::string& what,
+                                const std::string& form) {
+  if (S_ISDIR(mode)) throw InputError(shown + ": is a folder, not a " + what);
+  if (!S_ISREG(mode))
+    throw InputError(shown + ": not a regular file (a " + what + " is " + form + ")");
+}
+
+void refuse_unless_regular_file(const fs::path& path, const std::string& shown,
+                                const std::string& what, const std::string& form) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0)
+    throw InputError(shown + (errno == ENOENT
+                                  ? std::string(": no such file")
+                                  : ": cannot read " + what + ": " + std::strerror(errno)));
+  refuse_unless_regular_mode(st.st_mode, shown, what, form);
 }
 
 void AtomicTextFile::refuse_folder(const fs::path& file, const std::string& what) {

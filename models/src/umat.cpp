@@ -4,13 +4,11 @@
 #include "rendulic/models/umat.hpp"
 
 #include <dlfcn.h>
-#include <sys/stat.h>
 #include <toml++/toml.h>
 
 #include <algorithm>
 #include <array>
 #include <cctype>
-#include <cerrno>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -19,6 +17,7 @@
 
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/option_table.hpp"
+#include "rendulic/core/text_file.hpp"
 #include "toml_input.hpp"
 
 namespace rendulic::models {
@@ -41,18 +40,8 @@ class UmatLibrary {
  public:
   explicit UmatLibrary(const std::string& path) {
     // Checked before dlopen, which would block on a FIFO and call a folder "cannot read file
-    // data"; the words are read_input_text's (docs/usage.md, the paragraph on text inputs).
-    struct stat st {};
-    if (::stat(path.c_str(), &st) != 0) {
-      std::string m = "--umat " + path;
-      m += errno == ENOENT ? std::string(": no such file")
-                           : ": " + std::string(std::strerror(errno));
-      throw InputError(m);
-    }
-    if (S_ISDIR(st.st_mode))
-      throw InputError("--umat " + path + ": is a folder, not a UMAT library");
-    if (!S_ISREG(st.st_mode))
-      throw InputError("--umat " + path + ": not a regular file (a UMAT library is a .so file)");
+    // data"; in the words of every input file (docs/usage.md, the paragraph on text inputs).
+    refuse_unless_regular_file(path, "--umat " + path, "UMAT library", "a .so file");
     // RTLD_LOCAL: two UMAT libraries in one process keep their own symbols.
     handle_ = ::dlopen(std::filesystem::absolute(path).c_str(), RTLD_NOW | RTLD_LOCAL);
     if (!handle_) {

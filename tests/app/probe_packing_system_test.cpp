@@ -13,8 +13,10 @@
 //    refused.
 #include <H5Cpp.h>
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
@@ -436,7 +438,24 @@ TEST(Probe, BadPackingFilesExitTwoWithOneLine) {
                  "the header 2 atoms");
   const CliResult missing = probe("/nonexistent/packing.data --out /tmp/never");
   EXPECT_EQ(missing.code, 2);
-  EXPECT_NE(missing.err.find("no such packing file"), std::string::npos) << missing.err;
+  EXPECT_NE(missing.err.find("/nonexistent/packing.data: no such file"), std::string::npos)
+      << missing.err;
+  // A folder, a device and a FIFO in the words every input file gets (core text_file.hpp); a
+  // FIFO must not hang the command.
+  const fs::path d = kRoot / "not-files";
+  fs::create_directories(d);
+  const fs::path fifo = d / "fifo.data";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600) == 0 || errno == EEXIST, true);
+  for (const auto& [packing, words] : std::vector<std::pair<std::string, std::string>>{
+           {d.string(), d.string() + ": is a folder, not a packing file"},
+           {"/dev/zero",
+            "/dev/zero: not a regular file (a packing file is a LAMMPS data or dump "
+            "file, or FILE.h5:/states/LABEL)"},
+           {fifo.string(), fifo.string() + ": not a regular file"}}) {
+    const CliResult r = probe(packing + " --out /tmp/never");
+    EXPECT_EQ(r.code, 2) << packing;
+    EXPECT_NE(r.err.find(words), std::string::npos) << r.err;
+  }
 }
 
 }  // namespace

@@ -309,6 +309,17 @@ TEST(Results, RefusesFilesThatAreNotOurs) {
   EXPECT_THROW(ResultsReader(d / "truncated.h5"), InputError);
   const std::string what = input_error([&] { ResultsReader r(d / "text.h5"); });
   EXPECT_NE(what.find("not an HDF5 file"), std::string::npos) << what;
+  EXPECT_EQ(input_error([&] { ResultsReader r(d / "missing.h5"); }),
+            (d / "missing.h5").string() + ": no such file");
+  // A folder, a device and a FIFO (which must not block) in the words of every input file.
+  fs::create_directories(d / "folder.h5");
+  EXPECT_EQ(input_error([&] { ResultsReader r(d / "folder.h5"); }),
+            (d / "folder.h5").string() + ": is a folder, not a results file");
+  EXPECT_EQ(input_error([&] { ResultsReader r("/dev/zero"); }),
+            "/dev/zero: not a regular file (a results file is an HDF5 file)");
+  ASSERT_EQ(::mkfifo((d / "fifo.h5").c_str(), 0600), 0);
+  EXPECT_EQ(input_error([&] { ResultsReader r(d / "fifo.h5"); }),
+            (d / "fifo.h5").string() + ": not a regular file (a results file is an HDF5 file)");
   // An HDF5 file of another program, and one whose schema is a number (reported as no schema
   // at all).
   H5::H5File((d / "other.h5").string(), H5F_ACC_TRUNC).close();

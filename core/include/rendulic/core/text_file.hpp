@@ -26,6 +26,18 @@ namespace rendulic {
 std::string read_input_text(const std::string& path, const std::string& what,
                             std::size_t max_bytes);
 
+// The refusal of an input that is not a regular file, in the words every command uses (a
+// results file, a packing, a UMAT library and read_input_text's text files): "SHOWN: no such
+// file", "SHOWN: cannot read WHAT: REASON", "SHOWN: is a folder, not a WHAT" and "SHOWN: not a
+// regular file (a WHAT is FORM)" for a device, FIFO or socket; FORM says what the file should
+// be ("a text file", "an HDF5 file"). Checked with stat, which does not block on a FIFO;
+// returns quietly for a regular file (or a link to one).
+void refuse_unless_regular_file(const std::filesystem::path& path, const std::string& shown,
+                                const std::string& what, const std::string& form);
+// The same refusal for a file type already known (st_mode of an open descriptor).
+void refuse_unless_regular_mode(unsigned mode, const std::string& shown, const std::string& what,
+                                const std::string& form);
+
 // The file a name stands for: a symbolic link followed to its target (which may not exist yet),
 // at most 40 deep as the kernel does; any other name as it is. Writers that replace a file by
 // renaming onto it replace the target, so that the link stays.
