@@ -297,7 +297,7 @@ std::filesystem::path probe_packing(const ProbeRequest& r) {
   t0 = Clock::now();
   fit_state_envelopes(sc, out, group);
   out.attr(paths::kTimings, "fits", since(t0));
-  if (r.summary) print_summary(ResultsReader(out.temporary_path()), group);
+  if (r.summary) print_summary(out.read_back(), group);
   out.commit();
   log::info("wrote ", out.final_path().string());
   return out.final_path();

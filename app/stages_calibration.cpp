@@ -22,8 +22,7 @@ void run_calibration_stage(const Scenario& scenario, ResultsWriter& out, const R
   CalibrationPlan plan = calibration_plan(calibration_settings_from(scenario));
   CalibrationOptions& opt = plan.options;
   opt.solver.threads = ctx.threads;  // --threads: the fits' threads too (docs/calibration.md)
-  const CalibrationData data =
-      load_calibration_data(out.temporary_path(), plan.load, out.final_path());
+  const CalibrationData data = load_calibration_data(out.read_back(), plan.load);
   const std::vector<std::string>& models = plan.models;
   std::vector<ModelScore> scores;
   // One report per law: a stop asked for (Ctrl-C in Python) ends the stage between two laws,

@@ -236,15 +236,15 @@ void register_fit_keys(ScenarioSchema& s) {
 }
 
 void fit_state_envelopes(const Scenario& sc, ResultsWriter& out, const std::string& state_group) {
-  // Read from the temporary file, named as the file the run writes: the `error` of an envelope
-  // that cannot be fitted is stored, and named a file that was gone once the run ended.
-  rendulic::fit_state_envelopes(ResultsReader(out.temporary_path(), out.final_path()), out,
-                                state_group, fit_options(sc, "stress"), fit_options(sc, "fabric"));
+  // read_back(): the `error` of an envelope that cannot be fitted is stored, and named the
+  // temporary file, gone once the run ended.
+  rendulic::fit_state_envelopes(out.read_back(), out, state_group, fit_options(sc, "stress"),
+                                fit_options(sc, "fabric"));
 }
 
 void stage_fits(const Scenario& sc, ResultsWriter& out, const RunContext& ctx) {
-  const FitAllSummary s = fit_envelopes(ResultsReader(out.temporary_path(), out.final_path()), out,
-                                        fit_options(sc, "stress"), fit_options(sc, "fabric"));
+  const FitAllSummary s =
+      fit_envelopes(out.read_back(), out, fit_options(sc, "stress"), fit_options(sc, "fabric"));
   (void)ctx;
   log::info("fits: ", s.fitted, " fitted, ", s.failed, " not fittable");
 }

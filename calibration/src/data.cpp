@@ -125,13 +125,15 @@ EnvelopeRecord calibration_envelope(const ResultsReader& r, const std::string& g
 
 }  // namespace
 
-CalibrationData load_calibration_data(const std::filesystem::path& file, const LoadOptions& options,
-                                      const std::filesystem::path& shown_as) {
+CalibrationData load_calibration_data(const std::filesystem::path& file,
+                                      const LoadOptions& options) {
+  return load_calibration_data(ResultsReader(file), options);
+}
+
+CalibrationData load_calibration_data(const ResultsReader& r, const LoadOptions& options) {
   std::string why;
   if (!options.IsValid(&why)) throw InputError("calibration data: " + why);
-  const std::filesystem::path& shown = shown_as.empty() ? file : shown_as;
-  const ResultsReader r(file, shown);
-  const std::string name = shown.string();
+  const std::string name = r.path().string();
   CalibrationData data;
   data.source = name;
   if (!r.exists(paths::kMaterial)) throw InputError(name + ": no /material group");

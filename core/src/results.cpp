@@ -834,6 +834,10 @@ std::string ResultsWriter::keep_partial() {
 const std::vector<std::string>& ResultsWriter::notes() const { return impl_->notes; }
 const fs::path& ResultsWriter::final_path() const { return impl_->final_path; }
 const fs::path& ResultsWriter::temporary_path() const { return impl_->tmp_path; }
+
+ResultsReader ResultsWriter::read_back() const {
+  return ResultsReader(impl_->tmp_path, impl_->final_path);
+}
 fs::path ResultsWriter::partial_path() const { return with_suffix(impl_->final_path, ".partial"); }
 
 // ========================================================================================

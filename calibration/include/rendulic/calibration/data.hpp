@@ -14,6 +14,7 @@
 
 #include "rendulic/core/conventions.hpp"
 #include "rendulic/core/envelope_record.hpp"
+#include "rendulic/core/results.hpp"
 
 namespace rendulic::calibration {
 
@@ -72,13 +73,14 @@ struct LoadOptions {
   bool IsValid(std::string* why) const;
 };
 
-// Throws InputError naming the file (as `shown_as`, when given: a run reads its temporary file
-// under the final name) and the culprit: no /states, a requested label that does not exist (the
-// message lists the ones that do), a requested state without envelopes, no envelope at all,
-// malformed envelope datasets.
+// Throws InputError naming the file (as the reader names it: a run reads its temporary file
+// under the final name, ResultsWriter::read_back) and the culprit: no /states, a requested
+// label that does not exist (the message lists the ones that do), a requested state without
+// envelopes, no envelope at all, malformed envelope datasets.
+CalibrationData load_calibration_data(const ResultsReader& results,
+                                      const LoadOptions& options = {});
 CalibrationData load_calibration_data(const std::filesystem::path& file,
-                                      const LoadOptions& options = {},
-                                      const std::filesystem::path& shown_as = {});
+                                      const LoadOptions& options = {});
 
 // Envelope from probe directions and amplitude with the strain pairs filled in (core's
 // probe_strain); stress and fabric left empty for the caller.

@@ -18,6 +18,8 @@
 
 namespace rendulic {
 
+class ResultsReader;
+
 class ResultsWriter {
  public:
   // A new file that will become `final_path` on commit(); creates the folder if needed and
@@ -82,6 +84,9 @@ class ResultsWriter {
 
   const std::filesystem::path& final_path() const;
   const std::filesystem::path& temporary_path() const;
+  // A reader of what has been written so far, named as the final file in its messages and in
+  // what it stores (a fit's `error`): the temporary's name is gone once the writer commits.
+  ResultsReader read_back() const;
   // FINAL.partial: where a failed run keeps its completed stages, and resume() starts from.
   std::filesystem::path partial_path() const;
 
