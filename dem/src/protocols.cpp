@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "rendulic/core/conventions.hpp"
+#include "rendulic/core/decimal.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/dem/cell.hpp"
 
@@ -23,7 +24,8 @@ bool fail(std::string* why, const std::string& m) {
 bool GasOptions::IsValid(std::string* why) const {
   if (n_particles < 2) return fail(why, "n_particles must be at least 2");
   if (!(volume_fraction >= kGasVolumeFractionMin && volume_fraction <= kGasVolumeFractionMax))
-    return fail(why, "gas volume fraction must be in [1e-6, 0.4]");
+    return fail(why, "gas volume fraction must be in [" + decimal_g(kGasVolumeFractionMin) + ", " +
+                         decimal_g(kGasVolumeFractionMax) + "]");
   if (!(velocity >= 0 && std::isfinite(velocity))) return fail(why, "gas velocity must be >= 0");
   return true;
 }

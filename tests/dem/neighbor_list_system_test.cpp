@@ -234,7 +234,7 @@ TEST(NeighborList, AGasFarTooDiluteForOneBinPerRangeIsMadeAndStepped) {
   g.volume_fraction = 1e-300;
   std::string why;
   EXPECT_FALSE(g.IsValid(&why));
-  EXPECT_EQ(why, "gas volume fraction must be in [1e-6, 0.4]");
+  EXPECT_EQ(why, "gas volume fraction must be in [1e-06, 0.4]");
 }
 
 TEST(NeighborList, HalfSkinsStayWithinTheirBounds) {
