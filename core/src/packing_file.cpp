@@ -258,6 +258,8 @@ Packing read_lammps_data(const fs::path& file) {
           a[k] = in.number(w[2 + k], k == 0 ? "diameter" : k == 1 ? "density" : "position");
         if (!(a[0] > 0))
           in.fail("a diameter of " + w[2] + ": not a sphere (point particles have 0)");
+        // As LAMMPS refuses it ("Invalid density"): the mass would be zero or negative.
+        if (!(a[1] > 0)) in.fail("a density of " + w[3] + ": a density is positive");
         atoms.push_back(a);
       } else if (name == "Velocities") {
         if (w.size() < 4) in.fail("a Velocities line of fewer than 4 columns (id vx vy vz)");

@@ -391,6 +391,16 @@ TEST(Probe, BadPackingFilesExitTwoWithOneLine) {
       "ITEM: TIMESTEP\n0\nITEM: NUMBER OF ATOMS\n1000000000000\nITEM: BOX BOUNDS pp pp pp\n"
       "0 1\n0 1\n0 1\nITEM: ATOMS id radius x y z\n1 0.1 0.5 0.5 0.5\n",
       "the snapshot ends after 1 of 1000000000000 atoms");
+  expect_refused("point.data",
+                 data_file(kBox, "Atoms # sphere",
+                           "1 1 0 2000 0.001 0.001 0.001\n2 1 0.002 2000 0.005 0.005 0.005\n"),
+                 "a diameter of 0: not a sphere (point particles have 0)");
+  // LAMMPS refuses it too; it was read, and only warned about as differing from
+  // material.density.
+  expect_refused("density.data",
+                 data_file(kBox, "Atoms # sphere",
+                           "1 1 0.002 -2000 0.001 0.001 0.001\n2 1 0.002 2000 0.005 0.005 0.005\n"),
+                 "a density of -2000: a density is positive");
   expect_refused("degenerate.data",
                  data_file("0 0.01 xlo xhi\n0.01 0.01 ylo yhi\n0 0.01 zlo zhi\n", "Atoms # sphere",
                            "1 1 0.002 2000 0.001 0.001 0.001\n2 1 0.002 2000 0.005 0.005 0.005\n"),
