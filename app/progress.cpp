@@ -7,8 +7,8 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
-#include <cstdio>
 
+#include "rendulic/core/decimal.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/log.hpp"
 
@@ -33,22 +33,24 @@ std::function<bool()> stop_checker() {
 
 std::string human_seconds(double s) {
   constexpr double kYear = 365.25 * 86400;
-  char buf[48];
   if (!std::isfinite(s) || s < 0) return "?";
-  if (s < 60) {
-    std::snprintf(buf, sizeof buf, "%.0f s", s);
-  } else if (s < 3600) {
+  const auto two_digits = [](int v) { return (v < 10 ? "0" : "") + std::to_string(v); };
+  if (s < 60) return decimal_fixed(s, 0) + " s";
+  if (s < 3600) {
     const int m = static_cast<int>(s / 60);
-    std::snprintf(buf, sizeof buf, "%d min %02d s", m, static_cast<int>(s - 60 * m));
-  } else if (s < 2 * 86400) {
-    const int h = static_cast<int>(s / 3600);
-    std::snprintf(buf, sizeof buf, "%d h %02d min", h, static_cast<int>((s - 3600 * h) / 60));
-  } else if (s < 2 * kYear) {
-    std::snprintf(buf, sizeof buf, "%.0f days", s / 86400);
-  } else {
-    std::snprintf(buf, sizeof buf, "%.3g years", s / kYear);
+    return std::to_string(m) + " min " + two_digits(static_cast<int>(s - 60 * m)) + " s";
   }
-  return buf;
+  if (s < 2 * 86400) {
+    const int h = static_cast<int>(s / 3600);
+    return std::to_string(h) + " h " + two_digits(static_cast<int>((s - 3600 * h) / 60)) + " min";
+  }
+  if (s < 2 * kYear) return decimal_fixed(s / 86400, 0) + " days";
+  return decimal_g(s / kYear, 3) + " years";
+}
+
+std::string percent_done(double fraction) {
+  std::string text = decimal_fixed(100 * std::clamp(fraction, 0.0, 1.0), 1) + "%";
+  return std::string(text.size() < 6 ? 6 - text.size() : 0, ' ') + text;
 }
 
 std::string time_left(double fraction, double spent) {
@@ -137,10 +139,9 @@ void Progress::show_locked(double fraction, const std::string& detail, Clock::ti
   const double f = std::clamp(fraction, 0.0, 1.0);
   const double spent = std::chrono::duration<double>(now - from).count();
   const std::string left = time_left(f, spent);
-  char pct[16];
-  std::snprintf(pct, sizeof pct, "%5.1f%%", 100 * f);
   std::string text = "[" + stage_ + "] " + task_ + (detail.empty() ? "" : " " + detail) + " " +
-                     pct + ", " + human_seconds(elapsed()) + " in stage, about " + left + " left";
+                     percent_done(f) + ", " + human_seconds(elapsed()) + " in stage, about " +
+                     left + " left";
   if (live_)
     log::live(text);
   else

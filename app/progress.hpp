@@ -43,8 +43,12 @@ void throw_if_stopped();
 // The check a probe campaign takes (dem::ProbeOptions::stop).
 std::function<bool()> stop_checker();
 
-// "12 s", "3 min 05 s", "1 h 02 min", "3 days", "35 years": a duration for people.
+// "12 s", "3 min 05 s", "1 h 02 min", "3 days", "35 years": a duration for people. With a
+// decimal point whatever locale the process (a Python session) set, as every number rendulic
+// writes (core/decimal.hpp).
 std::string human_seconds(double seconds);
+// "  2.5%": the progress line's share done, five characters wide, of a fraction in [0, 1].
+std::string percent_done(double fraction);
 // The time a task still needs if the rest goes at the pace so far ("?" while unknown): from
 // 0.1 % done, or from kPaceAfter seconds in however little is done, so that a stage of years (a
 // mistyped rate) says so instead of "?" for ever.

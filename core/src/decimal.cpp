@@ -42,6 +42,13 @@ std::string decimal_g(double v, int digits) {
   return std::string(buf, r.ptr);
 }
 
+std::string decimal_fixed(double v, int decimals) {
+  // %f of 1e308 has 309 digits before the point.
+  char buf[400];
+  const auto r = std::to_chars(buf, buf + sizeof buf, v, std::chars_format::fixed, decimals);
+  return r.ec == std::errc{} ? std::string(buf, r.ptr) : decimal_g(v);
+}
+
 std::string decimal_text(double v) {
   if (!std::isfinite(v)) return decimal_g(v);
   for (int digits = 6; digits < 17; ++digits) {

@@ -3,7 +3,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <limits>
 #include <numeric>
 #include <sstream>
@@ -606,9 +605,8 @@ WindowMean window_mean(const std::vector<double>& x, const std::vector<double>& 
 
 std::int64_t step_count(double steps, const std::string& what) {
   if (!(steps <= kMaxSteps)) {
-    char text[64];
-    std::snprintf(text, sizeof text, " needs %.3g time steps, more than %.0e", steps, kMaxSteps);
-    throw InputError(what + text);
+    throw InputError(what + " needs " + decimal_g(steps, 3) + " time steps, more than " +
+                     decimal_g(kMaxSteps, 1));
   }
   return static_cast<std::int64_t>(steps);
 }

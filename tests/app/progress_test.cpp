@@ -13,6 +13,8 @@
 #include <tuple>
 #include <vector>
 
+#include "comma_locale.hpp"
+
 namespace rendulic::app {
 namespace {
 
@@ -62,6 +64,23 @@ TEST(Progress, TimeLeftIsKnownAfterAFewSecondsHoweverLittleIsDone) {
   EXPECT_EQ(human_seconds(3 * 86400.0), "3 days");
   EXPECT_EQ(human_seconds(1e14), "3.17e+06 years");
   EXPECT_EQ(human_seconds(std::numeric_limits<double>::infinity()), "?");
+}
+
+TEST(Progress, ThePercentageIsFiveCharactersWide) {
+  EXPECT_EQ(percent_done(0.0), "  0.0%");
+  EXPECT_EQ(percent_done(0.025), "  2.5%");
+  EXPECT_EQ(percent_done(0.5), " 50.0%");
+  EXPECT_EQ(percent_done(1.0), "100.0%");
+  EXPECT_EQ(percent_done(2.0), "100.0%");
+}
+
+// A Python session that set a locale with a decimal comma had its progress lines read
+// "  2,5%" and "3,17e+06 years" (printf follows the process's locale).
+using ProgressInACommaLocale = CommaLocale;
+TEST_F(ProgressInACommaLocale, NumbersKeepTheirPoint) {
+  EXPECT_EQ(percent_done(0.025), "  2.5%");
+  EXPECT_EQ(human_seconds(1e14), "3.17e+06 years");
+  EXPECT_EQ(human_seconds(12.4), "12 s");
 }
 
 }  // namespace

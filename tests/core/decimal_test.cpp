@@ -16,6 +16,7 @@
 #include <limits>
 #include <vector>
 
+#include "comma_locale.hpp"
 #include "rendulic/core/conventions.hpp"
 #include "rendulic/core/result_paths.hpp"
 #include "rendulic/core/scenario.hpp"
@@ -58,6 +59,18 @@ TEST(Decimal, GIsPrintfsGInTheCLocale) {
   EXPECT_EQ(decimal_g(5e-5), "5e-05");
 }
 
+TEST(Decimal, FixedIsPrintfsFInTheCLocale) {
+  ASSERT_STREQ(std::setlocale(LC_NUMERIC, nullptr), "C");
+  char buf[400];
+  for (const double v : samples())
+    for (const int decimals : {0, 1, 3}) {
+      std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
+      EXPECT_EQ(decimal_fixed(v, decimals), buf) << v;
+    }
+  EXPECT_EQ(decimal_fixed(2.45, 1), "2.5");
+  EXPECT_EQ(decimal_fixed(59.6, 0), "60");
+}
+
 // The shortest %g text that reads back exactly: the loop over precisions with printf and
 // strtod (the C locale's) gives the same text.
 TEST(Decimal, TextIsTheShortestGThatReadsBackExactly) {
@@ -86,37 +99,12 @@ TEST(Decimal, RefusalsNameTheTextInTheSameWords) {
   EXPECT_EQ(not_a_decimal_number("1,5\x01"), "'1,5\\x01' is not a finite decimal number");
 }
 
-// A locale whose decimal point is a comma, compiled from Debian's locale sources (the locales
-// package, which .ci/setup.sh installs) into the test's own folder: the machine's locales are
-// not changed.
-class CommaLocale : public ::testing::Test {
- protected:
-  void SetUp() override {
-    if (!fs::exists("/usr/share/i18n/locales/de_DE"))
-      GTEST_SKIP() << "no locale sources (Debian package locales): cannot make a locale with a "
-                      "decimal comma";
-    const fs::path dir = fs::path(RENDULIC_TEST_TMP) / "locales";
-    fs::create_directories(dir);
-    if (!fs::exists(dir / "de_DE.UTF-8" / "LC_NUMERIC")) {
-      const std::string command =
-          "localedef -i de_DE -f UTF-8 '" + (dir / "de_DE.UTF-8").string() + "' 2>&1";
-      ASSERT_EQ(std::system(command.c_str()), 0) << command;
-    }
-    ::setenv("LOCPATH", dir.c_str(), 1);
-    ASSERT_NE(std::setlocale(LC_ALL, "de_DE.UTF-8"), nullptr);
-    ASSERT_EQ(printf_g(0.66, 6), "0,66") << "the locale has no decimal comma";
-  }
-  void TearDown() override {
-    std::setlocale(LC_ALL, "C");
-    ::unsetenv("LOCPATH");
-  }
-};
-
 TEST_F(CommaLocale, NumbersAreReadAndWrittenWithAPoint) {
   EXPECT_EQ(decimal_number("1.5"), 1.5);
   EXPECT_EQ(decimal_number("-2.5e-3"), -2.5e-3);
   EXPECT_FALSE(decimal_number("1,5").has_value());
   EXPECT_EQ(decimal_g(0.66), "0.66");
+  EXPECT_EQ(decimal_fixed(2.5, 1), "2.5");
   EXPECT_EQ(decimal_text(0.1), "0.1");
   EXPECT_EQ(decimal_text(1.0 / 3.0), "0.3333333333333333");
   EXPECT_EQ(toml_number(2.5), "2.5");

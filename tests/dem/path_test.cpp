@@ -9,6 +9,7 @@
 #include <cmath>
 #include <random>
 
+#include "comma_locale.hpp"
 #include "input_error.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/dem/probe_minimise.hpp"
@@ -206,6 +207,14 @@ TEST(Paths, ARateNeedingMoreThanKMaxStepsIsRefusedNamingIt) {
   EXPECT_EQ(step_count(12.0, "x"), 12);
   EXPECT_NE(input_error([] { step_count(std::nan(""), "x"); }).find("x needs nan"),
             std::string::npos);
+}
+
+// The message's numbers keep their point under a Python session's decimal-comma locale (it read
+// "needs 1,5e+16 time steps").
+using StepCountInACommaLocale = CommaLocale;
+TEST_F(StepCountInACommaLocale, TheRefusalKeepsItsPoint) {
+  EXPECT_EQ(input_error([] { step_count(1.5e16, "path.rate"); }),
+            "path.rate needs 1.5e+16 time steps, more than 1e+15");
 }
 
 TEST(Paths, IsotropicLoadingRaisesTheVolumeFractionByTheClosedForm) {

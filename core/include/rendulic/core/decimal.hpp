@@ -22,6 +22,10 @@ std::optional<double> decimal_number(const std::string& text);
 // the process's locale and wrote "0,66" in a session with a decimal comma.
 std::string decimal_g(double v, int digits = 6);
 
+// v with `decimals` digits after the point as printf's %.*f writes it in the C locale ("2.5",
+// "47"): the text of a number in messages that give a fixed number of decimals.
+std::string decimal_fixed(double v, int decimals);
+
 // The shortest %g text of v (6 to 17 significant digits) that decimal_number reads back as v
 // exactly; "inf", "-inf" and "nan" for those.
 std::string decimal_text(double v);
