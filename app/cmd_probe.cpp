@@ -27,6 +27,7 @@
 #include "packing_system.hpp"
 #include "pipeline.hpp"
 #include "progress.hpp"
+#include "rendulic/core/decimal.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/log.hpp"
 #include "rendulic/core/option_table.hpp"
@@ -242,7 +243,7 @@ std::filesystem::path probe_packing(const ProbeRequest& r) {
     }
     if (!frictional && !(rest.at_rest.ratio < dem::kEquilibrium))
       throw InputError(packing.origin + ": not at rest after minimisation (net force " +
-                       std::to_string(rest.at_rest.ratio) + " of the mean contact force)");
+                       decimal_g(rest.at_rest.ratio) + " of the mean contact force)");
     const Moved m = what_moved(packing, *sys, r_mean);
     log::info("at rest: relaxed for ", rest.relaxed.time, " s (", rest.relaxed.steps,
               " steps), then ", rest.minimised.iterations, " FIRE iterations: net force ",

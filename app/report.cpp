@@ -13,6 +13,7 @@
 #include "commands.hpp"
 #include "rendulic/calibration/report.hpp"
 #include "rendulic/core/conventions.hpp"
+#include "rendulic/core/decimal.hpp"
 #include "rendulic/core/envelope_io.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/result_paths.hpp"
@@ -171,7 +172,7 @@ double plastic_amplitude(const std::vector<StateInfo>& states, std::string* note
     if (s.has_range && !(s.yield_strain <= largest_yield)) largest_yield = s.yield_strain;
   }
   if (!all_ranges) {
-    *note = "plastic amplitude " + std::to_string(common.back()) +
+    *note = "plastic amplitude " + decimal_g(common.back()) +
             " (no elastic range measured: not checked against the yield strain)";
     return common.back();
   }

@@ -23,6 +23,7 @@
 #include "pipeline.hpp"
 #include "progress.hpp"
 #include "rendulic/core/conventions.hpp"
+#include "rendulic/core/decimal.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/log.hpp"
 #include "rendulic/core/result_paths.hpp"
@@ -274,7 +275,7 @@ std::vector<std::pair<dem::DemSystem, dem::RestSummary>> rest_states(
     if (!frictional && !(summaries[k].at_rest.ratio < dem::kEquilibrium))
       throw std::runtime_error(
           "state " + labels[k] + ": not at rest after minimisation (net force " +
-          std::to_string(summaries[k].at_rest.ratio) + " of the mean contact force)");
+          decimal_g(summaries[k].at_rest.ratio) + " of the mean contact force)");
     out.emplace_back(std::move(*rested[k]), summaries[k]);
   }
   return out;

@@ -7,6 +7,7 @@
 #include <type_traits>
 
 #include "rendulic/core/conventions.hpp"
+#include "rendulic/core/decimal.hpp"
 #include "rendulic/core/envelope_io.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/log.hpp"
@@ -169,7 +170,7 @@ CalibrationData load_calibration_data(const ResultsReader& r, const LoadOptions&
       throw InputError(name + ": state '" + l + "' has non-finite stress or fabric");
     // The laws' density terms read them: NaN or 1e300 changed the fit without a word.
     if (!(s.volume_fraction >= 0.0 && s.volume_fraction < 1.0))
-      throw InputError(name + ":" + g + "@volume_fraction is " + std::to_string(s.volume_fraction) +
+      throw InputError(name + ":" + g + "@volume_fraction is " + decimal_g(s.volume_fraction) +
                        ", outside [0, 1)");
     if (!std::isfinite(s.eps_dev))
       throw InputError(name + ":" + g + "@eps_dev is not a finite number");

@@ -14,6 +14,7 @@
 #include "law_dispatch.hpp"
 #include "rendulic/core/affine_map.hpp"
 #include "rendulic/core/conventions.hpp"
+#include "rendulic/core/decimal.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/option_table.hpp"
 #include "rendulic/models/driver_core.hpp"
@@ -49,7 +50,7 @@ ParameterSpace::ParameterSpace(const models::Law& law, const std::vector<double>
       if (!(it->second.first < it->second.second) || it->second.first < info[i].lower ||
           it->second.second > info[i].upper)
         throw InputError("search bounds of '" + name + "' must lie within [" +
-                         std::to_string(info[i].lower) + ", " + std::to_string(info[i].upper) +
+                         decimal_g(info[i].lower) + ", " + decimal_g(info[i].upper) +
                          "] with lower < upper");
       f.lower = it->second.first;
       f.upper = it->second.second;

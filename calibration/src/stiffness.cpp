@@ -6,6 +6,7 @@
 
 #include "rendulic/core/affine_map.hpp"
 #include "rendulic/core/conventions.hpp"
+#include "rendulic/core/decimal.hpp"
 #include "rendulic/probes/envelope_fit.hpp"
 
 namespace rendulic::calibration {
@@ -90,7 +91,7 @@ RendulicStiffness fit_rendulic_stiffness(const EnvelopeRecord& env,
   // An elastic envelope should be centred: a centre beyond 5% of the minor axis says the
   // probes were not in the linear range (or the state was not relaxed).
   if (out.center.norm() > 0.05 * std::max(out.b, 1e-300))
-    out.note = std::string("centre ") + std::to_string(out.center.norm()) +
+    out.note = std::string("centre ") + decimal_g(out.center.norm()) +
                " Pa is more than 5% of the minor semi-axis: envelope not purely elastic?";
   return out;
 }

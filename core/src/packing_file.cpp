@@ -75,8 +75,8 @@ class Lines {
 
 void check_box(const Lines& at, double lo, double hi, const char* axis) {
   if (!(hi > lo))
-    at.fail(std::string("degenerate box: ") + axis + "hi <= " + axis + "lo (" + std::to_string(hi) +
-            " <= " + std::to_string(lo) + ")");
+    at.fail(std::string("degenerate box: ") + axis + "hi <= " + axis + "lo (" + decimal_g(hi) +
+            " <= " + decimal_g(lo) + ")");
 }
 
 double wrap(double x, double L) {

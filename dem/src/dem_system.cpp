@@ -23,6 +23,7 @@
 
 #include "contacts_first.hpp"
 #include "rendulic/core/conventions.hpp"
+#include "rendulic/core/decimal.hpp"
 #include "rendulic/core/errors.hpp"
 #include "vec4.hpp"
 
@@ -1784,8 +1785,8 @@ Measures DemSystem::measure() const {
   else
     m.inertial_number = std::numeric_limits<double>::infinity();
   if (!std::isfinite(m.kinetic_energy) || !std::isfinite(m.elastic_energy) || !m.stress.allFinite())
-    throw std::runtime_error("DEM integration diverged (non-finite energy or stress) at t = " +
-                             std::to_string(time_) + " s");
+    throw std::runtime_error(
+        "DEM integration diverged (non-finite energy or stress) at t = " + decimal_g(time_) + " s");
   return m;
 }
 

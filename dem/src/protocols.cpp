@@ -421,13 +421,13 @@ CompressSummary compress_isotropic(DemSystem& sys, const CompressOptions& o, con
     if (last) break;
   }
   if (to_pressure && !reached)
-    throw InputError("isotropic compression: P* = " + std::to_string(o.target_pressure_star) +
-                     " not reached by the volume fraction bound " + std::to_string(o.target_nu) +
-                     " (P* there " + std::to_string(pressure(sys.stress()) / mat.k_star()) +
+    throw InputError("isotropic compression: P* = " + decimal_g(o.target_pressure_star) +
+                     " not reached by the volume fraction bound " + decimal_g(o.target_nu) +
+                     " (P* there " + decimal_g(pressure(sys.stress()) / mat.k_star()) +
                      "); raise the bound");
   if (next_snap < snap_at.size())
     throw InputError("isotropic compression: a snapshot volume fraction lies beyond " +
-                     std::to_string(sys.volume_fraction()) + ", where P* reached its target");
+                     decimal_g(sys.volume_fraction()) + ", where P* reached its target");
   s.time = sys.time() - t0;
   if (progress) progress(1.0);
   return s;
@@ -496,9 +496,9 @@ PathSummary run_path(DemSystem& sys, const PathOptions& o, const SampleFn& sampl
     stress_diag = sys.stress().diagonal();
     p0 = stress_diag.sum() / 3.0;
     if (!(p0 > 0))
-      throw InputError(
-          "path: a " + o.type +
-          " path needs a packing under pressure at its start (p = " + std::to_string(p0) + " Pa)");
+      throw InputError("path: a " + o.type +
+                       " path needs a packing under pressure at its start (p = " + decimal_g(p0) +
+                       " Pa)");
     for (int a = 1; a < 3; ++a) control.axis[a].mode = AxisControl::Mode::kStress;
   }
   // Samples carry the path's rate (max |D_aa| of the imposed axes = rate) and the inertial
@@ -534,7 +534,7 @@ PathSummary run_path(DemSystem& sys, const PathOptions& o, const SampleFn& sampl
     held_rate.update(it, sys, &rate);
     const double inc = kFactor * rate * dt;
     if (it > max_steps)
-      throw InputError("path: " + o.type + " did not reach s = " + std::to_string(o.eps_dev_max) +
+      throw InputError("path: " + o.type + " did not reach s = " + decimal_g(o.eps_dev_max) +
                        " in " + std::to_string(max_steps) + " steps (the strain stopped growing)");
     const double now = path_strain();
     double event =

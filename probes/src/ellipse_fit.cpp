@@ -14,6 +14,7 @@
 
 #include "fit_internal.hpp"
 #include "rendulic/core/conventions.hpp"
+#include "rendulic/core/decimal.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/probes/envelope_fit.hpp"
 
@@ -564,7 +565,7 @@ EnvelopeFit fit_ellipse_or_circle(const Envelope& env, const FitOptions& options
         nz.q, Eigen::Vector2d(f.params[0], f.params[1]), 0.5 * (a + b), t, options.loss, scale,
         options.compute_covariance, options.max_iterations);
     EnvelopeFit c = circle_result(nz, fc, options, used_theta);
-    c.selection_note = "ellipse requested; axes equal within " + std::to_string(options.circle_z) +
+    c.selection_note = "ellipse requested; axes equal within " + decimal_g(options.circle_z) +
                        " standard errors: circle, inclination undefined";
     return c;
   }

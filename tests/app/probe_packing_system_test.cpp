@@ -404,7 +404,7 @@ TEST(Probe, BadPackingFilesExitTwoWithOneLine) {
   expect_refused("degenerate.data",
                  data_file("0 0.01 xlo xhi\n0.01 0.01 ylo yhi\n0 0.01 zlo zhi\n", "Atoms # sphere",
                            "1 1 0.002 2000 0.001 0.001 0.001\n2 1 0.002 2000 0.005 0.005 0.005\n"),
-                 "degenerate box");
+                 "degenerate box: yhi <= ylo (0.01 <= 0.01)");
   // Each length finite, their product not: the volume fraction and the cell widths would be
   // NaN (a segmentation fault in the pair search before).
   expect_refused("huge.data",

@@ -67,6 +67,12 @@ TEST(ParameterSpaceNames, AFreeParameterListedTwiceOrUnknownIsRefusedNamingIt) {
               ParameterSpace(*law, law->parameters(), {"M_ss"}, {{"nope", {0.0, 1.0}}});
             }),
             "search bounds given for 'nope', not free");
+  // The law's range in the words of every number rendulic writes: std::to_string wrote
+  // "[0.001000, 3.000000]", and "0.000000" for a bound below 1e-6.
+  EXPECT_EQ(rendulic::testing::input_error([&] {
+              ParameterSpace(*law, law->parameters(), {"M_ss"}, {{"M_ss", {0.0, 1.0}}});
+            }),
+            "search bounds of 'M_ss' must lie within [0.001, 3] with lower < upper");
 }
 
 TEST(DriverLoad, IsTheMostSubstepsOfAnyIntegratedProbe) {
