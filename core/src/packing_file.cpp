@@ -419,15 +419,35 @@ Packing read_lammps_dump(const fs::path& file) {
   return p;
 }
 
+namespace {
+
+// "; its states are a, b": the labels under /states that hold a configuration, so that a
+// mistyped label or a group that is not a state can be mended without another command.
+std::string its_states(const ResultsReader& r) {
+  constexpr std::size_t kShown = 12;
+  if (!r.is_group(paths::states())) return "; it holds no " + paths::states() + " group";
+  std::vector<std::string> labels;
+  for (const std::string& c : r.children(paths::states()))
+    if (r.exists(paths::state(c) + datasets::kPositions)) labels.push_back(c);
+  if (labels.empty()) return "; no state in " + paths::states() + " holds a configuration";
+  std::string text = "; its states are ";
+  for (std::size_t k = 0; k < std::min(labels.size(), kShown); ++k)
+    text += (k ? ", " : "") + labels[k];
+  if (labels.size() > kShown)
+    text += " and " + std::to_string(labels.size() - kShown) + " more (rendulic inspect)";
+  return text;
+}
+
+}  // namespace
+
 Packing read_results_state(const fs::path& file, const std::string& group) {
   const ResultsReader r(file);
-  if (!r.is_group(group))
-    throw InputError(file.string() + ": no state " + group + " (states: see rendulic inspect)");
+  if (!r.is_group(group)) throw InputError(file.string() + ": no state " + group + its_states(r));
   Packing p;
   p.origin = file.string() + ":" + group;
   const std::string pos = group + datasets::kPositions;
   if (!r.exists(pos))
-    throw InputError(p.origin + ": the state holds no configuration (positions, radii)");
+    throw InputError(p.origin + ": not a state (it holds no positions and radii)" + its_states(r));
   p.positions = r.read_matrix(pos);
   p.radii = r.read_vector(group + datasets::kRadii);
   const std::vector<double> L = r.read_vector(group + datasets::kCellLengths);

@@ -446,6 +446,18 @@ TEST(Probe, BadPackingFilesExitTwoWithOneLine) {
   expect_refused("short.data",
                  data_file(kBox, "Atoms # sphere", "1 1 0.002 2000 0.001 0.001 0.001\n"),
                  "the header 2 atoms");
+  // A label that is not there, and groups that are not states, list the states that are.
+  const std::string t = tiny().string();
+  for (const auto& [state, words] : std::vector<std::pair<std::string, std::string>>{
+           {t + ":nope", t + ": no state /states/nope; its states are a, b"},
+           {t + ":/states/", t + ":/states/: not a state (it holds no positions and radii); its "
+                                 "states are a, b"},
+           {t + ":/material", t + ":/material: not a state (it holds no positions and radii); "
+                                  "its states are a, b"}}) {
+    const CliResult r = probe(state + " --out /tmp/never");
+    EXPECT_EQ(r.code, 2) << state;
+    EXPECT_EQ(r.err, "rendulic: " + words + "\n");
+  }
   const CliResult missing = probe("/nonexistent/packing.data --out /tmp/never");
   EXPECT_EQ(missing.code, 2);
   EXPECT_NE(missing.err.find("/nonexistent/packing.data: no such file"), std::string::npos)
