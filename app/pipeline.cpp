@@ -37,6 +37,10 @@ struct Stage {
   StageFn run;  // empty for a stage that only reads the committed file
   PostFn post;  // runs on the committed file instead (the report reads what was written)
   bool reads_the_run = false;  // works on what the DEM stages before it wrote
+  // The stages of which at least one must run before it in the same run: what it works on
+  // lives only in the run's memory (the live packing, the path's snapshots, the relaxed states)
+  // or, for the calibration, is the envelopes the run measures.
+  std::vector<std::string> needs_one_of = {};
 };
 
 void report_stage(const Scenario& scenario, const std::filesystem::path& results,
@@ -49,27 +53,24 @@ void report_stage(const Scenario& scenario, const std::filesystem::path& results
 
 const std::vector<Stage>& stages() {
   static const std::vector<Stage> table = {
-      {"prepare", stage_prepare},
-      {"isotropic", stage_isotropic},
-      {"path", stage_path},
-      {"states", stage_states},
-      {"elastic_range", stage_elastic_range},
-      {"probes", stage_probes},
-      {"linear_response", stage_linear_response},
-      {"pressure", stage_pressure},
-      {"fits",
-       [](const Scenario& sc, ResultsWriter& out, const RunContext& ctx, DemRunSession&) {
-         stage_fits(sc, out, ctx);
-       },
-       {},
-       true},
-      {"calibration",
-       [](const Scenario& sc, ResultsWriter& out, const RunContext& ctx, DemRunSession&) {
-         run_calibration_stage(sc, out, ctx);
-       },
-       {},
-       true},
-      {"report", {}, report_stage},
+      {.name = "prepare", .run = stage_prepare},
+      {.name = "isotropic", .run = stage_isotropic, .needs_one_of = {"prepare"}},
+      {.name = "path", .run = stage_path, .needs_one_of = {"prepare"}},
+      {.name = "states", .run = stage_states, .needs_one_of = {"path"}},
+      {.name = "elastic_range", .run = stage_elastic_range, .needs_one_of = {"states"}},
+      {.name = "probes", .run = stage_probes, .needs_one_of = {"states"}},
+      {.name = "linear_response", .run = stage_linear_response, .needs_one_of = {"states"}},
+      {.name = "pressure", .run = stage_pressure, .needs_one_of = {"isotropic"}},
+      {.name = "fits",
+       .run = [](const Scenario& sc, ResultsWriter& out, const RunContext& ctx,
+                 DemRunSession&) { stage_fits(sc, out, ctx); },
+       .reads_the_run = true},
+      {.name = "calibration",
+       .run = [](const Scenario& sc, ResultsWriter& out, const RunContext& ctx,
+                 DemRunSession&) { run_calibration_stage(sc, out, ctx); },
+       .reads_the_run = true,
+       .needs_one_of = {"probes", "linear_response"}},
+      {.name = "report", .post = report_stage},
   };
   return table;
 }
@@ -99,7 +100,8 @@ void register_run_keys(ScenarioSchema& schema) {
               .help =
                   "Stages to run, executed in the fixed order prepare, isotropic, path, "
                   "states, elastic_range, probes, linear_response, pressure, fits, calibration, "
-                  "report; each at most once.",
+                  "report; each at most once, and each with the stages it builds on (docs/usage.md "
+                  "\"Results are atomic\").",
               .choices = names,
               .distinct = true});
   schema.add({.path = "report.figures",
@@ -160,8 +162,27 @@ void check_stages_available(const Scenario& scenario) {
     throw InputError("run.stages (" + scenario.origin("run.stages") +
                      "): no stage that computes anything; the report of an existing file is "
                      "`rendulic report FILE.h5`");
+  // A stage whose input the run would not make failed only when its turn came, after the
+  // stages before it (`run.stages = prepare, probes` prepared, then said "needs 'states'").
+  for (const auto& s : stages()) {
+    if (!stage_requested(scenario, s.name) || s.needs_one_of.empty()) continue;
+    if (std::any_of(s.needs_one_of.begin(), s.needs_one_of.end(),
+                    [&](const std::string& n) { return stage_requested(scenario, n); }))
+      continue;
+    std::string needed;
+    for (std::size_t k = 0; k < s.needs_one_of.size(); ++k)
+      needed += (k ? " or '" : "'") + s.needs_one_of[k] + "'";
+    throw InputError(
+        "run.stages (" + scenario.origin("run.stages") + "): stage '" + s.name +
+        "' needs the stage " + needed + " in the same run" +
+        (s.needs_one_of.front() == "states"
+             ? "; to probe a state of an existing file: `rendulic probe FILE.h5:LABEL`"
+         : std::string(s.name) == "calibration"
+             ? "; to calibrate on an existing file: `rendulic calibrate --results FILE.h5`"
+             : ""));
+  }
   // Cross-key rules of the DEM and probe stages, before the first (possibly long) stage runs.
-  dem::dem_options_from_scenario(scenario);
+  const dem::DemRunOptions dem_options = dem::dem_options_from_scenario(scenario);
   check_friction(scenario);
   if (stage_requested(scenario, "probes") || stage_requested(scenario, "linear_response") ||
       stage_requested(scenario, "elastic_range"))
@@ -172,8 +193,21 @@ void check_stages_available(const Scenario& scenario) {
     throw InputError("run: stage 'pressure' needs pressure.volume_fractions (" +
                      scenario.origin("pressure.volume_fractions") + ")");
   // The calibration's settings too (a UMAT's library and parameters file are loaded here).
-  if (stage_requested(scenario, "calibration"))
+  if (stage_requested(scenario, "calibration")) {
     calibration::calibration_plan(calibration::calibration_settings_from(scenario));
+    // The labels it names are this run's states (a mistyped one failed after every DEM stage).
+    const auto& labels = dem_options.state_labels;
+    for (const char* key : {"calibration.states", "calibration.holdout"})
+      for (const std::string& label : scenario.get_strings(key)) {
+        if (std::string(key) == "calibration.holdout" && (label == "auto" || label == "none"))
+          continue;
+        if (std::find(labels.begin(), labels.end(), label) != labels.end()) continue;
+        std::string known;
+        for (const std::string& l : labels) known += (known.empty() ? "" : ", ") + l;
+        throw InputError(std::string(key) + " (" + scenario.origin(key) + "): no state '" + label +
+                         "' in this run (states.labels: " + known + ")");
+      }
+  }
 }
 
 ResumePlan resume_plan(const Scenario& scenario, const ResultsReader& kept) {

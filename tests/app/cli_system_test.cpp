@@ -133,28 +133,62 @@ TEST(Cli, BadOverrideExits2NamingTheKey) {
 }
 
 TEST(Cli, StageFailingMidRunLeavesNoResultsFile) {
-  // The calibration stage needs states: after a small preparation it fails with the results
-  // file open, naming that file as the user will have it (it named the run's temporary file).
+  // A pressure the volume-fraction bound cannot reach: after a small preparation the isotropic
+  // stage fails with the results file open.
   const fs::path d = fresh_dir("mid_run");
   const fs::path scen = write_file(d / "s.toml",
-                                   "[run]\nstages = [\"prepare\", \"calibration\"]\n[dem]\n"
+                                   "[run]\nstages = [\"prepare\", \"isotropic\"]\n[dem]\n"
                                    "n_particles = 64\n[preparation]\nrate = 20000.0\n"
-                                   "gamma_b = 5.0\n[relax]\ntime_cap = 1e-4\n");
+                                   "gamma_b = 5.0\n[relax]\ntime_cap = 1e-4\n[isotropic]\n"
+                                   "pressure_star = 1.0\nnu_max = 0.66\n");
   const fs::path out = d / "out";
   const CmdResult r = rendulic("run " + scen.string() + " --out " + out.string());
   EXPECT_EQ(r.code, 2) << r.out;
   // The plan and the stages' starts (docs/usage.md "Progress and messages"), then one line.
-  EXPECT_NE(r.out.find("stages prepare, calibration"), std::string::npos) << r.out;
-  EXPECT_NE(r.out.find("[calibration] started"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("stages prepare, isotropic"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("[isotropic] started"), std::string::npos) << r.out;
   const std::string last = r.out.substr(r.out.rfind('\n', r.out.size() - 2) + 1);
-  EXPECT_EQ(last, "rendulic: " + (out / "results.h5").string() +
-                      ": no /states group (no relaxed states); completed stages (prepare) kept "
-                      "in " +
-                      (out / "results.h5.partial").string() + "\n")
-      << r.out;
+  EXPECT_EQ(last.rfind("rendulic: isotropic compression: P* = 1 not reached by the volume "
+                       "fraction bound 0.66 (P* there ",
+                       0),
+            0u)
+      << last;
+  const std::string kept = "; raise the bound; completed stages (prepare) kept in " +
+                           (out / "results.h5.partial").string() + "\n";
+  EXPECT_EQ(last.substr(last.size() - std::min(last.size(), kept.size())), kept) << last;
   EXPECT_FALSE(fs::exists(out / "results.h5"));
   for (const auto& e : fs::directory_iterator(out))
     EXPECT_EQ(e.path().filename(), "results.h5.partial") << "no temporary left behind";
+}
+
+// A stage whose input the run would not make (a label the run has no state of) is refused
+// before any work: `run.stages = prepare, probes` prepared, then said "needs 'states'".
+TEST(Cli, AStageWhoseInputTheRunWouldNotMakeIsRefusedBeforeAnyWork) {
+  const fs::path d = fresh_dir("needs");
+  const fs::path scen = write_file(d / "s.toml", "[dem]\nn_particles = 64\n");
+  const fs::path out = d / "out";
+  for (const auto& [set, words] : std::vector<std::pair<std::string, std::string>>{
+           {"run.stages=prepare,probes",
+            "run.stages (--set): stage 'probes' needs the stage 'states' in the same run; to "
+            "probe a state of an existing file: `rendulic probe FILE.h5:LABEL`"},
+           {"run.stages=prepare,isotropic,path,states,calibration",
+            "run.stages (--set): stage 'calibration' needs the stage 'probes' or "
+            "'linear_response' in the same run; to calibrate on an existing file: `rendulic "
+            "calibrate --results FILE.h5`"},
+           {"run.stages=prepare,pressure",
+            "run.stages (--set): stage 'pressure' needs the stage 'isotropic' in the same run"},
+           {"run.stages=isotropic,path",
+            "run.stages (--set): stage 'isotropic' needs the stage 'prepare' in the same run"},
+           {"run.stages=prepare,isotropic,path,states,linear_response,calibration --set "
+            "calibration.states=[a,zz]",
+            "calibration.states (--set): no state 'zz' in this run (states.labels: a, b, c, d, "
+            "e)"}}) {
+    const CmdResult r =
+        rendulic("run " + scen.string() + " --out " + out.string() + " --set " + set);
+    EXPECT_EQ(r.code, 2) << set << ": " << r.out;
+    EXPECT_EQ(r.out, "rendulic: " + words + "\n") << set;
+    EXPECT_FALSE(fs::exists(out)) << set;
+  }
 }
 
 // fits or calibration without the stages they read: refused before anything is written, and
