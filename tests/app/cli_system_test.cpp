@@ -84,7 +84,12 @@ TEST(Cli, ACountThatIsNotAWholeNumberIsCalledSo) {
            {"run x.toml --threads 2.5", "--threads: Value 2.5 is not a whole number (digits only)"},
            {"bench --repetitions x", "--repetitions: Value x is not a whole number (digits only)"},
            {"run x.toml --threads -1", "--threads: Value -1 not in range 0 to 4096"},
-           {"sweep --path-seeds 0", "--path-seeds: Value 0 not in range 1 to 64"}}) {
+           {"sweep --path-seeds 0", "--path-seeds: Value 0 not in range 1 to 64"},
+           // A real number's bounds as a scenario key's ("0.000000 to 10.000000" before), and a
+           // word is not a number (it was "not in range").
+           {"bench --friction -1", "--friction: Value -1 is out of range [0, 10]"},
+           {"bench --friction abc", "--friction: Value abc is not a number"},
+           {"bench --seconds nan", "--seconds: Value nan is not a finite number"}}) {
     const CmdResult r = rendulic(args);
     EXPECT_EQ(r.code, 2) << args << "\n" << r.out;
     EXPECT_EQ(lines(r.out), 1) << args << "\n" << r.out;
