@@ -93,8 +93,15 @@ CLI::Option* add_key_option(CLI::App* app, const std::string& flag, T& member, c
     o->check(CLI::Validator(
         [key](std::string& text) -> std::string {
           T v{};
-          // A text that does not convert is the option's own error (CLI11 says so).
-          if (!CLI::detail::lexical_cast(text, v)) return "";
+          // In the words of the other options (CLI11 said "Could not convert: --flag = abc").
+          if (!CLI::detail::lexical_cast(text, v)) {
+            if constexpr (std::is_same_v<T, bool>)
+              return "Value " + text + " is not true or false";
+            else if constexpr (std::is_integral_v<T>)
+              return "Value " + text + " is not a whole number (digits only)";
+            else
+              return "Value " + text + " is not a number";
+          }
           ScenarioValue value;
           if constexpr (std::is_same_v<T, int>)
             value = std::int64_t{v};

@@ -89,7 +89,12 @@ TEST(Cli, ACountThatIsNotAWholeNumberIsCalledSo) {
            // word is not a number (it was "not in range").
            {"bench --friction -1", "--friction: Value -1 is out of range [0, 10]"},
            {"bench --friction abc", "--friction: Value abc is not a number"},
-           {"bench --seconds nan", "--seconds: Value nan is not a finite number"}}) {
+           {"bench --seconds nan", "--seconds: Value nan is not a finite number"},
+           // Options backed by a scenario key too (CLI11 said "Could not convert").
+           {"calibrate --function-tolerance abc",
+            "--function-tolerance: Value abc is not a number"},
+           {"calibrate --max-iterations 2.5",
+            "--max-iterations: Value 2.5 is not a whole number (digits only)"}}) {
     const CmdResult r = rendulic(args);
     EXPECT_EQ(r.code, 2) << args << "\n" << r.out;
     EXPECT_EQ(lines(r.out), 1) << args << "\n" << r.out;
