@@ -116,4 +116,33 @@ CLI::Option* add_key_option(CLI::App* app, const std::string& flag, T& member, c
   return o;
 }
 
+// Gives every FLOAT and INT option of `app` and its subcommands that has no check of its own
+// the words of the others for a text that is not a number ("--amplitude: Value abc is not a
+// number"), where CLI11 said "Could not convert: --amplitude = abc". Added last, so an
+// option's own check speaks first.
+inline void name_words_that_are_not_numbers(CLI::App& app) {
+  for (CLI::Option* o : app.get_options()) {
+    const std::string type = o->get_type_name();
+    const std::string base = type.substr(0, type.find(':'));
+    if (base == "FLOAT")
+      o->check(CLI::Validator(
+          [](std::string& text) -> std::string {
+            double v = 0.0;
+            return CLI::detail::lexical_cast(text, v) ? "" : "Value " + text + " is not a number";
+          },
+          ""));
+    else if (base == "INT")
+      o->check(CLI::Validator(
+          [](std::string& text) -> std::string {
+            std::int64_t v = 0;
+            return CLI::detail::lexical_cast(text, v)
+                       ? ""
+                       : "Value " + text + " is not a whole number (digits only)";
+          },
+          ""));
+  }
+  for (CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; }))
+    name_words_that_are_not_numbers(*sub);
+}
+
 }  // namespace rendulic::app

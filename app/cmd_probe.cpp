@@ -325,12 +325,15 @@ Subcommand add_probe(CLI::App& parent) {
           "LABEL"));
   sub->add_option("--methods", o->methods,
                   "probe methods (default: probes.methods and linear_response)")
-      ->check(CLI::IsMember({"dynamic", "minimisation", kLinear}));
-  sub->add_option("--amplitudes", o->amplitudes, "probe strain amplitudes (probes.amplitudes)");
+      ->check(CLI::IsMember({"dynamic", "minimisation", kLinear}))
+      ->delimiter(',');
+  sub->add_option("--amplitudes", o->amplitudes, "probe strain amplitudes (probes.amplitudes)")
+      ->delimiter(',');
   sub->add_option("--directions", o->directions, "probe directions M (probes.directions)")
       ->check(positive_number());
   sub->add_option("--planes", o->planes,
-                  "probe planes: rendulic, deviatoric, meridian_<Lode deg> (probes.planes)");
+                  "probe planes: rendulic, deviatoric, meridian_<Lode deg> (probes.planes)")
+      ->delimiter(',');
   sub->add_option("--set", o->sets, "override a scenario key by its dotted path: a.b=value")
       ->take_all();
   sub->add_option("--threads", o->threads, "OpenMP threads over the probes (0: all cores)")

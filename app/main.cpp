@@ -11,6 +11,7 @@
 #include <iostream>
 #include <vector>
 
+#include "cli_options.hpp"
 #include "commands.hpp"
 #include "rendulic/calibration/solver.hpp"
 #include "rendulic/core/cleanup.hpp"
@@ -55,6 +56,7 @@ int main(int argc, char** argv) {
       app::add_run(cli),   app::add_fit(cli),     app::add_envelope(cli), app::add_calibrate(cli),
       app::add_bench(cli), app::add_inspect(cli), app::add_plot(cli),     app::add_keys(cli),
       app::add_sweep(cli), app::add_report(cli),  app::add_probe(cli),    app::add_export(cli)};
+  app::name_words_that_are_not_numbers(cli);
   try {
     cli.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

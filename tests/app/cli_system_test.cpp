@@ -94,7 +94,11 @@ TEST(Cli, ACountThatIsNotAWholeNumberIsCalledSo) {
            {"calibrate --function-tolerance abc",
             "--function-tolerance: Value abc is not a number"},
            {"calibrate --max-iterations 2.5",
-            "--max-iterations: Value 2.5 is not a whole number (digits only)"}}) {
+            "--max-iterations: Value 2.5 is not a whole number (digits only)"},
+           // And options without a check of their own.
+           {"envelope --amplitude abc", "--amplitude: Value abc is not a number"},
+           {"probe x.data --directions 2.5", "--directions: Value 2.5 is not a whole number"},
+           {"probe x.data --amplitudes 1e-4,abc", "--amplitudes: Value abc is not a number"}}) {
     const CmdResult r = rendulic(args);
     EXPECT_EQ(r.code, 2) << args << "\n" << r.out;
     EXPECT_EQ(lines(r.out), 1) << args << "\n" << r.out;

@@ -226,7 +226,8 @@ TEST(Probe, DeviatoricEnvelopesBesideTheRendulicOnesUnderTheirOwnNames) {
   const fs::path both = rendulic::testing::fresh_dir("app_probe/plane_both");
   const fs::path plain = rendulic::testing::fresh_dir("app_probe/plane_plain");
   const std::string state = base.string() + ":/states/b --label b --methods linear_response";
-  CliResult r = probe(state + " --planes rendulic deviatoric --out " + both.string());
+  // A comma list, as every other list option of rendulic takes (probe's were refused).
+  CliResult r = probe(state + " --planes rendulic,deviatoric --out " + both.string());
   ASSERT_EQ(r.code, 0) << r.err;
   r = probe(state + " --out " + plain.string());
   ASSERT_EQ(r.code, 0) << r.err;
