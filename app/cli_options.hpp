@@ -76,6 +76,13 @@ inline CLI::Validator real_in_range(double lo, double hi) {
       bounds);
 }
 
+// An empty output folder (`--out "$DIR"` with DIR unset) wrote into the current folder without
+// a word; refused on the command line and from Python alike.
+inline void refuse_empty_output_folder(const std::string& out) {
+  if (out.empty())
+    throw InputError("--out: the output folder name is empty (. for the current folder)");
+}
+
 // --progress-every of the commands that print progress lines (run, probe).
 inline CLI::Option* add_progress_every(CLI::App* app, double& seconds) {
   return app

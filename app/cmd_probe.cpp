@@ -159,6 +159,7 @@ std::filesystem::path probe_packing(const ProbeRequest& r) {
   check_thread_count(r.threads);
   if (r.quiet) log::set_level(log::Level::kWarning);
   // Everything is read and checked before the output folder is touched.
+  refuse_empty_output_folder(r.out);
   const PackingSource src = packing_source(r.packing);
   {
     // The probes' results.h5 replaces the file at --out whole: probing a state of DIR/results.h5

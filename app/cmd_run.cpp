@@ -26,6 +26,7 @@
 namespace rendulic::app {
 std::filesystem::path run_scenario(const RunRequest& r) {
   check_thread_count(r.threads);
+  refuse_empty_output_folder(r.out);
   if (r.quiet) log::set_level(log::Level::kWarning);
   Scenario scenario = Scenario::from_file(r.scenario, scenario_schema());
   for (const auto& s : r.sets) scenario.apply_override(s);

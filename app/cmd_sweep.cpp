@@ -80,7 +80,7 @@ Subcommand add_sweep(CLI::App& parent) {
             if (o->threads > 0) omp_set_num_threads(o->threads);
             // Refused before the sweep, not after it: an empty --out wrote into the current
             // folder, and a folder named sweep.csv failed once every point had run.
-            if (o->out.empty()) throw InputError("sweep --out: the output folder name is empty");
+            refuse_empty_output_folder(o->out);
             const std::filesystem::path dir = o->out;
             for (const char* name : {"sweep.csv", "sweep_path.csv"})
               AtomicTextFile::refuse_folder(dir / name, "the sweep's table");

@@ -323,10 +323,17 @@ struct ResultsWriter::Impl {
     const fs::path dir = final_path.parent_path();
     if (dir.empty()) return;
     std::error_code ec;
-    for (fs::path d = dir; !d.empty() && !fs::exists(d, ec); d = d.parent_path()) {
-      created_folders.push_back(d);
-      if (d == d.parent_path()) break;
+    fs::path existing = dir;  // the innermost part of it that exists
+    for (; !existing.empty() && !fs::exists(existing, ec); existing = existing.parent_path()) {
+      created_folders.push_back(existing);
+      if (existing == existing.parent_path()) break;
     }
+    // A file where a folder must be: the system's reason was "Not a directory".
+    if (!existing.empty() && fs::exists(existing, ec) && !fs::is_directory(existing, ec))
+      throw InputError(existing.string() + ": is a file, not a folder" +
+                       (existing == dir
+                            ? std::string(" (the output folder)")
+                            : " (it cannot hold the output folder " + dir.string() + ")"));
     fs::create_directories(dir, ec);
     if (ec) throw InputError(dir.string() + ": cannot create output folder: " + ec.message());
     if (!fs::is_directory(dir, ec))

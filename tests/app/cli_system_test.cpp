@@ -175,6 +175,31 @@ TEST(Cli, StageFailingMidRunLeavesNoResultsFile) {
     EXPECT_EQ(e.path().filename(), "results.h5.partial") << "no temporary left behind";
 }
 
+// An empty --out (a shell variable that is not set) wrote into the current folder without a word,
+// and a file where the output folder must be was called "Not a directory".
+TEST(Cli, AnOutputFolderThatIsEmptyOrAFileIsSaidSo) {
+  const fs::path d = fresh_dir("out_folder");
+  const fs::path scen =
+      write_file(d / "s.toml", "[run]\nstages = [\"prepare\"]\n[dem]\nn_particles = 64\n");
+  const fs::path file = write_file(d / "afile", "not a folder\n");
+  for (const auto& [args, words] : std::vector<std::pair<std::string, std::string>>{
+           {"run " + scen.string() + " --out ''",
+            "--out: the output folder name is empty (. for the current folder)"},
+           {"probe x.data --out ''",
+            "--out: the output folder name is empty (. for the current folder)"},
+           {"run " + scen.string() + " --out " + file.string(),
+            file.string() + ": is a file, not a folder (the output folder)"},
+           {"run " + scen.string() + " --out " + (file / "sub").string(),
+            file.string() + ": is a file, not a folder (it cannot hold the output folder " +
+                (file / "sub").string() + ")"}}) {
+    const CmdResult r = rendulic(args);
+    EXPECT_EQ(r.code, 2) << args;
+    EXPECT_EQ(r.out, "rendulic: " + words + "\n") << args;
+  }
+  EXPECT_EQ(rendulic::testing::read_file(file), "not a folder\n");
+  EXPECT_FALSE(fs::exists(fs::current_path() / "results.h5"));
+}
+
 // A stage whose input the run would not make (a label the run has no state of) is refused
 // before any work: `run.stages = prepare, probes` prepared, then said "needs 'states'".
 TEST(Cli, AStageWhoseInputTheRunWouldNotMakeIsRefusedBeforeAnyWork) {

@@ -169,7 +169,8 @@ TEST(Sweep, BadInputExitsTwoWithOneLineAndWritesNothing) {
   EXPECT_FALSE(fs::exists(root / "csv" / "sweep.h5"));
   const auto empty = run_rendulic("sweep " + kQuick + " --quick --out ''");
   EXPECT_EQ(empty.code, 2) << empty.out;
-  EXPECT_NE(empty.out.find("sweep --out: the output folder name is empty"), std::string::npos)
+  EXPECT_NE(empty.out.find("--out: the output folder name is empty (. for the current folder)"),
+            std::string::npos)
       << empty.out;
 }
 
