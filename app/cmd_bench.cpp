@@ -362,13 +362,7 @@ Subcommand add_bench(CLI::App& parent) {
           throw InputError(
               "bench: --rolling-friction needs --friction > 0 (rotations exist only with "
               "friction)");
-        if (!o->lammps_dir.empty()) {
-          std::error_code ec;
-          std::filesystem::create_directories(o->lammps_dir, ec);
-          if (ec)
-            throw InputError(o->lammps_dir +
-                             ": cannot create the --lammps folder: " + ec.message());
-        }
+        make_folders(o->lammps_dir, "--lammps folder");
         std::vector<int> settings = o->threads;
         settings.push_back(0);  // the default
         nlohmann::ordered_json json = nlohmann::ordered_json::array();

@@ -28,6 +28,7 @@
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/log.hpp"
 #include "rendulic/core/results.hpp"
+#include "rendulic/core/text_file.hpp"
 
 namespace rendulic::app {
 namespace {
@@ -119,12 +120,7 @@ int plot_results(const std::filesystem::path& file, const std::filesystem::path&
   std::error_code ec;
   // The folders made here go again if they stay empty: a plot that fails, or that finds no
   // figure's data in the file, left an empty figures/ behind.
-  std::vector<std::filesystem::path> made;  // innermost first
-  for (std::filesystem::path d = out_dir; !d.empty() && !std::filesystem::exists(d, ec);
-       d = d.parent_path()) {
-    made.push_back(d);
-    if (d == d.parent_path()) break;
-  }
+  const std::vector<std::filesystem::path> made = make_folders(out_dir, "figures folder");
   struct RemoveIfEmpty {
     const std::vector<std::filesystem::path>& folders;
     ~RemoveIfEmpty() {
@@ -132,9 +128,6 @@ int plot_results(const std::filesystem::path& file, const std::filesystem::path&
       for (const auto& d : folders) std::filesystem::remove(d, e);  // fails unless empty
     }
   } tidy{made};
-  std::filesystem::create_directories(out_dir, ec);
-  if (ec)
-    throw InputError(out_dir.string() + ": cannot create the figures folder: " + ec.message());
   if (::access(out_dir.c_str(), W_OK) != 0)
     throw InputError(out_dir.string() + ": cannot write figures here: " + std::strerror(errno));
   // The figures are independent: plot.py draws them in as many processes as this run may

@@ -864,7 +864,7 @@ void check_report_destination(const std::filesystem::path& dir, bool with_figure
   if (with_figures && fs::exists(figures_folder(dir), ec) &&
       !fs::is_directory(figures_folder(dir), ec))
     throw InputError(figures_folder(dir).string() +
-                     ": cannot create the figures folder: a file of that name is in the way");
+                     ": is a file, not a folder (the figures folder)");  // make_folders' words
 }
 
 std::filesystem::path write_report(const std::filesystem::path& results_file, bool with_figures) {

@@ -322,22 +322,8 @@ struct ResultsWriter::Impl {
   void make_folder() {
     const fs::path dir = final_path.parent_path();
     if (dir.empty()) return;
+    created_folders = make_folders(dir, "output folder");
     std::error_code ec;
-    fs::path existing = dir;  // the innermost part of it that exists
-    for (; !existing.empty() && !fs::exists(existing, ec); existing = existing.parent_path()) {
-      created_folders.push_back(existing);
-      if (existing == existing.parent_path()) break;
-    }
-    // A file where a folder must be: the system's reason was "Not a directory".
-    if (!existing.empty() && fs::exists(existing, ec) && !fs::is_directory(existing, ec))
-      throw InputError(existing.string() + ": is a file, not a folder" +
-                       (existing == dir
-                            ? std::string(" (the output folder)")
-                            : " (it cannot hold the output folder " + dir.string() + ")"));
-    fs::create_directories(dir, ec);
-    if (ec) throw InputError(dir.string() + ": cannot create output folder: " + ec.message());
-    if (!fs::is_directory(dir, ec))
-      throw InputError(dir.string() + ": cannot create output folder: not a folder");
     // Found here, not at the rename after the last stage (the whole run's work then kept only
     // as FINAL.partial).
     if (fs::is_directory(final_path, ec))

@@ -66,6 +66,29 @@ void refuse_unless_regular_file(const fs::path& path, const std::string& shown,
   refuse_unless_regular_mode(st.st_mode, shown, what, form);
 }
 
+std::vector<fs::path> make_folders(const fs::path& dir, const std::string& what) {
+  std::vector<fs::path> made;
+  if (dir.empty()) return made;
+  std::error_code ec;
+  fs::path existing = dir;  // the innermost part of it that exists
+  for (; !existing.empty() && !fs::exists(existing, ec); existing = existing.parent_path()) {
+    made.push_back(existing);
+    if (existing == existing.parent_path()) break;
+  }
+  if (!existing.empty() && fs::exists(existing, ec) && !fs::is_directory(existing, ec))
+    throw InputError(existing.string() + ": is a file, not a folder" +
+                     (existing == dir ? " (the " + what + ")"
+                                      : " (it cannot hold the " + what + " " + dir.string() + ")"));
+  fs::create_directories(dir, ec);
+  if (!ec && !fs::is_directory(dir, ec)) ec = std::make_error_code(std::errc::not_a_directory);
+  if (ec) {
+    std::error_code ignored;
+    for (const fs::path& d : made) fs::remove(d, ignored);  // fails unless empty
+    throw InputError(dir.string() + ": cannot create the " + what + ": " + ec.message());
+  }
+  return made;
+}
+
 void AtomicTextFile::refuse_folder(const fs::path& file, const std::string& what) {
   std::error_code ec;
   if (fs::is_directory(file, ec))

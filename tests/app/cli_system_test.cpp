@@ -73,7 +73,12 @@ TEST(Cli, ARealOptionThatIsNotFiniteIsRefusedNamingIt) {
                                (file / "sub").string());
   EXPECT_EQ(r.code, 2) << r.out;
   EXPECT_EQ(lines(r.out), 1) << r.out;
-  EXPECT_NE(r.out.find("cannot create the --lammps folder"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find(file.string() +
+                       ": is a file, not a folder (it cannot hold the --lammps "
+                       "folder " +
+                       (file / "sub").string() + ")"),
+            std::string::npos)
+      << r.out;
 }
 
 // A count that is not a whole number was called out of range ("Value abc not in range 0 to

@@ -126,8 +126,7 @@ TEST(Faults, AnOutputPathOfTheWrongKindIsRefusedBeforeTheStagesRun) {
   fs::create_directories(d / "c");
   write_file(d / "c" / "figures", "");
   expect_refusal(rendulic(run + (d / "c").string()),
-                 (d / "c" / "figures").string() +
-                     ": cannot create the figures folder: a file of that name is in the way");
+                 (d / "c" / "figures").string() + ": is a file, not a folder (the figures folder)");
   for (const char* sub : {"a", "b", "c"})
     EXPECT_EQ(std::distance(fs::directory_iterator(d / sub), fs::directory_iterator{}), 1) << sub;
   // Without figures, a file named figures is no obstacle.

@@ -13,6 +13,7 @@
 #include <filesystem>
 #include <sstream>
 #include <string>
+#include <vector>
 
 namespace rendulic {
 
@@ -37,6 +38,15 @@ void refuse_unless_regular_file(const std::filesystem::path& path, const std::st
 // The same refusal for a file type already known (st_mode of an open descriptor).
 void refuse_unless_regular_mode(unsigned mode, const std::string& shown, const std::string& what,
                                 const std::string& form);
+
+// Makes the folder `dir` and any missing folders above it (nothing for an empty `dir`, the
+// current folder) and returns those it made, innermost first, for a caller that removes them
+// again if they stay empty. A file where a folder must be is named: "F: is a file, not a folder
+// (the WHAT)", or "(it cannot hold the WHAT DIR)" for a file above it, where the system said
+// "Not a directory"; any other failure is "DIR: cannot create the WHAT: REASON", and the
+// folders made on the way are removed again.
+std::vector<std::filesystem::path> make_folders(const std::filesystem::path& dir,
+                                                const std::string& what);
 
 // The file a name stands for: a symbolic link followed to its target (which may not exist yet),
 // at most 40 deep as the kernel does; any other name as it is. Writers that replace a file by
