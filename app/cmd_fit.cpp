@@ -96,6 +96,12 @@ Subcommand add_fit(CLI::App& parent) {
             opts.use_theta = !o->ignore_theta;
             if (!o->results.empty()) {
               const FitAllSummary s = fit_all_envelopes(o->results, opts);
+              // Nothing was written; "fits: 0 fitted, 0 not fittable, stored in FILE" and exit 0
+              // said otherwise.
+              if (s.fitted + s.failed == 0)
+                throw InputError(o->results +
+                                 ": no envelope to fit (the probes and linear_response stages "
+                                 "of a run, or `rendulic probe FILE.h5:LABEL`, make them)");
               if (o->json) {
                 nlohmann::json j;
                 j["fitted"] = s.fitted;

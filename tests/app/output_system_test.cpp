@@ -190,6 +190,21 @@ TEST(Refit, AResultsFileIsFittedAgainInPlace) {
     EXPECT_EQ(rendulic::testing::error_lines(e.out), 1) << e.out;
   }
   EXPECT_EQ(fs::last_write_time(file), stamp);
+  // A file without envelopes (a run of prepare alone): nothing to fit is said, not "0 fitted,
+  // stored in FILE" with exit 0.
+  const fs::path bare = dir / "bare.h5";
+  {
+    rendulic::ResultsWriter w(bare);
+    w.create_group("/states/a");
+    w.commit();
+  }
+  const auto bare_stamp = fs::last_write_time(bare);
+  const CliResult none = rendulic::testing::run_rendulic("fit --results " + bare.string(), false);
+  EXPECT_EQ(none.code, 2) << none.err;
+  EXPECT_EQ(none.err, "rendulic: " + bare.string() +
+                          ": no envelope to fit (the probes and linear_response stages of a run, "
+                          "or `rendulic probe FILE.h5:LABEL`, make them)\n");
+  EXPECT_EQ(fs::last_write_time(bare), bare_stamp);
 }
 
 }  // namespace
