@@ -4,7 +4,8 @@
 // this stage repeats, under /pressure/nu<nu>, what the run does at nu_max: relaxation, the
 // undrained path (at the main path's inertial number: its rate scaled by sqrt(P / P_main), or
 // path.inertial_number held), the states brought to rest, and for each state the stages the
-// run requests among elastic_range, probes, linear_response and fits. The branches' states are
+// run requests among elastic_range, probes and linear_response; the `fits` stage, which comes
+// after this one, fits the branches' envelopes with the main ones. The branches' states are
 // stored without their configuration (positions, checkpoint): the main states carry those.
 #include <cmath>
 
@@ -31,7 +32,6 @@ void stage_pressure(const Scenario& sc, ResultsWriter& out, const RunContext& ct
   const bool with_range = stage_requested(sc, "elastic_range");
   const bool with_probes = stage_requested(sc, "probes");
   const bool with_lr = stage_requested(sc, "linear_response");
-  const bool with_fits = stage_requested(sc, "fits");
   for (auto& [nu, snapshot] : session.branches) {
     const std::string G = paths::pressure_branch(nu);
     log::info("[pressure] branch nu = ", nu);
@@ -76,7 +76,6 @@ void stage_pressure(const Scenario& sc, ResultsWriter& out, const RunContext& ct
           log::warning("no linear response for nu ", nu, " state ", label, ": ", e.what());
         }
       }
-      if (with_fits) fit_state_envelopes(sc, out, sg);
     }
   }
 }

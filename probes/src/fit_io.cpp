@@ -123,12 +123,20 @@ FitAllSummary fit_state_envelopes(const ResultsReader& in, ResultsWriter& out,
 FitAllSummary fit_envelopes(const ResultsReader& in, ResultsWriter& out,
                             const FitOptions& stress_options, const FitOptions& fabric_options) {
   FitAllSummary summary;
-  if (!in.exists(paths::kStates)) return summary;
-  for (const auto& label : in.children(paths::kStates)) {
-    const FitAllSummary s =
-        fit_state_envelopes(in, out, paths::state(label), stress_options, fabric_options);
-    summary.fitted += s.fitted;
-    summary.failed += s.failed;
+  // The run's states and those of its pressure branches (/pressure/nu<nu>/states), which the
+  // run fits too: a refit left the branches' fits as they were.
+  std::vector<std::string> roots = {""};
+  if (in.is_group(paths::kPressure))
+    for (const auto& branch : in.children(paths::kPressure))
+      roots.push_back(std::string(paths::kPressure) + "/" + branch);
+  for (const std::string& root : roots) {
+    if (!in.is_group(paths::states(root))) continue;
+    for (const auto& label : in.children(paths::states(root))) {
+      const FitAllSummary s =
+          fit_state_envelopes(in, out, paths::state(label, root), stress_options, fabric_options);
+      summary.fitted += s.fitted;
+      summary.failed += s.failed;
+    }
   }
   return summary;
 }

@@ -173,12 +173,24 @@ TEST(Refit, AResultsFileIsFittedAgainInPlace) {
     pairs_before = r.read_matrix(env + "/stress_star");
     ASSERT_EQ(r.attr_string(env + "/fit_stress", "shape"), "ellipse");
   }
+  // A pressure branch's states (here a copy of the main ones, as a run's pressure stage stores
+  // them): refitted too; they kept their old fits.
+  const std::string branch_env = "/pressure/nu0.7" + env;
+  {
+    H5::H5File h(file.string(), H5F_ACC_RDWR);
+    h.createGroup("/pressure").close();
+    h.createGroup("/pressure/nu0.7").close();
+    ASSERT_GE(H5Ocopy(h.getId(), "/states", h.getId(), "/pressure/nu0.7/states", H5P_DEFAULT,
+                      H5P_DEFAULT),
+              0);
+  }
   const CliResult ok =
       rendulic::testing::run_rendulic("fit --results " + file.string() + " --shape line --json");
   ASSERT_EQ(ok.code, 0) << ok.out;
   EXPECT_NE(ok.out.find("\"fitted\""), std::string::npos) << ok.out;
   const rendulic::ResultsReader r(file);
   EXPECT_EQ(r.attr_string(env + "/fit_stress", "shape"), "line");
+  EXPECT_EQ(r.attr_string(branch_env + "/fit_stress", "shape"), "line");
   EXPECT_EQ(r.attr_doubles(env + "/fit_stress", "semi_axes")[1], 0.0);
   EXPECT_TRUE(r.read_matrix(env + "/stress_star") == pairs_before);
 

@@ -29,8 +29,9 @@ struct FitAllSummary {
   int failed = 0;
 };
 // The same over a reader and a writer that are already open (the run's `fits` stage reads the
-// writer's temporary file): every envelope's stress_star and fabric pairs are fitted with their
-// own options; pairs that were never measured are skipped.
+// writer's temporary file): every envelope's stress_star and fabric pairs, of /states and of
+// the pressure branches' /pressure/<branch>/states, are fitted with their own options; pairs
+// that were never measured are skipped.
 FitAllSummary fit_envelopes(const ResultsReader& in, ResultsWriter& out,
                             const FitOptions& stress_options, const FitOptions& fabric_options);
 // The same for the envelopes of one state group (e.g. a pressure branch's state).
