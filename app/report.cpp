@@ -781,12 +781,8 @@ std::string report_markdown(const ResultsReader& r, const std::vector<Claim>& cl
         "minimisation, else linear response (elastic only).\n";
   md << other_planes_section(r);
   // The elastic range of every state, at nu_max and at the pressure branches.
-  std::vector<std::string> roots = {""};
-  if (r.exists(paths::kPressure))
-    for (const auto& b : r.children(paths::kPressure))
-      roots.push_back(std::string(paths::kPressure) + "/" + b);
   std::ostringstream range;
-  for (const auto& root : roots) {
+  for (const auto& root : state_roots(r)) {
     if (!r.exists(paths::states(root))) continue;
     for (const auto& label : r.children(paths::states(root))) {
       const std::string g = paths::state(label, root), e = paths::elastic_range(g);

@@ -421,16 +421,21 @@ Packing read_lammps_dump(const fs::path& file) {
 
 namespace {
 
-// "; its states are a, b": the labels under /states that hold a configuration, so that a
-// mistyped label or a group that is not a state can be mended without another command.
-std::string its_states(const ResultsReader& r) {
+// "; its states are a, b": the labels that hold a configuration in the states group the asked
+// `group` would be in (a pressure branch's for /pressure/nu0.7/states/x, else /states), so that
+// a mistyped label or a group that is not a state can be mended without another command.
+std::string its_states(const ResultsReader& r, const std::string& group) {
   constexpr std::size_t kShown = 12;
-  if (!r.is_group(paths::states())) return "; it holds no " + paths::states() + " group";
+  std::string root;
+  for (const std::string& candidate : state_roots(r))
+    if (!candidate.empty() && group.rfind(paths::states(candidate) + "/", 0) == 0) root = candidate;
+  const std::string where = root.empty() ? "its states are " : "the states of " + root + " are ";
+  if (!r.is_group(paths::states(root))) return "; it holds no " + paths::states(root) + " group";
   std::vector<std::string> labels;
-  for (const std::string& c : r.children(paths::states()))
-    if (r.exists(paths::state(c) + datasets::kPositions)) labels.push_back(c);
-  if (labels.empty()) return "; no state in " + paths::states() + " holds a configuration";
-  std::string text = "; its states are ";
+  for (const std::string& c : r.children(paths::states(root)))
+    if (r.exists(paths::state(c, root) + datasets::kPositions)) labels.push_back(c);
+  if (labels.empty()) return "; no state in " + paths::states(root) + " holds a configuration";
+  std::string text = "; " + where;
   for (std::size_t k = 0; k < std::min(labels.size(), kShown); ++k)
     text += (k ? ", " : "") + labels[k];
   if (labels.size() > kShown)
@@ -442,12 +447,14 @@ std::string its_states(const ResultsReader& r) {
 
 Packing read_results_state(const fs::path& file, const std::string& group) {
   const ResultsReader r(file);
-  if (!r.is_group(group)) throw InputError(file.string() + ": no state " + group + its_states(r));
+  if (!r.is_group(group))
+    throw InputError(file.string() + ": no state " + group + its_states(r, group));
   Packing p;
   p.origin = file.string() + ":" + group;
   const std::string pos = group + datasets::kPositions;
   if (!r.exists(pos))
-    throw InputError(p.origin + ": not a state (it holds no positions and radii)" + its_states(r));
+    throw InputError(p.origin + ": not a state (it holds no positions and radii)" +
+                     its_states(r, group));
   p.positions = r.read_matrix(pos);
   p.radii = r.read_vector(group + datasets::kRadii);
   const std::vector<double> L = r.read_vector(group + datasets::kCellLengths);

@@ -1025,6 +1025,20 @@ std::vector<std::string> ResultsReader::children(const std::string& group) const
   });
 }
 
+std::vector<std::string> pressure_branches(const ResultsReader& in) {
+  std::vector<std::string> out;
+  if (!in.is_group(paths::kPressure)) return out;
+  for (const std::string& c : in.children(paths::kPressure))
+    out.push_back(std::string(paths::kPressure) + "/" + c);
+  return out;
+}
+
+std::vector<std::string> state_roots(const ResultsReader& in) {
+  std::vector<std::string> out = {""};
+  for (std::string& b : pressure_branches(in)) out.push_back(std::move(b));
+  return out;
+}
+
 std::vector<std::string> ResultsReader::attr_names(const std::string& object) const {
   return impl_->guarded(object, [&] {
     std::vector<std::string> out;

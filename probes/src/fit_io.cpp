@@ -125,11 +125,7 @@ FitAllSummary fit_envelopes(const ResultsReader& in, ResultsWriter& out,
   FitAllSummary summary;
   // The run's states and those of its pressure branches (/pressure/nu<nu>/states), which the
   // run fits too: a refit left the branches' fits as they were.
-  std::vector<std::string> roots = {""};
-  if (in.is_group(paths::kPressure))
-    for (const auto& branch : in.children(paths::kPressure))
-      roots.push_back(std::string(paths::kPressure) + "/" + branch);
-  for (const std::string& root : roots) {
+  for (const std::string& root : state_roots(in)) {
     if (!in.is_group(paths::states(root))) continue;
     for (const auto& label : in.children(paths::states(root))) {
       const FitAllSummary s =

@@ -239,12 +239,7 @@ class Reader {
     d["attributes"] = attrs_of(in_, group);
     return d;
   }
-  std::vector<std::string> branches() const {
-    std::vector<std::string> out;
-    for (const auto& c : in_.children(paths::kPressure))
-      out.push_back(std::string(paths::kPressure) + "/" + c);
-    return out;
-  }
+  std::vector<std::string> branches() const { return pressure_branches(in_); }
   py::dict calibration() const {
     py::dict d;
     if (!in_.is_group(paths::kCalibration)) return d;

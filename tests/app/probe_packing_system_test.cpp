@@ -459,6 +459,30 @@ TEST(Probe, BadPackingFilesExitTwoWithOneLine) {
     EXPECT_EQ(r.code, 2) << state;
     EXPECT_EQ(r.err, "rendulic: " + words + "\n");
   }
+  // In a pressure branch, the branch's states are listed, not the run's own (here the branch
+  // holds a copy of state a only).
+  const fs::path branched = kRoot / "branched.h5";
+  fs::copy_file(tiny(), branched, fs::copy_options::overwrite_existing);
+  {
+    H5::H5File h(branched.string(), H5F_ACC_RDWR);
+    h.createGroup(paths::kPressure).close();
+    h.createGroup(paths::pressure_branch(0.7)).close();
+    h.createGroup(paths::states(paths::pressure_branch(0.7))).close();
+    ASSERT_GE(
+        H5Ocopy(h.getId(), paths::state("a").c_str(), h.getId(),
+                paths::state("a", paths::pressure_branch(0.7)).c_str(), H5P_DEFAULT, H5P_DEFAULT),
+        0);
+  }
+  const std::string b = branched.string() + ":/pressure/nu0.7/states/";
+  for (const auto& [state, words] : std::vector<std::pair<std::string, std::string>>{
+           {b + "b", branched.string() + ": no state /pressure/nu0.7/states/b; the states of "
+                                         "/pressure/nu0.7 are a"},
+           {b + "a/envelopes", b + "a/envelopes: not a state (it holds no positions and radii); "
+                                   "the states of /pressure/nu0.7 are a"}}) {
+    const CliResult r = probe(state + " --out /tmp/never");
+    EXPECT_EQ(r.code, 2) << state;
+    EXPECT_EQ(r.err, "rendulic: " + words + "\n");
+  }
   const CliResult missing = probe("/nonexistent/packing.data --out /tmp/never");
   EXPECT_EQ(missing.code, 2);
   EXPECT_NE(missing.err.find("/nonexistent/packing.data: no such file"), std::string::npos)

@@ -107,6 +107,30 @@ TEST(Results, RoundTripOfEveryKind) {
 // Schema rendulic/2 (docs/results.md "Schema versions"): lists are string arrays, counters
 // integers, float datasets carry their unit; a rendulic/1 file (lists joined by commas) is
 // still read, and a file of an unknown schema is refused naming it.
+TEST(Results, StateRootsAreTheRunsOwnAndEachPressureBranch) {
+  const fs::path d = fresh_dir("roots");
+  {
+    ResultsWriter w(d / "plain.h5");
+    w.attr(paths::state("a"), "volume_fraction", 0.82);
+    w.commit();
+  }
+  const ResultsReader plain(d / "plain.h5");
+  EXPECT_TRUE(pressure_branches(plain).empty());
+  EXPECT_EQ(state_roots(plain), std::vector<std::string>{""});
+  {
+    ResultsWriter w(d / "branched.h5");
+    w.attr(paths::state("a"), "volume_fraction", 0.82);
+    w.attr(paths::state("a", paths::pressure_branch(0.7)), "volume_fraction", 0.7);
+    w.attr(paths::pressure_branch(0.75), "volume_fraction", 0.75);
+    w.commit();
+  }
+  const ResultsReader branched(d / "branched.h5");
+  const std::vector<std::string> branches = {"/pressure/nu0.7", "/pressure/nu0.75"};
+  EXPECT_EQ(pressure_branches(branched), branches);
+  EXPECT_EQ(state_roots(branched),
+            (std::vector<std::string>{"", "/pressure/nu0.7", "/pressure/nu0.75"}));
+}
+
 TEST(Results, ListsUnitsCountersAndTheFirstSchema) {
   const fs::path d = fresh_dir("schema2");
   const fs::path f = d / "results.h5";

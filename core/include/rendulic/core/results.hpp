@@ -146,4 +146,11 @@ class ResultsReader {
   std::unique_ptr<Impl> impl_;
 };
 
+// The pressure branches of a results file, /pressure/nu<nu> (docs/results.md), in file order;
+// none if it has no /pressure group.
+std::vector<std::string> pressure_branches(const ResultsReader& in);
+// The roots that may hold a /states group: "" (the run's own states) and each pressure branch.
+// Whatever walks every state (fitting, the report, a wrong label's list) walks these.
+std::vector<std::string> state_roots(const ResultsReader& in);
+
 }  // namespace rendulic
