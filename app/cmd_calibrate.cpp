@@ -21,6 +21,7 @@
 #include "rendulic/calibration/calibrate.hpp"
 #include "rendulic/calibration/report.hpp"
 #include "rendulic/calibration/settings.hpp"
+#include "rendulic/core/comma_list.hpp"
 #include "rendulic/core/decimal.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/log.hpp"
@@ -59,9 +60,8 @@ int run_calibrate(const CalibrateArgs& a) {
   // Cheap checks first, so that bad input costs nothing and touches nothing.
   calibration::CalibrationSettings settings = a.settings;
   if (settings.model != "umat" && !models::make_law(settings.model)) {
-    std::string known;
-    for (const auto& n : models::law_names()) known += (known.empty() ? "" : ", ") + n;
-    throw InputError("calibrate: unknown model '" + settings.model + "' (known: " + known + ")");
+    throw InputError("calibrate: unknown model '" + settings.model +
+                     "' (known: " + comma_list(models::law_names()) + ")");
   }
   settings.states = split_commas(a.states);
   if (const auto h = split_commas(a.holdout); !h.empty()) settings.holdout = h;

@@ -16,6 +16,7 @@
 #include "cli_options.hpp"
 #include "commands.hpp"
 #include "pipeline.hpp"
+#include "rendulic/core/comma_list.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/log.hpp"
 #include "rendulic/core/results.hpp"
@@ -63,9 +64,8 @@ std::filesystem::path run_scenario(const RunRequest& r) {
                 "; running every stage");
       writer.reset();  // its temporary file goes before the new writer makes its own
     } else {
-      std::string kept;
-      for (const auto& c : completed) kept += (kept.empty() ? "" : ", ") + c;
-      log::info("resume: the stages ", kept, " are taken from ", writer->partial_path().string());
+      log::info("resume: the stages ", comma_list(completed), " are taken from ",
+                writer->partial_path().string());
     }
   }
   if (!writer) writer.emplace(final_path);
@@ -77,11 +77,9 @@ std::filesystem::path run_scenario(const RunRequest& r) {
   out.attr("/", "scenario_file", r.scenario);
   {
     // Say first what will run, on what, and where it goes.
-    std::string plan;
-    for (const auto& st : scenario.get_strings("run.stages"))
-      plan += (plan.empty() ? "" : ", ") + st;
-    log::info(r.scenario, ": N = ", scenario.get_int("dem.n_particles"), ", stages ", plan,
-              "; writing ", (out_dir / "results.h5").string(),
+    log::info(r.scenario, ": N = ", scenario.get_int("dem.n_particles"), ", stages ",
+              comma_list(scenario.get_strings("run.stages")), "; writing ",
+              (out_dir / "results.h5").string(),
               " (on 2 idle cores quick.toml takes under a minute, paper.toml about 10 min)");
   }
   if (r.mpi_ranks > 1) log::info(r.mpi_ranks, " MPI ranks share the probe campaigns");

@@ -11,6 +11,7 @@
 #include "packing_system.hpp"
 #include "progress.hpp"
 #include "rendulic/calibration/settings.hpp"
+#include "rendulic/core/comma_list.hpp"
 #include "rendulic/core/decimal.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/log.hpp"
@@ -202,10 +203,8 @@ void check_stages_available(const Scenario& scenario) {
         if (std::string(key) == "calibration.holdout" && (label == "auto" || label == "none"))
           continue;
         if (std::find(labels.begin(), labels.end(), label) != labels.end()) continue;
-        std::string known;
-        for (const std::string& l : labels) known += (known.empty() ? "" : ", ") + l;
         throw InputError(std::string(key) + " (" + scenario.origin(key) + "): no state '" + label +
-                         "' in this run (states.labels: " + known + ")");
+                         "' in this run (states.labels: " + comma_list(labels) + ")");
       }
   }
 }
@@ -255,7 +254,7 @@ bool holds_every_stage(const Scenario& scenario, const std::filesystem::path& re
 
 void run_pipeline(const Scenario& scenario, ResultsWriter& out, const RunContext& ctx,
                   const std::vector<std::string>& completed_before) {
-  std::string completed;
+  std::vector<std::string> completed = completed_before;
   DemRunSession session;
   auto was_completed = [&](const std::string& name) {
     return std::find(completed_before.begin(), completed_before.end(), name) !=
@@ -273,7 +272,6 @@ void run_pipeline(const Scenario& scenario, ResultsWriter& out, const RunContext
       session.relaxed.emplace_back(label, std::move(*sys));
     }
   }
-  for (const auto& name : completed_before) completed += (completed.empty() ? "" : ", ") + name;
   for (const auto& s : stages()) {
     if (!stage_requested(scenario, s.name) || !s.run) continue;
     if (was_completed(s.name)) continue;
@@ -287,8 +285,8 @@ void run_pipeline(const Scenario& scenario, ResultsWriter& out, const RunContext
     log::info("[", s.name, "] done in ", human_seconds(secs));
     out.attr(paths::kTimings, s.name, secs);  // wall seconds, reported in report.md
     // What a later failure keeps (results.h5.partial): hours of DEM are not thrown away.
-    completed += (completed.empty() ? "" : ", ") + std::string(s.name);
-    out.save_partial("completed stages (" + completed + ")");
+    completed.emplace_back(s.name);
+    out.save_partial("completed stages (" + comma_list(completed) + ")");
   }
 }
 

@@ -12,6 +12,7 @@
 
 #include "commands.hpp"
 #include "rendulic/calibration/report.hpp"
+#include "rendulic/core/comma_list.hpp"
 #include "rendulic/core/conventions.hpp"
 #include "rendulic/core/decimal.hpp"
 #include "rendulic/core/envelope_io.hpp"
@@ -508,10 +509,10 @@ std::vector<Claim> evaluate_claims(const ResultsReader& r) {
             "0.1, stiffness continuing the path < 0.2 of reversing it)",
             "", ""};
     std::vector<double> shift, thin, k_ratio;
-    std::string unconverged;
+    std::vector<std::string> unconverged_labels;
     for (std::size_t i = 0; i < pl.size() && all(pl); ++i)
-      if (!pl[i]->stress.converged)
-        unconverged += (unconverged.empty() ? "" : ", ") + states[i].label;
+      if (!pl[i]->stress.converged) unconverged_labels.push_back(states[i].label);
+    const std::string unconverged = comma_list(unconverged_labels);
     const bool measured = all(pl) && all(el) && beyond_elastic && unconverged.empty();
     bool ok = measured;
     if (all(pl) && all(el)) {

@@ -14,6 +14,7 @@
 #include <map>
 #include <sstream>
 
+#include "rendulic/core/comma_list.hpp"
 #include "rendulic/core/conventions.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/option_table.hpp"
@@ -550,9 +551,7 @@ bool SweepOptions::IsValid(std::string* why) const {
   if (factors.empty()) return fail("sweep: no factor to sweep");
   for (const auto& f : factors)
     if (std::find(kSweepFactors.begin(), kSweepFactors.end(), f) == kSweepFactors.end()) {
-      std::string known;
-      for (const auto& k : kSweepFactors) known += (known.empty() ? "" : ", ") + k;
-      return fail("sweep: unknown factor '" + f + "' (" + known + ")");
+      return fail("sweep: unknown factor '" + f + "' (" + comma_list(kSweepFactors) + ")");
     }
   // Listed twice, a factor was swept twice: the same runs again and twice the rows.
   if (const std::string* again = first_repeat(factors))

@@ -7,6 +7,7 @@
 #include <set>
 #include <sstream>
 
+#include "rendulic/core/comma_list.hpp"
 #include "rendulic/core/conventions.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/statistics.hpp"
@@ -130,9 +131,8 @@ CalibrationSummary calibrate(const CalibrationData& data, const CalibrationOptio
   if (!options.IsValid(&why)) throw InputError("calibrate: " + why);
   const std::unique_ptr<models::Law> law = models::make_law(options.model);
   if (!law) {
-    std::string known;
-    for (const auto& n : models::law_names()) known += (known.empty() ? "" : ", ") + n;
-    throw InputError("calibrate: unknown model '" + options.model + "' (known: " + known + ")");
+    throw InputError("calibrate: unknown model '" + options.model +
+                     "' (known: " + comma_list(models::law_names()) + ")");
   }
   if (data.states.empty()) throw InputError("calibrate: no states in the data");
   CalibrationSummary out;

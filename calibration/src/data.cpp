@@ -6,6 +6,7 @@
 #include <string>
 #include <type_traits>
 
+#include "rendulic/core/comma_list.hpp"
 #include "rendulic/core/conventions.hpp"
 #include "rendulic/core/decimal.hpp"
 #include "rendulic/core/envelope_io.hpp"
@@ -85,11 +86,7 @@ EnvelopeRecord probe_set(const std::string& name, double amplitude, int directio
 
 namespace {
 
-std::string join(const std::vector<std::string>& v) {
-  std::string s;
-  for (const auto& x : v) s += (s.empty() ? "" : ", ") + x;
-  return s.empty() ? "(none)" : s;
-}
+std::string join(const std::vector<std::string>& v) { return comma_list(v, "(none)"); }
 
 // A stored envelope (core/envelope_record.hpp) with what the calibration works with filled
 // in: stress pairs in Pa (stress_star times /material k_star, or from the d_stress tensors of a

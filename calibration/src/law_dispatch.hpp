@@ -7,6 +7,7 @@
 #include <string_view>
 #include <type_traits>
 
+#include "rendulic/core/comma_list.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/models/elastic_laws.hpp"
 #include "rendulic/models/elastoplastic_fabric.hpp"
@@ -28,9 +29,8 @@ decltype(auto) dispatch_law(std::string_view name, F&& f) {
   if (name == AnisotropicElastic::kName) return f(LawTag<AnisotropicElastic>{});
   if (name == HypoplasticWu::kName) return f(LawTag<HypoplasticWu>{});
   if (name == ElastoplasticFabric::kName) return f(LawTag<ElastoplasticFabric>{});
-  std::string known;
-  for (const auto& n : law_names()) known += (known.empty() ? "" : ", ") + n;
-  throw InputError("unknown model '" + std::string(name) + "' (known: " + known + ")");
+  throw InputError("unknown model '" + std::string(name) + "' (known: " + comma_list(law_names()) +
+                   ")");
 }
 
 // Whether the law carries a fabric response at all.

@@ -16,6 +16,7 @@
 #include <numeric>
 #include <sstream>
 
+#include "rendulic/core/comma_list.hpp"
 #include "rendulic/core/decimal.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/result_paths.hpp"
@@ -435,12 +436,7 @@ std::string its_states(const ResultsReader& r, const std::string& group) {
   for (const std::string& c : r.children(paths::states(root)))
     if (r.exists(paths::state(c, root) + datasets::kPositions)) labels.push_back(c);
   if (labels.empty()) return "; no state in " + paths::states(root) + " holds a configuration";
-  std::string text = "; " + where;
-  for (std::size_t k = 0; k < std::min(labels.size(), kShown); ++k)
-    text += (k ? ", " : "") + labels[k];
-  if (labels.size() > kShown)
-    text += " and " + std::to_string(labels.size() - kShown) + " more (rendulic inspect)";
-  return text;
+  return "; " + where + comma_list(labels, "", kShown, " (rendulic inspect)");
 }
 
 }  // namespace

@@ -15,6 +15,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "rendulic/core/comma_list.hpp"
 #include "rendulic/core/decimal.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/option_table.hpp"
@@ -122,9 +123,7 @@ std::string format_value(const ScenarioValue& v) {
 
 std::string format_range(const KeySpec& s) {
   if (!s.choices.empty()) {
-    std::string out = "one of ";
-    for (std::size_t i = 0; i < s.choices.size(); ++i) out += (i ? ", " : "") + s.choices[i];
-    return out;
+    return "one of " + comma_list(s.choices);
   }
   if (s.type == KeyType::kBool || s.type == KeyType::kString) return "";
   const bool lo = std::isfinite(s.min), hi = std::isfinite(s.max);

@@ -7,6 +7,7 @@
 #include <numeric>
 #include <sstream>
 
+#include "rendulic/core/comma_list.hpp"
 #include "rendulic/core/conventions.hpp"
 #include "rendulic/core/decimal.hpp"
 #include "rendulic/core/errors.hpp"
@@ -59,9 +60,7 @@ bool PathOptions::IsValid(std::string* why) const {
       return fail(why, "every snapshot -eps_dev must be in (0, eps_dev_max]");
   if (std::find(path_type_choices().begin(), path_type_choices().end(), type) ==
       path_type_choices().end()) {
-    std::string list;
-    for (const std::string& n : path_type_choices()) list += (list.empty() ? "" : ", ") + n;
-    return fail(why, "path type '" + type + "' is not one of " + list);
+    return fail(why, "path type '" + type + "' is not one of " + comma_list(path_type_choices()));
   }
   if (path_type(type).kind == PathKind::kProportional) {
     if (direction.size() != 3) return fail(why, "the path direction needs 3 components");

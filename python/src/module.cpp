@@ -30,6 +30,7 @@
 #include "rendulic/calibration/report.hpp"
 #include "rendulic/calibration/solver.hpp"
 #include "rendulic/core/cleanup.hpp"
+#include "rendulic/core/comma_list.hpp"
 #include "rendulic/core/envelope_io.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/log.hpp"
@@ -282,11 +283,7 @@ class Reader {
   }
 
  private:
-  static std::string joined(const std::vector<std::string>& v) {
-    std::string s;
-    for (const auto& x : v) s += (s.empty() ? "" : ", ") + x;
-    return s.empty() ? "none" : s;
-  }
+  static std::string joined(const std::vector<std::string>& v) { return comma_list(v, "none"); }
   ResultsReader in_;
 };
 

@@ -1,0 +1,33 @@
+// A list of names in a message, a log line or a report, written one way ("a, b, c"); with a
+// limit, the first `shown` and "and N more", so that a file of thousands of states does not
+// make a message of thousands of words (docs/architecture.md "Where each concept lives").
+#pragma once
+
+#include <cstddef>
+#include <limits>
+#include <string>
+#include <string_view>
+
+namespace rendulic {
+
+// "a, b, c" of any range of texts (std::string, const char*, std::string_view); `empty` if the
+// range is. Beyond `shown` items: "a, b and 3 more" followed by `more_hint`.
+template <class Range>
+std::string comma_list(const Range& items, std::string_view empty = "",
+                       std::size_t shown = std::numeric_limits<std::size_t>::max(),
+                       std::string_view more_hint = "") {
+  std::string out;
+  std::size_t n = 0;
+  for (const auto& item : items) {
+    if (n < shown) {
+      if (n) out += ", ";
+      out += std::string_view(item);
+    }
+    ++n;
+  }
+  if (n == 0) return std::string(empty);
+  if (n > shown) out += " and " + std::to_string(n - shown) + " more" + std::string(more_hint);
+  return out;
+}
+
+}  // namespace rendulic
