@@ -20,18 +20,20 @@ namespace rendulic::app {
 // The range of a thread count (0: every core), on the command line and from Python.
 inline constexpr int kMaxThreads = 4096;
 
-// The check of a whole number in [lo, hi]: "Value -1 not in range 0 to 4096", and "Value abc is
-// not a whole number" where CLI11's Range said "Value abc not in range 0 to 4096".
+// The check of a whole number in [lo, hi], in the words of real_in_range ("Value -1 is out of
+// range [0, 4096]"); CLI11's Range said "Value abc not in range 0 to 4096" of a word, and a
+// number beyond an int reached the conversion ("Could not convert: --substeps = 3000000000").
 inline CLI::Validator integer_in_range(std::int64_t lo, std::int64_t hi) {
-  const CLI::Range range(lo, hi);
+  const std::string bounds = "[" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
   return CLI::Validator(
-      [range](std::string& text) -> std::string {
+      [lo, hi, bounds](std::string& text) -> std::string {
         std::int64_t v = 0;
         if (!CLI::detail::lexical_cast(text, v))
           return "Value " + text + " is not a whole number (digits only)";
-        return range(text);
+        if (v < lo || v > hi) return "Value " + text + " is out of range " + bounds;
+        return "";
       },
-      range.get_description());
+      bounds);
 }
 
 // The check of --threads wherever a command runs work: a count, refused in counts. CLI11's
@@ -62,15 +64,18 @@ inline CLI::Validator positive_number(bool zero_allowed = false) {
 // The check of a real number in [lo, hi]. CLI11's Range lets NaN through (every comparison with
 // it is false), and `bench --friction nan` then skipped the frictional figures without a word;
 // it also wrote its bounds as %f ("Value -1 not in range 0.000000 to 10.000000") and called a
-// word out of range. The bounds are written as a scenario key's are ("[0, 10]").
-inline CLI::Validator real_in_range(double lo, double hi) {
-  const std::string bounds = "[" + decimal_g(lo) + ", " + decimal_g(hi) + "]";
+// word out of range. The bounds are written as a scenario key's are ("[0, 10]"); `open`, for
+// a range without its ends ("(0, 1)").
+inline CLI::Validator real_in_range(double lo, double hi, bool open = false) {
+  const std::string bounds =
+      std::string(open ? "(" : "[") + decimal_g(lo) + ", " + decimal_g(hi) + (open ? ")" : "]");
   return CLI::Validator(
-      [lo, hi, bounds](std::string& text) -> std::string {
+      [lo, hi, open, bounds](std::string& text) -> std::string {
         double v = 0.0;
         if (!CLI::detail::lexical_cast(text, v)) return "Value " + text + " is not a number";
         if (!std::isfinite(v)) return "Value " + text + " is not a finite number";
-        if (v < lo || v > hi) return "Value " + text + " is out of range " + bounds;
+        if (v < lo || v > hi || (open && (v == lo || v == hi)))
+          return "Value " + text + " is out of range " + bounds;
         return "";
       },
       bounds);

@@ -11,7 +11,9 @@
 #include <string>
 #include <vector>
 
+#include "cli_options.hpp"
 #include "commands.hpp"
+#include "rendulic/core/comma_list.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/models/envelope.hpp"
 #include "rendulic/models/material_io.hpp"
@@ -39,9 +41,8 @@ std::unique_ptr<models::Law> law_for(const std::string& model, const std::string
   }
   std::unique_ptr<models::Law> law = models::make_law(model);
   if (!law) {
-    std::string names;
-    for (const auto& n : models::law_names()) names += (names.empty() ? "" : ", ") + n;
-    throw InputError("--model: unknown model '" + model + "' (known: " + names + ", umat)");
+    throw InputError("--model: unknown model '" + model +
+                     "' (known: " + comma_list(models::law_names()) + ", umat)");
   }
   if (params_is_text)
     models::parse_parameters_toml(params, "parameters", law.get());
@@ -59,11 +60,13 @@ models::MaterialState state_for(const models::Law& law, const std::string& state
 models::StepOptions step_options_for(const std::string& scheme, double tolerance, int substeps) {
   models::StepOptions step;
   if (!models::scheme_from_name(scheme, &step.scheme)) {
-    std::string names;
-    for (const char* n : models::kSchemeNames)
-      names += (names.empty() ? "" : ", ") + std::string(n);
-    throw InputError("--scheme: unknown scheme '" + scheme + "' (known: " + names + ")");
+    throw InputError("--scheme: unknown scheme '" + scheme +
+                     "' (known: " + comma_list(models::kSchemeNames) + ")");
   }
+  // Named as the option is: the driver's own check calls it fixed_substeps, a name no user sets.
+  if (substeps < 1 || substeps > step.max_substeps)
+    throw InputError("substeps = " + std::to_string(substeps) + " is out of range [1, " +
+                     std::to_string(step.max_substeps) + "]");
   step.tolerance = tolerance;
   step.fixed_substeps = substeps;
   return step;
@@ -140,9 +143,8 @@ Subcommand add_envelope(CLI::App& parent) {
   auto opts = std::make_shared<EnvelopeRequest>();
   auto json = std::make_shared<bool>(false);
   auto* sub = parent.add_subcommand("envelope", "Envelope predicted by a constitutive model");
-  std::string names;
-  for (const auto& n : models::law_names()) names += (names.empty() ? "" : ", ") + n;
-  sub->add_option("--model", opts->model, "Constitutive law: " + names + ", umat (with --umat)")
+  sub->add_option("--model", opts->model,
+                  "Constitutive law: " + comma_list(models::law_names()) + ", umat (with --umat)")
       ->required();
   sub->add_option("--umat", opts->umat,
                   "Shared library of an Abaqus UMAT (entry umat_ or umat), with --model umat "
@@ -156,6 +158,7 @@ Subcommand add_envelope(CLI::App& parent) {
   sub->add_option("--amplitude", opts->amplitude, "Probe amplitude |d_eps| (Frobenius norm)")
       ->required();
   sub->add_option("--directions", opts->directions, "Number of probe directions")
+      ->check(integer_in_range(models::kEnvelopeDirectionsMin, models::kEnvelopeDirectionsMax))
       ->capture_default_str();
   sub->add_flag("--json", *json, "Print one JSON object");
   sub->add_option("--method", opts->method,
@@ -175,6 +178,7 @@ Subcommand add_envelope(CLI::App& parent) {
   sub->add_option("--tolerance", opts->tolerance, "Local relative error tolerance per substep")
       ->capture_default_str();
   sub->add_option("--substeps", opts->substeps, "Substeps of the explicit scheme")
+      ->check(integer_in_range(1, models::StepOptions{}.max_substeps))
       ->capture_default_str();
   return {sub, [opts, json]() -> int { return run_envelope(*opts, *json); }};
 }

@@ -17,7 +17,9 @@ bool EnvelopeOptions::IsValid(std::string* why) const {
     return false;
   };
   if (!(amplitude > 0.0 && amplitude < 1.0)) return fail("amplitude must be in (0, 1)");
-  if (directions < 3 || directions > 100000) return fail("directions must be in [3, 100000]");
+  if (directions < kEnvelopeDirectionsMin || directions > kEnvelopeDirectionsMax)
+    return fail("directions must be in [" + std::to_string(kEnvelopeDirectionsMin) + ", " +
+                std::to_string(kEnvelopeDirectionsMax) + "]");
   return step.IsValid(why);
 }
 

@@ -111,3 +111,9 @@ def test_paths_of_the_linear_law_have_the_closed_form():
     assert und["stress"].shape == (21, 3, 3)
     assert und["eps_dev"][-1] == pytest.approx(-0.01, rel=1e-12)
 
+
+
+def test_a_substep_count_out_of_range_is_named_as_the_argument():
+    state = {"stress": -1e5 * np.eye(3), "volume_fraction": 0.64}
+    with pytest.raises(rendulic.InputError, match=r"substeps = 0 is out of range \[1, 100000\]"):
+        rendulic.model_envelope("isotropic_elastic", state, scheme="explicit", substeps=0)

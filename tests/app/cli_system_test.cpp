@@ -82,14 +82,14 @@ TEST(Cli, ARealOptionThatIsNotFiniteIsRefusedNamingIt) {
 }
 
 // A count that is not a whole number was called out of range ("Value abc not in range 0 to
-// 4096", CLI11's Range); a count out of range still says the range.
+// 4096", CLI11's Range); a count out of range says the range as a real number's is said.
 TEST(Cli, ACountThatIsNotAWholeNumberIsCalledSo) {
   for (const auto& [args, said] : std::vector<std::pair<std::string, std::string>>{
            {"run x.toml --threads abc", "--threads: Value abc is not a whole number (digits only)"},
            {"run x.toml --threads 2.5", "--threads: Value 2.5 is not a whole number (digits only)"},
            {"bench --repetitions x", "--repetitions: Value x is not a whole number (digits only)"},
-           {"run x.toml --threads -1", "--threads: Value -1 not in range 0 to 4096"},
-           {"sweep --path-seeds 0", "--path-seeds: Value 0 not in range 1 to 64"},
+           {"run x.toml --threads -1", "--threads: Value -1 is out of range [0, 4096]"},
+           {"sweep --path-seeds 0", "--path-seeds: Value 0 is out of range [1, 64]"},
            // A real number's bounds as a scenario key's ("0.000000 to 10.000000" before), and a
            // word is not a number (it was "not in range").
            {"bench --friction -1", "--friction: Value -1 is out of range [0, 10]"},

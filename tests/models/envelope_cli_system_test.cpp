@@ -224,6 +224,13 @@ TEST(EnvelopeCli, BadInputExitsTwoNamingTheCulprit) {
   expect_input_error("envelope --model isotropic_elastic --state " + data("isotropic_state.toml") +
                          " --amplitude -1",
                      {"amplitude"});
+  // Counts named as the options are: --substeps 0 said "fixed_substeps must be >= 1", and a
+  // count beyond an int "Could not convert".
+  for (const auto& [option, words] : std::vector<std::pair<std::string, std::string>>{
+           {" --substeps 0", "--substeps: Value 0 is out of range [1, 100000]"},
+           {" --substeps 3000000000", "--substeps: Value 3000000000 is out of range [1, 100000]"},
+           {" --directions 2", "--directions: Value 2 is out of range [3, 100000]"}})
+    expect_input_error("envelope --model isotropic_elastic" + state + option, {words});
   expect_input_error(
       "envelope --model isotropic_elastic --state /nonexistent/s.toml --amplitude 1e-4",
       {"/nonexistent/s.toml"});

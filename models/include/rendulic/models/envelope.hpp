@@ -18,6 +18,11 @@ enum class EnvelopeMethod {
                 // rate equation at the start state (the envelope of Gudehus 1979 / Wu 2000)
 };
 
+// The number of probe directions of an envelope: three make the smallest ellipse that can be
+// fitted; the upper end keeps a mistyped count from running for hours.
+inline constexpr int kEnvelopeDirectionsMin = 3;
+inline constexpr int kEnvelopeDirectionsMax = 100000;
+
 struct EnvelopeOptions {
   double amplitude = 5e-5;  // |d_eps| (Frobenius), docs/physics.md section 5 elastic default
   int directions = 36;
