@@ -147,7 +147,12 @@ CalibrationSummary calibrate(const CalibrationData& data, const CalibrationOptio
                                                                   : options.holdout;
   const std::set<std::string> hold(holdout.begin(), holdout.end());
   for (const auto& h : hold)
-    if (!data.find(h)) throw InputError("calibrate: held-out state '" + h + "' is not in the data");
+    if (!data.find(h)) {
+      std::vector<std::string> labels;
+      for (const auto& s : data.states) labels.push_back(s.label);
+      throw InputError("calibrate: held-out state '" + h +
+                       "' is not in the data (states: " + comma_list(labels) + ")");
+    }
   for (const auto& s : data.states)
     (hold.count(s.label) ? out.held_out_states : out.fitted_states).push_back(s.label);
   if (out.fitted_states.empty()) throw InputError("calibrate: every state is held out");
@@ -222,7 +227,7 @@ CalibrationSummary calibrate(const CalibrationData& data, const CalibrationOptio
   }
   for (const auto& [name, v] : options.values) {
     const int i = law->parameter_index(name);
-    if (i < 0) throw InputError("calibrate: unknown parameter '" + name + "' of " + options.model);
+    if (i < 0) throw InputError("calibrate: " + law->unknown_parameter(name));
     const auto& pi = law->parameter_info()[i];
     if (!(v >= pi.lower && v <= pi.upper))
       throw InputError("calibrate: value of '" + name + "' outside its bounds");

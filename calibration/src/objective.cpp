@@ -40,7 +40,7 @@ ParameterSpace::ParameterSpace(const models::Law& law, const std::vector<double>
     throw InputError("parameter '" + *again + "' listed twice");
   for (const auto& name : free) {
     const int i = law.parameter_index(name);
-    if (i < 0) throw InputError("unknown parameter '" + name + "' of " + std::string(law.name()));
+    if (i < 0) throw InputError(law.unknown_parameter(name));
     FreeParameter f;
     f.name = name;
     f.index = i;

@@ -2,7 +2,9 @@
 // the registry (law.hpp; defaults and sources are discussed in docs/models.md).
 #include <cmath>
 #include <limits>
+#include <ranges>
 
+#include "rendulic/core/comma_list.hpp"
 #include "rendulic/core/decimal.hpp"
 #include "rendulic/models/elastic_laws.hpp"
 #include "rendulic/models/elastoplastic_fabric.hpp"
@@ -112,10 +114,18 @@ bool Law::set_parameters(const std::vector<double>& values, std::string* why) {
   return true;
 }
 
+std::string Law::unknown_parameter(std::string_view pname) const {
+  const auto names =
+      parameter_info() |
+      std::views::transform([](const ParameterInfo& p) -> const std::string& { return p.name; });
+  return "unknown parameter '" + std::string(pname) + "' of " + std::string(name()) +
+         " (known: " + comma_list(names) + ")";
+}
+
 bool Law::set_parameter(std::string_view pname, double value, std::string* why) {
   const int i = parameter_index(pname);
   if (i < 0) {
-    if (why) *why = "unknown parameter " + std::string(pname) + " of " + std::string(name());
+    if (why) *why = unknown_parameter(pname);
     return false;
   }
   std::vector<double> v = params_;

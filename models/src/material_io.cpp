@@ -4,9 +4,7 @@
 #include <toml++/toml.h>
 
 #include <cmath>
-#include <ranges>
 
-#include "rendulic/core/comma_list.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/text_file.hpp"
 #include "toml_input.hpp"
@@ -71,11 +69,7 @@ void parse_parameters_toml(const std::string& text, const std::string& path, Law
     const std::string key(k.str());
     const int i = law->parameter_index(key);
     if (i < 0) {
-      const auto names = law->parameter_info() |
-                         std::views::transform(
-                             [](const ParameterInfo& p) -> const std::string& { return p.name; });
-      throw InputError(path + ": unknown parameter '" + key + "' for model " +
-                       std::string(law->name()) + " (known: " + comma_list(names) + ")");
+      throw InputError(path + ": " + law->unknown_parameter(key));
     }
     const double v = number(node, key, path);
     const ParameterInfo& info = law->parameter_info()[i];

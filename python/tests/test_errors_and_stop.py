@@ -58,8 +58,8 @@ def test_a_thread_count_out_of_range_is_an_input_error(tiny_toml, cli_run, tmp_p
 
 def test_model_input_errors_have_the_file_readers_messages():
     state = {"stress": np.eye(3) * 1e6}
-    with pytest.raises(rendulic.InputError, match="unknown parameter 'Kx' for model "
-                                                  "isotropic_elastic"):
+    with pytest.raises(rendulic.InputError, match=r"unknown parameter 'Kx' of isotropic_elastic "
+                                                  r"\(known: K, G, "):
         rendulic.model_envelope("isotropic_elastic", state, {"Kx": 1.0})
     with pytest.raises(rendulic.InputError, match="parameter 'K' = -1 is outside its bounds"):
         rendulic.model_envelope("isotropic_elastic", state, {"K": -1.0})

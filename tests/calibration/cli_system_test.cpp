@@ -99,6 +99,15 @@ TEST(CalibrateCli, BadInputExitsTwoAndLeavesTheFileUntouched) {
   EXPECT_NE(slurp(log).find("no envelopes"), std::string::npos);
   EXPECT_EQ(run("--results " + file.string() + " --model anisotropic_elastic --free B,nope", log),
             2);
+  // A name or label that is not there comes with those that are.
+  EXPECT_NE(slurp(log).find("unknown parameter 'nope' of anisotropic_elastic (known: B, "),
+            std::string::npos)
+      << slurp(log);
+  EXPECT_EQ(run("--results " + file.string() + " --model anisotropic_elastic --holdout zz", log),
+            2);
+  EXPECT_NE(slurp(log).find("held-out state 'zz' is not in the data (states: s0, "),
+            std::string::npos)
+      << slurp(log);
   const fs::path text = file.parent_path() / "not_hdf5.h5";
   std::ofstream(text) << "hello";
   EXPECT_EQ(run("--results " + text.string() + " --model anisotropic_elastic", log), 2);

@@ -124,6 +124,9 @@ class Law {
   bool set_parameter(std::string_view name, double value, std::string* why);
   double parameter(std::string_view name) const;     // NaN if unknown
   int parameter_index(std::string_view name) const;  // -1 if unknown
+  // The refusal of a name parameter_index does not know, with the names it does:
+  // "unknown parameter 'x' of isotropic_elastic (known: B, nu)".
+  std::string unknown_parameter(std::string_view name) const;
   std::vector<double> default_parameters() const;
 
   // A state with the law's initial internal variables.
