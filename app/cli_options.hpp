@@ -6,11 +6,14 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <string>
 #include <type_traits>
+#include <vector>
 
+#include "rendulic/core/comma_list.hpp"
 #include "rendulic/core/decimal.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/option_table.hpp"
@@ -79,6 +82,19 @@ inline CLI::Validator real_in_range(double lo, double hi, bool open = false) {
         return "";
       },
       bounds);
+}
+
+// The check of a word among `choices`, in a scenario key's words ("'foo' is not one of auto,
+// ellipse, line"); CLI11's IsMember said "foo not in {auto,ellipse,line}". The help shows the
+// choices (TEXT:{auto, ellipse, line}).
+inline CLI::Validator one_of(std::vector<std::string> choices) {
+  const std::string shown = "{" + comma_list(choices) + "}";
+  return CLI::Validator(
+      [choices = std::move(choices)](std::string& text) -> std::string {
+        if (std::find(choices.begin(), choices.end(), text) != choices.end()) return "";
+        return "'" + text + "' is not one of " + comma_list(choices);
+      },
+      shown);
 }
 
 // An empty output folder (`--out "$DIR"` with DIR unset) wrote into the current folder without

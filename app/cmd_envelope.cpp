@@ -164,7 +164,7 @@ Subcommand add_envelope(CLI::App& parent) {
   sub->add_option("--method", opts->method,
                   "integrated: each probe integrated by the driver; rate: one evaluation of the "
                   "rate law (the exact incremental envelope)")
-      ->check(CLI::IsMember({"integrated", "rate"}))
+      ->check(one_of({"integrated", "rate"}))
       ->capture_default_str();
   sub->add_option("--scheme", opts->scheme,
                   "modified-euler or bogacki-shampine (error controlled; the third-order "
@@ -172,7 +172,7 @@ Subcommand add_envelope(CLI::App& parent) {
                   "surface), auto (bogacki-shampine without a yield surface, modified-euler with "
                   "one) or explicit (fixed substeps; reports when its error estimate exceeds the "
                   "tolerance)")
-      ->check(CLI::IsMember(
+      ->check(one_of(
           std::vector<std::string>(models::kSchemeNames.begin(), models::kSchemeNames.end())))
       ->capture_default_str();
   sub->add_option("--tolerance", opts->tolerance, "Local relative error tolerance per substep")

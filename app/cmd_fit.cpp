@@ -73,10 +73,10 @@ Subcommand add_fit(CLI::App& parent) {
   sub->add_option("--shape", o->shape,
                   "ellipse, line, or auto (line unless the ellipse fits significantly better: "
                   "docs/fitting.md); a circle is reported as such, without inclination")
-      ->check(CLI::IsMember(fit_shape_choices()))
+      ->check(one_of(fit_shape_choices()))
       ->capture_default_str();
   sub->add_option("--loss", o->loss, "robust loss of the orthogonal distances")
-      ->check(CLI::IsMember(fit_loss_choices()))
+      ->check(one_of(fit_loss_choices()))
       ->capture_default_str();
   sub->add_option("--loss-scale", o->loss_scale,
                   "distance at which the robust loss starts to discount a point, in data units "

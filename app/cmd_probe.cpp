@@ -326,7 +326,7 @@ Subcommand add_probe(CLI::App& parent) {
           "LABEL"));
   sub->add_option("--methods", o->methods,
                   "probe methods (default: probes.methods and linear_response)")
-      ->check(CLI::IsMember({"dynamic", "minimisation", kLinear}))
+      ->check(one_of({"dynamic", "minimisation", kLinear}))
       ->delimiter(',');
   sub->add_option("--amplitudes", o->amplitudes, "probe strain amplitudes (probes.amplitudes)")
       ->delimiter(',');

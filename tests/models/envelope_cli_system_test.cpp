@@ -229,7 +229,9 @@ TEST(EnvelopeCli, BadInputExitsTwoNamingTheCulprit) {
   for (const auto& [option, words] : std::vector<std::pair<std::string, std::string>>{
            {" --substeps 0", "--substeps: Value 0 is out of range [1, 100000]"},
            {" --substeps 3000000000", "--substeps: Value 3000000000 is out of range [1, 100000]"},
-           {" --directions 2", "--directions: Value 2 is out of range [3, 100000]"}})
+           {" --directions 2", "--directions: Value 2 is out of range [3, 100000]"},
+           // A word among choices, in a scenario key's words (CLI11: "foo not in {...}").
+           {" --method foo", "--method: 'foo' is not one of integrated, rate"}})
     expect_input_error("envelope --model isotropic_elastic" + state + option, {words});
   expect_input_error(
       "envelope --model isotropic_elastic --state /nonexistent/s.toml --amplitude 1e-4",
