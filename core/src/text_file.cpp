@@ -66,19 +66,39 @@ void refuse_unless_regular_file(const fs::path& path, const std::string& shown,
   refuse_unless_regular_mode(st.st_mode, shown, what, form);
 }
 
+namespace {
+
+// The innermost part of `dir` that exists ("" if none does); `missing` gets the parts below
+// it, innermost first.
+fs::path innermost_existing(const fs::path& dir, std::vector<fs::path>* missing = nullptr) {
+  std::error_code ec;
+  fs::path existing = dir;
+  for (; !existing.empty() && !fs::exists(existing, ec); existing = existing.parent_path()) {
+    if (missing) missing->push_back(existing);
+    if (existing == existing.parent_path()) break;
+  }
+  return existing;
+}
+
+// "F: is a file, not a folder (why)" where a file stands at `dir` or at a folder above it;
+// `why` is `itself` for `dir` itself, else `above`.
+void refuse_file_in_the_way(const fs::path& dir, const std::string& itself,
+                            const std::string& above) {
+  std::error_code ec;
+  const fs::path existing = innermost_existing(dir);
+  if (!existing.empty() && fs::exists(existing, ec) && !fs::is_directory(existing, ec))
+    throw InputError(existing.string() + ": is a file, not a folder (" +
+                     (existing == dir ? itself : above) + ")");
+}
+
+}  // namespace
+
 std::vector<fs::path> make_folders(const fs::path& dir, const std::string& what) {
   std::vector<fs::path> made;
   if (dir.empty()) return made;
   std::error_code ec;
-  fs::path existing = dir;  // the innermost part of it that exists
-  for (; !existing.empty() && !fs::exists(existing, ec); existing = existing.parent_path()) {
-    made.push_back(existing);
-    if (existing == existing.parent_path()) break;
-  }
-  if (!existing.empty() && fs::exists(existing, ec) && !fs::is_directory(existing, ec))
-    throw InputError(existing.string() + ": is a file, not a folder" +
-                     (existing == dir ? " (the " + what + ")"
-                                      : " (it cannot hold the " + what + " " + dir.string() + ")"));
+  innermost_existing(dir, &made);
+  refuse_file_in_the_way(dir, "the " + what, "it cannot hold the " + what + " " + dir.string());
   fs::create_directories(dir, ec);
   if (!ec && !fs::is_directory(dir, ec)) ec = std::make_error_code(std::errc::not_a_directory);
   if (ec) {
@@ -143,6 +163,14 @@ AtomicTextFile::AtomicTextFile(fs::path file, std::string what)
     return;
   }
   const fs::path folder = target_.has_parent_path() ? target_.parent_path() : fs::path(".");
+  // open() said only "No such file or directory" or "Not a directory" of the file itself
+  // (`export --lammps out/a.data` before out/ is made).
+  if (!fs::is_directory(folder, ec)) {
+    const std::string holds = "it cannot hold " + what_ + " " + final_.string();
+    refuse_file_in_the_way(folder, holds, holds);
+    throw InputError(final_.string() + ": cannot write " + what_ + ": the folder " +
+                     folder.string() + " does not exist");
+  }
   std::string name = target_.filename().string();
   name.insert(name.begin(), '.');
   name += ".tmp-" + std::to_string(::getpid());

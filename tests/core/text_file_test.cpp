@@ -157,9 +157,22 @@ TEST(AtomicTextFile, APlaceThatCannotBeWrittenIsRefusedAtOnceNamingIt) {
     rendulic::AtomicTextFile f(d / "no" / "such" / "a.txt", "the test text");
     FAIL() << "a missing folder was accepted";
   } catch (const rendulic::InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("no/such/a.txt: cannot write the test text: No such file"),
-              std::string::npos)
-        << e.what();
+    // The folder is named (open() said "No such file or directory" of the file).
+    EXPECT_EQ(std::string(e.what()), (d / "no/such/a.txt").string() +
+                                         ": cannot write the test text: the folder " +
+                                         (d / "no/such").string() + " does not exist");
+  }
+  std::ofstream(d / "plain") << "x";
+  for (const fs::path& inside : {d / "plain" / "a.txt", d / "plain" / "sub" / "a.txt"}) {
+    try {
+      rendulic::AtomicTextFile f(inside, "the test text");
+      FAIL() << "a file as its folder was accepted";
+    } catch (const rendulic::InputError& e) {
+      EXPECT_EQ(std::string(e.what()), (d / "plain").string() +
+                                           ": is a file, not a folder (it cannot hold the test "
+                                           "text " +
+                                           inside.string() + ")");
+    }
   }
   try {
     rendulic::AtomicTextFile f(d, "the test text");
