@@ -18,6 +18,7 @@
 #include <pybind11/stl/filesystem.h>
 #include <signal.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <mutex>
@@ -198,15 +199,27 @@ class Reader {
   py::dict attrs(const std::string& object) const { return attrs_of(in_, object); }
   py::array_t<double> read(const std::string& path) const { return dataset(in_, path); }
 
+  // A root that is not the run's own ("") nor a pressure branch gave no states and no
+  // envelopes, as if the branch were empty: a mistyped root ("nu0.7") looked like no data.
   std::vector<std::string> states(const std::string& root) const {
+    const std::vector<std::string> roots = state_roots(in_);
+    if (std::find(roots.begin(), roots.end(), root) == roots.end())
+      throw InputError(path() + ": no pressure branch '" + root +
+                       "' (branches: " + joined(pressure_branches(in_)) + ")");
     return in_.children(paths::states(root));
   }
-  py::dict state(const std::string& label, const std::string& root) const {
+  // The group of a state, which must be there: envelope_names of a mistyped label was [].
+  std::string state_group(const std::string& label, const std::string& root) const {
+    const std::vector<std::string> labels = states(root);
     const std::string g = paths::state(label, root);
     if (!in_.is_group(g))
       throw InputError(path() + ": no state '" + label + "'" +
-                       (root.empty() ? "" : " under " + root) +
-                       " (states: " + joined(states(root)) + ")");
+                       (root.empty() ? "" : " under " + root) + " (states: " + joined(labels) +
+                       ")");
+    return g;
+  }
+  py::dict state(const std::string& label, const std::string& root) const {
+    const std::string g = state_group(label, root);
     py::dict d = datasets_of(in_, g);
     // A State has a 3x3 stress and fabric: a missing one was a KeyError, one of shape (0, 3) a
     // State that no tensor formula can take.
@@ -220,11 +233,11 @@ class Reader {
     return d;
   }
   std::vector<std::string> envelopes(const std::string& label, const std::string& root) const {
-    return in_.children(paths::envelopes(paths::state(label, root)));
+    return in_.children(paths::envelopes(state_group(label, root)));
   }
   py::dict envelope(const std::string& label, const std::string& name,
                     const std::string& root) const {
-    const std::string g = paths::envelope(paths::state(label, root), name);
+    const std::string g = paths::envelope(state_group(label, root), name);
     if (!in_.is_group(g))
       throw InputError(path() + ": state '" + label + "' has no envelope '" + name +
                        "' (envelopes: " + joined(envelopes(label, root)) + ")");

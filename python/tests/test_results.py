@@ -61,6 +61,19 @@ def test_reader_matches_h5py(cli_run):
         np.testing.assert_array_equal(r.path()["eps_dev"], f["/path/eps_dev"][()])
 
 
+def test_a_mistyped_root_or_label_is_refused_not_read_as_no_data(cli_run):
+    # Both gave [] as if the branch or the state held nothing.
+    r = rendulic.Results(cli_run)
+    assert r.branches() == [] and r.states() == ["a", "b"]
+    with pytest.raises(rendulic.InputError,
+                       match=r"no pressure branch '/pressure/nu0.7' \(branches: none\)"):
+        r.states(root="/pressure/nu0.7")
+    with pytest.raises(rendulic.InputError, match=r"no pressure branch 'nu0.7'"):
+        r.envelopes(root="nu0.7")
+    with pytest.raises(rendulic.InputError, match=r"no state 'zz' \(states: a, b\)"):
+        r.envelope_names("zz")
+
+
 def test_stored_pairs_are_the_tensors_pairs(cli_run):
     # Rendulic pair of a tensor: (sqrt2 * mean of yy and zz, xx), docs/results.md.
     e = rendulic.Results(cli_run).envelopes(state="a")[0]
