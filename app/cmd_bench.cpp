@@ -326,15 +326,17 @@ Subcommand add_bench(CLI::App& parent) {
       ->capture_default_str()
       ->delimiter(',')
       ->check(integer_in_range(1, kMaxThreads));
-  sub->add_option("--seconds", o->seconds,
-                  "wall time of each state's first timed run, whose steps every figure of the "
-                  "state then times")
-      ->capture_default_str()
-      ->check(real_in_range(0.01, 600.0));
+  CLI::Option* seconds = sub->add_option("--seconds", o->seconds,
+                                         "wall time of each state's first timed run, whose "
+                                         "steps every figure of the state then times")
+                             ->capture_default_str()
+                             ->check(real_in_range(0.01, 600.0));
+  // Both given, --steps won without a word and --seconds was ignored.
   sub->add_option("--steps", o->steps,
                   "the steps every figure times instead (after 100 warm-up steps, as "
                   "bench/lammps_compare.sh has LAMMPS do)")
-      ->check(integer_in_range(1, 100000000));
+      ->check(integer_in_range(1, 100000000))
+      ->excludes(seconds);
   sub->add_option("--friction", o->friction,
                   "also time 1 thread with Coulomb friction mu (dem.friction) on the same states, "
                   "beside the frictionless engine, wall and CPU time")

@@ -53,7 +53,7 @@ TEST(Cli, ARealOptionThatIsNotFiniteIsRefusedNamingIt) {
   const fs::path d = fresh_dir("not_finite");
   const fs::path scenario = write_file(d / "s.toml", "[dem]\nn_particles = 250\n");
   for (const std::string& args : std::vector<std::string>{
-           "bench --particles 100 --steps 1 --repetitions 1 --seconds nan",
+           "bench --particles 100 --repetitions 1 --seconds nan",
            "bench --particles 100 --steps 1 --repetitions 1 --friction nan",
            "bench --particles 100 --steps 1 --repetitions 1 --friction 0.5 --rolling-friction nan",
            "bench --particles 100 --steps 1 --repetitions 1 --friction inf",
@@ -103,7 +103,9 @@ TEST(Cli, ACountThatIsNotAWholeNumberIsCalledSo) {
            // And options without a check of their own.
            {"envelope --amplitude abc", "--amplitude: Value abc is not a number"},
            {"probe x.data --directions 2.5", "--directions: Value 2.5 is not a whole number"},
-           {"probe x.data --amplitudes 1e-4,abc", "--amplitudes: Value abc is not a number"}}) {
+           {"probe x.data --amplitudes 1e-4,abc", "--amplitudes: Value abc is not a number"},
+           // Both ways to say how long bench times (--steps won without a word).
+           {"bench --seconds 1 --steps 5", "--seconds excludes --steps"}}) {
     const CmdResult r = rendulic(args);
     EXPECT_EQ(r.code, 2) << args << "\n" << r.out;
     EXPECT_EQ(lines(r.out), 1) << args << "\n" << r.out;
