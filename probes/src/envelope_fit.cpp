@@ -156,9 +156,10 @@ EnvelopeFit select_shape(const Envelope& env, const FitOptions& options) {
     case FitShape::kAuto:
       break;
   }
+  // The hint only where a line can be fitted (2 points): with 0 or 1 it failed again.
   if (env.size() < 5)
     throw InputError("fit: choosing between ellipse and line needs at least 5 points, got " +
-                     std::to_string(env.size()) + " (use --shape line)");
+                     std::to_string(env.size()) + (env.size() >= 2 ? " (use --shape line)" : ""));
   EnvelopeFit line = fit_line(env, options);
   // A line fits exactly (to rounding): nothing left for an ellipse to explain. This also
   // spares fit_ellipse the points of a zero-width curve.

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <string>
 
+#include "input_error.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/probes/envelope_fit.hpp"
 #include "synthetic.hpp"
@@ -41,6 +42,23 @@ TEST(ShapeSelection, ExactLineIsLine) {
   const EnvelopeFit f = fit_envelope(line_envelope({1.0, 1.0}, 2.0, 125.26, 36));
   EXPECT_EQ(f.shape, FitShape::kLine) << f.selection_note;
   EXPECT_LT(angle_diff_deg(*f.inclination_deg, 125.26), 1e-9);
+}
+
+// Too few points to choose: the hint to fit a line only where a line can be fitted.
+TEST(ShapeSelection, TooFewPointsToChooseSayWhatCanBeFitted) {
+  Envelope env;
+  for (const int n : {0, 1, 2, 4}) {
+    env.response.resize(static_cast<std::size_t>(n), Eigen::Vector2d(0.0, 0.0));
+    for (int i = 0; i < n; ++i) env.response[static_cast<std::size_t>(i)] = {i, 2.0 * i};
+    const std::string said = testing::input_error([&] { fit_envelope(env); });
+    EXPECT_EQ(said, "fit: choosing between ellipse and line needs at least 5 points, got " +
+                        std::to_string(n) + (n >= 2 ? " (use --shape line)" : ""));
+    if (n >= 2) {
+      FitOptions line;
+      line.shape = FitShape::kLine;
+      EXPECT_EQ(fit_envelope(env, line).shape, FitShape::kLine) << n;
+    }
+  }
 }
 
 TEST(ShapeSelection, ForcedEllipseOnLineDegeneratesToZeroMinorAxis) {
