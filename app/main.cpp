@@ -30,13 +30,47 @@ namespace {
   std::_Exit(code);
 }
 
+// std::cout's buffer, writing into C's stdout as the standard one does (so that its text and
+// printf's keep their order), which keeps the reason of the first write that failed. The
+// stream stops writing after it, and by the end errno no longer said why: `inspect FILE >
+// /dev/full` said "cannot write" without "No space left on device".
+class StdoutBuffer : public std::streambuf {
+ public:
+  int first_error() const { return first_error_; }
+
+ protected:
+  int overflow(int c) override {
+    if (c == traits_type::eof()) return traits_type::not_eof(c);
+    if (std::fputc(c, stdout) == EOF) return failed(), traits_type::eof();
+    return c;
+  }
+  std::streamsize xsputn(const char* s, std::streamsize n) override {
+    const std::size_t written = std::fwrite(s, 1, static_cast<std::size_t>(n), stdout);
+    if (written < static_cast<std::size_t>(n)) failed();
+    return static_cast<std::streamsize>(written);
+  }
+  int sync() override { return std::fflush(stdout) == 0 ? 0 : (failed(), -1); }
+
+ private:
+  void failed() {
+    if (first_error_ == 0) first_error_ = errno;
+  }
+  int first_error_ = 0;
+};
+
+// Never destroyed: std::cout is flushed at exit after the function's statics are gone.
+StdoutBuffer& stdout_buffer() {
+  static auto* buffer = new StdoutBuffer;
+  return *buffer;
+}
+
 // A command's output on stdout that could not all be written (a full disk under `fit --json >
 // fit.json`, /dev/full) was lost with exit 0: the stream's failure is one line and exit 2.
 int with_stdout_written(int code) {
   errno = 0;  // the flush that fails sets it
   std::cout.flush();
   if (std::fflush(stdout) == 0 && !std::ferror(stdout) && !std::cout.bad()) return code;
-  const int err = errno;
+  const int err = stdout_buffer().first_error() != 0 ? stdout_buffer().first_error() : errno;
   std::string line = "rendulic: standard output: cannot write";
   if (err != 0) line.append(": ").append(std::strerror(err));
   std::cerr << line << "\n";
@@ -47,6 +81,7 @@ int with_stdout_written(int code) {
 int main(int argc, char** argv) {
   using namespace rendulic;
   log::keep_standard_streams_open();
+  std::cout.rdbuf(&stdout_buffer());
   cleanup::install_handlers();
   calibration::quiet_solver_logging();
   CLI::App cli{"rendulic: calibrate constitutive models of granular soils from DEM envelopes"};
