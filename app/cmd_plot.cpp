@@ -12,6 +12,7 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <charconv>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -22,6 +23,7 @@
 #include <string>
 #include <vector>
 
+#include "cli_options.hpp"
 #include "commands.hpp"
 #include "plot_script.hpp"
 #include "rendulic/core/cleanup.hpp"
@@ -113,6 +115,20 @@ std::filesystem::path plot_script_file(const std::filesystem::path& script) {
   return {};
 }
 
+int plot_jobs_from_environment() {
+  const char* jobs = std::getenv("RENDULIC_PLOT_JOBS");
+  if (!jobs || !*jobs) return 0;
+  // "abc" failed in the script, after the files were checked, as a Python ValueError.
+  long long n = 0;
+  const char* end = jobs + std::strlen(jobs);
+  const auto [at, err] = std::from_chars(jobs, end, n);
+  if (err != std::errc() || at != end || n < 1 || n > kMaxThreads)
+    throw InputError("RENDULIC_PLOT_JOBS=" + printable(jobs) +
+                     ": the processes to draw with are a whole number in [1, " +
+                     std::to_string(kMaxThreads) + "]");
+  return static_cast<int>(n);
+}
+
 int plot_results(const std::filesystem::path& file, const std::filesystem::path& out_dir,
                  const std::filesystem::path& script) {
   const std::filesystem::path script_file = plot_script_file(script);
@@ -133,7 +149,7 @@ int plot_results(const std::filesystem::path& file, const std::filesystem::path&
   // The figures are independent: plot.py draws them in as many processes as this run may
   // use threads (--threads; the user's own RENDULIC_PLOT_JOBS wins).
   std::vector<std::string> env;
-  if (const char* jobs = std::getenv("RENDULIC_PLOT_JOBS"); !jobs || !*jobs)
+  if (plot_jobs_from_environment() == 0)
     env.push_back("RENDULIC_PLOT_JOBS=" + std::to_string(omp_get_max_threads()));
   std::vector<std::string> args = {""};
   if (script_file.empty()) {

@@ -97,6 +97,11 @@ models::StepOptions step_options_for(const std::string& scheme, double tolerance
 int plot_results(const std::filesystem::path& file, const std::filesystem::path& out_dir,
                  const std::filesystem::path& script = {});
 
+// The processes plot_results draws with: RENDULIC_PLOT_JOBS when set (InputError unless a whole
+// number in [1, kMaxThreads]), else 0 (as many as the threads). Checked before a run too, so
+// that a mistyped value does not fail it at its report, after the DEM.
+int plot_jobs_from_environment();
+
 // The figure script plot_results would run given `script` (empty: the compiled-in copy).
 std::filesystem::path plot_script_file(const std::filesystem::path& script = {});
 

@@ -427,6 +427,24 @@ TEST(Plot, RunsTheScriptOfTheOptionTheEnvironmentOrTheInstallPrefix) {
                                      (dir / "o5").string() + " --script " + mine.string());
   EXPECT_EQ(r.code, 0) << r.out;
   EXPECT_NE(ran(dir / "o5").find(" jobs=5"), std::string::npos) << ran(dir / "o5");
+  // A count of processes that is not one: one line naming it, exit 2 (it failed in the script
+  // as a Python ValueError), and a run with the report stage is refused before any work.
+  for (const char* jobs : {"abc", "0", "1.5"}) {
+    r = rendulic::testing::run_command("RENDULIC_PLOT_JOBS=" + std::string(jobs) + " " +
+                                       RENDULIC_EXE + " plot " + f.string() + " --out " +
+                                       (dir / "o6").string());
+    EXPECT_EQ(r.code, 2) << r.out;
+    EXPECT_EQ(r.out, "rendulic: RENDULIC_PLOT_JOBS=" + std::string(jobs) +
+                         ": the processes to draw with are a whole number in [1, 4096]\n");
+  }
+  EXPECT_FALSE(fs::exists(dir / "o6"));
+  r = rendulic::testing::run_command("RENDULIC_PLOT_JOBS=abc " + std::string(RENDULIC_EXE) +
+                                     " run " + rendulic::testing::tiny_scenario(dir).string() +
+                                     " --set run.stages=prepare,report --out " +
+                                     (dir / "run").string());
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("RENDULIC_PLOT_JOBS=abc: "), std::string::npos) << r.out;
+  EXPECT_FALSE(fs::exists(dir / "run"));
   // A script that is not there: one line naming it, exit 2.
   r = rendulic::testing::run_rendulic("plot " + f.string() + " --script " +
                                       (dir / "nope.py").string());
