@@ -856,7 +856,10 @@ constexpr const char* kReportWhat = "the report";
 void check_report_destination(const std::filesystem::path& dir, bool with_figures) {
   namespace fs = std::filesystem;
   std::error_code ec;
-  if (with_figures) plot_jobs_from_environment();
+  if (with_figures) {  // the environment's settings of the figures, before the DEM
+    plot_jobs_from_environment();
+    plot_script_file();
+  }
   AtomicTextFile::refuse_folder(report_file(dir), kReportWhat);
   refuse_read_only(link_target(report_file(dir)), report_file(dir), kReportWhat);
   if (with_figures && fs::exists(figures_folder(dir), ec) &&

@@ -445,6 +445,14 @@ TEST(Plot, RunsTheScriptOfTheOptionTheEnvironmentOrTheInstallPrefix) {
   EXPECT_EQ(r.code, 2) << r.out;
   EXPECT_NE(r.out.find("RENDULIC_PLOT_JOBS=abc: "), std::string::npos) << r.out;
   EXPECT_FALSE(fs::exists(dir / "run"));
+  r = rendulic::testing::run_command(
+      "RENDULIC_PLOT_SCRIPT=" + (dir / "nope.py").string() + " " + RENDULIC_EXE + " run " +
+      rendulic::testing::tiny_scenario(dir).string() + " --set run.stages=prepare,report --out " +
+      (dir / "run").string());
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("nope.py: no figure script there (RENDULIC_PLOT_SCRIPT)"), std::string::npos)
+      << r.out;
+  EXPECT_FALSE(fs::exists(dir / "run"));
   // A script that is not there: one line naming it, exit 2.
   r = rendulic::testing::run_rendulic("plot " + f.string() + " --script " +
                                       (dir / "nope.py").string());
