@@ -147,12 +147,9 @@ CalibrationSummary calibrate(const CalibrationData& data, const CalibrationOptio
                                                                   : options.holdout;
   const std::set<std::string> hold(holdout.begin(), holdout.end());
   for (const auto& h : hold)
-    if (!data.find(h)) {
-      std::vector<std::string> labels;
-      for (const auto& s : data.states) labels.push_back(s.label);
+    if (!data.find(h))
       throw InputError("calibrate: held-out state '" + h +
-                       "' is not in the data (states: " + comma_list(labels) + ")");
-    }
+                       "' is not in the data (states: " + comma_list(data.labels()) + ")");
   for (const auto& s : data.states)
     (hold.count(s.label) ? out.held_out_states : out.fitted_states).push_back(s.label);
   if (out.fitted_states.empty()) throw InputError("calibrate: every state is held out");

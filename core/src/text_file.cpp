@@ -80,12 +80,11 @@ fs::path innermost_existing(const fs::path& dir, std::vector<fs::path>* missing 
   return existing;
 }
 
-// "F: is a file, not a folder (why)" where a file stands at `dir` or at a folder above it;
-// `why` is `itself` for `dir` itself, else `above`.
-void refuse_file_in_the_way(const fs::path& dir, const std::string& itself,
-                            const std::string& above) {
+// "F: is a file, not a folder (why)" where a file stands at `dir` or at a folder above it
+// (`existing`, from innermost_existing); `why` is `itself` for `dir` itself, else `above`.
+void refuse_file_in_the_way(const fs::path& existing, const fs::path& dir,
+                            const std::string& itself, const std::string& above) {
   std::error_code ec;
-  const fs::path existing = innermost_existing(dir);
   if (!existing.empty() && fs::exists(existing, ec) && !fs::is_directory(existing, ec))
     throw InputError(existing.string() + ": is a file, not a folder (" +
                      (existing == dir ? itself : above) + ")");
@@ -97,8 +96,8 @@ std::vector<fs::path> make_folders(const fs::path& dir, const std::string& what)
   std::vector<fs::path> made;
   if (dir.empty()) return made;
   std::error_code ec;
-  innermost_existing(dir, &made);
-  refuse_file_in_the_way(dir, "the " + what, "it cannot hold the " + what + " " + dir.string());
+  refuse_file_in_the_way(innermost_existing(dir, &made), dir, "the " + what,
+                         "it cannot hold the " + what + " " + dir.string());
   fs::create_directories(dir, ec);
   if (!ec && !fs::is_directory(dir, ec)) ec = std::make_error_code(std::errc::not_a_directory);
   if (ec) {
@@ -167,7 +166,7 @@ AtomicTextFile::AtomicTextFile(fs::path file, std::string what)
   // (`export --lammps out/a.data` before out/ is made).
   if (!fs::is_directory(folder, ec)) {
     const std::string holds = "it cannot hold " + what_ + " " + final_.string();
-    refuse_file_in_the_way(folder, holds, holds);
+    refuse_file_in_the_way(innermost_existing(folder), folder, holds, holds);
     throw InputError(final_.string() + ": cannot write " + what_ + ": the folder " +
                      folder.string() + " does not exist");
   }

@@ -209,14 +209,13 @@ class Reader {
     return in_.children(paths::states(root));
   }
   // The group of a state, which must be there: envelope_names of a mistyped label was [].
+  // (The lists are read only for the refusal: envelopes() calls this for every envelope.)
   std::string state_group(const std::string& label, const std::string& root) const {
-    const std::vector<std::string> labels = states(root);
     const std::string g = paths::state(label, root);
-    if (!in_.is_group(g))
-      throw InputError(path() + ": no state '" + label + "'" +
-                       (root.empty() ? "" : " under " + root) + " (states: " + joined(labels) +
-                       ")");
-    return g;
+    if (in_.is_group(g)) return g;
+    const std::vector<std::string> labels = states(root);  // a root not there is named first
+    throw InputError(path() + ": no state '" + label + "'" +
+                     (root.empty() ? "" : " under " + root) + " (states: " + joined(labels) + ")");
   }
   py::dict state(const std::string& label, const std::string& root) const {
     const std::string g = state_group(label, root);
