@@ -23,6 +23,15 @@ namespace rendulic::app {
 // The range of a thread count (0: every core), on the command line and from Python.
 inline constexpr int kMaxThreads = 4096;
 
+// The words of every option's refusal of a text that is not a number, whichever check meets it
+// first (its range, its scenario key's, or the last one of name_words_that_are_not_numbers).
+inline std::string not_a_number(const std::string& text) {
+  return "Value " + text + " is not a number";
+}
+inline std::string not_a_whole_number(const std::string& text) {
+  return "Value " + text + " is not a whole number (digits only)";
+}
+
 // The check of a whole number in [lo, hi], in the words of real_in_range ("Value -1 is out of
 // range [0, 4096]"); CLI11's Range said "Value abc not in range 0 to 4096" of a word, and a
 // number beyond an int reached the conversion ("Could not convert: --substeps = 3000000000").
@@ -31,8 +40,7 @@ inline CLI::Validator integer_in_range(std::int64_t lo, std::int64_t hi) {
   return CLI::Validator(
       [lo, hi, bounds](std::string& text) -> std::string {
         std::int64_t v = 0;
-        if (!CLI::detail::lexical_cast(text, v))
-          return "Value " + text + " is not a whole number (digits only)";
+        if (!CLI::detail::lexical_cast(text, v)) return not_a_whole_number(text);
         if (v < lo || v > hi) return "Value " + text + " is out of range " + bounds;
         return "";
       },
@@ -57,7 +65,7 @@ inline CLI::Validator positive_number(bool zero_allowed = false) {
   return CLI::Validator(
       [zero_allowed](std::string& text) -> std::string {
         double v = 0.0;
-        if (!CLI::detail::lexical_cast(text, v)) return "Value " + text + " is not a number";
+        if (!CLI::detail::lexical_cast(text, v)) return not_a_number(text);
         if (v > 0.0 || (zero_allowed && v == 0.0)) return "";
         return "Value " + text + (zero_allowed ? " is not a number >= 0" : " is not a number > 0");
       },
@@ -73,7 +81,7 @@ inline CLI::Validator real_in_range(double lo, double hi) {
   return CLI::Validator(
       [lo, hi, bounds](std::string& text) -> std::string {
         double v = 0.0;
-        if (!CLI::detail::lexical_cast(text, v)) return "Value " + text + " is not a number";
+        if (!CLI::detail::lexical_cast(text, v)) return not_a_number(text);
         if (!std::isfinite(v)) return "Value " + text + " is not a finite number";
         if (v < lo || v > hi) return "Value " + text + " is out of range " + bounds;
         return "";
@@ -123,9 +131,9 @@ CLI::Option* add_key_option(CLI::App* app, const std::string& flag, T& member, c
             if constexpr (std::is_same_v<T, bool>)
               return "Value " + text + " is not true or false";
             else if constexpr (std::is_integral_v<T>)
-              return "Value " + text + " is not a whole number (digits only)";
+              return not_a_whole_number(text);
             else
-              return "Value " + text + " is not a number";
+              return not_a_number(text);
           }
           ScenarioValue value;
           if constexpr (std::is_same_v<T, int>)
@@ -153,16 +161,14 @@ inline void name_words_that_are_not_numbers(CLI::App& app) {
       o->check(CLI::Validator(
           [](std::string& text) -> std::string {
             double v = 0.0;
-            return CLI::detail::lexical_cast(text, v) ? "" : "Value " + text + " is not a number";
+            return CLI::detail::lexical_cast(text, v) ? "" : not_a_number(text);
           },
           ""));
     else if (base == "INT")
       o->check(CLI::Validator(
           [](std::string& text) -> std::string {
             std::int64_t v = 0;
-            return CLI::detail::lexical_cast(text, v)
-                       ? ""
-                       : "Value " + text + " is not a whole number (digits only)";
+            return CLI::detail::lexical_cast(text, v) ? "" : not_a_whole_number(text);
           },
           ""));
   }
