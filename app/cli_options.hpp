@@ -97,7 +97,7 @@ inline CLI::Validator one_of(std::vector<std::string> choices) {
   return CLI::Validator(
       [choices = std::move(choices)](std::string& text) -> std::string {
         if (std::find(choices.begin(), choices.end(), text) != choices.end()) return "";
-        return "'" + text + "' is not one of " + comma_list(choices);
+        return not_one_of(text, choices);
       },
       shown);
 }

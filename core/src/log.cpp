@@ -9,8 +9,6 @@
 #include <cstdio>
 #include <mutex>
 
-#include "rendulic/core/errors.hpp"
-
 namespace rendulic::log {
 namespace {
 
@@ -37,14 +35,6 @@ void write(Level at, const char* prefix, std::string_view message) {
 void set_level(Level level) { g_level.store(static_cast<int>(level)); }
 Level level() { return static_cast<Level>(g_level.load()); }
 bool enabled(Level level) { return static_cast<int>(level) <= g_level.load(); }
-
-Level level_from_string(const std::string& name) {
-  if (name == "error") return Level::kError;
-  if (name == "warning") return Level::kWarning;
-  if (name == "info") return Level::kInfo;
-  if (name == "debug") return Level::kDebug;
-  throw InputError("log level '" + name + "' is not one of error, warning, info, debug");
-}
 
 void error(std::string_view message) { write(Level::kError, "error: ", message); }
 void warning(std::string_view message) { write(Level::kWarning, "warning: ", message); }

@@ -197,7 +197,7 @@ std::string check_choice(const KeySpec& s, const std::string& x) {
     return "the text is not valid UTF-8 (byte " + std::to_string(at) + ")";
   if (s.choices.empty() || std::find(s.choices.begin(), s.choices.end(), x) != s.choices.end())
     return "";
-  return "'" + printable(x) + "' is not " + format_range(s);
+  return not_one_of(printable(x), s.choices);
 }
 
 // Validates a value against its spec; returns the reason or "".

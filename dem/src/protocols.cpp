@@ -60,7 +60,7 @@ bool PathOptions::IsValid(std::string* why) const {
       return fail(why, "every snapshot -eps_dev must be in (0, eps_dev_max]");
   if (std::find(path_type_choices().begin(), path_type_choices().end(), type) ==
       path_type_choices().end()) {
-    return fail(why, "path type '" + type + "' is not one of " + comma_list(path_type_choices()));
+    return fail(why, "path type " + not_one_of(type, path_type_choices()));
   }
   if (path_type(type).kind == PathKind::kProportional) {
     if (direction.size() != 3) return fail(why, "the path direction needs 3 components");

@@ -1,6 +1,7 @@
 // A list of names in a message, a log line or a report, written one way ("a, b, c"); with a
 // limit, the first `shown` and "and N more", so that a file of thousands of states does not
-// make a message of thousands of words (docs/architecture.md "Where each concept lives").
+// make a message of thousands of words. And the refusal of a word outside a list of choices,
+// also written one way (docs/architecture.md "Where each concept lives").
 #pragma once
 
 #include <cstddef>
@@ -27,6 +28,18 @@ std::string comma_list(const Range& items, std::string_view empty = "",
   }
   if (n == 0) return std::string(empty);
   if (n > shown) out += " and " + std::to_string(n - shown) + " more" + std::string(more_hint);
+  return out;
+}
+
+// The refusal of `word` that is not among `choices`: "'foo' is not one of a, b, c". Scenario
+// keys, option choices, probe methods, path types and log levels all say it so.
+template <class Range>
+std::string not_one_of(std::string_view word, const Range& choices) {
+  // Appended rather than "'" + word + ...: GCC 12 warns of a false overlap (-Wrestrict) there.
+  std::string out = "'";
+  out += word;
+  out += "' is not one of ";
+  out += comma_list(choices);
   return out;
 }
 

@@ -20,8 +20,6 @@ enum class Level { kError = 0, kWarning = 1, kInfo = 2, kDebug = 3 };
 void set_level(Level level);
 Level level();
 bool enabled(Level level);
-// "error", "warning", "info", "debug"; throws InputError naming the value otherwise.
-Level level_from_string(const std::string& name);
 
 void error(std::string_view message);
 void warning(std::string_view message);
