@@ -147,9 +147,8 @@ void print_summary(const ResultsReader& in, const std::string& group) {
 std::filesystem::path probe_packing(const ProbeRequest& r) {
   // What the CLI's option checks say before this runs, for callers without them (Python).
   for (const auto& m : r.methods)
-    if (m != "dynamic" && m != "minimisation" && m != kLinear)
-      throw InputError("--methods: unknown method '" + m +
-                       "' (dynamic, minimisation, linear_response)");
+    if (const std::string why = unknown_probe_method_reason(m); !why.empty())
+      throw InputError("--methods: " + why);
   // Twice, a method's campaign ran twice into the same groups (probes.methods refuses it too).
   if (const std::string* again = first_repeat(r.methods))
     throw InputError("--methods: method '" + *again + "' given twice");
@@ -326,7 +325,7 @@ Subcommand add_probe(CLI::App& parent) {
           "LABEL"));
   sub->add_option("--methods", o->methods,
                   "probe methods (default: probes.methods and linear_response)")
-      ->check(one_of({"dynamic", "minimisation", kLinear}))
+      ->check(one_of({kProbeMethods.begin(), kProbeMethods.end()}))
       ->delimiter(',');
   sub->add_option("--amplitudes", o->amplitudes, "probe strain amplitudes (probes.amplitudes)")
       ->delimiter(',');

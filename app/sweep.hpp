@@ -24,6 +24,7 @@
 #include <string>
 #include <vector>
 
+#include "rendulic/core/result_paths.hpp"
 #include "rendulic/core/results.hpp"
 #include "rendulic/core/scenario.hpp"
 
@@ -50,7 +51,7 @@ struct SweepOptions {
   std::vector<double> path_rates;  // 1/s (path.rate), each run from the same isotropic state
   double path_rate_target = 0.02;  // steady-state ratio within this of the run 4x slower
   int path_seeds = 1;  // independent packings (seeds run.seed, run.seed + 1, ...) per rate
-  std::vector<std::string> methods = {"dynamic", "minimisation", "linear_response"};
+  std::vector<std::string> methods{kProbeMethods.begin(), kProbeMethods.end()};
   double tight_relax = 1e-9;  // the threshold of the dt_factor_tight series
   static SweepOptions preset(bool quick);
   bool IsValid(std::string* why) const;

@@ -18,6 +18,7 @@
 #include "rendulic/core/conventions.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/option_table.hpp"
+#include "rendulic/core/result_paths.hpp"
 #include "rendulic/dem/probe_elastic_range.hpp"
 #include "rendulic/dem/probe_mpi.hpp"
 #include "rendulic/dem/rest.hpp"
@@ -708,9 +709,8 @@ std::vector<Envelope> probe_campaign(const DemSystem& state,
   if (!options.IsValid(&why)) throw InputError(why);
   std::vector<Envelope> envelopes;
   for (const std::string& method : methods) {
-    if (method != "dynamic" && method != "minimisation" && method != "linear_response") {
-      throw InputError("probes.methods: unknown method '" + method + "'");
-    }
+    if (const std::string why = unknown_probe_method_reason(method); !why.empty())
+      throw InputError("probes.methods: " + why);
     LinearResponse lr = known && method == "linear_response" ? *known : LinearResponse{};
     for (const std::string& name : options.planes) {
       const ProbePlane plane = *probe_plane_named(name);  // IsValid checked the names

@@ -17,11 +17,12 @@ from typing import Any, Callable, Optional
 import numpy as np
 
 from . import _rendulic
-from ._rendulic import InputError, fit_loss_choices, fit_shape_choices, law_names
+from ._rendulic import InputError, fit_loss_choices, fit_shape_choices, law_names, probe_methods
 
 __all__ = [
     "InputError", "Results", "State", "Envelope", "Fit", "fit_envelope", "model_envelope",
     "material_point_path", "probe", "run", "fit_shape_choices", "fit_loss_choices", "law_names",
+    "probe_methods",
 ]
 
 Progress = Optional[Callable[[str, str, float], Any]]
@@ -182,6 +183,8 @@ class Results:
     def envelopes(self, state: Optional[str] = None, method: Optional[str] = None,
                   root: str = "") -> list[Envelope]:
         """Every envelope of one state (or of every state), optionally of one method."""
+        if method is not None:
+            _rendulic.check_probe_method(method)
         out = []
         for s in ([state] if state is not None else self.states(root)):
             for n in self.envelope_names(s, root):

@@ -549,6 +549,13 @@ PYBIND11_MODULE(_rendulic, m) {
   m.def("fit_shape_choices", &fit_shape_choices);
   m.def("fit_loss_choices", &fit_loss_choices);
   m.def("law_names", &models::law_names);
+  m.def("probe_methods",
+        [] { return std::vector<std::string>(kProbeMethods.begin(), kProbeMethods.end()); });
+  // A method the stages never write read as no envelope at all; refused in the CLI's words.
+  m.def("check_probe_method", [](const std::string& method) {
+    if (const std::string why = unknown_probe_method_reason(method); !why.empty())
+      throw InputError("method: " + why);
+  });
 
   m.def(
       "fit_envelope",

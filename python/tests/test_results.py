@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import rendulic
-from conftest import cli
+from conftest import cli, cli_error_line
 
 
 def test_run_equals_cli_run(cli_run, module_run):
@@ -72,6 +72,21 @@ def test_a_mistyped_root_or_label_is_refused_not_read_as_no_data(cli_run):
         r.envelopes(root="nu0.7")
     with pytest.raises(rendulic.InputError, match=r"no state 'zz' \(states: a, b\)"):
         r.envelope_names("zz")
+
+
+def test_an_unknown_probe_method_is_refused_in_the_clis_words(cli_run, tmp_path):
+    # envelopes(method="dynamc") gave [] as if the run held no envelope of that method.
+    assert rendulic.probe_methods() == ["dynamic", "minimisation", "linear_response"]
+    with pytest.raises(rendulic.InputError, match=r"^method: 'dynamc' is not one of dynamic, "
+                                                  r"minimisation, linear_response$"):
+        rendulic.Results(cli_run).envelopes(method="dynamc")
+    packing = f"{cli_run}:/states/a"
+    with pytest.raises(rendulic.InputError) as e:
+        rendulic.probe(packing, tmp_path / "out", methods=["dynamc"], quiet=True)
+    # The CLI's line adds where the options are listed, which a Python user has no use for.
+    assert str(e.value) + " (see rendulic --help)" == cli_error_line(
+        "probe", packing, "--methods", "dynamc", "--out", tmp_path / "out")
+    assert not (tmp_path / "out").exists()
 
 
 def test_stored_pairs_are_the_tensors_pairs(cli_run):

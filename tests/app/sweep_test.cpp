@@ -116,6 +116,10 @@ TEST(SweepOptionsTest, PresetsAreValidAndBadValuesAreNamed) {
   o = SweepOptions::preset(true);
   o.target = 0;
   EXPECT_FALSE(o.IsValid(&why));
+  o = SweepOptions::preset(true);
+  o.methods = {"dynamic", "dynamc"};
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_EQ(why, "sweep: method 'dynamc' is not one of dynamic, minimisation, linear_response");
 }
 
 TEST(SweepCsv, OneRowPerPointAndNoNumbersForPointsThatDidNotRun) {

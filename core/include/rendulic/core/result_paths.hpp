@@ -8,10 +8,13 @@
 // under its own root (pressure_branch()), hence the builders take a root.
 #pragma once
 
+#include <algorithm>
+#include <array>
 #include <cstddef>
 #include <string>
 #include <string_view>
 
+#include "rendulic/core/comma_list.hpp"
 #include "rendulic/core/decimal.hpp"
 
 namespace rendulic {
@@ -29,6 +32,18 @@ inline std::string invalid_object_name_reason(const std::string& name) {
     if (c < 0x20 || c == 0x7f) return "contains a control character";
   }
   return "";
+}
+
+// The probe methods (docs/probes.md), the first word of an envelope's name and its `method`
+// attribute: the one list against which the CLI, the probe campaign, the sweep and the Python
+// reader check a method, so that a mistyped one is refused rather than read as no envelope.
+inline constexpr std::array<std::string_view, 3> kProbeMethods = {"dynamic", "minimisation",
+                                                                  "linear_response"};
+// "" for a method of kProbeMethods, else the reason in an option's words ("'x' is not one of
+// dynamic, ...").
+inline std::string unknown_probe_method_reason(std::string_view method) {
+  if (std::ranges::find(kProbeMethods, method) != kProbeMethods.end()) return "";
+  return not_one_of(method, kProbeMethods);
 }
 
 }  // namespace rendulic
