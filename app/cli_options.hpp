@@ -75,15 +75,18 @@ inline CLI::Validator positive_number(bool zero_allowed = false) {
 // The check of a real number in [lo, hi]. CLI11's Range lets NaN through (every comparison with
 // it is false), and `bench --friction nan` then skipped the frictional figures without a word;
 // it also wrote its bounds as %f ("Value -1 not in range 0.000000 to 10.000000") and called a
-// word out of range. The bounds are written as a scenario key's are ("[0, 10]").
-inline CLI::Validator real_in_range(double lo, double hi) {
-  const std::string bounds = "[" + decimal_g(lo) + ", " + decimal_g(hi) + "]";
+// word out of range. The bounds are written as a scenario key's are ("[0, 10]"); `open`: both
+// bounds excluded ("(0, 1)").
+inline CLI::Validator real_in_range(double lo, double hi, bool open = false) {
+  const std::string bounds =
+      (open ? "(" : "[") + decimal_g(lo) + ", " + decimal_g(hi) + (open ? ")" : "]");
   return CLI::Validator(
-      [lo, hi, bounds](std::string& text) -> std::string {
+      [lo, hi, open, bounds](std::string& text) -> std::string {
         double v = 0.0;
         if (!CLI::detail::lexical_cast(text, v)) return not_a_number(text);
         if (!std::isfinite(v)) return "Value " + text + " is not a finite number";
-        if (v < lo || v > hi) return "Value " + text + " is out of range " + bounds;
+        if (open ? !(v > lo && v < hi) : (v < lo || v > hi))
+          return "Value " + text + " is out of range " + bounds;
         return "";
       },
       bounds);

@@ -50,10 +50,14 @@ Subcommand add_sweep(CLI::App& parent) {
   sub->add_option("--factors", o->factors,
                   "factors to sweep (dt_factor, n_particles, inertial_number, relax, "
                   "dt_factor_tight, method, path_rate)")
-      ->delimiter(',');
+      ->delimiter(',')
+      ->check(one_of(kSweepFactors));
+  // Checked here, in the option's words; SweepOptions::IsValid said "sweep: target must be in
+  // (0, 1)" without naming the option.
   sub->add_option("--target", o->target,
                   "accuracy target: largest envelope error / reference major axis")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(real_in_range(0.0, 1.0, /*open=*/true));
   sub->add_option("--path-seeds", o->path_seeds,
                   "path_rate: independent packings per rate (seeds run.seed, run.seed + 1, ...)")
       ->check(integer_in_range(1, 64));

@@ -11,6 +11,8 @@
 #include <cmath>
 #include <filesystem>
 #include <map>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "cli_runner.hpp"
@@ -143,16 +145,26 @@ TEST(Sweep, QuickRunWritesFilesAndItsNumbersHold) {
 TEST(Sweep, BadInputExitsTwoWithOneLineAndWritesNothing) {
   const fs::path root = fresh_dir("app_sweep_bad");
   int k = 0;
-  for (const std::string& args :
-       {std::string("--factors bogus"), std::string("--target 2"),
-        std::string("--set dem.dt_factor=0.5"), std::string("--set probes.amplitudes=[0.002]"),
-        std::string("--set no.such_key=1"), std::string("--threads -1"),
-        // Beyond path.rate's range: it ran, 'ok', with an inertial number of inf.
-        std::string("--factors path_rate --path-rates 1e308")}) {
+  // The option is named: "sweep: target must be in (0, 1)" and "sweep: unknown factor" were
+  // the options struct's words.
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"--factors bogus",
+       "--factors: 'bogus' is not one of dt_factor, n_particles, inertial_number, relax, "
+       "dt_factor_tight, method, path_rate"},
+      {"--target 2", "--target: Value 2 is out of range (0, 1)"},
+      {"--target 0", "--target: Value 0 is out of range (0, 1)"},
+      {"--set dem.dt_factor=0.5", "dem.dt_factor"},
+      {"--set probes.amplitudes=[0.002]", "probes.amplitudes"},
+      {"--set no.such_key=1", "no.such_key"},
+      {"--threads -1", "--threads: Value -1 is out of range [0, 4096]"},
+      // Beyond path.rate's range: it ran, 'ok', with an inertial number of inf.
+      {"--factors path_rate --path-rates 1e308", "path.rate"}};
+  for (const auto& [args, says] : cases) {
     const fs::path out = root / ("o" + std::to_string(k++));
     const auto r = run_rendulic("sweep " + kQuick + " --quick --out " + out.string() + " " + args);
     EXPECT_EQ(r.code, 2) << args << ": " << r.out;
     EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 1) << args << ": " << r.out;
+    EXPECT_NE(r.out.find(says), std::string::npos) << args << ": " << r.out;
     EXPECT_FALSE(fs::exists(out)) << args;
   }
   const auto r =
