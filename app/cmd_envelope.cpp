@@ -3,6 +3,7 @@
 // section 5). Parameters and state come from small TOML files (models/material_io.hpp); `--json`
 // prints theta_deg, strain, stress (Pa) and fabric as Rendulic pairs, plus the driver's error
 // report.
+#include <algorithm>
 #include <cstdio>
 #include <iostream>
 #include <memory>
@@ -14,7 +15,9 @@
 #include "cli_options.hpp"
 #include "commands.hpp"
 #include "rendulic/core/comma_list.hpp"
+#include "rendulic/core/decimal.hpp"
 #include "rendulic/core/errors.hpp"
+#include "rendulic/core/log.hpp"
 #include "rendulic/models/envelope.hpp"
 #include "rendulic/models/material_io.hpp"
 #include "rendulic/models/umat.hpp"
@@ -57,16 +60,24 @@ models::MaterialState state_for(const models::Law& law, const std::string& state
                        : models::load_state_toml(state, law);
 }
 
+// The CLI's options check these before; the words here are for the Python module, whose
+// arguments have the same names without "--". The driver's own checks (StepOptions::IsValid)
+// call them by its fields' names, fixed_substeps among them, which no user sets.
 models::StepOptions step_options_for(const std::string& scheme, double tolerance, int substeps) {
   models::StepOptions step;
-  if (!models::scheme_from_name(scheme, &step.scheme)) {
-    throw InputError("--scheme: unknown scheme '" + scheme +
-                     "' (known: " + comma_list(models::kSchemeNames) + ")");
-  }
-  // Named as the option is: the driver's own check calls it fixed_substeps, a name no user sets.
+  if (!models::scheme_from_name(scheme, &step.scheme))
+    throw InputError("scheme: " + not_one_of(scheme, models::kSchemeNames));
+  if (!(tolerance > 0.0 && tolerance < 1.0))
+    throw InputError("tolerance = " + decimal_g(tolerance) + " is out of range (0, 1)");
   if (substeps < 1 || substeps > step.max_substeps)
     throw InputError("substeps = " + std::to_string(substeps) + " is out of range [1, " +
                      std::to_string(step.max_substeps) + "]");
+  // An error-controlled scheme chooses its own substeps: a count given with it did nothing,
+  // without a word, to a user who meant it to make the envelope finer.
+  if (substeps != 1 && step.scheme != models::Scheme::kExplicitEuler)
+    log::warning("substeps = ", substeps, " has no effect: the ", scheme,
+                 " scheme chooses its substeps by its error control (a fixed number: the "
+                 "explicit scheme)");
   step.tolerance = tolerance;
   step.fixed_substeps = substeps;
   return step;
@@ -75,13 +86,13 @@ models::StepOptions step_options_for(const std::string& scheme, double tolerance
 EnvelopeRecord envelope_for(const EnvelopeRequest& o, std::string* law_name) {
   const std::unique_ptr<models::Law> law = law_for(o.model, o.umat, o.params, o.params_is_text);
   const models::MaterialState state = state_for(*law, o.state, o.state_is_text);
-  if (o.method != "integrated" && o.method != "rate")
-    throw InputError("--method: unknown method '" + o.method + "' (known: integrated, rate)");
+  const auto& methods = models::kEnvelopeMethodNames;
+  const auto method = std::ranges::find(methods, o.method);
+  if (method == methods.end()) throw InputError("method: " + not_one_of(o.method, methods));
   models::EnvelopeOptions opt;
   opt.amplitude = o.amplitude;
   opt.directions = o.directions;
-  opt.method =
-      o.method == "rate" ? models::EnvelopeMethod::kRate : models::EnvelopeMethod::kIntegrated;
+  opt.method = static_cast<models::EnvelopeMethod>(method - methods.begin());
   opt.step = step_options_for(o.scheme, o.tolerance, o.substeps);
   std::string why;
   if (!opt.IsValid(&why)) throw InputError("envelope options: " + why);
@@ -164,7 +175,7 @@ Subcommand add_envelope(CLI::App& parent) {
   sub->add_option("--method", opts->method,
                   "integrated: each probe integrated by the driver; rate: one evaluation of the "
                   "rate law (the exact incremental envelope)")
-      ->check(one_of({"integrated", "rate"}))
+      ->check(one_of({models::kEnvelopeMethodNames.begin(), models::kEnvelopeMethodNames.end()}))
       ->capture_default_str();
   sub->add_option("--scheme", opts->scheme,
                   "modified-euler or bogacki-shampine (error controlled; the third-order "
@@ -176,7 +187,8 @@ Subcommand add_envelope(CLI::App& parent) {
           std::vector<std::string>(models::kSchemeNames.begin(), models::kSchemeNames.end())))
       ->capture_default_str();
   sub->add_option("--tolerance", opts->tolerance, "Local relative error tolerance per substep")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(real_in_range(0.0, 1.0, /*open=*/true));
   sub->add_option("--substeps", opts->substeps, "Substeps of the explicit scheme")
       ->check(integer_in_range(1, models::StepOptions{}.max_substeps))
       ->capture_default_str();

@@ -117,3 +117,15 @@ def test_a_substep_count_out_of_range_is_named_as_the_argument():
     state = {"stress": -1e5 * np.eye(3), "volume_fraction": 0.64}
     with pytest.raises(rendulic.InputError, match=r"substeps = 0 is out of range \[1, 100000\]"):
         rendulic.model_envelope("isotropic_elastic", state, scheme="explicit", substeps=0)
+
+
+def test_a_choice_or_tolerance_out_of_range_is_named_as_the_argument():
+    # The messages named the CLI's options (--scheme, --method) or the driver's words.
+    state = {"stress": -1e5 * np.eye(3), "volume_fraction": 0.64}
+    for kwargs, words in [
+            (dict(scheme="rk4"), r"^scheme: 'rk4' is not one of modified-euler, explicit, "
+                                 r"bogacki-shampine, auto$"),
+            (dict(method="foo"), r"^method: 'foo' is not one of integrated, rate$"),
+            (dict(tolerance=2.0), r"^tolerance = 2 is out of range \(0, 1\)$")]:
+        with pytest.raises(rendulic.InputError, match=words):
+            rendulic.model_envelope("isotropic_elastic", state, **kwargs)

@@ -150,6 +150,16 @@ TEST(EnvelopeCli, BogackiShampineAgreesWithModifiedEulerAndAutoPicksIt) {
   const CliRun bad = rendulic(base + " --scheme rk4");
   EXPECT_EQ(bad.code, 2) << bad.err;
   EXPECT_NE(bad.err.find("rk4"), std::string::npos) << bad.err;
+  // Substeps only the explicit scheme takes did nothing without a word to an error-controlled
+  // one; the envelope is the one without them, and the warning says so.
+  const CliRun ignored = rendulic(base + " --scheme modified-euler --substeps 7");
+  EXPECT_EQ(ignored.code, 0) << ignored.err;
+  EXPECT_NE(ignored.err.find("warning: substeps = 7 has no effect: the modified-euler scheme"),
+            std::string::npos)
+      << ignored.err;
+  EXPECT_EQ(ignored.out, rendulic(base + " --scheme modified-euler").out);
+  EXPECT_EQ(rendulic(base + " --scheme explicit --substeps 7").err.find("has no effect"),
+            std::string::npos);
 }
 
 void expect_input_error(const std::string& args, const std::vector<std::string>& mentions) {
@@ -231,7 +241,9 @@ TEST(EnvelopeCli, BadInputExitsTwoNamingTheCulprit) {
            {" --substeps 3000000000", "--substeps: Value 3000000000 is out of range [1, 100000]"},
            {" --directions 2", "--directions: Value 2 is out of range [3, 100000]"},
            // A word among choices, in a scenario key's words (CLI11: "foo not in {...}").
-           {" --method foo", "--method: 'foo' is not one of integrated, rate"}})
+           {" --method foo", "--method: 'foo' is not one of integrated, rate"},
+           // "envelope options: tolerance must be in (0, 1)": the driver's words.
+           {" --tolerance 2", "--tolerance: Value 2 is out of range (0, 1)"}})
     expect_input_error("envelope --model isotropic_elastic" + state + option, {words});
   expect_input_error(
       "envelope --model isotropic_elastic --state /nonexistent/s.toml --amplitude 1e-4",

@@ -4,6 +4,7 @@
 // campaign reports them. Each probe starts from the same state (probes are independent).
 #pragma once
 
+#include <array>
 #include <string>
 #include <vector>
 
@@ -17,6 +18,9 @@ enum class EnvelopeMethod {
   kRate,        // one evaluation of the rate law: the exact image of the probe under the
                 // rate equation at the start state (the envelope of Gudehus 1979 / Wu 2000)
 };
+// The methods' names (`rendulic envelope --method`, Python's model_envelope), in the enum's
+// order.
+inline constexpr std::array<const char*, 2> kEnvelopeMethodNames = {"integrated", "rate"};
 
 // The number of probe directions of an envelope: three make the smallest ellipse that can be
 // fitted; the upper end keeps a mistyped count from running for hours.
