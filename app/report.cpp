@@ -854,18 +854,16 @@ constexpr const char* kReportWhat = "the report";
 }  // namespace
 
 void check_report_destination(const std::filesystem::path& dir, bool with_figures) {
-  namespace fs = std::filesystem;
-  std::error_code ec;
   if (with_figures) {  // the environment's settings of the figures, before the DEM
     plot_jobs_from_environment();
     plot_script_file();
   }
+  // A file in the output folder's place is named as the results writer names it, not as the
+  // place of the report or of the figures folder inside it.
+  refuse_file_in_place_of_folder(dir, "output folder");
   AtomicTextFile::refuse_folder(report_file(dir), kReportWhat);
   refuse_read_only(link_target(report_file(dir)), report_file(dir), kReportWhat);
-  if (with_figures && fs::exists(figures_folder(dir), ec) &&
-      !fs::is_directory(figures_folder(dir), ec))
-    throw InputError(figures_folder(dir).string() +
-                     ": is a file, not a folder (the figures folder)");  // make_folders' words
+  if (with_figures) refuse_file_in_place_of_folder(figures_folder(dir), "figures folder");
 }
 
 std::filesystem::path write_report(const std::filesystem::path& results_file, bool with_figures) {

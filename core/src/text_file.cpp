@@ -90,14 +90,24 @@ void refuse_file_in_the_way(const fs::path& existing, const fs::path& dir,
                      (existing == dir ? itself : above) + ")");
 }
 
+// The words of both make_folders and refuse_file_in_place_of_folder.
+void refuse_file_in_place_of(const fs::path& existing, const fs::path& dir,
+                             const std::string& what) {
+  refuse_file_in_the_way(existing, dir, "the " + what,
+                         "it cannot hold the " + what + " " + dir.string());
+}
+
 }  // namespace
+
+void refuse_file_in_place_of_folder(const fs::path& dir, const std::string& what) {
+  if (!dir.empty()) refuse_file_in_place_of(innermost_existing(dir), dir, what);
+}
 
 std::vector<fs::path> make_folders(const fs::path& dir, const std::string& what) {
   std::vector<fs::path> made;
   if (dir.empty()) return made;
   std::error_code ec;
-  refuse_file_in_the_way(innermost_existing(dir, &made), dir, "the " + what,
-                         "it cannot hold the " + what + " " + dir.string());
+  refuse_file_in_place_of(innermost_existing(dir, &made), dir, what);
   fs::create_directories(dir, ec);
   if (!ec && !fs::is_directory(dir, ec)) ec = std::make_error_code(std::errc::not_a_directory);
   if (ec) {

@@ -182,6 +182,34 @@ TEST(AtomicTextFile, APlaceThatCannotBeWrittenIsRefusedAtOnceNamingIt) {
   }
 }
 
+// The check a run makes before any work says what make_folders would say later, and makes
+// nothing: the report's pre-run check copied these words by hand.
+TEST(MakeFolders, AFileInAFoldersPlaceIsRefusedAlikeBeforeAndWhenMaking) {
+  const fs::path d = fresh("in_place");
+  std::ofstream(d / "plain") << "x";
+  for (const fs::path& dir : {d / "plain", d / "plain" / "sub" / "deeper"}) {
+    std::string before, making;
+    try {
+      rendulic::refuse_file_in_place_of_folder(dir, "test folder");
+    } catch (const rendulic::InputError& e) {
+      before = e.what();
+    }
+    try {
+      rendulic::make_folders(dir, "test folder");
+    } catch (const rendulic::InputError& e) {
+      making = e.what();
+    }
+    EXPECT_EQ(before, making);
+    EXPECT_EQ(before, (d / "plain").string() + ": is a file, not a folder (" +
+                          (dir == d / "plain" ? std::string("the test folder")
+                                              : "it cannot hold the test folder " + dir.string()) +
+                          ")");
+  }
+  rendulic::refuse_file_in_place_of_folder(d / "a" / "b", "test folder");
+  rendulic::refuse_file_in_place_of_folder("", "test folder");
+  EXPECT_FALSE(fs::exists(d / "a"));
+}
+
 // The replaced file keeps its permissions (a rename makes it the temporary's: 600 became 644);
 // a new one gets 666 less the umask, as every other program's file (it got 644 whatever the
 // umask said).

@@ -47,6 +47,9 @@ void refuse_unless_regular_mode(unsigned mode, const std::string& shown, const s
 // folders made on the way are removed again.
 std::vector<std::filesystem::path> make_folders(const std::filesystem::path& dir,
                                                 const std::string& what);
+// make_folders' refusal of a file where `dir` or a folder above it must be, alone and in the
+// same words, for a check before any work; it makes nothing.
+void refuse_file_in_place_of_folder(const std::filesystem::path& dir, const std::string& what);
 
 // The file a name stands for: a symbolic link followed to its target (which may not exist yet),
 // at most 40 deep as the kernel does; any other name as it is. Writers that replace a file by
