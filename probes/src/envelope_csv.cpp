@@ -1,12 +1,16 @@
 // CSV reader of one envelope (docs/fitting.md "The fit command"); see envelope_csv.hpp.
 #include "rendulic/probes/envelope_csv.hpp"
 
+#include <algorithm>
+#include <cctype>
 #include <optional>
 #include <sstream>
+#include <string_view>
 #include <vector>
 
 #include "rendulic/core/decimal.hpp"
 #include "rendulic/core/errors.hpp"
+#include "rendulic/core/log.hpp"
 #include "rendulic/core/text_file.hpp"
 
 namespace rendulic {
@@ -21,6 +25,11 @@ std::string trim(const std::string& s) {
   return t;
 }
 
+std::string lower(std::string s) {
+  for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+
 std::vector<std::string> split(const std::string& line) {
   std::vector<std::string> out;
   std::string field;
@@ -33,7 +42,10 @@ std::vector<std::string> split(const std::string& line) {
 }  // namespace
 
 Envelope parse_envelope_csv(const std::string& text, const std::string& name) {
-  std::istringstream in(text);
+  // A spreadsheet's "CSV UTF-8" starts with a byte-order mark, which made the first column's
+  // name "\xEF\xBB\xBFx" and the file "without a column 'x'" (the mark does not show).
+  constexpr std::string_view kBom = "\xEF\xBB\xBF";
+  std::istringstream in(text.starts_with(kBom) ? text.substr(kBom.size()) : text);
   std::string line;
   int line_no = 0;
   std::vector<std::string> header;
@@ -46,6 +58,12 @@ Envelope parse_envelope_csv(const std::string& text, const std::string& name) {
     const std::vector<std::string> fields = split(line);
     const std::string where = name + ":" + std::to_string(line_no);
     if (header.empty()) {
+      // A file of rows alone said "column '0' appears twice" of its first row.
+      if (std::ranges::all_of(fields,
+                              [](const std::string& f) { return decimal_number(f).has_value(); }))
+        throw InputError(where +
+                         ": the first line is a row of numbers, not a header naming the "
+                         "columns (x,y or theta_deg,x,y)");
       header = fields;
       for (std::size_t k = 0; k < header.size(); ++k) {
         for (std::size_t j = 0; j < k; ++j)
@@ -58,6 +76,13 @@ Envelope parse_envelope_csv(const std::string& text, const std::string& name) {
       }
       if (ix < 0 || iy < 0)
         throw InputError(where + ": the header must name columns 'x' and 'y' (got '" + t + "')");
+      // Other columns are ignored by design; one that looks meant for the directions (theta,
+      // Theta_deg, theta_rad) was ignored without a word, and the fit ran without them.
+      if (it < 0)
+        for (const std::string& h : header)
+          if (lower(h).starts_with("theta"))
+            log::warning(where, ": column '", h,
+                         "' is not read; the probe directions' column is theta_deg (degrees)");
       continue;
     }
     if (fields.size() != header.size())

@@ -122,12 +122,40 @@ void expect_input_error(const std::string& args, const std::string& reason) {
   EXPECT_TRUE(r.out.empty()) << r.out;
 }
 
+// A spreadsheet's "CSV UTF-8" (a byte-order mark, CRLF line ends) is read as the plain file:
+// the mark made the first column's name differ from the one it shows. A column that looks
+// meant for the directions but is not theta_deg is said to be ignored.
+TEST(FitCli, ASpreadsheetsCsvIsReadAndADirectionsColumnMisnamedIsSaid) {
+  const std::string rows = "0,1,0\n90,0,1\n180,-1,0\n270,0,-1\n45,0.7,0.7\n";
+  const CmdResult plain =
+      run_fit("--in " + write_csv("plain.csv", "theta_deg,x,y\n" + rows).string());
+  ASSERT_EQ(plain.code, 0) << plain.err;
+  std::string crlf = "\xEF\xBB\xBF";
+  for (const char c : "theta_deg,x,y\n" + rows)
+    crlf += c == '\n' ? std::string("\r\n") : std::string(1, c);
+  const CmdResult sheet = run_fit("--in " + write_csv("sheet.csv", crlf).string());
+  EXPECT_EQ(sheet.code, 0) << sheet.err;
+  EXPECT_EQ(sheet.out, plain.out);
+  EXPECT_EQ(sheet.err, "");
+  const CmdResult misnamed =
+      run_fit("--in " + write_csv("theta.csv", "Theta,x,y\n" + rows).string());
+  EXPECT_EQ(misnamed.code, 0) << misnamed.err;
+  EXPECT_EQ(misnamed.err, "rendulic: warning: " + (dir() / "theta.csv").string() +
+                              ":1: column 'Theta' is not read; the probe directions' column is "
+                              "theta_deg (degrees)\n");
+  EXPECT_EQ(misnamed.out.find("directions used"), std::string::npos) << misnamed.out;
+}
+
 TEST(FitCli, BadInputExits2WithAReason) {
   expect_input_error("--in " + (dir() / "missing.csv").string(),
                      "missing.csv: cannot read CSV file: No such file or directory");
   expect_input_error("--in " + write_csv("empty.csv", "").string(), "empty file");
   expect_input_error("--in " + write_csv("header_only.csv", "x,y\n").string(), "no data rows");
   expect_input_error("--in " + write_csv("no_y.csv", "x,z\n1,2\n").string(), "'x' and 'y'");
+  // Rows without a header said "column '0' appears twice".
+  expect_input_error("--in " + write_csv("rows.csv", "0,1,0\n90,0,1\n").string(),
+                     "rows.csv:1: the first line is a row of numbers, not a header naming the "
+                     "columns (x,y or theta_deg,x,y)");
   expect_input_error("--in " + write_csv("nan.csv", "x,y\n1,2\n3,nan\n4,5\n").string(),
                      "nan.csv:3: column 'y'");
   for (const char* bad : {"abc", "0x10", "1e400", "-inf", "1e5e"})
