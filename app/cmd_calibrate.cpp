@@ -14,7 +14,6 @@
 #include <iostream>
 #include <memory>
 #include <optional>
-#include <sstream>
 
 #include "cli_options.hpp"
 #include "commands.hpp"
@@ -44,15 +43,16 @@ struct CalibrateArgs {
   int threads = 0;
 };
 
-std::vector<std::string> split_commas(const std::vector<std::string>& in) {
-  std::vector<std::string> out;
-  for (const auto& s : in) {
-    std::stringstream ss(s);
-    std::string item;
-    while (std::getline(ss, item, ','))
-      if (!item.empty()) out.push_back(item);
-  }
-  return out;
+// The names of a list option, split at its commas by CLI11, which drops empty items but keeps
+// a lone empty value: `--states "$S"` with S unset. That meant the option's default (every
+// state, the model's free parameters, no held-out state chosen) without a word.
+const std::vector<std::string>& names_of(const std::vector<std::string>& names,
+                                         const char* option) {
+  for (const auto& n : names)
+    if (n.empty())
+      throw InputError(std::string(option) +
+                       ": the list is empty (leave the option out for its default)");
+  return names;
 }
 
 int run_calibrate(const CalibrateArgs& a) {
@@ -63,14 +63,14 @@ int run_calibrate(const CalibrateArgs& a) {
     throw InputError("calibrate: unknown model '" + settings.model +
                      "' (known: " + comma_list(models::law_names()) + ")");
   }
-  settings.states = split_commas(a.states);
-  if (const auto h = split_commas(a.holdout); !h.empty()) settings.holdout = h;
+  settings.states = names_of(a.states, "--states");
+  if (const auto& h = names_of(a.holdout, "--holdout"); !h.empty()) settings.holdout = h;
   settings.path = !a.no_path;
   CalibrationPlan plan = calibration_plan(settings);
   CalibrationOptions& opt = plan.options;
   opt.solver.progress = a.progress;
   opt.solver.threads = a.threads;
-  opt.free = split_commas(a.free);
+  opt.free = names_of(a.free, "--free");
   // A UMAT's props are also named by their 1-based PROPS index (docs/umat.md).
   if (settings.model == "umat")
     for (auto& f : opt.free)
@@ -84,7 +84,7 @@ int run_calibrate(const CalibrateArgs& a) {
                            std::to_string(info.size()) + ")");
         f = info[i - 1].name;
       }
-  for (const auto& kv : split_commas(a.values)) {
+  for (const auto& kv : names_of(a.values, "--value")) {
     const auto eq = kv.find('=');
     if (eq == std::string::npos) throw InputError("--value '" + kv + "': expected name=number");
     const std::string name = kv.substr(0, eq), number = kv.substr(eq + 1);

@@ -108,6 +108,17 @@ TEST(CalibrateCli, BadInputExitsTwoAndLeavesTheFileUntouched) {
   EXPECT_NE(slurp(log).find("held-out state 'zz' is not in the data (states: s0, "),
             std::string::npos)
       << slurp(log);
+  // An empty list ("--states \"$S\"" with S unset) calibrated with the option's default.
+  for (const char* option : {"--states", "--holdout", "--free", "--value"}) {
+    EXPECT_EQ(
+        run("--results " + file.string() + " --model anisotropic_elastic " + option + " ''", log),
+        2)
+        << option;
+    EXPECT_NE(slurp(log).find(std::string(option) +
+                              ": the list is empty (leave the option out for its default)"),
+              std::string::npos)
+        << slurp(log);
+  }
   const fs::path text = file.parent_path() / "not_hdf5.h5";
   std::ofstream(text) << "hello";
   EXPECT_EQ(run("--results " + text.string() + " --model anisotropic_elastic", log), 2);
