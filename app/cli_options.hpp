@@ -105,6 +105,15 @@ inline CLI::Validator one_of(std::vector<std::string> choices) {
       shown);
 }
 
+// The check of a file name that must not be empty, for an option whose absence means a
+// default: `--params "$P"` with P unset took the law's defaults, `sweep "$S"` the built-in
+// scenario, without a word.
+inline CLI::Validator file_name() {
+  return CLI::Validator(
+      [](std::string& text) { return text.empty() ? std::string("the file name is empty") : ""; },
+      "FILE");
+}
+
 // An empty output folder (`--out "$DIR"` with DIR unset) wrote into the current folder without
 // a word; refused on the command line and from Python alike.
 inline void refuse_empty_output_folder(const std::string& out) {

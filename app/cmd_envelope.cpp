@@ -162,7 +162,8 @@ Subcommand add_envelope(CLI::App& parent) {
                   "(docs/umat.md)");
   sub->add_option("--params", opts->params,
                   "TOML file of parameters (keys = the law's parameter names; missing keys keep "
-                  "their defaults; for a UMAT: props, prop_names, nstatv, statev, bounds)");
+                  "their defaults; for a UMAT: props, prop_names, nstatv, statev, bounds)")
+      ->check(file_name());
   sub->add_option("--state", opts->state,
                   "TOML file of the state: stress (3x3, Pa), fabric (3x3), volume_fraction")
       ->required();

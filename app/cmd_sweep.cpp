@@ -41,7 +41,8 @@ Subcommand add_sweep(CLI::App& parent) {
   auto* sub = parent.add_subcommand(
       "sweep", "Speed versus accuracy of the probe methods: sweep.h5, sweep.csv, pareto.png");
   sub->add_option("scenario", o->scenario,
-                  "scenario file (TOML); without it the built-in defaults (the seed's)");
+                  "scenario file (TOML); without it the built-in defaults (the seed's)")
+      ->check(file_name());
   sub->add_option("--out", o->out, "output folder")->capture_default_str();
   sub->add_option("--set", o->sets, "override a scenario key by its dotted path: a.b=value")
       ->take_all();

@@ -22,8 +22,17 @@ namespace rendulic {
 
 namespace fs = std::filesystem;
 
+namespace {
+// An empty name (a shell variable that is not set) said ": cannot read ...: No such file or
+// directory", a message that begins with nothing.
+void refuse_empty_name(const std::string& path, const std::string& what) {
+  if (path.empty()) throw InputError("the name of the " + what + " is empty");
+}
+}  // namespace
+
 std::string read_input_text(const std::string& path, const std::string& what,
                             std::size_t max_bytes) {
+  refuse_empty_name(path, what);
   const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
   if (fd < 0) throw InputError(path + ": cannot read " + what + ": " + std::strerror(errno));
   struct FdCloser {
@@ -58,6 +67,7 @@ void refuse_unless_regular_mode(unsigned mode, const std::string& shown, const s
 
 void refuse_unless_regular_file(const fs::path& path, const std::string& shown,
                                 const std::string& what, const std::string& form) {
+  refuse_empty_name(path.string(), what);
   struct stat st {};
   if (::stat(path.c_str(), &st) != 0)
     throw InputError(shown + (errno == ENOENT

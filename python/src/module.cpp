@@ -19,6 +19,7 @@
 #include <signal.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <mutex>
@@ -439,11 +440,15 @@ std::string toml_of(const py::dict& d) {
 }
 
 // Parameters or a state given as a dictionary (TOML text) or as the path of a TOML file.
-std::pair<std::string, bool> toml_input(const py::object& x) {
+std::pair<std::string, bool> toml_input(const py::object& x, const char* what) {
   if (x.is_none()) return {"", false};
   if (py::isinstance<py::dict>(x)) return {toml_of(x.cast<py::dict>()), true};
-  if (py::isinstance<py::str>(x) || py::hasattr(x, "__fspath__"))
-    return {py::str(py::module_::import("os").attr("fspath")(x)), false};
+  if (py::isinstance<py::str>(x) || py::hasattr(x, "__fspath__")) {
+    std::string path = py::str(py::module_::import("os").attr("fspath")(x));
+    // "" stands for no file inside; params="" took the law's defaults without a word.
+    if (path.empty()) throw InputError(std::string(what) + ": the file name is empty");
+    return {path, false};
+  }
   throw InputError("expected a dictionary or the path of a TOML file");
 }
 
@@ -597,8 +602,8 @@ PYBIND11_MODULE(_rendulic, m) {
         app::EnvelopeRequest r;
         r.model = model;
         r.umat = umat;
-        std::tie(r.params, r.params_is_text) = toml_input(params);
-        std::tie(r.state, r.state_is_text) = toml_input(state);
+        std::tie(r.params, r.params_is_text) = toml_input(params, "params");
+        std::tie(r.state, r.state_is_text) = toml_input(state, "state");
         if (r.state.empty() && !r.state_is_text) throw InputError("a state is required");
         r.amplitude = amplitude;
         r.directions = directions;
@@ -623,10 +628,11 @@ PYBIND11_MODULE(_rendulic, m) {
       [](const std::string& model, const py::object& state, const py::object& params,
          const std::string& kind, double end, int steps, const std::string& scheme,
          double tolerance, int substeps, const std::string& umat) {
-        const auto [p, p_text] = toml_input(params);
-        const auto [s, s_text] = toml_input(state);
-        if (kind != "undrained" && kind != "isotropic")
-          throw InputError("kind: unknown path '" + kind + "' (known: undrained, isotropic)");
+        const auto [p, p_text] = toml_input(params, "params");
+        const auto [s, s_text] = toml_input(state, "state");
+        constexpr std::array<const char*, 2> kinds = {"undrained", "isotropic"};
+        if (std::ranges::find(kinds, kind) == kinds.end())
+          throw InputError("kind: " + not_one_of(kind, kinds));
         models::PathOptions o;
         o.steps = steps;
         o.step = app::step_options_for(scheme, tolerance, substeps);

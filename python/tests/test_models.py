@@ -129,3 +129,17 @@ def test_a_choice_or_tolerance_out_of_range_is_named_as_the_argument():
             (dict(tolerance=2.0), r"^tolerance = 2 is out of range \(0, 1\)$")]:
         with pytest.raises(rendulic.InputError, match=words):
             rendulic.model_envelope("isotropic_elastic", state, **kwargs)
+
+
+def test_an_empty_file_name_is_refused_not_read_as_no_file():
+    # params="" took the law's defaults without a word; a path kind that is not there is named.
+    state = {"stress": -1e5 * np.eye(3), "volume_fraction": 0.64}
+    with pytest.raises(rendulic.InputError, match=r"^params: the file name is empty$"):
+        rendulic.model_envelope("isotropic_elastic", state, params="")
+    with pytest.raises(rendulic.InputError, match=r"^state: the file name is empty$"):
+        rendulic.material_point_path("isotropic_elastic", "")
+    with pytest.raises(rendulic.InputError,
+                       match=r"^kind: 'drained' is not one of undrained, isotropic$"):
+        rendulic.material_point_path("isotropic_elastic", state, kind="drained")
+    with pytest.raises(rendulic.InputError, match=r"^the name of the results file is empty$"):
+        rendulic.Results("")

@@ -207,6 +207,33 @@ TEST(Cli, AnOutputFolderThatIsEmptyOrAFileIsSaidSo) {
   EXPECT_FALSE(fs::exists(fs::current_path() / "results.h5"));
 }
 
+// An empty file name (a shell variable that is not set) said ": no such file", a message that
+// begins with nothing; where an option left out means a default, it took the default without a
+// word: `envelope --params ''` the law's defaults, `sweep ''` the built-in scenario.
+TEST(Cli, AnEmptyFileNameIsSaidSo) {
+  const std::string state = std::string(RENDULIC_SOURCE_DIR) + "/data/models/isotropic_state.toml";
+  for (const auto& [args, words] : std::vector<std::pair<std::string, std::string>>{
+           {"inspect ''", "the name of the results file is empty"},
+           {"plot ''", "the name of the results file is empty"},
+           {"export '' --state a --lammps x.data", "the name of the results file is empty"},
+           {"calibrate --model isotropic_elastic --results ''",
+            "the name of the results file is empty"},
+           {"probe '' --out x", "the name of the packing file is empty"},
+           {"run '' --out x", "the name of the scenario file is empty"},
+           {"envelope --model isotropic_elastic --amplitude 1e-4 --state ''",
+            "the name of the state file is empty"},
+           {"envelope --model isotropic_elastic --amplitude 1e-4 --state " + state + " --params ''",
+            "--params: the file name is empty (see rendulic --help)"},
+           // Small, so that without the check the default sweep this ran costs seconds.
+           {"sweep '' --quick --factors method --base-n 50 --out x",
+            "scenario: the file name is empty (see rendulic --help)"}}) {
+    const CmdResult r = rendulic(args);
+    EXPECT_EQ(r.code, 2) << args;
+    EXPECT_EQ(r.out, "rendulic: " + words + "\n") << args;
+  }
+  EXPECT_FALSE(fs::exists(fs::current_path() / "x"));
+}
+
 // A stage whose input the run would not make (a label the run has no state of) is refused
 // before any work: `run.stages = prepare, probes` prepared, then said "needs 'states'".
 TEST(Cli, AStageWhoseInputTheRunWouldNotMakeIsRefusedBeforeAnyWork) {
