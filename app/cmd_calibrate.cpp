@@ -86,7 +86,9 @@ int run_calibrate(const CalibrateArgs& a) {
       }
   for (const auto& kv : names_of(a.values, "--value")) {
     const auto eq = kv.find('=');
-    if (eq == std::string::npos) throw InputError("--value '" + kv + "': expected name=number");
+    // "=3" was looked up as a parameter named '' ("unknown parameter '' of ...").
+    if (eq == std::string::npos || eq == 0)
+      throw InputError("--value '" + printable(kv) + "': expected name=number");
     const std::string name = kv.substr(0, eq), number = kv.substr(eq + 1);
     // K=1,K=2 kept the last without a word.
     if (opt.values.count(name)) throw InputError("--value: parameter '" + name + "' given twice");

@@ -119,6 +119,14 @@ TEST(CalibrateCli, BadInputExitsTwoAndLeavesTheFileUntouched) {
               std::string::npos)
         << slurp(log);
   }
+  for (const char* value : {"B", "=3"}) {
+    EXPECT_EQ(
+        run("--results " + file.string() + " --model anisotropic_elastic --value " + value, log),
+        2);
+    EXPECT_NE(slurp(log).find("--value '" + std::string(value) + "': expected name=number"),
+              std::string::npos)
+        << slurp(log);
+  }
   const fs::path text = file.parent_path() / "not_hdf5.h5";
   std::ofstream(text) << "hello";
   EXPECT_EQ(run("--results " + text.string() + " --model anisotropic_elastic", log), 2);
