@@ -32,7 +32,7 @@ std::string comma_list(const Range& items, std::string_view empty = "",
 }
 
 // The refusal of `word` that is not among `choices`: "'foo' is not one of a, b, c". Scenario
-// keys, option choices, probe methods, path types and log levels all say it so.
+// keys, option choices, probe methods, path types and model arguments all say it so.
 template <class Range>
 std::string not_one_of(std::string_view word, const Range& choices) {
   // Appended rather than "'" + word + ...: GCC 12 warns of a false overlap (-Wrestrict) there.
