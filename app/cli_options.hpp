@@ -99,8 +99,7 @@ inline CLI::Validator one_of(std::vector<std::string> choices) {
   const std::string shown = "{" + comma_list(choices) + "}";
   return CLI::Validator(
       [choices = std::move(choices)](std::string& text) -> std::string {
-        if (std::find(choices.begin(), choices.end(), text) != choices.end()) return "";
-        return not_one_of(text, choices);
+        return choice_refusal(text, choices);
       },
       shown);
 }

@@ -147,7 +147,7 @@ void print_summary(const ResultsReader& in, const std::string& group) {
 std::filesystem::path probe_packing(const ProbeRequest& r) {
   // What the CLI's option checks say before this runs, for callers without them (Python).
   for (const auto& m : r.methods)
-    if (const std::string why = unknown_probe_method_reason(m); !why.empty())
+    if (const std::string why = choice_refusal(m, kProbeMethods); !why.empty())
       throw InputError("--methods: " + why);
   // Twice, a method's campaign ran twice into the same groups (probes.methods refuses it too).
   if (const std::string* again = first_repeat(r.methods))

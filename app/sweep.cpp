@@ -574,7 +574,7 @@ bool SweepOptions::IsValid(std::string* why) const {
     return fail("sweep: path_rate_target must be in (0, 1)");
   if (path_seeds < 1 || path_seeds > 64) return fail("sweep: path seeds must be in 1..64");
   for (const auto& m : methods)
-    if (const std::string why = unknown_probe_method_reason(m); !why.empty())
+    if (const std::string why = choice_refusal(m, kProbeMethods); !why.empty())
       return fail("sweep: method " + why);
   return true;
 }

@@ -195,9 +195,9 @@ std::size_t invalid_utf8_at(const std::string& text) {
 std::string check_choice(const KeySpec& s, const std::string& x) {
   if (const auto at = invalid_utf8_at(x); at != std::string::npos)
     return "the text is not valid UTF-8 (byte " + std::to_string(at) + ")";
-  if (s.choices.empty() || std::find(s.choices.begin(), s.choices.end(), x) != s.choices.end())
-    return "";
-  return not_one_of(printable(x), s.choices);
+  // The word is valid UTF-8 here but may hold control characters: the refusal shows it
+  // printable (a choice never holds one, so the check is the same).
+  return s.choices.empty() ? "" : choice_refusal(printable(x), s.choices);
 }
 
 // Validates a value against its spec; returns the reason or "".

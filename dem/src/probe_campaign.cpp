@@ -709,7 +709,7 @@ std::vector<Envelope> probe_campaign(const DemSystem& state,
   if (!options.IsValid(&why)) throw InputError(why);
   std::vector<Envelope> envelopes;
   for (const std::string& method : methods) {
-    if (const std::string why = unknown_probe_method_reason(method); !why.empty())
+    if (const std::string why = choice_refusal(method, kProbeMethods); !why.empty())
       throw InputError("probes.methods: " + why);
     LinearResponse lr = known && method == "linear_response" ? *known : LinearResponse{};
     for (const std::string& name : options.planes) {

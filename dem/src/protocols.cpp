@@ -58,10 +58,8 @@ bool PathOptions::IsValid(std::string* why) const {
   for (double e : snapshot_eps_dev)
     if (!(e > 0 && e <= eps_dev_max))
       return fail(why, "every snapshot -eps_dev must be in (0, eps_dev_max]");
-  if (std::find(path_type_choices().begin(), path_type_choices().end(), type) ==
-      path_type_choices().end()) {
-    return fail(why, "path type " + not_one_of(type, path_type_choices()));
-  }
+  if (const std::string bad = choice_refusal(type, path_type_choices()); !bad.empty())
+    return fail(why, "path type " + bad);
   if (path_type(type).kind == PathKind::kProportional) {
     if (direction.size() != 3) return fail(why, "the path direction needs 3 components");
     double largest = 0;

@@ -558,7 +558,7 @@ PYBIND11_MODULE(_rendulic, m) {
         [] { return std::vector<std::string>(kProbeMethods.begin(), kProbeMethods.end()); });
   // A method the stages never write read as no envelope at all; refused in the CLI's words.
   m.def("check_probe_method", [](const std::string& method) {
-    if (const std::string why = unknown_probe_method_reason(method); !why.empty())
+    if (const std::string why = choice_refusal(method, kProbeMethods); !why.empty())
       throw InputError("method: " + why);
   });
 
@@ -631,8 +631,8 @@ PYBIND11_MODULE(_rendulic, m) {
         const auto [p, p_text] = toml_input(params, "params");
         const auto [s, s_text] = toml_input(state, "state");
         constexpr std::array<const char*, 2> kinds = {"undrained", "isotropic"};
-        if (std::ranges::find(kinds, kind) == kinds.end())
-          throw InputError("kind: " + not_one_of(kind, kinds));
+        if (const std::string why = choice_refusal(kind, kinds); !why.empty())
+          throw InputError("kind: " + why);
         models::PathOptions o;
         o.steps = steps;
         o.step = app::step_options_for(scheme, tolerance, substeps);

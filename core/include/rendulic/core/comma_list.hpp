@@ -43,4 +43,14 @@ std::string not_one_of(std::string_view word, const Range& choices) {
   return out;
 }
 
+// "" when `word` is among `choices`, else not_one_of's refusal: the one check behind a scenario
+// key's choices, an option's choices, the probe methods, the path types and the Python
+// module's choices.
+template <class Range>
+std::string choice_refusal(std::string_view word, const Range& choices) {
+  for (const auto& c : choices)
+    if (std::string_view(c) == word) return "";
+  return not_one_of(word, choices);
+}
+
 }  // namespace rendulic

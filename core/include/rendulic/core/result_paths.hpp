@@ -39,12 +39,6 @@ inline std::string invalid_object_name_reason(const std::string& name) {
 // reader check a method, so that a mistyped one is refused rather than read as no envelope.
 inline constexpr std::array<std::string_view, 3> kProbeMethods = {"dynamic", "minimisation",
                                                                   "linear_response"};
-// "" for a method of kProbeMethods, else the reason in an option's words ("'x' is not one of
-// dynamic, ...").
-inline std::string unknown_probe_method_reason(std::string_view method) {
-  if (std::ranges::find(kProbeMethods, method) != kProbeMethods.end()) return "";
-  return not_one_of(method, kProbeMethods);
-}
 
 }  // namespace rendulic
 
