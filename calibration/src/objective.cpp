@@ -36,11 +36,14 @@ ParameterSpace::ParameterSpace(const models::Law& law, const std::vector<double>
   if (values.size() != info.size())
     throw InputError(std::string(law.name()) + " takes " + std::to_string(info.size()) +
                      " parameters, got " + std::to_string(values.size()));
+  // An unknown name first: `--free B,B` for a law without B is wrong for that reason, and
+  // "listed twice" would send the user to fix the wrong thing.
+  for (const auto& name : free)
+    if (law.parameter_index(name) < 0) throw InputError(law.unknown_parameter(name));
   if (const std::string* again = first_repeat(free))
     throw InputError("parameter '" + *again + "' listed twice");
   for (const auto& name : free) {
     const int i = law.parameter_index(name);
-    if (i < 0) throw InputError(law.unknown_parameter(name));
     FreeParameter f;
     f.name = name;
     f.index = i;

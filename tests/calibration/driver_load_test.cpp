@@ -67,6 +67,11 @@ TEST(ParameterSpaceNames, AFreeParameterListedTwiceOrUnknownIsRefusedNamingIt) {
       << unknown;
   EXPECT_NE(unknown.find(", M_ss, "), std::string::npos) << unknown;
   EXPECT_EQ(unknown.back(), ')') << unknown;
+  // Unknown and listed twice: the unknown name is the fault to mend (it said "listed twice").
+  EXPECT_EQ(rendulic::testing::input_error([&] {
+              ParameterSpace(*law, law->parameters(), {"Q", "Q"});
+            }).rfind("unknown parameter 'Q' of elastoplastic_fabric (known: ", 0),
+            0u);
   EXPECT_EQ(rendulic::testing::input_error([&] {
               ParameterSpace(*law, law->parameters(), {"M_ss"}, {{"nope", {0.0, 1.0}}});
             }),
