@@ -336,13 +336,19 @@ TEST(Faults, ClaimsOnEnvelopesThatCouldNotBeFittedAreNotMeasured) {
 }
 
 // calibrate --value: a parameter given twice kept the last value without a word, 0x10 was read
-// as sixteen (std::stod takes hexadecimal), and nan was "outside its bounds".
+// as sixteen (std::stod takes hexadecimal), and nan was "outside its bounds". An unknown name
+// given twice was refused as given twice, and an unknown name only after the file was read.
 TEST(Faults, CalibrateValuesGivenTwiceOrNotDecimalAreRefused) {
   const fs::path f = calibratable("values");
   const std::string calibrate =
       "calibrate --no-write --no-path --model isotropic_elastic --results " + f.string() +
       " --value ";
   expect_refusal(rendulic(calibrate + "K=1e10,K=2e10"), "--value: parameter 'K' given twice");
+  const std::string unknown = "--value: unknown parameter 'Q' of isotropic_elastic (known: K, ";
+  expect_refusal(rendulic(calibrate + "Q=1,Q=2"), unknown);
+  expect_refusal(rendulic("calibrate --model isotropic_elastic --results " +
+                          (f.parent_path() / "absent.h5").string() + " --value Q=1"),
+                 unknown);
   for (const std::string v : {"K=0x10", "K=1e10x", "K=nan", "K=inf", "K=1e400", "K="})
     expect_refusal(rendulic(calibrate + v),
                    "--value '" + v + "': '" + v.substr(2) + "' is not a finite decimal number");
