@@ -84,15 +84,18 @@ int run_calibrate(const CalibrateArgs& a) {
                            std::to_string(info.size()) + ")");
         f = info[i - 1].name;
       }
+  // The names of --free and --value, looked up before the results file is read, and an
+  // unknown name before a repeated one, which would send the user to mend the wrong thing.
   const std::unique_ptr<models::Law> law = models::make_law(settings.model);
+  for (const auto& f : opt.free)
+    if (law && law->parameter_index(f) < 0)
+      throw InputError("--free: " + law->unknown_parameter(f));
   for (const auto& kv : names_of(a.values, "--value")) {
     const auto eq = kv.find('=');
     // "=3" was looked up as a parameter named '' ("unknown parameter '' of ...").
     if (eq == std::string::npos || eq == 0)
       throw InputError("--value '" + printable(kv) + "': expected name=number");
     const std::string name = kv.substr(0, eq), number = kv.substr(eq + 1);
-    // Before the results file is read, and before "given twice", which for an unknown name
-    // would send the user to mend the wrong thing.
     if (law && law->parameter_index(name) < 0)
       throw InputError("--value: " + law->unknown_parameter(name));
     // K=1,K=2 kept the last without a word.

@@ -337,7 +337,8 @@ TEST(Faults, ClaimsOnEnvelopesThatCouldNotBeFittedAreNotMeasured) {
 
 // calibrate --value: a parameter given twice kept the last value without a word, 0x10 was read
 // as sixteen (std::stod takes hexadecimal), and nan was "outside its bounds". An unknown name
-// given twice was refused as given twice, and an unknown name only after the file was read.
+// given twice was refused as given twice, and an unknown name of --value or --free only after
+// the results file was read.
 TEST(Faults, CalibrateValuesGivenTwiceOrNotDecimalAreRefused) {
   const fs::path f = calibratable("values");
   const std::string calibrate =
@@ -349,6 +350,9 @@ TEST(Faults, CalibrateValuesGivenTwiceOrNotDecimalAreRefused) {
   expect_refusal(rendulic("calibrate --model isotropic_elastic --results " +
                           (f.parent_path() / "absent.h5").string() + " --value Q=1"),
                  unknown);
+  expect_refusal(rendulic("calibrate --model isotropic_elastic --results " +
+                          (f.parent_path() / "absent.h5").string() + " --free K,Q,Q"),
+                 "--free: unknown parameter 'Q' of isotropic_elastic (known: K, ");
   for (const std::string v : {"K=0x10", "K=1e10x", "K=nan", "K=inf", "K=1e400", "K="})
     expect_refusal(rendulic(calibrate + v),
                    "--value '" + v + "': '" + v.substr(2) + "' is not a finite decimal number");
