@@ -60,10 +60,16 @@ models::MaterialState state_for(const models::Law& law, const std::string& state
                        : models::load_state_toml(state, law);
 }
 
+// An option with its value as the front end spells it (EnvelopeRequest::cli).
+std::string spelt(bool cli, const char* name, const std::string& value) {
+  return (cli ? "--" : "") + std::string(name) + (cli ? " " : " = ") + value;
+}
+
 // The CLI's options check these before; the words here are for the Python module, whose
 // arguments have the same names without "--". The driver's own checks (StepOptions::IsValid)
 // call them by its fields' names, fixed_substeps among them, which no user sets.
-models::StepOptions step_options_for(const std::string& scheme, double tolerance, int substeps) {
+models::StepOptions step_options_for(const std::string& scheme, double tolerance, int substeps,
+                                     bool cli) {
   models::StepOptions step;
   if (!models::scheme_from_name(scheme, &step.scheme))
     throw InputError("scheme: " + not_one_of(scheme, models::kSchemeNames));
@@ -75,7 +81,7 @@ models::StepOptions step_options_for(const std::string& scheme, double tolerance
   // An error-controlled scheme chooses its own substeps: a count given with it did nothing,
   // without a word, to a user who meant it to make the envelope finer.
   if (substeps != 1 && step.scheme != models::Scheme::kExplicitEuler)
-    log::warning("substeps = ", substeps, " has no effect: the ", scheme,
+    log::warning(spelt(cli, "substeps", std::to_string(substeps)), " has no effect: the ", scheme,
                  " scheme chooses its substeps by its error control (a fixed number: the "
                  "explicit scheme)");
   step.tolerance = tolerance;
@@ -93,7 +99,22 @@ EnvelopeRecord envelope_for(const EnvelopeRequest& o, std::string* law_name) {
   opt.amplitude = o.amplitude;
   opt.directions = o.directions;
   opt.method = static_cast<models::EnvelopeMethod>(method - methods.begin());
-  opt.step = step_options_for(o.scheme, o.tolerance, o.substeps);
+  opt.step = step_options_for(o.scheme, o.tolerance, o.substeps, o.cli);
+  // The rate method integrates nothing: a scheme, tolerance or substeps given with it did
+  // nothing, without a word, to a user who meant them to make the envelope more accurate.
+  if (opt.method == models::EnvelopeMethod::kRate) {
+    const EnvelopeRequest defaults;
+    std::vector<std::string> unused;
+    if (o.scheme != defaults.scheme) unused.push_back(spelt(o.cli, "scheme", o.scheme));
+    if (o.tolerance != defaults.tolerance)
+      unused.push_back(spelt(o.cli, "tolerance", decimal_g(o.tolerance)));
+    if (o.substeps != defaults.substeps)
+      unused.push_back(spelt(o.cli, "substeps", std::to_string(o.substeps)));
+    if (!unused.empty())
+      log::warning(comma_list(unused), unused.size() == 1 ? " has" : " have",
+                   " no effect: the rate method evaluates the rate law once and integrates "
+                   "nothing");
+  }
   std::string why;
   if (!opt.IsValid(&why)) throw InputError("envelope options: " + why);
   try {
@@ -135,9 +156,13 @@ int run_envelope(const EnvelopeRequest& o, bool json) {
     std::cout << j.dump(2) << "\n";
     return 0;
   }
-  std::printf("# %s envelope, |d_eps| = %g, %d directions, %s (%s, tolerance %g)\n",
-              law_name.c_str(), o.amplitude, o.directions, o.method.c_str(), o.scheme.c_str(),
-              o.tolerance);
+  // The scheme and tolerance only where they made the envelope: the rate method has none.
+  std::printf("# %s envelope, |d_eps| = %g, %d directions, %s", law_name.c_str(), o.amplitude,
+              o.directions, o.method.c_str());
+  if (o.method == "rate")
+    std::printf("\n");
+  else
+    std::printf(" (%s, tolerance %g)\n", o.scheme.c_str(), o.tolerance);
   std::printf("# Rendulic pairs (sqrt2 lateral, axial); stress in Pa\n");
   std::printf("%10s %14s %14s %16s %16s %14s %14s\n", "theta_deg", "strain_x", "strain_y",
               "stress_x", "stress_y", "fabric_x", "fabric_y");
@@ -152,6 +177,7 @@ int run_envelope(const EnvelopeRequest& o, bool json) {
 
 Subcommand add_envelope(CLI::App& parent) {
   auto opts = std::make_shared<EnvelopeRequest>();
+  opts->cli = true;
   auto json = std::make_shared<bool>(false);
   auto* sub = parent.add_subcommand("envelope", "Envelope predicted by a constitutive model");
   sub->add_option("--model", opts->model,

@@ -81,6 +81,9 @@ struct EnvelopeRequest {
   std::string scheme = "modified-euler";  // or "explicit"
   double tolerance = models::StepOptions{}.tolerance;
   int substeps = 1;
+  // Messages spell an option as the command line does ("--substeps 7"), else as Python's
+  // keyword arguments ("substeps = 7").
+  bool cli = false;
 };
 EnvelopeRecord envelope_for(const EnvelopeRequest& request, std::string* law_name = nullptr);
 // Its pieces: the law with its parameters (params empty: the defaults), the state, the driver's
@@ -89,7 +92,8 @@ std::unique_ptr<models::Law> law_for(const std::string& model, const std::string
                                      const std::string& params, bool params_is_text);
 models::MaterialState state_for(const models::Law& law, const std::string& state,
                                 bool state_is_text);
-models::StepOptions step_options_for(const std::string& scheme, double tolerance, int substeps);
+models::StepOptions step_options_for(const std::string& scheme, double tolerance, int substeps,
+                                     bool cli = false);
 
 // Draws the figures of a results file into out_dir (cmd_plot.cpp); used by the report stage.
 // The figure script is `script` if given, else the first of RENDULIC_PLOT_SCRIPT, plot.py

@@ -119,6 +119,19 @@ def test_a_substep_count_out_of_range_is_named_as_the_argument():
         rendulic.model_envelope("isotropic_elastic", state, scheme="explicit", substeps=0)
 
 
+def test_driver_arguments_that_change_nothing_are_said_to_in_the_arguments_words(capfd):
+    # Substeps with an error-controlled scheme, and any driver argument with the rate method,
+    # did nothing without a word.
+    state = {"stress": -1e5 * np.eye(3), "volume_fraction": 0.64}
+    rendulic.model_envelope("isotropic_elastic", state, substeps=7)
+    assert "warning: substeps = 7 has no effect" in capfd.readouterr().err
+    rendulic.model_envelope("isotropic_elastic", state, method="rate", scheme="explicit")
+    assert ("warning: scheme = explicit has no effect: the rate method"
+            in capfd.readouterr().err)
+    rendulic.model_envelope("isotropic_elastic", state, method="rate")
+    assert "no effect" not in capfd.readouterr().err
+
+
 def test_a_choice_or_tolerance_out_of_range_is_named_as_the_argument():
     # The messages named the CLI's options (--scheme, --method) or the driver's words.
     state = {"stress": -1e5 * np.eye(3), "volume_fraction": 0.64}

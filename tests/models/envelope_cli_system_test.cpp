@@ -154,12 +154,29 @@ TEST(EnvelopeCli, BogackiShampineAgreesWithModifiedEulerAndAutoPicksIt) {
   // one; the envelope is the one without them, and the warning says so.
   const CliRun ignored = rendulic(base + " --scheme modified-euler --substeps 7");
   EXPECT_EQ(ignored.code, 0) << ignored.err;
-  EXPECT_NE(ignored.err.find("warning: substeps = 7 has no effect: the modified-euler scheme"),
+  EXPECT_NE(ignored.err.find("warning: --substeps 7 has no effect: the modified-euler scheme"),
             std::string::npos)
       << ignored.err;
   EXPECT_EQ(ignored.out, rendulic(base + " --scheme modified-euler").out);
   EXPECT_EQ(rendulic(base + " --scheme explicit --substeps 7").err.find("has no effect"),
             std::string::npos);
+  // The rate method integrates nothing: the driver's options given with it did nothing without
+  // a word, and its header named a scheme and tolerance that made nothing.
+  const std::string rate = base + " --method rate";
+  const CliRun rate_ignored = rendulic(rate + " --scheme explicit --tolerance 0.001 --substeps 7");
+  EXPECT_EQ(rate_ignored.code, 0) << rate_ignored.err;
+  EXPECT_NE(rate_ignored.err.find("warning: --scheme explicit, --tolerance 0.001, --substeps 7 "
+                                  "have no effect: the rate method evaluates the rate law once"),
+            std::string::npos)
+      << rate_ignored.err;
+  EXPECT_EQ(numbers_of(rate_ignored.out, "stress"), numbers_of(rendulic(rate).out, "stress"));
+  EXPECT_EQ(rendulic(rate).err.find("no effect"), std::string::npos);
+  const std::string table = rate.substr(0, rate.find(" --json")) + " --method rate";
+  const CliRun text = rendulic(table);
+  ASSERT_EQ(text.code, 0) << text.err;
+  EXPECT_EQ(text.out.rfind("# hypoplastic_wu envelope, |d_eps| = 0.002, 12 directions, rate\n", 0),
+            0u)
+      << text.out;
 }
 
 void expect_input_error(const std::string& args, const std::vector<std::string>& mentions) {
