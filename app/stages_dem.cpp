@@ -31,6 +31,7 @@
 #include "rendulic/dem/rest.hpp"
 #include "rendulic/dem/run_protocol.hpp"
 #include "rendulic/dem/scenario_keys.hpp"
+#include "rendulic/dem/team.hpp"
 #include "stages.hpp"
 
 namespace rendulic::app {
@@ -242,7 +243,7 @@ std::vector<std::pair<dem::DemSystem, dem::RestSummary>> rest_states(
   std::vector<std::string> errors(snapshots.size());
   progress.start_task("relax and minimise " + std::to_string(n) + " states");
   long done = 0;
-  const int team = ctx.threads > 0 ? ctx.threads : omp_get_max_threads();
+  const int team = dem::task_team(ctx.threads, snapshots.size());
 #pragma omp parallel for schedule(dynamic, 1) num_threads(team)
   for (int k = 0; k < n; ++k) {
     omp_set_num_threads(1);

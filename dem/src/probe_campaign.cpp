@@ -23,6 +23,7 @@
 #include "rendulic/dem/probe_mpi.hpp"
 #include "rendulic/dem/rest.hpp"
 #include "rendulic/dem/scenario_keys.hpp"
+#include "rendulic/dem/team.hpp"
 
 namespace rendulic::dem {
 
@@ -112,9 +113,6 @@ void check(const ProbeOptions& options, double amplitude, const std::vector<doub
   if (theta.empty()) throw InputError("probes: no directions");
 }
 
-int team_size(const ProbeOptions& options) {
-  return options.threads > 0 ? options.threads : omp_get_max_threads();
-}
 
 // Symmetric matrix exponential: the deformation gradient exp(-d_eps) of a log strain.
 Eigen::Matrix3d exp_sym(const Eigen::Matrix3d& a) {
@@ -240,7 +238,8 @@ template <class Run>
 bool run_probe_tasks(const ProbeOptions& options, int n, std::vector<std::string>& errors,
                      Run&& run) {
   std::atomic<bool> stopped{false};
-#pragma omp parallel for schedule(dynamic, 1) num_threads(team_size(options))
+#pragma omp parallel for schedule(dynamic, 1) \
+    num_threads(task_team(options.threads, static_cast<std::size_t>(n)))
   for (int q = 0; q < n; ++q) {
     if (stopped.load(std::memory_order_relaxed) || (options.stop && options.stop())) {
       stopped.store(true, std::memory_order_relaxed);

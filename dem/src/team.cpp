@@ -1,4 +1,4 @@
-// The team-size rule and controller of DEM steps, the barrier inside a step, and the round trip
+// The team-size rule and controller of DEM steps, the team over independent tasks, the barrier inside a step, and the round trip
 // between two cores that a team pays for (team.hpp; docs/performance.md).
 #include "rendulic/dem/team.hpp"
 
@@ -11,6 +11,7 @@
 
 #include <climits>
 #endif
+#include <omp.h>
 
 #include <algorithm>
 #include <chrono>
@@ -31,6 +32,11 @@ std::size_t block_count(std::size_t n) {
 int max_team(std::size_t n, int threads) {
   if (n < 2 * kRowsPerBlock || threads <= 1) return 1;
   return static_cast<int>(std::min<std::size_t>(static_cast<std::size_t>(threads), block_count(n)));
+}
+
+int task_team(int threads, std::size_t tasks) {
+  const int asked = threads > 0 ? threads : omp_get_max_threads();
+  return static_cast<int>(std::clamp<std::size_t>(tasks, 1, static_cast<std::size_t>(asked)));
 }
 
 void TeamController::reset(int max_size) {

@@ -3,8 +3,9 @@
 // 0.5 deg, from the least-squares Rendulic map of the pairs and its SVD); minimisation and
 // dynamic probes agree on the elastic envelope, also in the deviatoric probe plane; an elastic
 // probe opens or closes no contact while a 2e-3 probe does; the campaign is identical for 1 and 2
-// threads; a stop request skips the remaining probes.
+// threads and uses no more threads than probes; a stop request skips the remaining probes.
 #include <gtest/gtest.h>
+#include <omp.h>
 
 #include <algorithm>
 #include <atomic>
@@ -382,6 +383,21 @@ TEST(ProbeCampaignThreads, IdenticalForAnyThreadCount) {
 
 namespace rendulic::dem {
 namespace {
+
+// A campaign of three probes asked for sixteen threads started sixteen, thirteen of them idle.
+TEST_F(ProbeCampaign, NoMoreThreadsThanProbes) {
+  ProbeOptions opt;
+  opt.threads = 16;
+  std::atomic<int> largest{0};
+  opt.probe_done = [&largest] {  // called by the thread that ran the probe, in the team
+    const int team = omp_get_num_threads();
+    for (int seen = largest.load(); seen < team && !largest.compare_exchange_weak(seen, team);) {
+    }
+  };
+  EXPECT_EQ(minimisation_envelope(*state_, 5e-5, probe_directions(3), opt).size(), 3u);
+  EXPECT_GE(largest.load(), 1);
+  EXPECT_LE(largest.load(), 3);
+}
 
 // A stop request (the Python module's Ctrl-C, app/progress.hpp): the probes after it are
 // skipped, not computed, and the envelope ends with Cancelled; on one thread exactly the

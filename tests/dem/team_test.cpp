@@ -40,6 +40,15 @@ TEST(TeamRule, NoTeamWhereAStepCannotPayForIt) {
   EXPECT_EQ(max_team(9261, 0), 1);
 }
 
+TEST(TeamRule, NeverMoreThreadsThanTasks) {
+  EXPECT_EQ(task_team(64, 8), 8);
+  EXPECT_EQ(task_team(2, 8), 2);
+  EXPECT_EQ(task_team(3, 1), 1);
+  EXPECT_EQ(task_team(4, 0), 1);  // a team of one: OpenMP takes no team of none
+  EXPECT_EQ(task_team(0, 1000), omp_get_max_threads());
+  EXPECT_EQ(task_team(0, 1), 1);
+}
+
 TEST(TeamRule, BlocksArePowersOfTwoGrowingSlowerThanN) {
   std::size_t previous = 1;
   for (std::size_t n = 2; n < 2000000; n = n * 5 / 4 + 1) {

@@ -11,6 +11,7 @@
 //
 // max_team() is the static part of the rule: no team at all where the step is too small to
 // pay for its synchronisations, and never more threads than the step has blocks of rows.
+// task_team() is the team over independent tasks (probes, states), whose steps run serial.
 #pragma once
 
 #include <array>
@@ -34,6 +35,11 @@ std::size_t block_count(std::size_t n);
 // 2 kRowsPerBlock particles (a step there lasts about as long as a few synchronisations), at
 // most one thread per block.
 int max_team(std::size_t n, int threads);
+// The team over `tasks` independent tasks (probes, states) given `threads` asked for (0: every
+// core OpenMP may use): never more threads than tasks. `--threads 64` with eight probes
+// started 64 threads, 56 of them with nothing to do; where a container caps the processes,
+// one that cannot start ends the run in libgomp.
+int task_team(int threads, std::size_t tasks);
 
 // Chooses the team size step by step from measured step times. Sizes are the ladder 1, 2,
 // 4, ..., max. The controller runs windows of at least kWindowSeconds of step time: mostly
