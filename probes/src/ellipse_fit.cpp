@@ -293,9 +293,11 @@ Normalized normalize(const std::vector<Eigen::Vector2d>& points) {
   double largest = 0.0;
   for (const auto& p : points) largest = std::max({largest, std::abs(p.x()), std::abs(p.y())});
   if (!(largest > 0.0)) return out;  // all points at the origin: scale 0, degenerate
+  // 2^(e-1) <= largest < 2^e: up = 2^(e-1) is finite for every finite largest (2^e was
+  // infinite above 2^1023, about 9e307, and every number of the fit inf or nan).
   int e = 0;
   std::frexp(largest, &e);
-  const double down = std::ldexp(1.0, -e), up = std::ldexp(1.0, e);
+  const double down = std::ldexp(1.0, 1 - e), up = std::ldexp(1.0, e - 1);
   Eigen::Vector2d mean = Eigen::Vector2d::Zero();
   for (const auto& p : points) mean += p * down;
   mean /= static_cast<double>(points.size());

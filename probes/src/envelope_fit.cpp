@@ -17,6 +17,7 @@
 //   span their own envelope (a/rms = sqrt(2) for a thin one), so such a fit has run away
 //   along a nearly straight cloud the test found not quite straight (noise with structure).
 //   The line stands then, and the note says so.
+#include <algorithm>
 #include <cmath>
 #include <optional>
 #include <random>
@@ -24,6 +25,7 @@
 
 #include "fit_internal.hpp"
 #include "rendulic/core/conventions.hpp"
+#include "rendulic/core/decimal.hpp"
 #include "rendulic/core/errors.hpp"
 
 namespace rendulic {
@@ -124,6 +126,20 @@ EnvelopeFit fit_envelope(const Envelope& env, const FitOptions& options) {
   const std::int64_t start = fit_detail::point_operations();
   EnvelopeFit f = select_shape(env, options);
   f.point_operations = fit_detail::point_operations() - start;
+  // Points near the largest double can make a number beyond it (a line's half-length along a
+  // diagonal), printed as inf, or null in JSON, with exit 0. (The covariance, which no file
+  // stores, holds squares: beyond about 1e154 it overflows where the standard errors do not.)
+  const bool finite = f.center.allFinite() && std::isfinite(f.a) && std::isfinite(f.b) &&
+                      std::isfinite(f.inclination_deg.value_or(0.0)) && std::isfinite(f.rms) &&
+                      f.center_stderr.allFinite() && std::isfinite(f.a_stderr) &&
+                      std::isfinite(f.b_stderr) &&
+                      std::isfinite(f.inclination_stderr_deg.value_or(0.0));
+  if (!finite) {
+    double largest = 0.0;
+    for (const auto& p : env.response) largest = std::max(largest, p.cwiseAbs().maxCoeff());
+    throw InputError("fit: the fit's numbers exceed the largest double (the points reach " +
+                     decimal_g(largest) + "); rescale the points");
+  }
   return f;
 }
 

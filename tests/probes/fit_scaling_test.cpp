@@ -1,12 +1,14 @@
 // Cost and scale of the envelope fits (docs/fitting.md "Accuracy and cost"): the work of a
 // fit, counted in point operations (EnvelopeFit::point_operations), grows linearly with the
-// number of points, and a fit of data near 1e300 is the fit of the same data near 1 scaled.
+// number of points, and a fit of data near 1e300, or up to the largest double, is the fit of the
+// same data near 1 scaled; a fit whose numbers would exceed the largest double is refused.
 // The distinctness check of the ellipse fit once compared every point with every other:
 // 200,000 points took 51 s against 0.6 s for 20,000.
 #include <gtest/gtest.h>
 
 #include <cmath>
 
+#include "input_error.hpp"
 #include "rendulic/probes/envelope_fit.hpp"
 #include "synthetic.hpp"
 
@@ -68,6 +70,50 @@ TEST(FitScaling, DataNear1e300FitAsTheSameDataNear1) {
   Envelope tiny = test::ellipse_envelope(e, 36, 0.01, 3, true);
   for (auto& p : tiny.response) p *= 1e-300;
   EXPECT_NEAR(fit_envelope(tiny).a / 1e-300, 2.0, 0.05);
+}
+
+TEST(FitScaling, DataUpToTheLargestDoubleFitAsTheSameDataNear1) {
+  // Above 2^1023 (about 9e307) the normalisation's scale was 2^1024, infinite: every number of
+  // the fit inf or nan, printed with exit 0. Scaled by a power of two, the fit is the same fit.
+  test::TrueEllipse e;
+  e.c = {3.0, 1.0}, e.a = 2.0, e.b = 1.0, e.phi_deg = 17.0;
+  for (const FitShape shape : {FitShape::kAuto, FitShape::kEllipse, FitShape::kLine}) {
+    const Envelope unit = test::ellipse_envelope(e, 36, 0.01, 3, true);
+    Envelope huge = unit;
+    double largest = 0.0;
+    for (auto& p : huge.response) {
+      p = {std::ldexp(p.x(), 1021), std::ldexp(p.y(), 1021)};
+      largest = std::max(largest, p.cwiseAbs().maxCoeff());
+    }
+    ASSERT_GT(largest, std::ldexp(1.0, 1023));
+    FitOptions opts;
+    opts.shape = shape;
+    const EnvelopeFit a = fit_envelope(unit, opts), b = fit_envelope(huge, opts);
+    ASSERT_EQ(a.shape, b.shape);
+    const auto down = [](double x) { return std::ldexp(x, -1021); };
+    EXPECT_NEAR(down(b.center.x()), a.center.x(), 1e-12 * a.a);
+    EXPECT_NEAR(down(b.center.y()), a.center.y(), 1e-12 * a.a);
+    EXPECT_NEAR(down(b.a), a.a, 1e-12 * a.a);
+    EXPECT_NEAR(down(b.b), a.b, 1e-12 * a.a);
+    EXPECT_NEAR(down(b.rms), a.rms, 1e-9 * a.rms);
+    ASSERT_EQ(a.has_stderr, b.has_stderr);
+    if (a.has_stderr) {
+      EXPECT_NEAR(down(b.a_stderr), a.a_stderr, 1e-9 * a.a_stderr);
+    }
+  }
+}
+
+TEST(FitScaling, AFitBeyondTheLargestDoubleIsRefused) {
+  // Points along the diagonal out to +-1.7e308: the line's half-length, 2.4e308, is no double.
+  // It was printed as inf (null in JSON) with exit 0.
+  Envelope diagonal;
+  for (const double t : {-1.7e308, -1e308, 0.0, 5e307, 1e308, 1.7e308})
+    diagonal.response.push_back({t, t});
+  FitOptions opts;
+  opts.shape = FitShape::kLine;
+  EXPECT_EQ(testing::input_error([&] { fit_envelope(diagonal, opts); }),
+            "fit: the fit's numbers exceed the largest double (the points reach 1.7e+308); "
+            "rescale the points");
 }
 
 }  // namespace
