@@ -131,6 +131,21 @@ EnvelopeRecord read_envelope(const ResultsReader& in, const std::string& group) 
   if (in.has_attr(group, "directions") && m > 0)
     agree = agree && in.attr_int(group, "directions") == static_cast<std::int64_t>(m);
   if (!agree) throw InputError(where + " has datasets of different lengths");
+  // rendulic never stores a pair that is not finite (a probe that fails fails its campaign): a
+  // nan or inf here is damage. The report's claims fitted such pairs and ended in "internal
+  // error: fit_rendulic_map: strain pairs are collinear", exit 1.
+  auto finite_pairs = [&](const char* name, const std::vector<Eigen::Vector2d>& v) {
+    for (std::size_t i = 0; i < v.size(); ++i)
+      if (!v[i].allFinite())
+        throw InputError(where + name + ": probe " + std::to_string(i) + " is not finite");
+  };
+  for (std::size_t i = 0; i < env.theta_deg.size(); ++i)
+    if (!std::isfinite(env.theta_deg[i]))
+      throw InputError(where + datasets::kThetaDeg + ": probe " + std::to_string(i) +
+                       " is not finite");
+  finite_pairs(datasets::kStrain, env.strain);
+  finite_pairs(datasets::kStressStar, env.stress_star);
+  finite_pairs(datasets::kFabric, env.fabric);
   return env;
 }
 

@@ -24,7 +24,9 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <limits>
 #include <sstream>
+#include <vector>
 
 #include "cli_runner.hpp"
 #include "damage_walk.hpp"
@@ -117,6 +119,37 @@ TEST(FaultsSystem, ADatasetDeclaringMoreValuesThanItHoldsIsOneLine) {
   }
   EXPECT_FALSE(fs::exists(d / "a.data"));
   EXPECT_FALSE(fs::exists(d / "probed" / "results.h5"));
+  EXPECT_EQ(read_file(f), before);
+}
+
+// A probe's strain pair set to nan (a file edited elsewhere, or damaged): the report fitted it
+// for its claims and ended in "internal error: fit_rendulic_map: strain pairs are collinear",
+// exit 1. Found by setting values of a real file to nan, inf and 1e308 at random.
+TEST(FaultsSystem, APairThatIsNotFiniteIsOneLineNamingIt) {
+  const fs::path d = fresh_dir("not_finite");
+  const fs::path f = d / "results.h5";
+  fs::copy_file(base_results(), f);
+  const std::string g = "/states/b/envelopes/dynamic_0.002";
+  {
+    H5::H5File h(f.string(), H5F_ACC_RDWR);
+    H5::DataSet strain = h.openDataSet(g + "/strain");
+    std::vector<double> v(strain.getSpace().getSimpleExtentNpoints());
+    strain.read(v.data(), H5::PredType::NATIVE_DOUBLE);
+    v.at(10) = std::numeric_limits<double>::quiet_NaN();  // probe 5, x
+    strain.write(v.data(), H5::PredType::NATIVE_DOUBLE);
+  }
+  const std::string before = read_file(f);
+  for (const std::string& command :
+       {"report --no-figures " + f.string(),
+        "calibrate --model isotropic_elastic --max-iterations 5 --results " + f.string()}) {
+    const CliResult r = rendulic::testing::run_rendulic(command, false);
+    EXPECT_EQ(r.code, 2) << command << "\n" << r.err;
+    EXPECT_EQ(rendulic::testing::error_lines(r.err), 1) << r.err;
+    EXPECT_NE(r.err.find(f.string() + ": envelope " + g + "/strain: probe 5 is not finite"),
+              std::string::npos)
+        << r.err;
+  }
+  EXPECT_FALSE(fs::exists(d / "report.md"));
   EXPECT_EQ(read_file(f), before);
 }
 

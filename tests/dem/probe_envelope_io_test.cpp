@@ -1,8 +1,10 @@
 // Envelopes in the results file (docs/results.md /states/<label>/envelopes/<name>): the
-// datasets and attributes of the contract, and an exact round trip including diagnostics.
+// datasets and attributes of the contract, and an exact round trip including diagnostics; a
+// stored pair that is not finite (damage: rendulic writes none) is refused naming it.
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <limits>
 
 #include "rendulic/core/envelope_io.hpp"
 #include "rendulic/core/errors.hpp"
@@ -68,6 +70,40 @@ TEST(EnvelopeIo, RoundTripWithTheContractNames) {
   EXPECT_EQ(back.diagnostics, env.diagnostics);
   EXPECT_EQ(back.attributes, env.attributes);
   EXPECT_THROW(read_envelope(in, paths::envelope(paths::state("s0"), "missing")), InputError);
+}
+
+TEST(EnvelopeIo, APairThatIsNotFiniteIsRefusedNamingItsDatasetAndProbe) {
+  // The report fitted such pairs for its claims: "internal error: fit_rendulic_map: strain
+  // pairs are collinear", exit 1.
+  const std::filesystem::path dir = std::filesystem::path(RENDULIC_TEST_TMP) / "envelope_io";
+  std::filesystem::create_directories(dir);
+  const std::string group = paths::envelope(paths::state("s0"), "dynamic_5e-05");
+  const double bad[] = {std::numeric_limits<double>::quiet_NaN(),
+                        std::numeric_limits<double>::infinity()};
+  for (const char* dataset : {"theta_deg", "strain", "stress_star", "fabric"}) {
+    Envelope env = sample_envelope();
+    const std::string name = dataset;
+    for (const double v : bad) {
+      if (name == "theta_deg") env.theta_deg[3] = v;
+      if (name == "strain") env.strain[3].y() = v;
+      if (name == "stress_star") env.stress_star[3].x() = v;
+      if (name == "fabric") env.fabric[3].y() = v;
+      const std::filesystem::path file = dir / ("not_finite_" + name + ".h5");
+      {
+        ResultsWriter out(file);
+        write_envelope(out, group, env);
+        out.commit();
+      }
+      const ResultsReader in(file);
+      try {
+        read_envelope(in, group);
+        ADD_FAILURE() << name << " " << v << " read";
+      } catch (const InputError& e) {
+        EXPECT_EQ(std::string(e.what()), file.string() + ": envelope " + group + "/" + name +
+                                             ": probe 3 is not finite");
+      }
+    }
+  }
 }
 
 }  // namespace
