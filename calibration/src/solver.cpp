@@ -15,6 +15,7 @@
 #include <thread>
 
 #include "cores.hpp"
+#include "rendulic/core/decimal.hpp"
 #include "rendulic/core/errors.hpp"
 
 namespace rendulic::calibration {
@@ -338,7 +339,19 @@ CeresRun run_ceres_once(const Objective& obj, std::vector<double> z, const Solve
   so.function_tolerance = o.function_tolerance;
   // Relative to the cost at the start, so that the criterion does not depend on the units
   // and weights of the residuals (Ceres's own is absolute).
-  so.gradient_tolerance = o.gradient_tolerance * std::max(cost_of(obj, z, o.likelihood), 1e-300);
+  const double start_cost = cost_of(obj, z, o.likelihood);
+  // A cost that is not finite there (a datum or prediction beyond the doubles) made the
+  // tolerance nan, and Ceres blamed its own configuration ("Solver::Options::gradient_tolerance
+  // = nan"); an infinite one made any gradient small enough to stop at once.
+  if (!std::isfinite(start_cost)) {
+    CeresRun run;
+    run.z = z;
+    run.pinned = pinned;
+    run.message = "the objective at the start point is " + decimal_g(start_cost) +
+                  " (a datum or a prediction is not finite there)";
+    return run;
+  }
+  so.gradient_tolerance = o.gradient_tolerance * std::max(start_cost, 1e-300);
   if (cm.frozen) {
     std::vector<double> r(obj.num_residuals());
     double c = 0.0;

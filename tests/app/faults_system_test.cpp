@@ -153,6 +153,33 @@ TEST(FaultsSystem, APairThatIsNotFiniteIsOneLineNamingIt) {
   EXPECT_EQ(read_file(f), before);
 }
 
+// A probe direction of -1e308 deg (finite, so read): the objective is nan at the start, and the
+// solver's gradient tolerance, relative to it, was nan too. The fit failed with Ceres blaming its
+// own configuration ("Solver::Options::gradient_tolerance = nan"); it now says what is wrong.
+TEST(FaultsSystem, ACalibrationWhoseObjectiveIsNotFiniteAtTheStartSaysSo) {
+  const fs::path d = fresh_dir("nan_objective");
+  const fs::path f = d / "results.h5";
+  fs::copy_file(base_results(), f);
+  {
+    H5::H5File h(f.string(), H5F_ACC_RDWR);
+    H5::DataSet theta = h.openDataSet("/states/a/envelopes/dynamic_5e-05/theta_deg");
+    std::vector<double> v(theta.getSpace().getSimpleExtentNpoints());
+    theta.read(v.data(), H5::PredType::NATIVE_DOUBLE);
+    v.at(5) = -1e308;
+    theta.write(v.data(), H5::PredType::NATIVE_DOUBLE);
+  }
+  const CliResult r = rendulic::testing::run_rendulic(
+      "calibrate --no-write --model isotropic_elastic --max-iterations 5 --results " + f.string(),
+      false);
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("\"converged\": false"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("the objective at the start point is nan (a datum or a prediction is not "
+                       "finite there)"),
+            std::string::npos)
+      << r.out;
+  EXPECT_EQ(r.out.find("gradient_tolerance"), std::string::npos) << r.out;
+}
+
 TEST(FaultsSystem, ARunOnAFullDiskFailsInOneLineAndLeavesNoTemporary) {
   const fs::path d = fresh_dir("full_run");
   const SmallDisk disk(d / "disk", 160);
