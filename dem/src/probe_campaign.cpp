@@ -113,7 +113,6 @@ void check(const ProbeOptions& options, double amplitude, const std::vector<doub
   if (theta.empty()) throw InputError("probes: no directions");
 }
 
-
 // Symmetric matrix exponential: the deformation gradient exp(-d_eps) of a log strain.
 Eigen::Matrix3d exp_sym(const Eigen::Matrix3d& a) {
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(a);
@@ -238,8 +237,8 @@ template <class Run>
 bool run_probe_tasks(const ProbeOptions& options, int n, std::vector<std::string>& errors,
                      Run&& run) {
   std::atomic<bool> stopped{false};
-#pragma omp parallel for schedule(dynamic, 1) \
-    num_threads(task_team(options.threads, static_cast<std::size_t>(n)))
+  const int team = task_team(options.threads, static_cast<std::size_t>(n));
+#pragma omp parallel for schedule(dynamic, 1) num_threads(team)
   for (int q = 0; q < n; ++q) {
     if (stopped.load(std::memory_order_relaxed) || (options.stop && options.stop())) {
       stopped.store(true, std::memory_order_relaxed);

@@ -1,5 +1,6 @@
-// The team-size rule and controller of DEM steps, the team over independent tasks, the barrier inside a step, and the round trip
-// between two cores that a team pays for (team.hpp; docs/performance.md).
+// The team-size rule and controller of DEM steps, the team over independent tasks, the barrier
+// inside a step, and the round trip between two cores that a team pays for (team.hpp;
+// docs/performance.md).
 #include "rendulic/dem/team.hpp"
 
 #if defined(__linux__)

@@ -99,8 +99,8 @@ TEST(EnvelopeIo, APairThatIsNotFiniteIsRefusedNamingItsDatasetAndProbe) {
         read_envelope(in, group);
         ADD_FAILURE() << name << " " << v << " read";
       } catch (const InputError& e) {
-        EXPECT_EQ(std::string(e.what()), file.string() + ": envelope " + group + "/" + name +
-                                             ": probe 3 is not finite");
+        EXPECT_EQ(std::string(e.what()),
+                  file.string() + ": envelope " + group + "/" + name + ": probe 3 is not finite");
       }
     }
   }
