@@ -374,8 +374,9 @@ Packing read_lammps_dump(const fs::path& file) {
       if (found < 0) in.fail("no position columns (x y z, xu yu zu, xs ys zs or xsu ysu zsu)");
       scaled = found >= 2;
     }
-    const int c_v = column({"vx"});
-    const bool has_v = c_v >= 0 && column({"vy"}) >= 0 && column({"vz"}) >= 0;
+    // Each velocity by its own name: `dump custom` writes the columns in any order.
+    const int c_v[3] = {column({"vx"}), column({"vy"}), column({"vz"})};
+    const bool has_v = c_v[0] >= 0 && c_v[1] >= 0 && c_v[2] >= 0;
     const auto n = static_cast<std::size_t>(n_atoms);
     // Grown line by line: the header's count is not trusted with memory (a damaged count of
     // 10^12 asked for 40 TB before the first line was read).
@@ -399,7 +400,7 @@ Packing read_lammps_dump(const fs::path& file) {
         double q = in.number(w[static_cast<std::size_t>(c_x[a])], "position");
         q = scaled ? q * p.lengths[a] : q - lo[a];
         xk[a] = wrap(q, p.lengths[a]);
-        if (has_v) vk[a] = in.number(w[static_cast<std::size_t>(c_v + a)], "velocity");
+        if (has_v) vk[a] = in.number(w[static_cast<std::size_t>(c_v[a])], "velocity");
       }
       x.push_back(xk);
       if (has_v) v.push_back(vk);

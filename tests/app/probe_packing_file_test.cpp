@@ -103,6 +103,25 @@ TEST(PackingFile, DumpGivesItsLastSnapshotInAnyCoordinateColumns) {
   }
 }
 
+// `dump custom` writes its columns in the order the user names them. The velocities were
+// taken as the three columns from vx on, so `vx fx vz vy` read fx as vy, and with vx last the
+// reader indexed past the line's words.
+TEST(PackingFile, DumpVelocitiesAreReadByTheirNamesInAnyOrder) {
+  const std::string head =
+      "ITEM: TIMESTEP\n0\nITEM: NUMBER OF ATOMS\n2\n"
+      "ITEM: BOX BOUNDS pp pp pp\n0 2\n0 2\n0 2\n";
+  for (const std::string cols : {"id radius x y z vx fx vz vy", "vz vy id radius x y z vx"}) {
+    const bool first = cols.front() == 'i';
+    const std::string rows = first ? "1 0.2 0.5 0.5 0.5 1 9 3 2\n2 0.2 1.5 1.5 1.5 4 9 6 5\n"
+                                   : "3 2 1 0.2 0.5 0.5 0.5 1\n6 5 2 0.2 1.5 1.5 1.5 4\n";
+    const fs::path f = write("velocities.dump", head + "ITEM: ATOMS " + cols + "\n" + rows);
+    const Packing p = rendulic::read_lammps_dump(f);
+    ASSERT_EQ(p.velocities.rows(), 2) << cols;
+    EXPECT_EQ(p.velocities.row(0), Eigen::RowVector3d(1, 2, 3)) << cols;
+    EXPECT_EQ(p.velocities.row(1), Eigen::RowVector3d(4, 5, 6)) << cols;
+  }
+}
+
 TEST(PackingFile, WriterIsReadBackToTheSameDoubles) {
   Packing p;
   p.lengths = Eigen::Vector3d(0.1, std::sqrt(0.02), 1.0 / 3.0);
