@@ -190,9 +190,9 @@ void io(A& a, RelaxSummary& s) {
 template <class A>
 void io(A& a, MinimiseSummary& s) {
   auto& [converged, iterations, pair_rebuilds, max_force, mean_contact_force, elastic_energy,
-         message] = s;
+         message, stalled_at] = s;
   a(converged), a(iterations), a(pair_rebuilds), a(max_force), a(mean_contact_force);
-  a(elastic_energy), a(message);
+  a(elastic_energy), a(message), a(stalled_at);
 }
 
 namespace {
@@ -330,6 +330,11 @@ Envelope dynamic_envelope_of(const DemSystem& given, double amplitude,
       reference = relax(state, options.relax);
     }
     omp_set_num_threads(saved_threads);
+    // Every probe would stall there too, and its envelope be made of unsettled probes.
+    if (reference_minimised.stalled_at > 0.0)
+      throw InputError("dynamic probes: " + round_off_refusal(reference_minimised,
+                                                              "probes.force_tolerance",
+                                                              options.minimise.force_tolerance));
   }
   detail::ProbeTaskScope scope("dynamic", plane.name, state, amplitude, theta_deg, options);
   const double rate = probe_rate(state, options);
@@ -491,6 +496,9 @@ MinimisationBasis minimisation_basis(const DemSystem& state, const ProbeOptions&
   b.k_star = state.material().k_star();
   b.ref = packing_of(state);
   b.summary = minimise_energy(b.ref, b.mo);
+  if (b.summary.stalled_at > 0.0)
+    throw InputError("minimisation probes: " +
+                     round_off_refusal(b.summary, "probes.force_tolerance", b.mo.force_tolerance));
   if (!b.summary.converged) {
     // Bad input, not a bug: the scenario chose a state without a contact network to probe.
     std::ostringstream why;
@@ -680,6 +688,9 @@ LinearResponse state_linear_response(const DemSystem& state, const ProbeOptions&
     MinimiseOptions mo = options.minimise;
     mo.k = lo.k;
     const MinimiseSummary ms = minimise_energy(packing, mo);
+    if (ms.stalled_at > 0.0)
+      throw InputError(lr.message + "; minimising first: " +
+                       round_off_refusal(ms, "probes.force_tolerance", mo.force_tolerance));
     if (!ms.converged)
       throw std::runtime_error(lr.message + "; minimising first did not converge (" + ms.message +
                                ")");

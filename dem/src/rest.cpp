@@ -157,6 +157,9 @@ RestSummary bring_to_rest(DemSystem& sys, const RestOptions& options) {
   s.after_relax = force_balance(packing_of(sys), k);
   const Eigen::Matrix3d stress_relaxed = sys.stress();
   s.minimised = settle_at_minimum(sys, options.minimise, &s.max_displacement);
+  if (s.minimised.stalled_at > 0.0)
+    throw InputError(
+        round_off_refusal(s.minimised, "states.force_tolerance", options.minimise.force_tolerance));
   if (!s.minimised.converged)
     throw std::runtime_error("states: the energy minimisation did not converge (" +
                              s.minimised.message + ")");

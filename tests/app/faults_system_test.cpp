@@ -228,6 +228,27 @@ TEST(FaultsSystem, CalibrateOnAFullDiskFailsInOneLine) {
 
 // --- failures and signals during a run ---------------------------------------------------
 
+TEST(FaultsSystem, AStateToleranceBelowTheRoundOffFloorIsBadInputNamingItsKey) {
+  // It ran FIRE for a million iterations per state, then ended as an internal error (exit 1),
+  // the kind lost on leaving the states' parallel loop.
+  const fs::path out = fresh_dir("round_off") / "out";
+  const CliResult r = rendulic::testing::run_rendulic(
+      "run " + tiny_scenario().string() +
+          " --quiet --threads 1 --set run.stages=prepare,isotropic,path,states --set "
+          "states.force_tolerance=1e-16 --out " +
+          out.string(),
+      false);
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_EQ(rendulic::testing::error_lines(r.err), 1) << r.err;
+  EXPECT_NE(r.err.find(": states.force_tolerance = 1e-16 is below the round-off floor of this "
+                       "state's forces (FIRE stalled at "),
+            std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find(" or more; completed stages (prepare, isotropic, path) kept in "),
+            std::string::npos)
+      << r.err;
+}
+
 TEST(FaultsSystem, ALateStageFailureKeepsTheCompletedStagesAsPartial) {
   // Every earlier stage used to be thrown away with the temporary file.
   const fs::path d = fresh_dir("late_failure");

@@ -123,5 +123,37 @@ TEST(BringToRest, ADisturbedPackingEndsAtAMinimumWithItsOwnStress) {
   EXPECT_LT(again.kinetic_energy(), 1e-14 * again.elastic_energy());
 }
 
+// Round-off bounds the net forces from below (about 1e-14 of the mean contact force here): a
+// tolerance under that floor ran FIRE for all its iterations (20 s at N = 100, minutes at the
+// paper's N) and then failed as "not converged", an internal error of the states stage. FIRE
+// now stops where the floor stalls it and the refusal names the key and a tolerance it meets.
+TEST(MinimiseEnergy, AToleranceBelowTheRoundOffFloorStallsEarlyAndSaysSo) {
+  GeneratedPackingOptions g;
+  g.n = 100;
+  g.volume_fraction = 0.75;
+  g.seed = 2;
+  const PackingData start = generate_packing(g, nullptr);
+  MinimiseOptions o;
+  o.force_tolerance = 1e-16;
+  PackingData p = start;
+  const MinimiseSummary s = minimise_energy(p, o);
+  EXPECT_FALSE(s.converged);
+  EXPECT_GT(s.stalled_at, o.force_tolerance) << s.message;
+  EXPECT_LT(s.stalled_at, 1e-12) << s.message;
+  EXPECT_LT(s.iterations, o.max_iterations / 5) << s.message;
+  EXPECT_NE(s.message.find("FIRE stalled at"), std::string::npos) << s.message;
+  const std::string why = round_off_refusal(s, "states.force_tolerance", o.force_tolerance);
+  EXPECT_EQ(why.rfind("states.force_tolerance = 1e-16 is below the round-off floor", 0), 0u) << why;
+  // The tolerance it names is met from the same start, with no stall.
+  const double named = std::stod(why.substr(why.rfind("use ") + 4));
+  EXPECT_GE(named, 10 * s.stalled_at) << why;
+  EXPECT_LE(named, 100 * s.stalled_at) << why;
+  o.force_tolerance = named;
+  p = start;
+  const MinimiseSummary met = minimise_energy(p, o);
+  EXPECT_TRUE(met.converged) << met.message;
+  EXPECT_EQ(met.stalled_at, 0.0);
+}
+
 }  // namespace
 }  // namespace rendulic::dem

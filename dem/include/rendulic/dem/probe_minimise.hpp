@@ -38,7 +38,15 @@ struct MinimiseSummary {
   double mean_contact_force = 0.0;  // N
   double elastic_energy = 0.0;      // J
   std::string message;              // why it stopped
+  // Where the largest net force stalled, as a fraction of the mean contact force, when the
+  // tolerance lies below the round-off floor of the forces (0: it did not stall there).
+  double stalled_at = 0.0;
 };
+
+// The one-line refusal of a tolerance below the round-off floor that `summary` stalled at:
+// names `key` (states.force_tolerance, probes.force_tolerance) and a tolerance that is reached.
+std::string round_off_refusal(const MinimiseSummary& summary, const std::string& key,
+                              double tolerance);
 
 // Minimises the elastic energy over the particle positions at the fixed cell of `packing`.
 // Positions are updated in place (not wrapped into the cell).
