@@ -22,6 +22,7 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <mutex>
 #include <optional>
 #include <sstream>
@@ -490,6 +491,15 @@ std::vector<Eigen::Vector2d> points_of(const py::object& x, const char* what) {
   return out;
 }
 
+// A count taken from Python as a 64-bit integer and narrowed here: pybind's own refusal of an
+// int beyond 32 bits (directions=2**31) is a TypeError that lists every signature and names no
+// argument. Within 32 bits the count's own range is checked where it is used.
+int count_of(long long v, const char* name) {
+  if (v < std::numeric_limits<int>::min() || v > std::numeric_limits<int>::max())
+    throw InputError(std::string(name) + " = " + std::to_string(v) + " is out of range");
+  return static_cast<int>(v);
+}
+
 py::dict model_envelope_dict(const EnvelopeRecord& env, const std::string& law_name) {
   py::dict d;
   d["model"] = law_name;
@@ -597,8 +607,8 @@ PYBIND11_MODULE(_rendulic, m) {
   m.def(
       "model_envelope",
       [](const std::string& model, const py::object& state, const py::object& params,
-         double amplitude, int directions, const std::string& method, const std::string& scheme,
-         double tolerance, int substeps, const std::string& umat) {
+         double amplitude, long long directions, const std::string& method,
+         const std::string& scheme, double tolerance, long long substeps, const std::string& umat) {
         app::EnvelopeRequest r;
         r.model = model;
         r.umat = umat;
@@ -606,11 +616,11 @@ PYBIND11_MODULE(_rendulic, m) {
         std::tie(r.state, r.state_is_text) = toml_input(state, "state");
         if (r.state.empty() && !r.state_is_text) throw InputError("a state is required");
         r.amplitude = amplitude;
-        r.directions = directions;
+        r.directions = count_of(directions, "directions");
         r.method = method;
         r.scheme = scheme;
         r.tolerance = tolerance;
-        r.substeps = substeps;
+        r.substeps = count_of(substeps, "substeps");
         std::string name;
         EnvelopeRecord env;
         {
@@ -626,16 +636,16 @@ PYBIND11_MODULE(_rendulic, m) {
   m.def(
       "material_point_path",
       [](const std::string& model, const py::object& state, const py::object& params,
-         const std::string& kind, double end, int steps, const std::string& scheme,
-         double tolerance, int substeps, const std::string& umat) {
+         const std::string& kind, double end, long long steps, const std::string& scheme,
+         double tolerance, long long substeps, const std::string& umat) {
         const auto [p, p_text] = toml_input(params, "params");
         const auto [s, s_text] = toml_input(state, "state");
         constexpr std::array<const char*, 2> kinds = {"undrained", "isotropic"};
         if (const std::string why = choice_refusal(kind, kinds); !why.empty())
           throw InputError("kind: " + why);
         models::PathOptions o;
-        o.steps = steps;
-        o.step = app::step_options_for(scheme, tolerance, substeps);
+        o.steps = count_of(steps, "steps");
+        o.step = app::step_options_for(scheme, tolerance, count_of(substeps, "substeps"));
         std::string why;
         if (!o.IsValid(&why)) throw InputError("path options: " + why);
         models::PathSeries series;
@@ -666,18 +676,18 @@ PYBIND11_MODULE(_rendulic, m) {
       "probe",
       [](const std::string& packing, const std::string& out, const std::string& label,
          const std::vector<std::string>& methods, const std::vector<double>& amplitudes,
-         int directions, const std::vector<std::string>& planes, const py::object& sets,
-         int threads, bool quiet, const py::object& progress) {
+         long long directions, const std::vector<std::string>& planes, const py::object& sets,
+         long long threads, bool quiet, const py::object& progress) {
         app::ProbeRequest r;
         r.packing = packing;
         r.out = out;
         r.label = label;
         r.methods = methods;
         r.amplitudes = amplitudes;
-        r.directions = directions;
+        r.directions = count_of(directions, "directions");
         r.planes = planes;
         r.sets = sets_of(sets);
-        r.threads = threads;
+        r.threads = count_of(threads, "threads");
         r.quiet = quiet;
         r.summary = false;  // the caller has the file
         return long_work(progress, quiet, [&] { return app::probe_packing(r).string(); });
@@ -689,13 +699,13 @@ PYBIND11_MODULE(_rendulic, m) {
 
   m.def(
       "run",
-      [](const std::string& scenario, const std::string& out, const py::object& sets, int threads,
-         bool quiet, bool resume, const py::object& progress) {
+      [](const std::string& scenario, const std::string& out, const py::object& sets,
+         long long threads, bool quiet, bool resume, const py::object& progress) {
         app::RunRequest r;
         r.scenario = scenario;
         r.out = out;
         r.sets = sets_of(sets);
-        r.threads = threads;
+        r.threads = count_of(threads, "threads");
         r.quiet = quiet;
         r.resume = resume;
         return long_work(progress, quiet, [&] { return app::run_scenario(r).string(); });

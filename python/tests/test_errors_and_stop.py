@@ -56,6 +56,30 @@ def test_a_thread_count_out_of_range_is_an_input_error(tiny_toml, cli_run, tmp_p
     assert not (tmp_path / "out").exists()
 
 
+def test_a_count_beyond_32_bits_is_an_input_error_naming_it(tiny_toml, cli_run, tmp_path):
+    # pybind refused such an int with a TypeError listing every signature and naming no
+    # argument; numpy's integers stay accepted as counts.
+    state = {"stress": np.eye(3) * 1e6}
+    calls = {
+        "directions = 2147483648": lambda: rendulic.model_envelope(
+            "isotropic_elastic", state, directions=2**31),
+        "substeps = -2147483649": lambda: rendulic.model_envelope(
+            "isotropic_elastic", state, substeps=-2**31 - 1),
+        "steps = 4294967296": lambda: rendulic.material_point_path(
+            "isotropic_elastic", state, steps=2**32),
+        "threads = 2147483648": lambda: rendulic.run(tiny_toml, tmp_path / "out", threads=2**31),
+        "directions = 8589934592": lambda: rendulic.probe(
+            f"{cli_run}:/states/a", tmp_path / "out", directions=2**33),
+    }
+    for words, call in calls.items():
+        with pytest.raises(rendulic.InputError, match="^" + words + " is out of range$"):
+            call()
+    env = rendulic.model_envelope("isotropic_elastic", state, directions=np.int64(8),
+                                  substeps=np.int32(2))
+    assert len(env["theta_deg"]) == 8
+    assert not (tmp_path / "out").exists()
+
+
 def test_model_input_errors_have_the_file_readers_messages():
     state = {"stress": np.eye(3) * 1e6}
     with pytest.raises(rendulic.InputError, match=r"unknown parameter 'Kx' of isotropic_elastic "
