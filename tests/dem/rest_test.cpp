@@ -128,11 +128,8 @@ TEST(BringToRest, ADisturbedPackingEndsAtAMinimumWithItsOwnStress) {
 // paper's N) and then failed as "not converged", an internal error of the states stage. FIRE
 // now stops where the floor stalls it and the refusal names the key and a tolerance it meets.
 TEST(MinimiseEnergy, AToleranceBelowTheRoundOffFloorStallsEarlyAndSaysSo) {
-  GeneratedPackingOptions g;
-  g.n = 100;
-  g.volume_fraction = 0.75;
-  g.seed = 2;
-  const PackingData start = generate_packing(g, nullptr);
+  const PackingData start =
+      generate_packing({.n = 100, .volume_fraction = 0.75, .seed = 2}, nullptr);
   MinimiseOptions o;
   o.force_tolerance = 1e-16;
   PackingData p = start;
