@@ -228,6 +228,22 @@ TEST(FaultsSystem, CalibrateOnAFullDiskFailsInOneLine) {
 
 // --- failures and signals during a run ---------------------------------------------------
 
+TEST(FaultsSystem, AProbeRateTheEngineRefusesIsBadInput) {
+  // The engine's refusal of a strain per step above its bound left the probes' parallel loop
+  // as words only, and ended as an internal error (exit 1).
+  const fs::path out = fresh_dir("probe_rate") / "out";
+  const CliResult r = rendulic::testing::run_rendulic(
+      "run " + tiny_scenario().string() +
+          " --quiet --threads 1 --set run.stages=prepare,isotropic,path,states,probes --set "
+          "probes.methods=dynamic --set probes.amplitudes=[0.02] --set probes.rate=1e308 --out " +
+          out.string(),
+      false);
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_EQ(rendulic::testing::error_lines(r.err), 1) << r.err;
+  EXPECT_NE(r.err.find("rendulic: dynamic probe: DEM: the imposed strain rate "), std::string::npos)
+      << r.err;
+}
+
 TEST(FaultsSystem, AStateToleranceBelowTheRoundOffFloorIsBadInputNamingItsKey) {
   // It ran FIRE for a million iterations per state, then ended as an internal error (exit 1),
   // the kind lost on leaving the states' parallel loop.
