@@ -240,10 +240,9 @@ std::vector<std::pair<dem::DemSystem, dem::RestSummary>> rest_states(
   const int n = static_cast<int>(snapshots.size());
   std::vector<std::optional<dem::DemSystem>> rested(snapshots.size());
   std::vector<dem::RestSummary> summaries(snapshots.size());
-  std::vector<std::string> errors(snapshots.size());
   // Bad input found while resting a state (a tolerance below the round-off floor) stays bad
   // input once it has left the parallel region (exit 2, not an internal error).
-  std::vector<char> input_error(snapshots.size(), 0);
+  std::vector<CaughtError> errors(snapshots.size());
   progress.start_task("relax and minimise " + std::to_string(n) + " states");
   long done = 0;
   const int team = dem::task_team(ctx.threads, snapshots.size());
@@ -255,11 +254,8 @@ std::vector<std::pair<dem::DemSystem, dem::RestSummary>> rest_states(
       dem::DemSystem sys = snapshots[u];
       summaries[u] = dem::bring_to_rest(sys, options);
       rested[u] = std::move(sys);
-    } catch (const InputError& e) {
-      errors[u] = e.what();
-      input_error[u] = 1;
-    } catch (const std::exception& e) {
-      errors[u] = e.what();
+    } catch (...) {
+      errors[u] = CaughtError::current();
     }
     long finished = 0;
 #pragma omp atomic capture
@@ -268,11 +264,7 @@ std::vector<std::pair<dem::DemSystem, dem::RestSummary>> rest_states(
   }
   std::vector<std::pair<dem::DemSystem, dem::RestSummary>> out;
   for (std::size_t k = 0; k < snapshots.size(); ++k) {
-    if (!errors[k].empty()) {
-      const std::string why = "state " + labels[k] + ": " + errors[k];
-      if (input_error[k]) throw InputError(why);
-      throw std::runtime_error(why);
-    }
+    if (!errors[k].message.empty()) errors[k].rethrow("state " + labels[k] + ": ");
     warn_cap("of state " + labels[k], summaries[k].relaxed);
     const bool frictional = snapshots[k].material().frictional();
     // A frictional state is relaxed dynamically only (rest.hpp): its balance is what that

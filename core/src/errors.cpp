@@ -142,4 +142,19 @@ void rethrow_with_note(const std::string& note) {
   }
 }
 
+CaughtError CaughtError::current() {
+  try {
+    throw;
+  } catch (const InputError& e) {
+    return {e.what(), true};
+  } catch (...) {
+    return {describe_current_exception(), false};
+  }
+}
+
+void CaughtError::rethrow(const std::string& prefix) const {
+  if (input) throw InputError(prefix + message);
+  throw std::runtime_error(prefix + message);
+}
+
 }  // namespace rendulic

@@ -25,6 +25,15 @@
 #include "rendulic/dem/scenario_keys.hpp"
 #include "rendulic/dem/team.hpp"
 
+namespace rendulic {
+// A probe's error travels with its record between MPI ranks (probe_mpi.hpp; found by
+// argument-dependent lookup, so it sits in CaughtError's namespace).
+template <class A>
+void io(A& a, CaughtError& e) {
+  a(e.message), a(e.input);
+}
+}  // namespace rendulic
+
 namespace rendulic::dem {
 
 bool ProbeOptions::IsValid(std::string* why) const {
@@ -127,25 +136,11 @@ struct ProbeOutcome {
   FabricSplit split;                                    // of d_fabric
 };
 
-// A probe's error as it leaves its task (and, with MPI, its rank): its words, and whether it
-// was bad input.
-struct ProbeError {
-  std::string message;
-  bool input = false;
-};
-template <class A>
-void io(A& a, ProbeError& e) {  // sent with the probe's record (probe_mpi.hpp)
-  a(e.message), a(e.input);
-}
-
 // No exception may leave a parallel region: probes record their errors, the first is thrown
-// after the loop, bad input (a probe rate the engine refuses) again as bad input (exit 2).
-void rethrow_first(const std::vector<ProbeError>& errors, const std::string& method) {
-  for (const ProbeError& e : errors) {
-    if (e.message.empty()) continue;
-    if (e.input) throw InputError(method + " probe: " + e.message);
-    throw std::runtime_error(method + " probe: " + e.message);
-  }
+// after the loop, of its kind (a probe rate the engine refuses stays bad input, exit 2).
+void rethrow_first(const std::vector<CaughtError>& errors, const std::string& method) {
+  for (const CaughtError& e : errors)
+    if (!e.message.empty()) e.rethrow(method + " probe: ");
 }
 
 ProbeOutcome outcome_of(const Eigen::Matrix3d& d_stress, const Eigen::Matrix3d& d_fabric,
@@ -247,7 +242,7 @@ void io(A& a, MinimisationProbe& r) {
 // thread is free: run(q) computes probe q and keeps its record. A stop asked for skips the
 // probes not yet begun (returns true); each probe's error is kept in errors[q].
 template <class Run>
-bool run_probe_tasks(const ProbeOptions& options, int n, std::vector<ProbeError>& errors,
+bool run_probe_tasks(const ProbeOptions& options, int n, std::vector<CaughtError>& errors,
                      Run&& run) {
   std::atomic<bool> stopped{false};
   const int team = task_team(options.threads, static_cast<std::size_t>(n));
@@ -259,10 +254,8 @@ bool run_probe_tasks(const ProbeOptions& options, int n, std::vector<ProbeError>
     }
     try {
       run(q);
-    } catch (const InputError& e) {
-      errors[static_cast<std::size_t>(q)] = {e.what(), true};
-    } catch (const std::exception& e) {
-      errors[static_cast<std::size_t>(q)] = {e.what(), false};
+    } catch (...) {
+      errors[static_cast<std::size_t>(q)] = CaughtError::current();
     }
     if (options.probe_done) options.probe_done();
   }
@@ -282,7 +275,7 @@ bool compute_probes(detail::ProbeTaskScope& scope, const ProbeOptions& options,
   for (int p = 0; p < m; ++p)
     if (share.owns(p)) mine.push_back(p);
   const int n = static_cast<int>(mine.size());
-  std::vector<ProbeError> errors(m), mine_errors(n);
+  std::vector<CaughtError> errors(m), mine_errors(n);
   const bool stopped =
       run_probe_tasks(options, n, mine_errors, [&](int q) { records[mine[q]] = compute(mine[q]); });
   for (int q = 0; q < n; ++q) errors[mine[q]] = std::move(mine_errors[q]);
@@ -654,7 +647,7 @@ std::vector<std::vector<Envelope>> minimisation_envelopes(
   std::vector<std::vector<std::vector<double>>> wall(
       S, std::vector<std::vector<double>>(A, std::vector<double>(D, 0.0)));
   const int n = static_cast<int>(S * A * D);
-  std::vector<ProbeError> errors(static_cast<std::size_t>(n));
+  std::vector<CaughtError> errors(static_cast<std::size_t>(n));
   const bool stopped = run_probe_tasks(options, n, errors, [&](int q) {
     const std::size_t k = static_cast<std::size_t>(q);
     const std::size_t a = A - 1 - k / (S * D), s = k / D % S, d = k % D;

@@ -228,41 +228,36 @@ TEST(FaultsSystem, CalibrateOnAFullDiskFailsInOneLine) {
 
 // --- failures and signals during a run ---------------------------------------------------
 
-TEST(FaultsSystem, AProbeRateTheEngineRefusesIsBadInput) {
-  // The engine's refusal of a strain per step above its bound left the probes' parallel loop
-  // as words only, and ended as an internal error (exit 1).
-  const fs::path out = fresh_dir("probe_rate") / "out";
-  const CliResult r = rendulic::testing::run_rendulic(
-      "run " + tiny_scenario().string() +
-          " --quiet --threads 1 --set run.stages=prepare,isotropic,path,states,probes --set "
-          "probes.methods=dynamic --set probes.amplitudes=[0.02] --set probes.rate=1e308 --out " +
-          out.string(),
-      false);
-  EXPECT_EQ(r.code, 2) << r.err;
-  EXPECT_EQ(rendulic::testing::error_lines(r.err), 1) << r.err;
-  EXPECT_NE(r.err.find("rendulic: dynamic probe: DEM: the imposed strain rate "), std::string::npos)
-      << r.err;
-}
-
-TEST(FaultsSystem, AStateToleranceBelowTheRoundOffFloorIsBadInputNamingItsKey) {
-  // It ran FIRE for a million iterations per state, then ended as an internal error (exit 1),
-  // the kind lost on leaving the states' parallel loop.
-  const fs::path out = fresh_dir("round_off") / "out";
-  const CliResult r = rendulic::testing::run_rendulic(
-      "run " + tiny_scenario().string() +
-          " --quiet --threads 1 --set run.stages=prepare,isotropic,path,states --set "
-          "states.force_tolerance=1e-16 --out " +
-          out.string(),
-      false);
-  EXPECT_EQ(r.code, 2) << r.err;
-  EXPECT_EQ(rendulic::testing::error_lines(r.err), 1) << r.err;
-  EXPECT_NE(r.err.find(": states.force_tolerance = 1e-16 is below the round-off floor of this "
-                       "state's forces (FIRE stalled at "),
-            std::string::npos)
-      << r.err;
-  EXPECT_NE(r.err.find(" or more; completed stages (prepare, isotropic, path) kept in "),
-            std::string::npos)
-      << r.err;
+TEST(FaultsSystem, BadInputMetInsideAParallelLoopStaysBadInput) {
+  // Each ended as an internal error (exit 1), its kind lost on leaving the loop: the states' (a
+  // tolerance below the round-off floor, which also ran FIRE for 10^6 iterations per state)
+  // and the probes' (a probe rate at which one step strains the cell too far).
+  const struct {
+    const char* folder;
+    const char* sets;
+    const char* words;
+    const char* also;
+  } cases[] = {
+      {"round_off", "run.stages=prepare,isotropic,path,states --set states.force_tolerance=1e-16",
+       ": states.force_tolerance = 1e-16 is below the round-off floor of this state's forces "
+       "(FIRE stalled at ",
+       " or more; completed stages (prepare, isotropic, path) kept in "},
+      {"probe_rate",
+       "run.stages=prepare,isotropic,path,states,probes --set probes.methods=dynamic --set "
+       "probes.amplitudes=[0.02] --set probes.rate=1e308",
+       "rendulic: dynamic probe: DEM: the imposed strain rate ",
+       "; completed stages (prepare, isotropic, path, states) kept in "},
+  };
+  for (const auto& c : cases) {
+    const CliResult r = rendulic::testing::run_rendulic(
+        "run " + tiny_scenario().string() + " --quiet --threads 1 --set " + c.sets + " --out " +
+            (fresh_dir(c.folder) / "out").string(),
+        false);
+    EXPECT_EQ(r.code, 2) << r.err;
+    EXPECT_EQ(rendulic::testing::error_lines(r.err), 1) << r.err;
+    EXPECT_NE(r.err.find(c.words), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find(c.also), std::string::npos) << r.err;
+  }
 }
 
 TEST(FaultsSystem, ALateStageFailureKeepsTheCompletedStagesAsPartial) {

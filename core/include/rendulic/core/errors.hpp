@@ -37,4 +37,16 @@ std::string describe_current_exception();
 // std::runtime_error (exit 1).
 [[noreturn]] void rethrow_with_note(const std::string& note);
 
+// An exception caught where none may leave (a parallel loop, an MPI worker's task), to be
+// thrown again after it: its one-line words and whether it was bad input, so that an
+// InputError stays one (exit 2) and anything else is an internal error (exit 1).
+struct CaughtError {
+  std::string message;  // empty: nothing was caught
+  bool input = false;
+  // The exception in flight (call inside a catch block).
+  static CaughtError current();
+  // Throws it again, of its kind, its words after `prefix`.
+  [[noreturn]] void rethrow(const std::string& prefix) const;
+};
+
 }  // namespace rendulic
