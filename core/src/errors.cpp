@@ -143,13 +143,18 @@ void rethrow_with_note(const std::string& note) {
 }
 
 CaughtError CaughtError::current() {
+  CaughtError c;
   try {
     throw;
   } catch (const InputError& e) {
-    return {e.what(), true};
+    c = {e.what(), true};
   } catch (...) {
-    return {describe_current_exception(), false};
+    c = {describe_current_exception(), false};
   }
+  // The empty message means "nothing was caught": an exception without words must not pass
+  // the loop unnoticed.
+  if (c.message.empty()) c.message = "an error without a message";
+  return c;
 }
 
 void CaughtError::rethrow(const std::string& prefix) const {

@@ -47,6 +47,11 @@ TEST(CaughtError, KeepsTheWordsAndTheKindAcrossTheLoop) {
   }
   EXPECT_EQ(caught([] { throw std::logic_error("a bug"); }).message, "a bug");
   EXPECT_EQ(caught([] { throw 42; }).message, "unknown exception");
+  // An exception without words is still an error after the loop, of its kind.
+  const CaughtError wordless = caught([] { throw InputError(""); });
+  EXPECT_EQ(wordless.message, "an error without a message");
+  EXPECT_TRUE(wordless.input);
+  EXPECT_EQ(caught([] { throw std::runtime_error(""); }).message, "an error without a message");
 }
 
 }  // namespace

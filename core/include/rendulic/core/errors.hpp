@@ -41,7 +41,7 @@ std::string describe_current_exception();
 // thrown again after it: its one-line words and whether it was bad input, so that an
 // InputError stays one (exit 2) and anything else is an internal error (exit 1).
 struct CaughtError {
-  std::string message;  // empty: nothing was caught
+  std::string message;  // empty: nothing was caught (current() never leaves it empty)
   bool input = false;
   // The exception in flight (call inside a catch block).
   static CaughtError current();
