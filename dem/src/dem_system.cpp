@@ -15,7 +15,6 @@
 #include <array>
 #include <chrono>
 #include <cmath>
-#include <cstdio>
 #include <cstring>
 #include <limits>
 #include <numbers>
@@ -102,12 +101,9 @@ DemSystem DemSystem::restore(const State& s, const SystemOptions& options) {
       !NeighborList::half_skins_fit(s.particles.radius, skin, s.ref_half_skin)) {
     const double made = 2.0 * *std::min_element(s.ref_half_skin.begin(), s.ref_half_skin.end()) /
                         options.material.r_mean;
-    char text[160];
-    std::snprintf(text, sizeof text,
-                  "DEM state: its neighbour list was made with dem.skin = %.6g, not %.6g: "
-                  "restart it with the skin of the run that saved it",
-                  made, options.skin);
-    throw InputError(text);
+    throw InputError("DEM state: its neighbour list was made with dem.skin = " + decimal_g(made) +
+                     ", not " + decimal_g(options.skin) +
+                     ": restart it with the skin of the run that saved it");
   }
   if (s.ref_half_skin.empty())
     d.list_.build(ref, s.ref_lengths, skin);
@@ -1385,13 +1381,10 @@ void DemSystem::step_impl(const Eigen::Vector3d& D) {
   const double rate =
       D.allFinite() ? D.cwiseAbs().maxCoeff() : std::numeric_limits<double>::quiet_NaN();
   if (const double strain = rate * dt_; !(strain <= kMaxStrainPerStep)) {
-    char text[320];
-    std::snprintf(text, sizeof text,
-                  "DEM: the imposed strain rate %.6g 1/s strains the cell by %.6g per time step "
-                  "(dt = %.6g s), more than %g: lower the rate, or check the material (k, "
-                  "density and r_mean set dt)",
-                  rate, strain, dt_, kMaxStrainPerStep);
-    throw InputError(text);
+    throw InputError("DEM: the imposed strain rate " + decimal_g(rate) +
+                     " 1/s strains the cell by " + decimal_g(strain) + " per time step (dt = " +
+                     decimal_g(dt_) + " s), more than " + decimal_g(kMaxStrainPerStep) +
+                     ": lower the rate, or check the material (k, density and r_mean set dt)");
   }
   if constexpr (!kStress) last_stress_known_ = false;  // sum_stress sets it on a measuring step
   // Step times (wall, without list builds) feed the team controller when it has a choice, and

@@ -11,7 +11,9 @@
 #include <limits>
 #include <numbers>
 
+#include "comma_locale.hpp"
 #include "dem_helpers.hpp"
+#include "input_error.hpp"
 #include "rendulic/core/conventions.hpp"
 #include "rendulic/core/errors.hpp"
 
@@ -238,6 +240,24 @@ TEST(Engine, AStepStrainingTheCellTooFarOrByNaNIsRefusedUntouched) {
   }
   EXPECT_NO_THROW(s.step(Eigen::Vector3d(0.0, 0.999 * limit, 0.0)));
   EXPECT_EQ(s.steps(), before.steps + 1);
+}
+
+// The two refusals' numbers keep their point under a Python session's decimal-comma locale
+// (printf wrote "more than 0,01" and "dem.skin = 0,3").
+using EngineInACommaLocale = CommaLocale;
+using rendulic::testing::input_error;
+TEST_F(EngineInACommaLocale, RefusalsKeepTheirPoint) {
+  SystemOptions o;
+  o.skin = 0.25;
+  DemSystem s = compressed_gas(o);
+  const std::string step = input_error(
+      [&] { s.step(Eigen::Vector3d(0.0, 0.0, 2.0 * DemSystem::kMaxStrainPerStep / s.dt())); });
+  EXPECT_NE(step.find("strains the cell by 0.02 per time step"), std::string::npos) << step;
+  EXPECT_NE(step.find("more than 0.01: lower the rate"), std::string::npos) << step;
+  SystemOptions other = o;
+  other.skin = 0.5;
+  const std::string skin = input_error([&] { DemSystem::restore(s.save(), other); });
+  EXPECT_NE(skin.find("dem.skin = 0.25, not 0.5:"), std::string::npos) << skin;
 }
 
 TEST(Engine, CellTooSmallForOneImageIsRefused) {
