@@ -16,6 +16,7 @@
 #include <sstream>
 
 #include "rendulic/core/conventions.hpp"
+#include "rendulic/core/decimal.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/option_table.hpp"
 #include "rendulic/core/result_paths.hpp"
@@ -56,16 +57,36 @@ std::vector<double> probe_directions(int m, const ProbePlane& plane) {
   return {d.data(), d.data() + d.size()};
 }
 
+namespace {
+
+// The key that sets the probes' rate, with its value: the words of a refusal of that rate.
+std::string rate_key(const ProbeOptions& options) {
+  return options.rate > 0.0 ? "probes.rate = " + decimal_g(options.rate)
+                            : "probes.inertial_number = " + decimal_g(options.inertial_number);
+}
+
+}  // namespace
+
 double probe_rate(const DemSystem& state, const ProbeOptions& options) {
-  if (options.rate > 0.0) return options.rate;
   const Material& mat = state.material();
-  const double p = pressure(state.stress());
-  if (!(p > 0.0)) {
-    throw InputError(
-        "probes: the state has no pressure, so the inertial number cannot set the rate; give "
-        "probes.rate");
+  double rate = options.rate;
+  if (!(rate > 0.0)) {
+    const double p = pressure(state.stress());
+    if (!(p > 0.0)) {
+      throw InputError(
+          "probes: the state has no pressure, so the inertial number cannot set the rate; give "
+          "probes.rate");
+    }
+    rate = options.inertial_number * std::sqrt(p / mat.density) / (2.0 * mat.r_mean);
   }
-  return options.inertial_number * std::sqrt(p / mat.density) / (2.0 * mat.r_mean);
+  // Refused here, naming the key, rather than by the engine's step inside a probe task: only a
+  // probe longer than one step's limit reached that check, as "the imposed strain rate".
+  if (const double strain = rate * state.dt(); !(strain <= DemSystem::kMaxStrainPerStep)) {
+    throw InputError(rate_key(options) + " strains the cell by " + decimal_g(strain) +
+                     " per time step of the probes (dt = " + decimal_g(state.dt()) +
+                     " s), more than " + decimal_g(DemSystem::kMaxStrainPerStep) + ": lower it");
+  }
+  return rate;
 }
 
 namespace {
@@ -365,7 +386,7 @@ Envelope dynamic_envelope_of(const DemSystem& given, double amplitude,
     DynamicProbe r;
     DemSystem sys = state;
     const Eigen::Matrix3d d_eps = plane_strain(plane, theta_deg[p], amplitude);
-    r.load_steps = impose_strain_increment(sys, d_eps.diagonal(), rate);
+    r.load_steps = impose_strain_increment(sys, d_eps.diagonal(), rate, rate_key(options));
     if (fire) {
       RelaxOptions first = options.relax;
       first.kinetic_to_elastic = options.relax_fire_from;

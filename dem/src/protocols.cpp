@@ -608,13 +608,14 @@ std::int64_t step_count(double steps, const std::string& what) {
   return static_cast<std::int64_t>(steps);
 }
 
-std::int64_t impose_strain_increment(DemSystem& sys, const Eigen::Vector3d& d_eps, double rate) {
+std::int64_t impose_strain_increment(DemSystem& sys, const Eigen::Vector3d& d_eps, double rate,
+                                     const std::string& rate_name) {
   if (!(rate > 0 && std::isfinite(rate))) throw InputError("strain increment: rate must be > 0");
   if (!d_eps.allFinite()) throw InputError("strain increment: non-finite component");
   const double largest = d_eps.cwiseAbs().maxCoeff();
   if (largest == 0) return 0;
   const std::int64_t n = std::max<std::int64_t>(
-      1, step_count(std::ceil(largest / (rate * sys.dt())), "strain increment at this rate"));
+      1, step_count(std::ceil(largest / (rate * sys.dt())), "strain increment at " + rate_name));
   // epsilon = -E: a compressive increment is a negative D.
   const Eigen::Vector3d D = -d_eps / (static_cast<double>(n) * sys.dt());
   sys.advance(n, D);

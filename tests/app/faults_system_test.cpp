@@ -231,7 +231,8 @@ TEST(FaultsSystem, CalibrateOnAFullDiskFailsInOneLine) {
 TEST(FaultsSystem, BadInputMetInsideAParallelLoopStaysBadInput) {
   // Each ended as an internal error (exit 1), its kind lost on leaving the loop: the states' (a
   // tolerance below the round-off floor, which also ran FIRE for 10^6 iterations per state)
-  // and the probes' (a probe rate at which one step strains the cell too far).
+  // and the probes' (a probe rate so slow that a probe needs more than 10^15 steps, which also
+  // did not name its key).
   const struct {
     const char* folder;
     const char* sets;
@@ -244,8 +245,8 @@ TEST(FaultsSystem, BadInputMetInsideAParallelLoopStaysBadInput) {
        " or more; completed stages (prepare, isotropic, path) kept in "},
       {"probe_rate",
        "run.stages=prepare,isotropic,path,states,probes --set probes.methods=dynamic --set "
-       "probes.amplitudes=[0.02] --set probes.rate=1e308",
-       "rendulic: dynamic probe: DEM: the imposed strain rate ",
+       "probes.amplitudes=[0.02] --set probes.rate=1e-300",
+       "rendulic: dynamic probe: strain increment at probes.rate = 1e-300 needs ",
        "; completed stages (prepare, isotropic, path, states) kept in "},
   };
   for (const auto& c : cases) {

@@ -13,6 +13,7 @@
 #include <iostream>
 
 #include "input_error.hpp"
+#include "rendulic/core/decimal.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/dem/probe_campaign.hpp"
 
@@ -241,6 +242,26 @@ TEST_F(ProbeCampaign, LargerProbeTimeStepKeepsTheElasticEnvelope) {
   // A time step beyond stability.
   const std::string what = input_error([&] { dynamic_envelope(*state_, amp, theta, opt); });
   EXPECT_NE(what.find("probes.dt_factor"), std::string::npos) << what;
+}
+
+// A probe rate that one time step cannot follow (more than DemSystem::kMaxStrainPerStep of
+// strain per step) is refused before the probes, naming the key; within the limit the probes
+// run. It was met only by the engine's step inside a probe task, as "the imposed strain rate",
+// and only where the probe was larger than the limit.
+TEST_F(ProbeCampaign, AProbeRateBeyondOneStepsLimitIsRefusedNamingTheKey) {
+  ProbeOptions opt;
+  const double limit = DemSystem::kMaxStrainPerStep / state_->dt();
+  opt.rate = 2.0 * limit;
+  const std::string why = input_error([&] { probe_rate(*state_, opt); });
+  EXPECT_EQ(why.rfind("probes.rate = " + decimal_g(opt.rate) +
+                          " strains the cell by 0.02 per time step of the probes",
+                      0),
+            0u)
+      << why;
+  EXPECT_NE(why.find("more than 0.01: lower it"), std::string::npos) << why;
+  opt.rate = 0.5 * limit;
+  EXPECT_EQ(probe_rate(*state_, opt), opt.rate);
+  EXPECT_EQ(dynamic_envelope(*state_, 5e-5, probe_directions(4), opt).strain.size(), 4u);
 }
 
 // probes.relax_method = "fire" (docs/probes.md "Methods"): the dynamic loading, then FIRE at

@@ -221,8 +221,10 @@ std::int64_t step_count(double steps, const std::string& what);
 
 // Imposes the diagonal strain increment d_eps (compression positive, docs/physics.md section 5)
 // in whole steps at constant D, the largest component advancing at `rate` (1/s) at most.
-// Returns the number of steps.
-std::int64_t impose_strain_increment(DemSystem& sys, const Eigen::Vector3d& d_eps, double rate);
+// Returns the number of steps. `rate_name` names the rate where more than kMaxSteps steps are
+// refused (the key that set it).
+std::int64_t impose_strain_increment(DemSystem& sys, const Eigen::Vector3d& d_eps, double rate,
+                                     const std::string& rate_name = "this rate");
 
 // A system from stored positions [N,3], radii [N] and cell lengths (e.g. a /states/<label>
 // of a results file), at rest.
