@@ -197,6 +197,11 @@ std::filesystem::path probe_packing(const ProbeRequest& r) {
     log::warning(packing.origin, ": its densities differ from material.density (",
                  dro.system.material.density,
                  " kg/m^3), which is used (only the dynamic probes depend on it)");
+  // Starred envelopes do not depend on the length unit (k* = k / (2 <r>)), but the rates, the
+  // time step and the stress in Pa are those of metres.
+  if (!packing.units.empty() && packing.units != "si")
+    log::warning(packing.origin, ": its units are '", packing.units,
+                 "'; its lengths are read as metres (rendulic works in SI)");
 
   std::optional<dem::DemSystem> sys;
   if (from_results) sys = restore_checkpoint(ResultsReader(src.file), src.object, dro.system);

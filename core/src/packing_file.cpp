@@ -50,6 +50,16 @@ class Lines {
     if (!line.empty() && line.back() == '\r') line.pop_back();
     return true;
   }
+  // The next line, which the format requires: a file that ends before it is refused, naming
+  // what is missing (the line before it was read as that line).
+  void need(std::string& line, const std::string& what) {
+    if (!next(line)) fail("the file ends before " + what);
+  }
+  // The next line, which must start with `item` (a dump's "ITEM: ..." keyword).
+  void need_item(std::string& line, const char* item) {
+    need(line, std::string("'") + item + "'");
+    if (line.rfind(item, 0) != 0) fail(std::string("expected '") + item + "'");
+  }
   [[noreturn]] void fail(const std::string& why) const {
     throw InputError(file_.string() + ":" + std::to_string(number_) + ": " + printable(why));
   }
@@ -323,16 +333,32 @@ Packing read_lammps_dump(const fs::path& file) {
   // Every snapshot is read (so that a damaged one is reported); the last is kept.
   while (in.next(line)) {
     if (line.empty()) continue;
+    // `dump_modify units yes` and `time yes` put two items before a snapshot's timestep: the
+    // unit style (in the first snapshot only) and the simulated time.
+    const std::vector<std::string> item = split_words(line);
+    if (item.size() == 2 && item[0] == "ITEM:" && (item[1] == "UNITS" || item[1] == "TIME")) {
+      const bool units = item[1] == "UNITS";
+      in.need(line, units ? "the unit style" : "the snapshot's time");
+      const std::vector<std::string> w = split_words(line);
+      if (w.size() != 1)
+        in.fail(units ? "the units line needs one word" : "the time line needs one number");
+      if (units)
+        p.units = w[0];
+      else
+        in.number(w[0], "time");
+      continue;
+    }
     if (line.rfind("ITEM: TIMESTEP", 0) != 0) in.fail("expected 'ITEM: TIMESTEP'");
-    in.next(line);
-    if (!in.next(line) || line.rfind("ITEM: NUMBER OF ATOMS", 0) != 0)
-      in.fail("expected 'ITEM: NUMBER OF ATOMS'");
-    in.next(line);
+    in.need(line, "the snapshot's timestep");
+    const std::vector<std::string> tw = split_words(line);
+    if (tw.size() != 1) in.fail("the timestep line needs one integer");
+    in.integer(tw[0], "timestep");
+    in.need_item(line, "ITEM: NUMBER OF ATOMS");
+    in.need(line, "the atom count");
     const std::vector<std::string> nw = split_words(line);
     const long long n_atoms = nw.empty() ? -1 : in.integer(nw[0], "atom count");
     if (n_atoms <= 0) in.fail("the atom count must be positive");
-    if (!in.next(line) || line.rfind("ITEM: BOX BOUNDS", 0) != 0)
-      in.fail("expected 'ITEM: BOX BOUNDS'");
+    in.need_item(line, "ITEM: BOX BOUNDS");
     const std::vector<std::string> bw = split_words(line.substr(16));
     if (std::find(bw.begin(), bw.end(), "xy") != bw.end())
       in.fail("a triclinic box (xy xz yz); rendulic's cell is orthorhombic");
@@ -342,7 +368,7 @@ Packing read_lammps_dump(const fs::path& file) {
     double lo[3], hi[3];
     const char* axes[3] = {"x", "y", "z"};
     for (int a = 0; a < 3; ++a) {
-      in.next(line);
+      in.need(line, std::string("the box's ") + axes[a] + " bounds");
       const std::vector<std::string> w = split_words(line);
       if (w.size() < 2) in.fail("a box line needs lo and hi");
       lo[a] = in.number(w[0], "box bound");
@@ -350,7 +376,7 @@ Packing read_lammps_dump(const fs::path& file) {
       check_box(in, lo[a], hi[a], axes[a]);
       p.lengths[a] = hi[a] - lo[a];
     }
-    if (!in.next(line) || line.rfind("ITEM: ATOMS", 0) != 0) in.fail("expected 'ITEM: ATOMS'");
+    in.need_item(line, "ITEM: ATOMS");
     const std::vector<std::string> cols = split_words(line.substr(11));
     auto column = [&](std::initializer_list<const char*> names) -> int {
       for (const char* nm : names)

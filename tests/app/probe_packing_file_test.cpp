@@ -7,6 +7,8 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <string>
+#include <vector>
 
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/packing_file.hpp"
@@ -119,6 +121,62 @@ TEST(PackingFile, DumpVelocitiesAreReadByTheirNamesInAnyOrder) {
     ASSERT_EQ(p.velocities.rows(), 2) << cols;
     EXPECT_EQ(p.velocities.row(0), Eigen::RowVector3d(1, 2, 3)) << cols;
     EXPECT_EQ(p.velocities.row(1), Eigen::RowVector3d(4, 5, 6)) << cols;
+  }
+}
+
+// `dump_modify units yes time yes` (LAMMPS writes them so) puts ITEM: UNITS (first snapshot
+// only) and ITEM: TIME before a snapshot's timestep: such a dump was refused as "expected
+// 'ITEM: TIMESTEP'". The unit style is kept for the warning that the numbers are read as SI.
+TEST(PackingFile, DumpUnitsAndTimeItemsAreReadPast) {
+  const std::string snapshot =
+      "ITEM: TIMESTEP\n0\nITEM: NUMBER OF ATOMS\n1\nITEM: BOX BOUNDS pp pp pp\n0 2\n0 2\n0 2\n"
+      "ITEM: ATOMS id radius x y z\n1 0.2 0.5 0.5 0.5\n";
+  const std::string text = "ITEM: UNITS\ncgs\nITEM: TIME\n0\n" + snapshot +
+                           "ITEM: TIME\n1.5000000000000000e-08\n" + snapshot;
+  const Packing p = rendulic::read_lammps_dump(write("units.dump", text));
+  EXPECT_EQ(p.units, "cgs");
+  EXPECT_EQ(p.size(), 1u);
+  EXPECT_TRUE(rendulic::read_lammps_dump(write("plain.dump", snapshot)).units.empty());
+}
+
+// A dump cut anywhere in a snapshot's header says what is missing. The reader went on with an
+// empty line: cut after "ITEM: NUMBER OF ATOMS" it said "the atom count must be positive",
+// inside the box "a box line needs lo and hi", after the timestep "expected 'ITEM: NUMBER OF
+// ATOMS'" on the timestep's line.
+TEST(PackingFile, ADumpCutInItsHeaderSaysWhatIsMissing) {
+  const std::vector<std::string> lines = {"ITEM: TIMESTEP",
+                                          "0",
+                                          "ITEM: NUMBER OF ATOMS",
+                                          "1",
+                                          "ITEM: BOX BOUNDS pp pp pp",
+                                          "0 2",
+                                          "0 2",
+                                          "0 2",
+                                          "ITEM: ATOMS id radius x y z"};
+  const std::vector<std::string> missing = {"the snapshot's timestep", "'ITEM: NUMBER OF ATOMS'",
+                                            "the atom count",          "'ITEM: BOX BOUNDS'",
+                                            "the box's x bounds",      "the box's y bounds",
+                                            "the box's z bounds",      "'ITEM: ATOMS'"};
+  for (std::size_t cut = 1; cut < lines.size(); ++cut) {
+    std::string text;
+    for (std::size_t k = 0; k < cut; ++k) text += lines[k] + "\n";
+    const fs::path f = write("cut.dump", text);
+    const std::string want =
+        f.string() + ":" + std::to_string(cut) + ": the file ends before " + missing[cut - 1];
+    try {
+      rendulic::read_lammps_dump(f);
+      ADD_FAILURE() << "read a dump cut after line " << cut;
+    } catch (const rendulic::InputError& e) {
+      EXPECT_EQ(e.what(), want);
+    }
+  }
+  try {
+    rendulic::read_lammps_dump(write("step.dump", "ITEM: TIMESTEP\nstep\n"));
+    ADD_FAILURE() << "read a timestep that is not an integer";
+  } catch (const rendulic::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(":2: timestep 'step' is not an integer"),
+              std::string::npos)
+        << e.what();
   }
 }
 

@@ -3,8 +3,8 @@
 //    restarts from its checkpoint, with the run's own scenario);
 //  - a state exported to a LAMMPS data file and imported again is the same packing, at rest as
 //    read (nothing moved), and the data file, a LAMMPS dump of it (written by LAMMPS when `lmp`
-//    is installed, and by this test in another column layout) and the results file's state give
-//    the same linear-response envelopes;
+//    is installed, with its units and time items, and by this test in another column layout)
+//    and the results file's state give the same linear-response envelopes;
 //  - a packing away from equilibrium is brought to rest, and the report says what moved;
 //  - bad packing files exit 2 with one line and write nothing, and so does a results file's
 //    state probed with another dem.skin than its list was made with or with a number in its
@@ -159,11 +159,14 @@ TEST(Probe, ExportedDataFileAndDumpsGiveTheSamePackingAndEnvelopes) {
       exported.err.substr(at + say.size(), exported.err.find('\n', at) - at - say.size());
   EXPECT_EQ(sets, " --set material.r_mean=0.001 --set material.w=3") << exported.err;
   write_dump(rendulic::read_lammps_data(data), dump);
-  std::vector<fs::path> inputs = {data, dump};
+  // The same dump declaring another unit style: read as SI, with a warning that says so.
+  std::ofstream(dir / "lj.dump") << "ITEM: UNITS\nlj\n" << std::ifstream(dump).rdbuf();
+  std::vector<fs::path> inputs = {data, dump, dir / "lj.dump"};
   if (rendulic::testing::have_lammps()) {
     std::ofstream(dir / "in.dump") << "units si\natom_style sphere\nboundary p p p\n"
                                       "read_data a.data\nwrite_dump all custom lammps.dump id "
-                                      "diameter x y z modify sort id format float %.17g\n";
+                                      "diameter x y z modify sort id format float %.17g "
+                                      "units yes time yes\n";
     const CliResult l = run_command("cd " + dir.string() + " && lmp -nocite -log none -in in.dump");
     ASSERT_EQ(l.code, 0) << l.out;
     inputs.push_back(dir / "lammps.dump");
@@ -179,6 +182,9 @@ TEST(Probe, ExportedDataFileAndDumpsGiveTheSamePackingAndEnvelopes) {
     const fs::path out = dir / ("from_" + in.filename().string());
     const CliResult r = probe(in.string() + common + sets + " --out " + out.string());
     ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_EQ(r.err.find("its units are 'lj'; its lengths are read as metres") != std::string::npos,
+              in.filename() == "lj.dump")
+        << r.err;
     const ResultsReader got(out / "results.h5");
     // The same packing, taken as it was: at rest as read.
     EXPECT_TRUE(got.read_matrix(gi + ds::kPositions) == stored.read_matrix(ga + ds::kPositions));

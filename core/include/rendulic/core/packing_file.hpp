@@ -23,6 +23,7 @@ struct Packing {
   Eigen::Vector3d lengths{1, 1, 1};  // the periodic box, m
   std::vector<double> densities;     // kg/m^3 per particle (a LAMMPS data file); else empty
   std::string origin;                // what was read: "FILE (LAMMPS data file)", for messages
+  std::string units;                 // the unit style a dump declares (ITEM: UNITS), else empty
 
   std::size_t size() const { return radii.size(); }
   double mean_radius() const;
@@ -49,7 +50,8 @@ Packing read_packing(const PackingSource& source);
 Packing read_lammps_data(const std::filesystem::path& file);
 // LAMMPS `dump custom` text: the last snapshot of the file; columns id, radius or diameter, and
 // x y z, xu yu zu (unwrapped) or xs ys zs (scaled); vx vy vz when present. Periodic boundaries
-// (pp) on every axis.
+// (pp) on every axis. The items of `dump_modify units yes` and `time yes` are read past (the
+// unit style is kept in `units`; the numbers are taken as SI whatever it says).
 Packing read_lammps_dump(const std::filesystem::path& file);
 // A state of a results file (docs/results.md /states/<label>): positions, radii, cell lengths,
 // and the velocities of its checkpoint when it has one.
