@@ -198,6 +198,15 @@ Packing read_lammps_data(const fs::path& file) {
   p.origin = file.string() + " (LAMMPS data file)";
   std::string line;
   in.next(line);  // the title
+  // LAMMPS's write_data (since 2022) names the unit style in it: "LAMMPS data file via
+  // write_data, version ..., timestep = 0, units = si".
+  if (line.rfind("LAMMPS data file via write_data", 0) == 0) {
+    const std::size_t at = line.find(", units = ");
+    if (at != std::string::npos) {
+      const std::vector<std::string> w = split_words(line.substr(at + 10));
+      if (!w.empty()) p.units = w[0];
+    }
+  }
   long long n_atoms = -1;
   double lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
   bool has_box[3] = {false, false, false};

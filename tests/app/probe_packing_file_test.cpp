@@ -50,6 +50,26 @@ TEST(PackingFile, DataFileIsReadRelativeToItsBoxOrderedByIdAndWrapped) {
   EXPECT_NEAR(p.mean_radius(), 0.2, 1e-15);
 }
 
+// LAMMPS's write_data names the unit style in the title since 2022 (Debian 12's of 2021 does
+// not): it is kept for probe's warning about units other than si; another title says nothing.
+TEST(PackingFile, DataFileTitleFromWriteDataGivesItsUnits) {
+  const std::string body =
+      "\n1 atoms\n1 atom types\n\n0 2 xlo xhi\n0 2 ylo yhi\n0 2 zlo zhi\n\n"
+      "Atoms # sphere\n\n1 1 0.4 2000 1 1 1\n";
+  const struct {
+    const char* title;
+    const char* units;
+  } cases[] = {
+      {"LAMMPS data file via write_data, version 2 Aug 2023, timestep = 0, units = cgs", "cgs"},
+      {"LAMMPS data file via write_data, version 29 Sep 2021, timestep = 0", ""},
+      {"my packing, units = lj", ""},
+  };
+  for (const auto& c : cases)
+    EXPECT_EQ(rendulic::read_lammps_data(write("title.data", c.title + ("\n" + body))).units,
+              c.units)
+        << c.title;
+}
+
 // Another engine may write a velocity that underflowed (a subnormal, strtod's ERANGE): it is a
 // number, read as it is; it used to be refused as "not a finite number".
 TEST(PackingFile, ASubnormalNumberIsReadAsItIs) {

@@ -23,7 +23,8 @@ struct Packing {
   Eigen::Vector3d lengths{1, 1, 1};  // the periodic box, m
   std::vector<double> densities;     // kg/m^3 per particle (a LAMMPS data file); else empty
   std::string origin;                // what was read: "FILE (LAMMPS data file)", for messages
-  std::string units;                 // the unit style a dump declares (ITEM: UNITS), else empty
+  std::string units;  // the unit style the file declares (a dump's ITEM: UNITS, write_data's
+                      // title "..., units = si"), else empty
 
   std::size_t size() const { return radii.size(); }
   double mean_radius() const;
@@ -46,7 +47,8 @@ std::string packing_label(const PackingSource& source, const std::string& fallba
 Packing read_packing(const PackingSource& source);
 // LAMMPS `write_data` layout: header (N atoms, the box), then the sections Atoms (# sphere: id
 // type diameter density x y z [ix iy iz]) and optionally Velocities (id vx vy vz [wx wy wz]);
-// other sections (Masses, Pair Coeffs, ...) are skipped.
+// other sections (Masses, Pair Coeffs, ...) are skipped. The unit style write_data names in the
+// title is kept in `units`.
 Packing read_lammps_data(const std::filesystem::path& file);
 // LAMMPS `dump custom` text: the last snapshot of the file; columns id, radius or diameter, and
 // x y z, xu yu zu (unwrapped) or xs ys zs (scaled); vx vy vz when present. Periodic boundaries
