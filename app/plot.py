@@ -121,6 +121,17 @@ def attr(obj, name, default=None):
     return v
 
 
+def finite(g, name):
+    """Dataset `name` of group `g` as a float array. rendulic never stores a value that is not
+    finite in the series and envelope pairs the figures draw, so one is damage: the figure is
+    skipped naming it (matplotlib left such a point out without a word)."""
+    a = np.asarray(g[name][:], dtype=float)
+    bad = np.flatnonzero(~np.isfinite(a.reshape(len(a), -1)).all(axis=1)) if a.size else []
+    if len(bad):
+        raise ValueError(f"{g.name}/{name}: row {bad[0]} is not finite")
+    return a
+
+
 def attr_list(obj, name, sep=","):
     """A list attribute stored either as one `sep`-joined string or as an HDF5 string array
     (files of either form exist: docs/results.md)."""
@@ -289,9 +300,9 @@ def fig_isotropic(f, out, ctx):
         ctx["notes"].append("isotropic branch: no /isotropic")
         return
     g = f["isotropic"]
-    nu = g["volume_fraction"][:]
+    nu = finite(g, "volume_fraction")
+    p = finite(g, "pressure_star")
     fig, ax = plt.subplots(1, 2, figsize=(PAGE_WIDTH, 2.8))
-    p = g["pressure_star"][:]
     e = power_of_ten(p)
     ax[0].plot(nu, p / 10.0 ** e, ".-")
     ax[0].set_xlabel(r"volume fraction $\nu$")
@@ -321,8 +332,8 @@ def fig1_path(f, out, ctx):
         ctx["notes"].append("Fig. 1: no /path")
         return
     g = f["path"]
-    x = -g["eps_dev"][:]
-    s, F = g["stress_star"][:], g["fabric"][:]
+    x = -finite(g, "eps_dev")
+    s, F = finite(g, "stress_star"), finite(g, "fabric")
     fig, ax = plt.subplots(1, 2, figsize=(PAGE_WIDTH, 3.0))
     es = power_of_ten(*(s[:, i, i] for i in range(3)))
     for i, (lab, ls) in enumerate((("xx", "-"), ("yy", "--"), ("zz", ":"))):
@@ -351,7 +362,7 @@ def fig2_strain_circle(f, out, ctx):
         for name, e in g["envelopes"].items():
             if "strain" not in e or not rendulic_plane(e):
                 continue
-            s = np.asarray(e["strain"][:], dtype=float)
+            s = finite(e, "strain")
             n = np.linalg.norm(s, axis=1)
             if not np.all(n > 0):
                 continue
@@ -393,7 +404,7 @@ def fig_envelopes(f, out, ctx, number, kind, quantity):
     key = "stress_star" if quantity == "stress" else "fabric"
     fit_key = "fit_stress" if quantity == "stress" else "fit_fabric"
     sym = "\\sigma^*" if quantity == "stress" else "F"
-    e = power_of_ten(*(g[key][:] for _, _, envs in found for _, g in envs if key in g))
+    e = power_of_ten(*(finite(g, key) for _, _, envs in found for _, g in envs if key in g))
     scale = 10.0 ** e
     fig, axes, leg = panel_grid(len(found))
     ncols = fig.axes[0].get_subplotspec().get_gridspec().ncols
@@ -408,7 +419,7 @@ def fig_envelopes(f, out, ctx, number, kind, quantity):
             g = by_method[method]
             st = METHODS.get(method, dict(marker="x", ms=4, mfc="k", mew=0.8, color="k",
                                           zorder=3, fit_ls="-."))
-            r = g[key][:] / scale
+            r = finite(g, key) / scale
             xs.append(r[:, 0])
             ys.append(r[:, 1])
             ax.plot(r[:, 0], r[:, 1], ls="none", marker=st["marker"], ms=st["ms"],
@@ -428,7 +439,7 @@ def fig_envelopes(f, out, ctx, number, kind, quantity):
                     handles[(method, shape)] = Line2D([], [], ls=st["fit_ls"], color=st["color"],
                                                       lw=0.9, label=f"{method} fit: {shape}")
             if method == primary:
-                th = g["theta_deg"][:] if "theta_deg" in g else None
+                th = finite(g, "theta_deg") if "theta_deg" in g else None
                 families |= mark_special(ax, th, r, annotate=(k == 0))
         rendulic_axes(ax, xs, ys, label)
         rendulic_labels(ax, sym, e, k % ncols == 0)
@@ -664,13 +675,13 @@ def fig_model_envelopes(f, out, ctx, kind, quantity):
     key = "stress_star" if quantity == "stress" else "fabric"
     fit_key = "fit_stress" if quantity == "stress" else "fit_fabric"
     sym = "\\sigma^*" if quantity == "stress" else "F"
-    e = power_of_ten(*(g[key][:] for _, _, (_, g) in panels))
+    e = power_of_ten(*(finite(g, key) for _, _, (_, g) in panels))
     scale = 10.0 ** e
     fig, axes, leg = panel_grid(len(panels))
     ncols = fig.axes[0].get_subplotspec().get_gridspec().ncols
     drawn, no_fabric, handles = set(), set(), {}
     for k, (ax, (eps, label, (name, g))) in enumerate(zip(axes, panels)):
-        r = g[key][:] / scale
+        r = finite(g, key) / scale
         ax.plot(r[:, 0], r[:, 1], "k.", ms=4, zorder=4)
         handles.setdefault("dem", Line2D([], [], ls="none", marker=".", color="k", ms=4,
                                          label=f"DEM ({attr(g, 'method', '?')})"))
@@ -724,9 +735,9 @@ def fig_models_path(f, out, ctx):
         return
     g = f["path"]
     k_star = float(attr(f["material"], "k_star", 1.0)) if "material" in f else 1.0
-    e0 = float(g["eps_dev"][0])
-    x = -g["eps_dev"][:]
-    s, F = g["stress_star"][:], g["fabric"][:]
+    x = -finite(g, "eps_dev")
+    e0 = -x[0]
+    s, F = finite(g, "stress_star"), finite(g, "fabric")
     es = power_of_ten(s[:, 0, 0], s[:, 1, 1])
     fig, ax = plt.subplots(1, 2, figsize=(PAGE_WIDTH, 3.2))
     for i, lab in ((0, "xx"), (1, "yy")):

@@ -508,6 +508,36 @@ TEST(Plot, TwoProcessesDrawTheSameFiguresAsOne) {
   EXPECT_GE(compared, 7);
 }
 
+// rendulic never stores a value that is not finite in the series and envelope pairs the
+// figures draw: one is damage, and its figure is skipped naming the dataset and row, while the
+// others are drawn. Matplotlib left such a point out with a bare "posx and posy should be
+// finite values", exit 0.
+TEST(Plot, AValueThatIsNotFiniteSkipsItsFigureNamingIt) {
+  if (python().empty()) GTEST_SKIP() << "no python3 with matplotlib and h5py";
+  const fs::path dir = rendulic::testing::fresh_dir("app_plot_system/not_finite");
+  const fs::path f = dir / "results.h5";
+  fs::copy_file(tiny_results(), f);
+  const std::string envelope = "/states/a/envelopes/dynamic_0.002/stress_star";
+  const CliResult damage = rendulic::testing::run_command(
+      python() + " -c \"import h5py, numpy as np\nwith h5py.File('" + f.string() +
+      "', 'r+') as h:\n  for name, row in (('/path/stress_star', 3), ('" + envelope +
+      "', 2)):\n    d = h[name]; a = d[...]; a[row] = np.nan; d[...] = a\"");
+  ASSERT_EQ(damage.code, 0) << damage.out;
+  const CliResult r = rendulic::testing::run_rendulic(
+      "plot " + f.string() + " --out " + (dir / "figs").string(), false);
+  EXPECT_EQ(r.code, 0) << r.err;
+  const std::string notes[] = {"skipped: Fig. 1: /path/stress_star: row 3 is not finite",
+                               "skipped: Fig. 5: " + envelope + ": row 2 is not finite",
+                               "skipped: models path: /path/stress_star: row 3 is not finite"};
+  for (const std::string& note : notes)
+    EXPECT_NE(r.err.find(note), std::string::npos) << note << "\n" << r.err;
+  EXPECT_EQ(r.err.find("posx"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "figs" / "fig1_path.png"));
+  EXPECT_FALSE(fs::exists(dir / "figs" / "fig5_plastic_stress.png"));
+  EXPECT_TRUE(fs::exists(dir / "figs" / "fig3_elastic_stress.png"));
+  EXPECT_TRUE(fs::exists(dir / "figs" / "isotropic_branch.png"));
+}
+
 TEST(Plot, AFolderItMadeAndDrewNothingInIsRemovedAgain) {
   // A file without any figure's data, and a script that fails: each left an empty figures
   // folder (and the folders above it that --out named) behind.
