@@ -70,6 +70,47 @@ void DemSystem::init_rotations() {
     inv_inertia_[i] = 2.5 * p_.inv_mass[i] / (p_.radius[i] * p_.radius[i]);
 }
 
+namespace {
+
+// A saved state the engine cannot have made: the finite numbers of a damaged file. A particle
+// beyond its cell by more than the cell's length (the list bins it at the cell's edge: -1e308 m
+// crashed the packing's pair search), one that would cross its own radius in one time step (a
+// velocity of -1e308 m/s ended in an internal error of the list), or a strain rate beyond one
+// step's limit (last_D = -1e308 1/s: a diverged integration). Each is far beyond any state a
+// run saves: the particles move 1e-4 of their radius per step in quick.toml's gas.
+void check_saved_state(const State& s, double dt, double max_strain_per_step) {
+  const Particles& p = s.particles;
+  auto place = [](const char* what, std::size_t i, const std::vector<double>& x, int a,
+                  const Eigen::Vector3d& L) {
+    if (i >= x.size() || (x[i] >= -L[a] && x[i] < 2.0 * L[a])) return;
+    throw InputError(std::string("DEM state: ") + what + " " + std::to_string(i) + " at " +
+                     decimal_g(x[i]) + " m on axis " + "xyz"[a] + " lies beyond its cell [0, " +
+                     decimal_g(L[a]) + ") by more than the cell's length");
+  };
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    for (int a = 0; a < 3; ++a) {
+      place("particle", i, a == 0 ? p.x : a == 1 ? p.y : p.z, a, s.lengths);
+      place("the reference position of particle", i,
+            a == 0   ? s.ref_x
+            : a == 1 ? s.ref_y
+                     : s.ref_z,
+            a, s.ref_lengths);
+    }
+    const double speed = std::hypot(p.vx[i], p.vy[i], p.vz[i]);  // no overflow at 1e308
+    if (!(speed * dt <= p.radius[i]))
+      throw InputError("DEM state: particle " + std::to_string(i) + " moves " +
+                       decimal_g(speed * dt) + " m per time step (|v| = " + decimal_g(speed) +
+                       " m/s, dt = " + decimal_g(dt) + " s), more than its radius " +
+                       decimal_g(p.radius[i]) + " m");
+  }
+  if (const double strain = s.last_D.cwiseAbs().maxCoeff() * dt; !(strain <= max_strain_per_step))
+    throw InputError("DEM state: its last strain rate strains the cell by " + decimal_g(strain) +
+                     " per time step (dt = " + decimal_g(dt) + " s), more than " +
+                     decimal_g(max_strain_per_step));
+}
+
+}  // namespace
+
 DemSystem DemSystem::restore(const State& s, const SystemOptions& options) {
   std::string why;
   if (!options.IsValid(&why)) throw InputError("DEM options: " + why);
@@ -83,6 +124,7 @@ DemSystem DemSystem::restore(const State& s, const SystemOptions& options) {
   d.time_ = s.time;
   d.steps_ = s.steps;
   d.dt_ = time_step(options.material, options.dt_factor);
+  check_saved_state(s, d.dt_, kMaxStrainPerStep);
   d.solid_volume_ = d.p_.total_volume();
   d.stress_scratch_.assign(3 * d.p_.size(), 0.0);
   d.init_rotations();

@@ -74,6 +74,14 @@ void find_pairs_unordered(const PackingData& packing, double skin,
   std::vector<Eigen::Vector3d> wrapped(n);  // h f, f the wrapped fractional coordinates
   for (int p = 0; p < n; ++p) {
     Eigen::Vector3d s = h_inv * packing.positions.row(p).transpose();
+    // A finite position can still be beyond the cell's coordinates (-1e308 m: s = -inf), whose
+    // wrap is NaN and whose bin was out of the table (a crash).
+    if (!s.allFinite()) {
+      std::ostringstream os;
+      os << "packing: particle " << p << " at " << packing.positions.row(p)
+         << " m is too far from the cell to be wrapped into it";
+      throw InputError(os.str());
+    }
     int b[3];
     for (int a = 0; a < 3; ++a) {
       double f = s(a) - std::floor(s(a));

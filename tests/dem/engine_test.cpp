@@ -20,6 +20,8 @@
 namespace rendulic::dem {
 namespace {
 
+using rendulic::testing::input_error;
+
 // Unit tests run on one thread: the build machine is shared, and a spinning second thread
 // only adds noise. Thread independence has its own test below.
 const bool kOneThread = (omp_set_num_threads(1), true);
@@ -242,10 +244,49 @@ TEST(Engine, AStepStrainingTheCellTooFarOrByNaNIsRefusedUntouched) {
   EXPECT_EQ(s.steps(), before.steps + 1);
 }
 
+// A saved state the engine cannot have made (finite numbers of a damaged file) is refused by
+// restore(), naming what: a particle or a reference position beyond its cell by more than the
+// cell's length, a particle that crosses its own radius in one step, a strain rate beyond one
+// step's limit. From a results file they crashed the packing's pair search, or ended in an
+// internal error of the list or a diverged integration. Within the bounds the state restores.
+TEST(Engine, RestoreRefusesAStateTheEngineCannotHaveMade) {
+  SystemOptions o;
+  const State good = compressed_gas(o).save();
+  const double dt = DemSystem::restore(good, o).dt();
+  const double L = good.lengths[0], r = good.particles.radius[3];
+  const struct {
+    void (*damage)(State&, double, double, double);
+    const char* words;
+  } cases[] = {
+      {[](State& s, double, double, double) { s.particles.x[3] = -1e308; },
+       "DEM state: particle 3 at -1e+308 m on axis x lies beyond its cell [0, "},
+      {[](State& s, double, double, double) { s.ref_y[5] = 2.0 * s.ref_lengths[1]; },
+       "DEM state: the reference position of particle 5 at "},
+      {[](State& s, double, double, double) { s.particles.vz[3] = -1e308; },
+       "m per time step (|v| = 1e+308 m/s"},
+      {[](State& s, double, double r, double dt) { s.particles.vx[3] = 1.01 * r / dt; },
+       "more than its radius"},
+      {[](State& s, double, double, double dt) {
+         s.last_D[2] = 1.01 * DemSystem::kMaxStrainPerStep / dt;
+       },
+       "DEM state: its last strain rate strains the cell by 0.0101 per time step"},
+  };
+  for (const auto& c : cases) {
+    State s = good;
+    c.damage(s, L, r, dt);
+    const std::string why = input_error([&] { DemSystem::restore(s, o); });
+    EXPECT_NE(why.find(c.words), std::string::npos) << why;
+  }
+  State edge = good;
+  edge.particles.x[3] = -0.99 * L;
+  edge.particles.vx[3] = 0.99 * r / dt;
+  edge.last_D[2] = 0.99 * DemSystem::kMaxStrainPerStep / dt;
+  EXPECT_NO_THROW(DemSystem::restore(edge, o));
+}
+
 // The two refusals' numbers keep their point under a Python session's decimal-comma locale
 // (printf wrote "more than 0,01" and "dem.skin = 0,3").
 using EngineInACommaLocale = CommaLocale;
-using rendulic::testing::input_error;
 TEST_F(EngineInACommaLocale, RefusalsKeepTheirPoint) {
   SystemOptions o;
   o.skin = 0.25;

@@ -11,6 +11,7 @@
 
 #include <random>
 
+#include "rendulic/core/errors.hpp"
 #include "rendulic/dem/probe_minimise.hpp"
 
 namespace rendulic::dem {
@@ -88,6 +89,24 @@ TEST(FindPairs, EqualsTheSearchOverAllPairsInADiluteCell) {
   p.positions(1, 0) = 0.5 * p.radii(1);
   for (double skin : {0.0, 0.5e-3}) expect_same_pairs(p, skin);
   EXPECT_EQ(find_pairs(p, 0.0).size(), 20u);
+}
+
+// A finite position beyond the range of the cell's coordinates (-1e308 m, a damaged results
+// file: its fractional coordinate is -inf) is refused naming the particle; its bin was out of
+// the table and the search crashed. Far but within range, a position is wrapped as any other.
+TEST(FindPairs, APositionTooFarToWrapIsRefusedNamingTheParticle) {
+  PackingData p = random_packing(30, 20.0, 5);
+  p.positions(7, 1) = -1e308;
+  try {
+    find_pairs(p, 0.0);
+    ADD_FAILURE() << "searched a packing with a particle at -1e308 m";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("packing: particle 7 at "), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("too far from the cell to be wrapped"), std::string::npos)
+        << e.what();
+  }
+  p.positions(7, 1) = -1e300;
+  EXPECT_NO_THROW(find_pairs(p, 0.0));
 }
 
 TEST(FindPairs, EqualsTheSearchOverAllPairsInAShearedCell) {
