@@ -8,6 +8,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "rendulic/core/conventions.hpp"
+#include "rendulic/core/decimal.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/result_paths.hpp"
 
@@ -146,6 +148,29 @@ EnvelopeRecord read_envelope(const ResultsReader& in, const std::string& group) 
   finite_pairs(datasets::kStrain, env.strain);
   finite_pairs(datasets::kStressStar, env.stress_star);
   finite_pairs(datasets::kFabric, env.fabric);
+  // The strain pair of probe i is amplitude (cos t_i, sin t_i) in every plane (docs/probes.md),
+  // to round-off as rendulic writes it (8e-16 of the amplitude at most in the files measured).
+  // A finite pair that is not is damage too: -1e308 there gave a calibration of NaN (exit 0)
+  // and the report's fit an internal error.
+  if (std::isfinite(env.amplitude)) {
+    const bool directions = env.theta_deg.size() == env.strain.size();
+    for (std::size_t i = 0; i < env.strain.size(); ++i) {
+      const double t = directions ? deg_to_rad(env.theta_deg[i]) : 0.0;
+      const double off =
+          directions
+              ? (env.strain[i] - env.amplitude * Eigen::Vector2d(std::cos(t), std::sin(t))).norm()
+              : std::abs(env.strain[i].norm() - env.amplitude);
+      // A direction beyond the doubles in radians (-1e308 deg) has no cosine: off is NaN.
+      if (!(off <= 1e-9 * env.amplitude))
+        throw InputError(
+            where + datasets::kStrain + ": probe " + std::to_string(i) +
+            " is not the probe strain " +
+            (directions ? "@amplitude (cos, sin) of its theta_deg" : "of norm @amplitude") +
+            (std::isfinite(off)
+                 ? " (off by " + decimal_g(off / env.amplitude, 3) + " of the amplitude)"
+                 : " (theta_deg " + decimal_g(env.theta_deg[i]) + " has no finite cosine)"));
+    }
+  }
   return env;
 }
 

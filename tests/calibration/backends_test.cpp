@@ -63,6 +63,21 @@ TEST_F(Backends, FeatureObjective) {
   for (const auto& b : s.blocks) EXPECT_NE(b.kind.find("features"), std::string::npos);
 }
 
+// A probe direction of -1e308 deg (the readers refuse it in a file: envelope_io) has no finite
+// radians, so the predictions and the cost at the start are nan: the fit stops there and says
+// why. Ceres's gradient tolerance, relative to that cost, was nan, and Ceres blamed its own
+// configuration ("Solver::Options::gradient_tolerance = nan").
+TEST_F(Backends, AnObjectiveThatIsNotFiniteAtTheStartSaysSo) {
+  data_.states[0].envelopes[0].theta_deg[5] = -1e308;
+  const CalibrationSummary s = calibrate(data_, options_);
+  EXPECT_FALSE(s.fit.converged) << s.fit.report;
+  EXPECT_NE(s.fit.report.find("the objective at the start point is nan (a datum or a prediction "
+                              "is not finite there)"),
+            std::string::npos)
+      << s.fit.report;
+  EXPECT_EQ(s.fit.report.find("gradient_tolerance"), std::string::npos) << s.fit.report;
+}
+
 TEST_F(Backends, BadOptionsAreInputErrors) {
   options_.free = {"B", "nope"};
   EXPECT_THROW(calibrate(data_, options_), InputError);

@@ -1,6 +1,7 @@
 // Envelopes in the results file (docs/results.md /states/<label>/envelopes/<name>): the
 // datasets and attributes of the contract, and an exact round trip including diagnostics; a
-// stored pair that is not finite (damage: rendulic writes none) is refused naming it.
+// stored pair that is not finite (damage: rendulic writes none), or a strain pair that is not
+// the probe strain, is refused naming it.
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -102,6 +103,50 @@ TEST(EnvelopeIo, APairThatIsNotFiniteIsRefusedNamingItsDatasetAndProbe) {
         EXPECT_EQ(std::string(e.what()),
                   file.string() + ": envelope " + group + "/" + name + ": probe 3 is not finite");
       }
+    }
+  }
+}
+
+// The strain pair of every probe is amplitude (cos t, sin t) (docs/probes.md); a finite pair
+// that is not, or a direction that does not match its pair, is damage and refused naming the
+// probe: -1e308 there gave a calibration of NaN with exit 0, and the report an internal error.
+// Round-off far above rendulic's own (1e-12 of the amplitude) is still read.
+TEST(EnvelopeIo, AStrainPairThatIsNotTheProbeStrainIsRefused) {
+  const std::filesystem::path dir = std::filesystem::path(RENDULIC_TEST_TMP) / "envelope_io";
+  std::filesystem::create_directories(dir);
+  const std::string group = paths::envelope(paths::state("s0"), "dynamic_5e-05");
+  const struct {
+    void (*damage)(Envelope&);
+    const char* says;  // empty: read
+  } cases[] = {
+      {[](Envelope& e) { e.strain[3].x() = -1e308; }, "probe 3 is not the probe strain"},
+      {[](Envelope& e) { e.theta_deg[2] = -1e308; }, "probe 2 is not the probe strain"},
+      {[](Envelope& e) { e.strain[1] *= 1.0 + 1e-6; }, "probe 1 is not the probe strain"},
+      {[](Envelope& e) { e.strain[1] *= 1.0 + 1e-12; }, ""},
+  };
+  for (const auto& c : cases) {
+    Envelope env = sample_envelope();
+    c.damage(env);
+    const std::filesystem::path file = dir / "not_the_probe_strain.h5";
+    {
+      ResultsWriter out(file);
+      write_envelope(out, group, env);
+      out.commit();
+    }
+    const ResultsReader in(file);
+    if (!*c.says) {
+      EXPECT_NO_THROW(read_envelope(in, group));
+      continue;
+    }
+    try {
+      read_envelope(in, group);
+      ADD_FAILURE() << c.says << ": read";
+    } catch (const InputError& e) {
+      EXPECT_EQ(std::string(e.what()).rfind(file.string() + ": envelope " + group + "/strain: " +
+                                                c.says + " @amplitude (cos, sin) of its theta_deg",
+                                            0),
+                0u)
+          << e.what();
     }
   }
 }
