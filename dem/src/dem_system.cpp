@@ -141,8 +141,14 @@ DemSystem DemSystem::restore(const State& s, const SystemOptions& options) {
   // another dem.skin the saved list, and the springs kept per entry, cannot be rebuilt.
   if (!s.ref_half_skin.empty() &&
       !NeighborList::half_skins_fit(s.particles.radius, skin, s.ref_half_skin)) {
-    const double made = 2.0 * *std::min_element(s.ref_half_skin.begin(), s.ref_half_skin.end()) /
-                        options.material.r_mean;
+    const double smallest = *std::min_element(s.ref_half_skin.begin(), s.ref_half_skin.end());
+    const double made = 2.0 * smallest / options.material.r_mean;
+    // Half skins that fit no skin (a damaged file: -1e308 said "made with dem.skin = -inf")
+    // are not a matter of the skin chosen.
+    if (!(made > 0.0) || !NeighborList::half_skins_fit(
+                             s.particles.radius, made * options.material.r_mean, s.ref_half_skin))
+      throw InputError("DEM state: its neighbour list's half skins fit no skin (the smallest is " +
+                       decimal_g(smallest) + " m): a damaged state");
     throw InputError("DEM state: its neighbour list was made with dem.skin = " + decimal_g(made) +
                      ", not " + decimal_g(options.skin) +
                      ": restart it with the skin of the run that saved it");

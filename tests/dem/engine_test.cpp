@@ -247,8 +247,9 @@ TEST(Engine, AStepStrainingTheCellTooFarOrByNaNIsRefusedUntouched) {
 // A saved state the engine cannot have made (finite numbers of a damaged file) is refused by
 // restore(), naming what: a particle or a reference position beyond its cell by more than the
 // cell's length, a particle that crosses its own radius in one step, a strain rate beyond one
-// step's limit. From a results file they crashed the packing's pair search, or ended in an
-// internal error of the list or a diverged integration. Within the bounds the state restores.
+// step's limit, half skins that fit no skin (-1e308 said "made with dem.skin = -inf"). From a
+// results file they crashed the packing's pair search, or ended in an internal error of the list or
+// a diverged integration. Within the bounds the state restores.
 TEST(Engine, RestoreRefusesAStateTheEngineCannotHaveMade) {
   SystemOptions o;
   const State good = compressed_gas(o).save();
@@ -270,6 +271,10 @@ TEST(Engine, RestoreRefusesAStateTheEngineCannotHaveMade) {
          s.last_D[2] = 1.01 * DemSystem::kMaxStrainPerStep / dt;
        },
        "DEM state: its last strain rate strains the cell by 0.0101 per time step"},
+      {[](State& s, double, double, double) { s.ref_half_skin[4] = -1e308; },
+       "DEM state: its neighbour list's half skins fit no skin (the smallest is -1e+308 m)"},
+      {[](State& s, double L, double, double) { s.ref_half_skin[4] = L; },
+       "DEM state: its neighbour list's half skins fit no skin"},
   };
   for (const auto& c : cases) {
     State s = good;
