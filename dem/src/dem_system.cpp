@@ -78,7 +78,7 @@ namespace {
 // velocity of -1e308 m/s ended in an internal error of the list), or a strain rate beyond one
 // step's limit (last_D = -1e308 1/s: a diverged integration). Each is far beyond any state a
 // run saves: the particles move 1e-4 of their radius per step in quick.toml's gas.
-void check_saved_state(const State& s, double dt, double max_strain_per_step) {
+void check_saved_state(const State& s, double dt) {
   const Particles& p = s.particles;
   auto place = [](const char* what, std::size_t i, const std::vector<double>& x, int a,
                   const Eigen::Vector3d& L) {
@@ -103,13 +103,20 @@ void check_saved_state(const State& s, double dt, double max_strain_per_step) {
                        " m/s, dt = " + decimal_g(dt) + " s), more than its radius " +
                        decimal_g(p.radius[i]) + " m");
   }
-  if (const double strain = s.last_D.cwiseAbs().maxCoeff() * dt; !(strain <= max_strain_per_step))
-    throw InputError("DEM state: its last strain rate strains the cell by " + decimal_g(strain) +
-                     " per time step (dt = " + decimal_g(dt) + " s), more than " +
-                     decimal_g(max_strain_per_step));
+  if (const std::string excess =
+          DemSystem::strain_per_step_excess(s.last_D.cwiseAbs().maxCoeff(), dt);
+      !excess.empty())
+    throw InputError("DEM state: its last strain rate " + excess);
 }
 
 }  // namespace
+
+std::string DemSystem::strain_per_step_excess(double rate, double dt) {
+  if (const double strain = rate * dt; !(strain <= kMaxStrainPerStep))
+    return "strains the cell by " + decimal_g(strain) + " per time step (dt = " + decimal_g(dt) +
+           " s), more than " + decimal_g(kMaxStrainPerStep);
+  return {};
+}
 
 DemSystem DemSystem::restore(const State& s, const SystemOptions& options) {
   std::string why;
@@ -124,7 +131,7 @@ DemSystem DemSystem::restore(const State& s, const SystemOptions& options) {
   d.time_ = s.time;
   d.steps_ = s.steps;
   d.dt_ = time_step(options.material, options.dt_factor);
-  check_saved_state(s, d.dt_, kMaxStrainPerStep);
+  check_saved_state(s, d.dt_);
   d.solid_volume_ = d.p_.total_volume();
   d.stress_scratch_.assign(3 * d.p_.size(), 0.0);
   d.init_rotations();
@@ -1428,10 +1435,9 @@ void DemSystem::step_impl(const Eigen::Vector3d& D) {
   // (allFinite first: Eigen's maxCoeff may pass over a NaN that is not in the first lane.)
   const double rate =
       D.allFinite() ? D.cwiseAbs().maxCoeff() : std::numeric_limits<double>::quiet_NaN();
-  if (const double strain = rate * dt_; !(strain <= kMaxStrainPerStep)) {
-    throw InputError("DEM: the imposed strain rate " + decimal_g(rate) +
-                     " 1/s strains the cell by " + decimal_g(strain) + " per time step (dt = " +
-                     decimal_g(dt_) + " s), more than " + decimal_g(kMaxStrainPerStep) +
+  if (!(rate * dt_ <= kMaxStrainPerStep)) {  // the words only when refused: this is every step
+    throw InputError("DEM: the imposed strain rate " + decimal_g(rate) + " 1/s " +
+                     strain_per_step_excess(rate, dt_) +
                      ": lower the rate, or check the material (k, density and r_mean set dt)");
   }
   if constexpr (!kStress) last_stress_known_ = false;  // sum_stress sets it on a measuring step

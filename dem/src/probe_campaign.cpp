@@ -81,11 +81,9 @@ double probe_rate(const DemSystem& state, const ProbeOptions& options) {
   }
   // Refused here, naming the key, rather than by the engine's step inside a probe task: only a
   // probe longer than one step's limit reached that check, as "the imposed strain rate".
-  if (const double strain = rate * state.dt(); !(strain <= DemSystem::kMaxStrainPerStep)) {
-    throw InputError(rate_key(options) + " strains the cell by " + decimal_g(strain) +
-                     " per time step of the probes (dt = " + decimal_g(state.dt()) +
-                     " s), more than " + decimal_g(DemSystem::kMaxStrainPerStep) + ": lower it");
-  }
+  if (const std::string excess = DemSystem::strain_per_step_excess(rate, state.dt());
+      !excess.empty())
+    throw InputError(rate_key(options) + " " + excess + " in the probes: lower it");
   return rate;
 }
 

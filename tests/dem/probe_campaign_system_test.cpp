@@ -254,11 +254,11 @@ TEST_F(ProbeCampaign, AProbeRateBeyondOneStepsLimitIsRefusedNamingTheKey) {
   opt.rate = 2.0 * limit;
   const std::string why = input_error([&] { probe_rate(*state_, opt); });
   EXPECT_EQ(why.rfind("probes.rate = " + decimal_g(opt.rate) +
-                          " strains the cell by 0.02 per time step of the probes",
+                          " strains the cell by 0.02 per time step (dt = " +
+                          decimal_g(state_->dt()) + " s), more than 0.01 in the probes: lower it",
                       0),
             0u)
       << why;
-  EXPECT_NE(why.find("more than 0.01: lower it"), std::string::npos) << why;
   opt.rate = 0.5 * limit;
   EXPECT_EQ(probe_rate(*state_, opt), opt.rate);
   EXPECT_EQ(dynamic_envelope(*state_, 5e-5, probe_directions(4), opt).strain.size(), 4u);

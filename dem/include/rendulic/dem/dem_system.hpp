@@ -105,6 +105,10 @@ class DemSystem {
   // that would strain the cell by more than kMaxStrainPerStep (|D_aa| dt), or a D that is not
   // finite, throws InputError and changes nothing.
   static constexpr double kMaxStrainPerStep = 1e-2;
+  // Empty when a strain rate `rate` (1/s, the largest |D_aa|) strains the cell by at most
+  // kMaxStrainPerStep per step of `dt`; else the words of the refusal, "strains the cell by
+  // 0.02 per time step (dt = ... s), more than 0.01", for the caller to name the rate.
+  static std::string strain_per_step_excess(double rate, double dt);
   void step(const Eigen::Vector3d& D);
   void advance(std::int64_t n, const Eigen::Vector3d& D);
   // One step whose D comes from a cell control. Servo axes use the stress that the last step
