@@ -15,6 +15,7 @@
 #include <numbers>
 #include <numeric>
 #include <sstream>
+#include <string_view>
 
 #include "rendulic/core/comma_list.hpp"
 #include "rendulic/core/decimal.hpp"
@@ -201,9 +202,10 @@ Packing read_lammps_data(const fs::path& file) {
   // LAMMPS's write_data (since 2022) names the unit style in it: "LAMMPS data file via
   // write_data, version ..., timestep = 0, units = si".
   if (line.rfind("LAMMPS data file via write_data", 0) == 0) {
-    const std::size_t at = line.find(", units = ");
+    constexpr std::string_view kUnits = ", units = ";
+    const std::size_t at = line.find(kUnits);
     if (at != std::string::npos) {
-      const std::vector<std::string> w = split_words(line.substr(at + 10));
+      const std::vector<std::string> w = split_words(line.substr(at + kUnits.size()));
       if (!w.empty()) p.units = w[0];
     }
   }

@@ -375,6 +375,7 @@ Envelope dynamic_envelope_of(const DemSystem& given, double amplitude,
   const std::vector<std::pair<int, int>> pairs_before = pairs_of(keys_before);
   const int m = static_cast<int>(theta_deg.size());
   std::vector<DynamicProbe> probes(m);
+  const std::string rate_name = rate_key(options);  // for a refusal inside a probe task
   const bool assemble = compute_probes(scope, options, "dynamic", probes, [&](int p) {
     // The engine's own parallel loops run serially inside a probe (this task's ICV only):
     // its force sums are then the same whatever the campaign's team size, so the envelope
@@ -384,7 +385,7 @@ Envelope dynamic_envelope_of(const DemSystem& given, double amplitude,
     DynamicProbe r;
     DemSystem sys = state;
     const Eigen::Matrix3d d_eps = plane_strain(plane, theta_deg[p], amplitude);
-    r.load_steps = impose_strain_increment(sys, d_eps.diagonal(), rate, rate_key(options));
+    r.load_steps = impose_strain_increment(sys, d_eps.diagonal(), rate, rate_name);
     if (fire) {
       RelaxOptions first = options.relax;
       first.kinetic_to_elastic = options.relax_fire_from;
