@@ -140,7 +140,7 @@ struct PathTask {
 
 struct KernelBase {
   virtual ~KernelBase() = default;
-  virtual bool residuals(const double* z, double* r) const = 0;
+  virtual bool residuals(const double* z, double* r, FailureHint* hint) const = 0;
   virtual ceres::CostFunction* cost_function() const = 0;
   virtual bool envelope(const double* p, const StateData& s, const EnvelopeRecord& probes,
                         bool integrated, EnvelopeRecord* out) const = 0;
@@ -207,13 +207,14 @@ struct Objective::Impl {
   // those failed because a prediction needed more driver substeps than options.step allows
   // (Objective::tally).
   mutable std::atomic<long> evaluations{0}, failed{0}, failed_on_limit{0};
-  // Where the last failed evaluation failed: the part (kPath, or an envelope task's index) and
-  // its probe. Evaluations start there, so that a trial point that fails where the last one
-  // did (the stiff probe of a fit near the substep cap) fails before the other predictions are
-  // integrated. The order changes no value: every probe starts from its state, every part
-  // writes its own residuals (docs/calibration.md "When to stop").
+  // The parts of the residuals: kPath, or an envelope task's index; kNoPart in a FailureHint
+  // that holds none. An evaluation starts where its stream's last one failed (FailureHint),
+  // so that a trial point that fails where the last one did (the stiff probe of a fit near
+  // the substep cap) fails before the other predictions are integrated. The order changes no
+  // value: every probe starts from its state, every part writes its own residuals
+  // (docs/calibration.md "When to stop").
   static constexpr int kPath = -1, kNoPart = -2;
-  mutable std::atomic<int> fail_part{kNoPart}, fail_probe{0};
+  static_assert(FailureHint{}.part == kNoPart);
   // Why the last failed evaluation failed, where the law says (a UMAT's driver: its NaN, its
   // PNEWDT cuts); evaluations run side by side, hence the lock.
   mutable std::mutex failure_mutex;
@@ -222,7 +223,7 @@ struct Objective::Impl {
     std::lock_guard<std::mutex> lock(failure_mutex);
     failure = why;
   }
-  bool count(bool ok, const std::atomic<bool>& on_limit) const {
+  bool count(bool ok, bool on_limit) const {
     ++evaluations;
     if (!ok) ++failed;
     if (!ok && on_limit) ++failed_on_limit;
@@ -246,17 +247,26 @@ class Kernel final : public KernelBase {
  public:
   explicit Kernel(const Objective::Impl* o) : o_(o) {}
 
-  // What the units of one evaluation share: whether a prediction failed on the substep limit,
-  // and where the objective's last failure was, read once so that every unit sees one order.
+  // How one part of an evaluation ended: completed by some unit, or failed in an integration
+  // (at which probe, whether on the substep limit). Neither: stopped by another unit's
+  // failure, or its start state inadmissible.
+  struct PartEnd {
+    std::atomic<bool> done{false}, failed{false}, on_limit{false};
+    std::atomic<int> probe{0};
+  };
+
+  // What the units of one evaluation share: how each part ended, and where the stream's last
+  // failure was (its hint, copied so that every unit sees one order).
   struct EvalContext {
-    std::atomic<bool> on_limit{false};
     // A prediction failed: the evaluation fails whatever the others give, so the units still
     // running stop at their next probe or path increment.
     std::atomic<bool> stop{false};
     int fail_part = Objective::Impl::kNoPart, fail_probe = 0;
-    explicit EvalContext(const Objective::Impl* o)
-        : fail_part(o->fail_part.load(std::memory_order_relaxed)),
-          fail_probe(o->fail_probe.load(std::memory_order_relaxed)) {}
+    int path = 0;               // 1 with a path part (kPath), which comes first in ends
+    std::vector<PartEnd> ends;  // by part + path
+    EvalContext(const FailureHint& hint, int parts, int path_)
+        : fail_part(hint.part), fail_probe(hint.probe), path(path_), ends(parts) {}
+    PartEnd& end(int part) { return ends[static_cast<std::size_t>(part + path)]; }
     // The part of the k-th of `parts` units in evaluation order (kPath, or a task index): the
     // last failure's part first, then the others in their order.
     int part(int k, int parts, int path) const {
@@ -267,16 +277,62 @@ class Kernel final : public KernelBase {
     }
   };
 
-  // Residuals for any scalar: double for values, Jets for the exact Jacobian (integrated
-  // predictions go through the driver with Jets, driver_core.hpp). Ceres's evaluations cut
-  // these into parts that may take a second thread (JetCost below).
+  int path_parts() const { return o_->path_task.active ? 1 : 0; }
+  int parts() const { return path_parts() + static_cast<int>(o_->tasks.size()); }
+  EvalContext context(const FailureHint* hint) const {
+    return EvalContext(hint ? *hint : FailureHint{}, parts(), path_parts());
+  }
+
+  // The residuals' values, part by part in the evaluation's order on the caller's thread,
+  // until one fails. Ceres's evaluations cut these into parts that may take a second thread
+  // (JetCost below).
+  bool eval(const double* z, double* r, EvalContext* ctx) const {
+    for (int k = 0; k < parts(); ++k)
+      if (!run_part<double>(z, r, ctx->part(k, parts(), path_parts()), ctx)) return false;
+    return true;
+  }
+
+  // One part, marked done in ctx if it completes.
   template <typename T>
-  bool eval(const T* z, T* r, EvalContext* ctx) const {
-    const int path = o_->path_task.active ? 1 : 0;
-    const int parts = path + static_cast<int>(o_->tasks.size());
-    for (int k = 0; k < parts; ++k)
-      if (!eval_part<T>(z, r, ctx->part(k, parts, path), ctx)) return false;
-    return all_finite(r, o_->n_residuals);
+  bool run_part(const T* z, T* r, int part, EvalContext* ctx) const {
+    if (!eval_part<T>(z, r, part, ctx)) return false;
+    ctx->end(part).done = true;
+    return true;
+  }
+
+  // Counts an evaluation whose units all completed (`units_ok`) or not. A failed one failed
+  // "on the substep limit" if the first part in the evaluation's order that fails failed
+  // there, and the stream's hint moves to that part. With a helper thread, a later part may
+  // fail first and stop an earlier one before its own end: `again(part, ctx)` runs that part
+  // alone (in the evaluation's own scalar) to its end, so that the verdict is the one of a
+  // single thread, not of which part failed first in time (docs/calibration.md "When to
+  // stop").
+  template <class Again>
+  bool finish(bool units_ok, const double* r, EvalContext* ctx, FailureHint* hint,
+              const Again& again) const {
+    if (units_ok) return o_->count(all_finite(r, o_->n_residuals), false);
+    for (int k = 0; k < parts(); ++k) {
+      const int part = ctx->part(k, parts(), path_parts());
+      const PartEnd& e = ctx->end(part);
+      if (e.done) continue;
+      if (e.failed) return o_->count(false, verdict(e, part, hint));
+      EvalContext alone(FailureHint{ctx->fail_part, ctx->fail_probe}, parts(), path_parts());
+      if (!again(part, &alone)) return o_->count(false, verdict(alone.end(part), part, hint));
+    }
+    return o_->count(false, false);  // not reached: a failed unit leaves its part not done
+  }
+  // finish() for the residuals' values at z.
+  bool finish_values(bool units_ok, const double* z, const double* r, EvalContext* ctx,
+                     FailureHint* hint) const {
+    return finish(units_ok, r, ctx, hint, [&](int part, EvalContext* alone) {
+      std::vector<double> scratch(static_cast<std::size_t>(o_->n_residuals));
+      return run_part<double>(z, scratch.data(), part, alone);
+    });
+  }
+  // A failed part's verdict: whether on the substep limit; the hint moves there.
+  static bool verdict(const PartEnd& e, int part, FailureHint* hint) {
+    if (hint) *hint = {part, e.failed ? e.probe.load() : 0};
+    return e.failed && e.on_limit;
   }
 
   // One part of the residuals: the path's (part -1) or envelope task `part`'s. The parts are
@@ -324,15 +380,19 @@ class Kernel final : public KernelBase {
     return true;
   }
 
-  bool residuals(const double* z, double* r) const override {
-    EvalContext ctx(o_);
-    return o_->count(eval<double>(z, r, &ctx), ctx.on_limit);
+  bool residuals(const double* z, double* r, FailureHint* hint) const override {
+    EvalContext ctx = context(hint);
+    return finish_values(eval(z, r, &ctx), z, r, &ctx, hint);
   }
 
-  // Central differences: each of the 2p + 1 evaluations of a Jacobian counts as one.
+  // Central differences: each of the 2p + 1 evaluations of a Jacobian counts as one. The
+  // functor is the cost function's, one per fit: its hint is the fit's.
   struct NumericFunctor {
     const Kernel* k;
-    bool operator()(double const* const* z, double* r) const { return k->residuals(z[0], r); }
+    mutable FailureHint hint;
+    bool operator()(double const* const* z, double* r) const {
+      return k->residuals(z[0], r, &hint);
+    }
   };
 
   // The exact Jacobian by forward-mode Jets of 4 derivatives: the residuals evaluated once per
@@ -354,40 +414,46 @@ class Kernel final : public KernelBase {
     }
     bool Evaluate(double const* const* z, double* r, double** jac) const override {
       const int n = k_->o_->space.size(), m = k_->o_->n_residuals;
-      const int path = k_->o_->path_task.active ? 1 : 0;
-      const int parts = path + static_cast<int>(k_->o_->tasks.size());
-      EvalContext ctx(k_->o_);
+      const int path = k_->path_parts(), parts = k_->parts();
+      EvalContext ctx = k_->context(&hint_);
       if (jac == nullptr || jac[0] == nullptr) {
         // The values alone, part by part: a trial point of a fit with integrated predictions
         // is tens of milliseconds of substeps, worth the free core as much as a Jacobian is.
-        return k_->o_->count(share_units(parts,
-                                         [&](int u) {
-                                           return k_->eval_part<double>(
-                                               z[0], r, ctx.part(u, parts, path), &ctx);
-                                         }) &&
-                                 all_finite(r, m),
-                             ctx.on_limit);
+        const bool ok = share_units(parts, [&](int u) {
+          return k_->run_part<double>(z[0], r, ctx.part(u, parts, path), &ctx);
+        });
+        return k_->finish_values(ok, z[0], r, &ctx, &hint_);
       }
       using J = ceres::Jet<double, 4>;
       const int passes = (n + 3) / 4;
       std::vector<std::vector<J>> out(static_cast<std::size_t>(passes),
                                       std::vector<J>(static_cast<std::size_t>(m)));
-      // Every pass of a part before the next part: the last failure's part first.
-      const bool ok = share_units(passes * parts, [&](int u) {
-        const int pass = u % passes, part = ctx.part(u / passes, parts, path);
+      const auto seeded = [&](int pass) {
         std::vector<J> in(static_cast<std::size_t>(n));
         for (int i = 0; i < n; ++i) {
           in[i] = J(z[0][i]);
           if (i / 4 == pass) in[i].v[i % 4] = 1.0;
         }
-        return k_->eval_part<J>(in.data(), out[pass].data(), part, &ctx);
+        return in;
+      };
+      // Every pass of a part before the next part: the last failure's part first.
+      const bool ok = share_units(passes * parts, [&](int u) {
+        const int pass = u % passes, part = ctx.part(u / passes, parts, path);
+        const std::vector<J> in = seeded(pass);
+        return k_->run_part<J>(in.data(), out[pass].data(), part, &ctx);
       });
-      if (!ok) return k_->o_->count(false, ctx.on_limit);
+      if (!ok)
+        // A part run again: its first pass (every pass takes the same substeps).
+        return k_->finish(false, r, &ctx, &hint_, [&](int part, EvalContext* alone) {
+          const std::vector<J> in = seeded(0);
+          std::vector<J> scratch(static_cast<std::size_t>(m));
+          return k_->run_part<J>(in.data(), scratch.data(), part, alone);
+        });
       for (int k = 0; k < m; ++k) {
         r[k] = out.back()[k].a;
         for (int j = 0; j < n; ++j) jac[0][k * n + j] = out[j / 4][k].v[j % 4];
       }
-      return k_->o_->count(all_finite(r, m), ctx.on_limit);
+      return k_->finish(true, r, &ctx, &hint_, [](int, EvalContext*) { return true; });
     }
 
    private:
@@ -428,6 +494,8 @@ class Kernel final : public KernelBase {
     }
 
     const Kernel* k_;
+    // This cost function's fit's stream of evaluations (Ceres evaluates one at a time).
+    mutable FailureHint hint_;
   };
 
   ceres::CostFunction* cost_function() const override {
@@ -438,7 +506,7 @@ class Kernel final : public KernelBase {
     // tolerance, so keep that tolerance far below 1e-6 when comparing against these.
     nd.relative_step_size = 1e-6;
     auto* f = new ceres::DynamicNumericDiffCostFunction<NumericFunctor, ceres::CENTRAL>(
-        new NumericFunctor{this}, ceres::TAKE_OWNERSHIP, nd);
+        new NumericFunctor{this, {}}, ceres::TAKE_OWNERSHIP, nd);
     f->AddParameterBlock(n);
     f->SetNumResiduals(o_->n_residuals);
     return f;
@@ -501,14 +569,16 @@ class Kernel final : public KernelBase {
   }
 
   // A failed integration of a fit's evaluation (ctx) at probe `probe` of part `part`: false,
-  // where it failed kept for the next evaluations, and on_limit set if on the substep limit.
+  // the other units stopped, and how the part ended kept for the evaluation's verdict
+  // (finish).
   template <class Result>
-  bool failed(const Result& res, EvalContext* ctx, int part, int probe) const {
+  static bool failed(const Result& res, EvalContext* ctx, int part, int probe) {
     if (!ctx) return false;
     ctx->stop = true;
-    o_->fail_probe.store(probe, std::memory_order_relaxed);
-    o_->fail_part.store(part, std::memory_order_relaxed);
-    if (res.on_substep_limit) ctx->on_limit = true;
+    PartEnd& e = ctx->end(part);
+    e.probe = probe;
+    e.on_limit = res.on_substep_limit;
+    e.failed = true;
     return false;
   }
 
@@ -650,7 +720,8 @@ class UmatKernel final : public KernelBase {
     return all_finite(r, o_->n_residuals);
   }
 
-  bool residuals(const double* z, double* r) const override {
+  // The UMAT's evaluations go part by part on one thread, from the first (no hint).
+  bool residuals(const double* z, double* r, FailureHint*) const override {
     std::atomic<bool> on_limit{false};
     return o_->count(eval(z, r, nullptr, false, &on_limit), on_limit);
   }
@@ -1051,8 +1122,8 @@ bool Objective::predict_path(const std::vector<double>& p, PathData* out) const 
   return impl_->kernel->path(p.data(), out);
 }
 
-bool Objective::residuals(const double* z, double* r) const {
-  return impl_->kernel->residuals(z, r);
+bool Objective::residuals(const double* z, double* r, FailureHint* hint) const {
+  return impl_->kernel->residuals(z, r, hint);
 }
 
 ceres::CostFunction* Objective::make_cost_function() const {

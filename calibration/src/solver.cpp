@@ -57,9 +57,10 @@ bool SolverOptions::IsValid(std::string* why) const {
   return identifiability.IsValid(why);
 }
 
-double objective_cost(const Objective& objective, const std::vector<double>& z) {
+double objective_cost(const Objective& objective, const std::vector<double>& z, FailureHint* hint) {
   std::vector<double> r(objective.num_residuals());
-  if (!objective.residuals(z.data(), r.data())) return std::numeric_limits<double>::infinity();
+  if (!objective.residuals(z.data(), r.data(), hint))
+    return std::numeric_limits<double>::infinity();
   double s = 0.0;
   for (double x : r) s += x * x;
   return 0.5 * s;
@@ -143,10 +144,11 @@ double likelihood_sum(const Objective& obj, const double* r, std::vector<double>
 }
 
 // The cost the back ends minimise: 0.5 |r|^2, or 0.5 sum_b rho_b with the likelihood.
-double cost_of(const Objective& obj, const std::vector<double>& z, bool likelihood) {
-  if (!likelihood) return objective_cost(obj, z);
+double cost_of(const Objective& obj, const std::vector<double>& z, bool likelihood,
+               FailureHint* hint = nullptr) {
+  if (!likelihood) return objective_cost(obj, z, hint);
   std::vector<double> r(obj.num_residuals());
-  if (!obj.residuals(z.data(), r.data())) return std::numeric_limits<double>::infinity();
+  if (!obj.residuals(z.data(), r.data(), hint)) return std::numeric_limits<double>::infinity();
   return 0.5 * likelihood_sum(obj, r.data());
 }
 
@@ -512,6 +514,7 @@ struct NloptContext {
   int evaluations = 0;
   double best = std::numeric_limits<double>::infinity();
   std::vector<double> best_u;
+  FailureHint hint;  // NLopt's points are one stream
   std::vector<double> z_of(const std::vector<double>& u) const {
     std::vector<double> z(u.size());
     for (std::size_t k = 0; k < u.size(); ++k) z[k] = lo[k] + u[k] * (hi[k] - lo[k]);
@@ -522,7 +525,7 @@ struct NloptContext {
 double nlopt_function(const std::vector<double>& u, std::vector<double>&, void* data) {
   auto* c = static_cast<NloptContext*>(data);
   ++c->evaluations;
-  const double f = cost_of(*c->obj, c->z_of(u), c->likelihood);
+  const double f = cost_of(*c->obj, c->z_of(u), c->likelihood, &c->hint);
   if (f < c->best) {
     c->best = f;
     c->best_u = u;
@@ -614,7 +617,7 @@ FitResult solve(const Objective& obj, const std::vector<double>& z0, const Solve
       }
     }
   } else {
-    NloptContext c{&obj, o.likelihood, {}, {}, 0, std::numeric_limits<double>::infinity(), {}};
+    NloptContext c{&obj, o.likelihood, {}, {}, 0, std::numeric_limits<double>::infinity(), {}, {}};
     for (int k = 0; k < p; ++k) {
       c.lo.push_back(sp.z_lower(k));
       c.hi.push_back(sp.z_upper(k));

@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <regex>
 #include <set>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -217,6 +218,38 @@ TEST(Refit, AResultsFileIsFittedAgainInPlace) {
                           ": no envelope to fit (the probes and linear_response stages of a run, "
                           "or `rendulic probe FILE.h5:LABEL`, make them)\n");
   EXPECT_EQ(fs::last_write_time(bare), bare_stamp);
+}
+
+// What a calibration writes does not depend on its threads ("results do not depend on it",
+// docs/calibration.md "Threads"), its tally of evaluations that failed on the substep cap
+// included. The tiny run's elasto-plastic fit has trial points where one part fails on the
+// cap and another fails otherwise: with a helper thread, which of the two failed first in time
+// used to decide the count (136, 132 or 133 of 206 failed evaluations on two threads, 136 on
+// one) and with it the warning's words.
+TEST(Calibrate, WritesTheSameOnOneThreadAndOnTwo) {
+  const fs::path dir = rendulic::testing::fresh_dir("app_output_system/calibrate_threads");
+  fs::copy_file(rendulic::testing::tiny_results(), dir / "results.h5");
+  const auto json = [&](int threads) {
+    const CliResult r = rendulic::testing::run_rendulic(
+        "calibrate --results " + (dir / "results.h5").string() +
+            " --model elastoplastic_fabric --no-write --threads " + std::to_string(threads),
+        /*merge_stderr=*/false);
+    EXPECT_EQ(r.code, 0) << r.err;
+    // Every line but the wall time's.
+    std::vector<std::string> lines;
+    std::istringstream in(r.out);
+    for (std::string line; std::getline(in, line);)
+      if (line.find("\"seconds\":") == std::string::npos) lines.push_back(line);
+    return lines;
+  };
+  const std::vector<std::string> one = json(1);
+  ASSERT_GT(one.size(), 100u);
+  for (int round = 0; round < 3; ++round) {
+    const std::vector<std::string> two = json(2);
+    ASSERT_EQ(two.size(), one.size()) << "round " << round;
+    for (std::size_t k = 0; k < one.size(); ++k)
+      ASSERT_EQ(two[k], one[k]) << "round " << round << ", line " << k + 1;
+  }
 }
 
 }  // namespace

@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <memory>
 
 #include "input_error.hpp"
 #include "rendulic/calibration/calibrate.hpp"
@@ -191,10 +192,11 @@ TEST(DriverLoad, TallyCountsTheEvaluationsThatFailOnTheCap) {
   expect(stiff.tally(), 1, 1, 0);
 }
 
-// After a failed evaluation the objective starts the next ones where it failed (that part
-// first, from that probe on), so that trial points failing there fail at once: the values and
-// the Jacobian at a point that succeeds are the same bits as from an objective that never
-// failed.
+// After a failed evaluation a stream of evaluations (FailureHint: one fit's) starts its next
+// ones where it failed (that part first, from that probe on), so that trial points failing
+// there fail at once: the values and the Jacobian at a point that succeeds are the same bits
+// as from an objective that never failed. The hint is the stream's: an evaluation without one,
+// or through another cost function, starts at the first part.
 TEST(DriverLoad, StartingWhereTheLastEvaluationFailedChangesNoBit) {
   const auto law = law_with("elastoplastic_fabric", testing::kElastoplasticTruth);
   const CalibrationData d = plastic_data(*law);
@@ -215,16 +217,28 @@ TEST(DriverLoad, StartingWhereTheLastEvaluationFailedChangesNoBit) {
   const Objective hinted("elastoplastic_fabric", d, labels, space, oo);
   const std::vector<double> z_stiff = space.to_z(stiff), z = space.to_z(law->parameters());
   std::vector<double> r0(static_cast<std::size_t>(fresh.num_residuals())), r1 = r0;
-  ASSERT_FALSE(hinted.residuals(z_stiff.data(), r1.data()));
+  FailureHint stream;
+  ASSERT_EQ(stream.part, FailureHint{}.part);
+  ASSERT_FALSE(hinted.residuals(z_stiff.data(), r1.data(), &stream));
   ASSERT_EQ(hinted.tally().failed_on_limit, 1);
+  // Not the first part: the next evaluations go in another order.
+  ASSERT_GT(stream.part, 0) << "the failure was not kept, or it was in the first part";
   ASSERT_TRUE(fresh.residuals(z.data(), r0.data()));
-  ASSERT_TRUE(hinted.residuals(z.data(), r1.data()));
+  ASSERT_TRUE(hinted.residuals(z.data(), r1.data(), &stream));
   EXPECT_EQ(r0, r1);
-  Eigen::VectorXd v0, v1;
-  Eigen::MatrixXd J0, J1;
-  ASSERT_FALSE(hinted.jacobian(z_stiff.data(), &v1, &J1));
-  ASSERT_TRUE(fresh.jacobian(z.data(), &v0, &J0));
-  ASSERT_TRUE(hinted.jacobian(z.data(), &v1, &J1));
+  // The Jacobian through one cost function (one fit's stream): its failure kept in it.
+  const std::unique_ptr<ceres::CostFunction> f0(fresh.make_cost_function()),
+      f1(hinted.make_cost_function());
+  const int n = fresh.num_parameters();
+  std::vector<double> v0(r0.size()), v1(r0.size()), J0(r0.size() * n), J1(J0.size());
+  double* j0[1] = {J0.data()};
+  double* j1[1] = {J1.data()};
+  const double* at_stiff[1] = {z_stiff.data()};
+  const double* at[1] = {z.data()};
+  ASSERT_FALSE(f1->Evaluate(at_stiff, v1.data(), j1));
+  ASSERT_EQ(hinted.tally().failed_on_limit, 2);
+  ASSERT_TRUE(f0->Evaluate(at, v0.data(), j0));
+  ASSERT_TRUE(f1->Evaluate(at, v1.data(), j1));
   EXPECT_EQ(v0, v1);
   EXPECT_EQ(J0, J1);
 }

@@ -171,6 +171,17 @@ struct ResidualBlock {
   double noise = 0.0;
 };
 
+// Where a stream of evaluations (one optimiser's run: a Ceres fit, NLopt's points) last failed:
+// the part (-1 the path, k the k-th envelope task; -2 none) and the probe. The stream's next
+// evaluations start there, so that a trial point failing where the last one did fails before
+// the other predictions are integrated. Each stream keeps its own: the order, and with it
+// which failure a failed evaluation reports (EvaluationTally::failed_on_limit), then depends
+// on no other stream's timing (docs/calibration.md "Threads").
+struct FailureHint {
+  int part = -2;
+  int probe = 0;
+};
+
 class Objective {
  public:
   // Throws InputError: unknown law, a state label not in `data`, nothing to fit.
@@ -189,8 +200,10 @@ class Objective {
   bool integrated() const;         // some prediction goes through the driver
 
   // Residuals at working coordinates z; false where the law cannot be evaluated (inadmissible
-  // state, driver failure): back ends treat that as an infinite cost.
-  bool residuals(const double* z, double* r) const;
+  // state, driver failure): back ends treat that as an infinite cost. With `hint`, the
+  // evaluation starts where the hint's stream last failed and updates it; without, it starts
+  // at the first part.
+  bool residuals(const double* z, double* r, FailureHint* hint = nullptr) const;
   // Residuals and the Jacobian dr/dz (Jets or central differences: exact_derivatives()).
   bool jacobian(const double* z, Eigen::VectorXd* r, Eigen::MatrixXd* J) const;
   // A Ceres cost function over the one parameter block z (the caller's problem owns it).

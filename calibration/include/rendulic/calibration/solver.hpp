@@ -110,7 +110,8 @@ FitResult solve(const Objective& objective, const std::vector<double>& z0,
 void likelihood_block_model(double n, double floor2, int m, int p, double* r, double* J);
 
 // 0.5 |r|^2 at z (+inf where the model fails).
-double objective_cost(const Objective& objective, const std::vector<double>& z);
+double objective_cost(const Objective& objective, const std::vector<double>& z,
+                      FailureHint* hint = nullptr);
 
 // Ceres reports a failed evaluation (a law that cannot integrate a trial point) through glog
 // at ERROR level whatever its logging_type says: a raw line on stderr that reads like a
