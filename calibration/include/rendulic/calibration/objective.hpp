@@ -151,8 +151,10 @@ struct DriverLoad {
 // (docs/calibration.md "When to stop").
 struct EvaluationTally {
   long evaluations = 0;
-  long failed = 0;           // the law could not be evaluated (any reason)
-  long failed_on_limit = 0;  // of those, a prediction needed more than step.max_substeps
+  long failed = 0;  // the law could not be evaluated (any reason)
+  // Of those, the ones whose first failing part, in the evaluation's order, needed more than
+  // step.max_substeps (the same on any number of threads).
+  long failed_on_limit = 0;
 };
 
 // One block of the residual vector, for reports and for per-state errors.
