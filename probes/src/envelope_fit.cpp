@@ -22,6 +22,7 @@
 #include <optional>
 #include <random>
 #include <sstream>
+#include <vector>
 
 #include "fit_internal.hpp"
 #include "rendulic/core/conventions.hpp"
@@ -145,10 +146,30 @@ EnvelopeFit fit_envelope(const Envelope& env, const FitOptions& options) {
 
 namespace {
 
+// Refuses points whose sizes span more than the fit can resolve (kMaxSizeSpan): a damaged
+// point, in practice, named with the median it dwarfs.
+void refuse_beyond_span(const std::vector<Eigen::Vector2d>& points) {
+  if (points.size() < 3) return;
+  std::vector<double> size(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i) size[i] = points[i].cwiseAbs().maxCoeff();
+  const std::size_t k =
+      static_cast<std::size_t>(std::max_element(size.begin(), size.end()) - size.begin());
+  std::vector<double> sorted = size;
+  const auto mid = sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2);
+  std::nth_element(sorted.begin(), mid, sorted.end());
+  const double median = *mid;
+  if (!(median > 0.0) || size[k] / fit_detail::kMaxSizeSpan <= median) return;
+  throw InputError("fit: response point " + std::to_string(k) + " reaches " + decimal_g(size[k]) +
+                   ", more than " + decimal_g(fit_detail::kMaxSizeSpan) +
+                   " times the median point's " + decimal_g(median) +
+                   ": the fit cannot resolve the others beside it (a damaged point?)");
+}
+
 EnvelopeFit select_shape(const Envelope& env, const FitOptions& options) {
   std::string why;
   if (!options.IsValid(&why)) throw InputError(why);
   if (!env.IsValid(&why)) throw InputError(why);
+  refuse_beyond_span(env.response);
   // A given scale is in data units: 1e308 went into the fit as inf, 1e-320 failed it and the
   // message blamed the data.
   if (options.loss != FitLoss::kNone && options.loss_scale > 0.0) {

@@ -1,12 +1,14 @@
 // Cost and scale of the envelope fits (docs/fitting.md "Accuracy and cost"): the work of a
 // fit, counted in point operations (EnvelopeFit::point_operations), grows linearly with the
 // number of points, and a fit of data near 1e300, or up to the largest double, is the fit of the
-// same data near 1 scaled; a fit whose numbers would exceed the largest double is refused.
+// same data near 1 scaled; a fit whose numbers would exceed the largest double is refused, and
+// so are points whose sizes span more than the fit can resolve.
 // The distinctness check of the ellipse fit once compared every point with every other:
 // 200,000 points took 51 s against 0.6 s for 20,000.
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <string>
 
 #include "input_error.hpp"
 #include "rendulic/probes/envelope_fit.hpp"
@@ -114,6 +116,35 @@ TEST(FitScaling, AFitBeyondTheLargestDoubleIsRefused) {
   EXPECT_EQ(testing::input_error([&] { fit_envelope(diagonal, opts); }),
             "fit: the fit's numbers exceed the largest double (the points reach 1.7e+308); "
             "rescale the points");
+}
+
+// One point 1e300 among points of about 0.1 (a damaged point): the fit in units of the data's
+// size made the others' residuals square to zero, and `rendulic fit` printed a line through it
+// with rms 0 and standard errors 0, exit 0. Beyond 1e100 times the median point's size it is
+// refused naming the point; within it the fit keeps the others' residuals (rms as computed
+// here, from the residuals).
+TEST(FitScaling, APointBeyondTheFitsSpanIsRefusedNamingIt) {
+  const auto with_point = [](double big) {
+    Envelope env;
+    for (int i = 0; i < 17; ++i) {
+      const double t = 2.0 * M_PI * i / 17.0;
+      env.response.push_back({0.14 * std::cos(t), 0.042 * std::sin(t)});
+    }
+    env.response[2].y() = big;
+    return env;
+  };
+  const std::string why =
+      testing::input_error([&] { fit_envelope(with_point(1e300), FitOptions{}); });
+  EXPECT_NE(why.find("fit: response point 2 reaches 1e+300, more than 1e+100 times the median "
+                     "point's 0.1"),
+            std::string::npos)
+      << why;
+  EXPECT_NE(testing::input_error([&] { fit_envelope(with_point(1e200), FitOptions{}); }), "");
+  const EnvelopeFit f = fit_envelope(with_point(1e90), FitOptions{});
+  double ssr = 0.0;
+  for (double r : f.residuals) ssr += r * r;
+  ASSERT_GT(ssr, 0.0);
+  EXPECT_NEAR(f.rms, std::sqrt(ssr / static_cast<double>(f.residuals.size())), 1e-9 * f.rms);
 }
 
 }  // namespace
