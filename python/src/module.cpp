@@ -412,7 +412,7 @@ auto long_work(const py::object& callback, bool quiet, Work&& work) {
 
 // A dictionary of numbers (law parameters) or of a state's stress, fabric (3x3) and
 // volume_fraction as TOML text, checked afterwards by the same readers as a file.
-std::string toml_of(const py::dict& d) {
+std::string toml_of(const py::dict& d, const char* what) {
   std::ostringstream out;
   for (const auto& [k, v] : d) {
     const std::string key = py::str(k);
@@ -420,7 +420,9 @@ std::string toml_of(const py::dict& d) {
     out << toml_quoted(key) << " = ";
     const py::array_t<double, py::array::c_style | py::array::forcecast> a =
         py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(v);
-    if (!a) throw InputError("'" + key + "' must be a number or an array of numbers");
+    if (!a)
+      throw InputError(std::string(what) + ": '" + key +
+                       "' must be a number or an array of numbers");
     if (a.ndim() == 0) {
       out << toml_number(*a.data());
     } else if (a.ndim() == 2) {
@@ -433,17 +435,25 @@ std::string toml_of(const py::dict& d) {
       }
       out << ']';
     } else {
-      throw InputError("'" + key + "' must be a number or a 3x3 array");
+      // The wrapper's message for values that are not numbers, with the shape given.
+      std::ostringstream msg;
+      msg << what << ": '" << key
+          << "' must be a number or a 3x3 array of numbers, got an array of shape (";
+      for (py::ssize_t i = 0; i < a.ndim(); ++i) msg << (i ? ", " : "") << a.shape(i);
+      msg << (a.ndim() == 1 ? ",)" : ")");
+      throw InputError(msg.str());
     }
     out << '\n';
   }
   return out.str();
 }
 
-// Parameters or a state given as a dictionary (TOML text) or as the path of a TOML file.
-std::pair<std::string, bool> toml_input(const py::object& x, const char* what) {
+// Parameters or a state given as a dictionary (TOML text) or as the path of a TOML file. `what`
+// names the argument, `content` its values as the readers name them (parameters: 'K' ...).
+std::pair<std::string, bool> toml_input(const py::object& x, const char* what,
+                                        const char* content) {
   if (x.is_none()) return {"", false};
-  if (py::isinstance<py::dict>(x)) return {toml_of(x.cast<py::dict>()), true};
+  if (py::isinstance<py::dict>(x)) return {toml_of(x.cast<py::dict>(), content), true};
   if (py::isinstance<py::str>(x) || py::hasattr(x, "__fspath__")) {
     std::string path = py::str(py::module_::import("os").attr("fspath")(x));
     // "" stands for no file inside; params="" took the law's defaults without a word.
@@ -612,8 +622,8 @@ PYBIND11_MODULE(_rendulic, m) {
         app::EnvelopeRequest r;
         r.model = model;
         r.umat = umat;
-        std::tie(r.params, r.params_is_text) = toml_input(params, "params");
-        std::tie(r.state, r.state_is_text) = toml_input(state, "state");
+        std::tie(r.params, r.params_is_text) = toml_input(params, "params", "parameters");
+        std::tie(r.state, r.state_is_text) = toml_input(state, "state", "state");
         if (r.state.empty() && !r.state_is_text) throw InputError("a state is required");
         r.amplitude = amplitude;
         r.directions = count_of(directions, "directions");
@@ -638,8 +648,8 @@ PYBIND11_MODULE(_rendulic, m) {
       [](const std::string& model, const py::object& state, const py::object& params,
          const std::string& kind, double end, long long steps, const std::string& scheme,
          double tolerance, long long substeps, const std::string& umat) {
-        const auto [p, p_text] = toml_input(params, "params");
-        const auto [s, s_text] = toml_input(state, "state");
+        const auto [p, p_text] = toml_input(params, "params", "parameters");
+        const auto [s, s_text] = toml_input(state, "state", "state");
         constexpr std::array<const char*, 2> kinds = {"undrained", "isotropic"};
         if (const std::string why = choice_refusal(kind, kinds); !why.empty())
           throw InputError("kind: " + why);

@@ -97,6 +97,15 @@ def test_model_input_errors_have_the_file_readers_messages():
         rendulic.model_envelope("isotropic_elastic", state, {"K": "stiff"})
     with pytest.raises(rendulic.InputError, match="state: 'fabric' must be a number"):
         rendulic.material_point_path("isotropic_elastic", dict(state, fabric="isotropic"))
+    # An array of numbers of another shape names its key too, with the shape.
+    with pytest.raises(rendulic.InputError,
+                       match=r"^state: 'fabric' must be a number or a 3x3 array of numbers, "
+                             r"got an array of shape \(3,\)$"):
+        rendulic.model_envelope("isotropic_elastic", dict(state, fabric=[1, 2, 3]))
+    with pytest.raises(rendulic.InputError,
+                       match=r"^parameters: 'K' must be a number or a 3x3 array of numbers, "
+                             r"got an array of shape \(2, 2, 2\)$"):
+        rendulic.model_envelope("isotropic_elastic", state, {"K": np.ones((2, 2, 2))})
     with pytest.raises(TypeError, match="state: expected a dict or the path of a TOML file"):
         rendulic.model_envelope("isotropic_elastic", 5)
     with pytest.raises(rendulic.InputError, match="unknown shape"):
