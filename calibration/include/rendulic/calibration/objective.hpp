@@ -178,7 +178,7 @@ struct ResidualBlock {
 // evaluations start there, so that a trial point failing where the last one did fails before
 // the other predictions are integrated. Each stream keeps its own: the order, and with it
 // which failure a failed evaluation reports (EvaluationTally::failed_on_limit), then depends
-// on no other stream's timing (docs/calibration.md "Threads").
+// on no other stream's timing (docs/calibration.md "When to stop").
 struct FailureHint {
   int part = -2;
   int probe = 0;
