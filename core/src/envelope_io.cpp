@@ -7,6 +7,7 @@
 #include <optional>
 #include <sstream>
 #include <stdexcept>
+#include <utility>
 
 #include "rendulic/core/conventions.hpp"
 #include "rendulic/core/decimal.hpp"
@@ -148,6 +149,15 @@ EnvelopeRecord read_envelope(const ResultsReader& in, const std::string& group) 
   finite_pairs(datasets::kStrain, env.strain);
   finite_pairs(datasets::kStressStar, env.stress_star);
   finite_pairs(datasets::kFabric, env.fabric);
+  // Nor a response pair beyond the span an envelope can hold (kMaxEnvelopeSpan): 1e290 in a
+  // stress pair silenced its envelope in a calibration (its block's scale swamped) with exit 0,
+  // and fitted as a line through it with rms 0.
+  for (const auto& [name, pairs] : {std::pair{datasets::kStressStar, &env.stress_star},
+                                    std::pair{datasets::kFabric, &env.fabric}})
+    if (const std::optional<SpanExcess> x = span_excess(*pairs))
+      throw InputError(where + name + ": probe " + std::to_string(x->index) + " reaches " +
+                       decimal_g(x->size) + ", more than " + decimal_g(kMaxEnvelopeSpan) +
+                       " times the median probe's " + decimal_g(x->median) + ": damaged");
   // The strain pair of probe i is amplitude (cos t_i, sin t_i) in every plane (docs/probes.md),
   // to round-off as rendulic writes it (8e-16 of the amplitude at most in the files measured).
   // A finite pair that is not is damage too: -1e308 there gave a calibration of NaN (exit 0)

@@ -27,6 +27,7 @@
 #include "fit_internal.hpp"
 #include "rendulic/core/conventions.hpp"
 #include "rendulic/core/decimal.hpp"
+#include "rendulic/core/envelope_record.hpp"
 #include "rendulic/core/errors.hpp"
 
 namespace rendulic {
@@ -146,22 +147,14 @@ EnvelopeFit fit_envelope(const Envelope& env, const FitOptions& options) {
 
 namespace {
 
-// Refuses points whose sizes span more than the fit can resolve (kMaxSizeSpan): a damaged
-// point, in practice, named with the median it dwarfs.
+// Refuses points whose sizes span more than the fit can resolve (kMaxEnvelopeSpan,
+// envelope_record.hpp): a damaged point, in practice, named with the median it dwarfs.
 void refuse_beyond_span(const std::vector<Eigen::Vector2d>& points) {
-  if (points.size() < 3) return;
-  std::vector<double> size(points.size());
-  for (std::size_t i = 0; i < points.size(); ++i) size[i] = points[i].cwiseAbs().maxCoeff();
-  const std::size_t k =
-      static_cast<std::size_t>(std::max_element(size.begin(), size.end()) - size.begin());
-  std::vector<double> sorted = size;
-  const auto mid = sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2);
-  std::nth_element(sorted.begin(), mid, sorted.end());
-  const double median = *mid;
-  if (!(median > 0.0) || size[k] / fit_detail::kMaxSizeSpan <= median) return;
-  throw InputError("fit: response point " + std::to_string(k) + " reaches " + decimal_g(size[k]) +
-                   ", more than " + decimal_g(fit_detail::kMaxSizeSpan) +
-                   " times the median point's " + decimal_g(median) +
+  const std::optional<SpanExcess> x = span_excess(points);
+  if (!x) return;
+  throw InputError("fit: response point " + std::to_string(x->index) + " reaches " +
+                   decimal_g(x->size) + ", more than " + decimal_g(kMaxEnvelopeSpan) +
+                   " times the median point's " + decimal_g(x->median) +
                    ": the fit cannot resolve the others beside it (a damaged point?)");
 }
 

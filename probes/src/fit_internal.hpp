@@ -86,12 +86,6 @@ Normalized normalize(const std::vector<Eigen::Vector2d>& points);
 constexpr double kMinLossScale = 1e-8;
 constexpr double kMaxLossScale = 1.0 / kMinLossScale;
 
-// The largest ratio of a point's size to the median point's that a fit takes. The fit works in
-// units of the data's size, set by its largest points: beyond about 1e154 the others'
-// residuals square to below the smallest double, and a point of 1e300 among points of 0.14
-// gave a line through it with rms 0 and standard errors 0. Real envelopes span a few decades.
-constexpr double kMaxSizeSpan = 1e100;
-
 // Result of the latent-angle least-squares fit of an ellipse (5 parameters cx, cy, a, b, phi)
 // or a circle (3 parameters cx, cy, r), in normalized units, before folding to a >= b >= 0.
 struct CurveFit {

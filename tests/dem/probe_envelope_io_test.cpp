@@ -1,7 +1,7 @@
 // Envelopes in the results file (docs/results.md /states/<label>/envelopes/<name>): the
 // datasets and attributes of the contract, and an exact round trip including diagnostics; a
-// stored pair that is not finite (damage: rendulic writes none), or a strain pair that is not
-// the probe strain, is refused naming it.
+// stored pair that is not finite (damage: rendulic writes none), a strain pair that is not the
+// probe strain, or a response pair beyond the span an envelope can hold, is refused naming it.
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -146,6 +146,48 @@ TEST(EnvelopeIo, AStrainPairThatIsNotTheProbeStrainIsRefused) {
                                                 c.says + " @amplitude (cos, sin) of its theta_deg",
                                             0),
                 0u)
+          << e.what();
+    }
+  }
+}
+
+// A response pair more than kMaxEnvelopeSpan times the median pair's size is damage too
+// (rendulic's envelopes span a few decades): 1e290 in a stress pair silenced that envelope in a
+// calibration with exit 0. Refused naming the dataset and the probe; a span of 1e90 is read.
+TEST(EnvelopeIo, AResponsePairBeyondTheEnvelopesSpanIsRefused) {
+  const std::filesystem::path dir = std::filesystem::path(RENDULIC_TEST_TMP) / "envelope_io";
+  std::filesystem::create_directories(dir);
+  const std::string group = paths::envelope(paths::state("s0"), "dynamic_5e-05");
+  const struct {
+    void (*damage)(Envelope&);
+    const char* says;  // empty: read
+  } cases[] = {
+      {[](Envelope& e) { e.stress_star[3].y() = 1e290; }, "/stress_star: probe 3 reaches 1e+290"},
+      {[](Envelope& e) { e.fabric[0].x() = -1e200; }, "/fabric: probe 0 reaches 1e+200"},
+      {[](Envelope& e) { e.stress_star[3].y() = 1e90 * e.stress_star[3].norm(); }, ""},
+  };
+  for (const auto& c : cases) {
+    Envelope env = sample_envelope();
+    c.damage(env);
+    const std::filesystem::path file = dir / "beyond_the_span.h5";
+    {
+      ResultsWriter out(file);
+      write_envelope(out, group, env);
+      out.commit();
+    }
+    const ResultsReader in(file);
+    if (!*c.says) {
+      EXPECT_NO_THROW(read_envelope(in, group));
+      continue;
+    }
+    try {
+      read_envelope(in, group);
+      ADD_FAILURE() << c.says << ": read";
+    } catch (const InputError& e) {
+      EXPECT_EQ(std::string(e.what()).rfind(file.string() + ": envelope " + group + c.says, 0), 0u)
+          << e.what();
+      EXPECT_NE(std::string(e.what()).find("more than 1e+100 times the median probe's"),
+                std::string::npos)
           << e.what();
     }
   }

@@ -19,6 +19,7 @@
 #include <Eigen/Dense>
 #include <cstddef>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -76,5 +77,20 @@ struct EnvelopeRecord {
            const Eigen::Matrix3d& d_f, const Eigen::Matrix3d& d_f_volume,
            const Eigen::Matrix3d& d_f_rotation, const Eigen::Matrix3d& d_f_contacts);
 };
+
+// The largest ratio of a pair's size (its larger coordinate) to the median pair's that one
+// envelope's response may span. The envelope fit works in units of the data's size, set by its
+// largest pairs: beyond about 1e154 the others' residuals square to below the smallest double,
+// and a pair of 1e300 among pairs of 0.14 fitted as a line through it with rms 0 and standard
+// errors 0. Real envelopes span a few decades: beyond this, a pair is damage (docs/fitting.md).
+inline constexpr double kMaxEnvelopeSpan = 1e100;
+
+// A pair beyond kMaxEnvelopeSpan times the median pair's size: which, its size and the median.
+struct SpanExcess {
+  std::size_t index = 0;
+  double size = 0.0, median = 0.0;
+};
+// The largest pair of `pairs` if it exceeds the span (3 pairs or more, median above 0).
+std::optional<SpanExcess> span_excess(const std::vector<Eigen::Vector2d>& pairs);
 
 }  // namespace rendulic
