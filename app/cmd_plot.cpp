@@ -6,13 +6,15 @@
 // command line (no temporary file), so `plot` works from any folder. The file is checked to be
 // ours and the output folder to be writable first, and the script reports data it cannot draw
 // in one line (exit 2), so a bad file or folder is the usual one-line exit 2, never a Python
-// traceback. Its process is killed if ours is stopped by a signal.
+// traceback. Its process is stopped if ours is stopped by a signal, SIGKILL included.
 #include <omp.h>
+#include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <cerrno>
 #include <charconv>
+#include <csignal>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -53,6 +55,7 @@ Spawned spawn(const std::vector<std::string>& args, const std::vector<std::strin
   envp.push_back(nullptr);
   int pipefd[2] = {-1, -1};
   if (::pipe(pipefd) != 0) throw std::runtime_error("plot: cannot create a pipe");
+  const pid_t parent = ::getpid();
   const pid_t pid = fork();
   if (pid < 0) {
     ::close(pipefd[0]);
@@ -60,6 +63,11 @@ Spawned spawn(const std::vector<std::string>& args, const std::vector<std::strin
     throw std::runtime_error("plot: cannot start a process");
   }
   if (pid == 0) {
+    // SIGTERM when rendulic dies, whatever kills it: a SIGKILL runs no handler of ours (below,
+    // cleanup), and the script drew on for seconds, putting figures in place after the command
+    // had ended. On SIGTERM the script ends its workers and removes its temporaries.
+    ::prctl(PR_SET_PDEATHSIG, SIGTERM);
+    if (::getppid() != parent) _exit(127);  // rendulic died before the line above
     ::dup2(pipefd[1], STDERR_FILENO);
     ::close(pipefd[0]);
     ::close(pipefd[1]);

@@ -381,11 +381,11 @@ bool running(pid_t pid) {
   return close != std::string::npos && close + 2 < stat.size() && stat[close + 2] != 'Z';
 }
 
-TEST(FaultsSystem, AnInterruptedPlotLeavesNoFigureScriptRunningNorItsFile) {
-  // The figure script was a temporary file under /tmp, and its process went on writing
-  // figures after rendulic was stopped.
+// `rendulic plot` stopped by `sig` while the script draws: the script and its workers end, and
+// no figure's temporary is left.
+void expect_a_stopped_plot_leaves_nothing_running(int sig, const std::string& dir) {
   const fs::path base = base_results();
-  const fs::path d = fresh_dir("signal_plot");
+  const fs::path d = fresh_dir(dir);
   fs::copy_file(base, d / "results.h5");
   // Two drawing processes whatever the cores: with one, the script could finish its figures
   // while the workers are waited for, and the stop would come after the end.
@@ -430,15 +430,36 @@ TEST(FaultsSystem, AnInterruptedPlotLeavesNoFigureScriptRunningNorItsFile) {
         return !workers.empty();
       },
       10);
-  kill(pid, SIGTERM);
+  kill(pid, sig);
+  const auto stopped = fs::file_time_type::clock::now();
   int status = 0;
   waitpid(pid, &status, 0);
   EXPECT_TRUE(WIFSIGNALED(status));
   EXPECT_TRUE(wait_for([&] { return !running(script); }, 30)) << "the figure script runs on";
+  // No figure put in place after the stop: a second leaves the save under way, if any, to end
+  // (the script stops at its next step; its figures take 0.3-1.2 s each to draw).
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(d / "figures", ec))
+    EXPECT_LT(e.last_write_time(), stopped + std::chrono::seconds(1))
+        << e.path() << " was written after the stop";
   // The script ends only after its workers (terminated and joined on its way out).
   for (pid_t w : workers) EXPECT_FALSE(running(w)) << "a figure worker runs on";
   // Nor a figure's temporary: each is saved beside its name and renamed (plot.py save()).
   EXPECT_TRUE(temporaries(d / "figures").empty()) << temporaries(d / "figures").front();
+}
+
+TEST(FaultsSystem, AnInterruptedPlotLeavesNoFigureScriptRunningNorItsFile) {
+  // The figure script was a temporary file under /tmp, and its process went on writing
+  // figures after rendulic was stopped.
+  expect_a_stopped_plot_leaves_nothing_running(SIGTERM, "signal_plot");
+}
+
+TEST(FaultsSystem, AKilledPlotLeavesNoFigureScriptRunning) {
+  // SIGKILL runs no handler of rendulic's: the script drew on for seconds, renaming figures
+  // into the folder after the command had ended (where a later report could already have
+  // written newer ones). It now gets SIGTERM when rendulic dies (PR_SET_PDEATHSIG), and ends
+  // its workers and its temporaries as when rendulic stops it.
+  expect_a_stopped_plot_leaves_nothing_running(SIGKILL, "kill_plot");
 }
 
 TEST(FaultsSystem, TheNextRunTidiesStaleTemporariesAndTheStoredScenarioReplays) {
