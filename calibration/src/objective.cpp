@@ -267,9 +267,10 @@ class Kernel final : public KernelBase {
     EvalContext(const FailureHint& hint, int parts, int path_)
         : fail_part(hint.part), fail_probe(hint.probe), path(path_), ends(parts) {}
     PartEnd& end(int part) { return ends[static_cast<std::size_t>(part + path)]; }
-    // The part of the k-th of `parts` units in evaluation order (kPath, or a task index): the
-    // last failure's part first, then the others in their order.
-    int part(int k, int parts, int path) const {
+    // The part of the k-th unit in evaluation order (kPath, or a task index): the last
+    // failure's part first, then the others in their order.
+    int part(int k) const {
+      const int parts = static_cast<int>(ends.size());
       const int hint = fail_part + path;  // the failed part's place in the natural order
       if (fail_part == Objective::Impl::kNoPart || hint < 0 || hint >= parts) return k - path;
       if (k == 0) return fail_part;
@@ -288,7 +289,7 @@ class Kernel final : public KernelBase {
   // (JetCost below).
   bool eval(const double* z, double* r, EvalContext* ctx) const {
     for (int k = 0; k < parts(); ++k)
-      if (!run_part<double>(z, r, ctx->part(k, parts(), path_parts()), ctx)) return false;
+      if (!run_part<double>(z, r, ctx->part(k), ctx)) return false;
     return true;
   }
 
@@ -312,7 +313,7 @@ class Kernel final : public KernelBase {
               const Again& again) const {
     if (units_ok) return o_->count(all_finite(r, o_->n_residuals), false);
     for (int k = 0; k < parts(); ++k) {
-      const int part = ctx->part(k, parts(), path_parts());
+      const int part = ctx->part(k);
       const PartEnd& e = ctx->end(part);
       if (e.done) continue;
       if (e.failed) return o_->count(false, verdict(e, part, hint));
@@ -414,14 +415,13 @@ class Kernel final : public KernelBase {
     }
     bool Evaluate(double const* const* z, double* r, double** jac) const override {
       const int n = k_->o_->space.size(), m = k_->o_->n_residuals;
-      const int path = k_->path_parts(), parts = k_->parts();
+      const int parts = k_->parts();
       EvalContext ctx = k_->context(&hint_);
       if (jac == nullptr || jac[0] == nullptr) {
         // The values alone, part by part: a trial point of a fit with integrated predictions
         // is tens of milliseconds of substeps, worth the free core as much as a Jacobian is.
-        const bool ok = share_units(parts, [&](int u) {
-          return k_->run_part<double>(z[0], r, ctx.part(u, parts, path), &ctx);
-        });
+        const bool ok = share_units(
+            parts, [&](int u) { return k_->run_part<double>(z[0], r, ctx.part(u), &ctx); });
         return k_->finish_values(ok, z[0], r, &ctx, &hint_);
       }
       using J = ceres::Jet<double, 4>;
@@ -438,7 +438,7 @@ class Kernel final : public KernelBase {
       };
       // Every pass of a part before the next part: the last failure's part first.
       const bool ok = share_units(passes * parts, [&](int u) {
-        const int pass = u % passes, part = ctx.part(u / passes, parts, path);
+        const int pass = u % passes, part = ctx.part(u / passes);
         const std::vector<J> in = seeded(pass);
         return k_->run_part<J>(in.data(), out[pass].data(), part, &ctx);
       });
@@ -453,7 +453,7 @@ class Kernel final : public KernelBase {
         r[k] = out.back()[k].a;
         for (int j = 0; j < n; ++j) jac[0][k * n + j] = out[j / 4][k].v[j % 4];
       }
-      return k_->finish(true, r, &ctx, &hint_, [](int, EvalContext*) { return true; });
+      return k_->o_->count(all_finite(r, m), false);
     }
 
    private:
