@@ -142,6 +142,23 @@ void check_friction(const Scenario& scenario) {
                    "): the energy minimisation models frictionless contacts only, but " + list +
                    "; use the dynamic method or dem.friction = 0");
 }
+
+void check_servo(const Scenario& scenario, const dem::DemRunOptions& o) {
+  // The servo's gain per step is path.servo_gain x dem.dt_factor times the packing's K*
+  // (O(0.1 .. 1)): beyond 2 the explicit servo overshoots more each step, and the rate bound
+  // turns it into a swing between the bounds (docs/dem.md "Paths"). 1 keeps a margin for K*.
+  const bool path = (stage_requested(scenario, "path") || stage_requested(scenario, "pressure")) &&
+                    dem::path_type(o.path.type).mixed();
+  const bool hold = stage_requested(scenario, "isotropic") && o.loading.target_pressure_star > 0;
+  const double step_gain = o.path.servo_gain * o.system.dt_factor;
+  if (!(path || hold) || step_gain <= 1) return;
+  throw InputError("path.servo_gain = " + decimal_g(o.path.servo_gain) + " (" +
+                   scenario.origin("path.servo_gain") +
+                   ") with dem.dt_factor = " + decimal_g(o.system.dt_factor) + " gives the " +
+                   (path ? "path's lateral servo" : "hold at isotropic.pressure_star") +
+                   " a gain of " + decimal_g(step_gain) +
+                   " per step, beyond the explicit limit of 1: lower either");
+}
 }  // namespace
 
 void check_stages_available(const Scenario& scenario) {
@@ -185,6 +202,7 @@ void check_stages_available(const Scenario& scenario) {
   // Cross-key rules of the DEM and probe stages, before the first (possibly long) stage runs.
   const dem::DemRunOptions dem_options = dem::dem_options_from_scenario(scenario);
   check_friction(scenario);
+  check_servo(scenario, dem_options);
   if (stage_requested(scenario, "probes") || stage_requested(scenario, "linear_response") ||
       stage_requested(scenario, "elastic_range"))
     dem::probe_options_from(scenario);

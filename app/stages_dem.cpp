@@ -160,7 +160,7 @@ void stage_isotropic(const Scenario&, ResultsWriter& out, const RunContext& ctx,
   };
   dem::IsotropicLoading iso = dem::load_isotropic(
       sys, o.loading, o.relax, row, [&](const std::string& t) { progress.start_task(t); },
-      progress.fn());
+      progress.fn(), o.path);
   dem::CompressSummary& c = iso.loading;
   const dem::RelaxSummary& r = iso.relax;
   auto& branches = session.branches;

@@ -73,9 +73,11 @@ namespace {
 double smallest_reduced_mass(const Material& m) { return 0.5 * m.sphere_mass(m.r_min()); }
 }  // namespace
 
-double time_step(const Material& m, double factor) {
-  return factor * contact_time(m.contact(), smallest_reduced_mass(m));
+double contact_duration(const Material& m) {
+  return contact_time(m.contact(), smallest_reduced_mass(m));
 }
+
+double time_step(const Material& m, double factor) { return factor * contact_duration(m); }
 
 double stability_limit(const Material& m) {
   constexpr double kMaxContacts = 12.0;  // kissing number: most contacts a smallest sphere has

@@ -69,11 +69,21 @@ bool PathOptions::IsValid(std::string* why) const {
     }
     if (!(largest > 0)) return fail(why, "the path direction must not be zero");
   }
-  if (!servo.IsValid(why)) return false;
+  if (!(servo_gain > 0 && std::isfinite(servo_gain)))
+    return fail(why, "servo gain must be positive");
+  if (!(servo_integral_gain >= 0 && std::isfinite(servo_integral_gain)))
+    return fail(why, "servo integral gain must be >= 0");
   if (!(servo_max_rate_factor >= 1 && std::isfinite(servo_max_rate_factor)))
     return fail(why, "the servo's rate factor must be >= 1");
   if (!(servo_tolerance > 0)) return fail(why, "the servo tolerance must be > 0");
   return true;
+}
+
+ServoOptions PathOptions::servo(const Material& m) const {
+  const double t_c = contact_duration(m);
+  return {.gain = servo_gain / t_c,
+          .integral_gain = servo_integral_gain / (t_c * t_c),
+          .max_rate = servo_max_rate_factor * rate};
 }
 
 namespace {
@@ -481,8 +491,7 @@ PathSummary run_path(DemSystem& sys, const PathOptions& o, const SampleFn& sampl
   // Mixed paths: the lateral axes follow the servo, which reads the stress of the last step
   // (the first one: measured now) and holds the target from the start's mean stress p0.
   CellControl control;
-  control.servo = o.servo;
-  control.servo.max_rate = o.servo_max_rate_factor * o.rate;
+  control.servo = o.servo(sys.material());
   Eigen::Vector3d integral = Eigen::Vector3d::Zero();
   Eigen::Vector3d stress_diag = Eigen::Vector3d::Zero();
   double p0 = 0;

@@ -49,14 +49,14 @@ void use_run_material(DemSystem& sys, const DemRunOptions& o) {
 IsotropicLoading load_isotropic(DemSystem& sys, const CompressOptions& loading,
                                 const RelaxOptions& relax_options, const SampleFn& sample,
                                 const TaskFn& task, const ProgressFn& progress,
-                                const ServoOptions& servo) {
+                                const PathOptions& servo_of) {
   IsotropicLoading out;
   const bool to_pressure = loading.target_pressure_star > 0;
   if (task) task(to_pressure ? "loading to P*" : "loading to nu_max");
   out.loading = compress_isotropic(sys, loading, sample, progress);
   if (to_pressure) {
     if (task) task("relax at P*");
-    ServoOptions s = servo;
+    ServoOptions s = servo_of.servo(sys.material());
     s.max_rate = loading.rate_max;
     out.relax = relax_at_pressure(sys, loading.target_pressure_star * sys.material().k_star(),
                                   relax_options, s, progress);

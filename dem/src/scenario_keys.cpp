@@ -316,20 +316,23 @@ const OptionTable<DemRunOptions>& dem_run_option_table() {
            .min_open = true},
           [](O& o) -> double& { return o.path.eps_dev_max; }},
       Row{{.path = "path.servo_gain",
-           .unit = "1/s",
+           .unit = "1/t_c",
            .help = "Proportional gain of the lateral stress servo of the drained and constant-p "
-                   "paths, D = I + gain (sigma - target) / k* (docs/dem.md 'Paths').",
+                   "paths and of the hold at isotropic.pressure_star, D = I + (gain / t_c) "
+                   "(sigma - target) / k*, in units of the smallest pair's contact time t_c "
+                   "(docs/dem.md 'Paths'); gain x dem.dt_factor above 1 is refused (the "
+                   "servo's explicit limit).",
            .min = 0,
-           .max = 1e9,
+           .max = 100,
            .min_open = true},
-          [](O& o) -> double& { return o.path.servo.gain; }},
+          [](O& o) -> double& { return o.path.servo_gain; }},
       Row{{.path = "path.servo_integral_gain",
-           .unit = "1/s^2",
-           .help = "Integral gain of the lateral servo, dI/dt = gain_i (sigma - target) / k* "
-                   "(0: proportional only, which lags behind the path).",
+           .unit = "1/t_c^2",
+           .help = "Integral gain of the same servo, dI/dt = (gain_i / t_c^2) (sigma - target) "
+                   "/ k* (0: proportional only, which lags behind the path).",
            .min = 0,
-           .max = 1e15},
-          [](O& o) -> double& { return o.path.servo.integral_gain; }},
+           .max = 100},
+          [](O& o) -> double& { return o.path.servo_integral_gain; }},
       Row{{.path = "path.servo_tolerance",
            .unit = "-",
            .help = "Largest relative error of the stress a drained (lateral stresses) or "

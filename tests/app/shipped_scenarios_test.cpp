@@ -5,9 +5,11 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <string>
 
 #include "commands.hpp"
 #include "pipeline.hpp"
+#include "rendulic/core/errors.hpp"
 #include "rendulic/core/scenario.hpp"
 
 namespace rendulic::app {
@@ -27,6 +29,32 @@ TEST(ShippedScenarios, EachParsesAndPassesTheRunsChecks) {
     });
   }
   EXPECT_GE(files, 4);  // quick, paper, pressure, frictional at least
+}
+
+// The cell's servo (docs/dem.md "Paths"): a gain per step, path.servo_gain x dem.dt_factor,
+// above 1 is refused before the first stage, naming both keys and the servo that would use it;
+// a scenario whose stages use no servo is not refused.
+TEST(ServoCheck, AGainBeyondTheExplicitLimitIsRefusedNamingBothKeys) {
+  const auto refusal = [](const std::string& text) -> std::string {
+    try {
+      check_stages_available(Scenario::from_string(text, "s.toml", scenario_schema()));
+    } catch (const InputError& e) {
+      return e.what();
+    }
+    return "";
+  };
+  const std::string drained = "[path]\ntype = \"drained_compression\"\n";
+  EXPECT_EQ(refusal(drained + "servo_gain = 50.0\n"), "");  // 50 x 0.02 = 1: at the limit
+  const std::string path = refusal(drained + "servo_gain = 60.0\n");
+  EXPECT_NE(path.find("path.servo_gain = 60 (s.toml:3)"), std::string::npos) << path;
+  EXPECT_NE(path.find("dem.dt_factor = 0.02"), std::string::npos) << path;
+  EXPECT_NE(path.find("lateral servo a gain of 1.2 per step"), std::string::npos) << path;
+  const std::string hold = refusal(
+      "[isotropic]\npressure_star = 1e-3\n[dem]\ndt_factor = 0.1\n[path]\nservo_gain = 15.0\n");
+  EXPECT_NE(hold.find("hold at isotropic.pressure_star a gain of 1.5 per step"), std::string::npos)
+      << hold;
+  // Neither a mixed path nor a pressure target: no servo runs.
+  EXPECT_EQ(refusal("[path]\nservo_gain = 60.0\n"), "");
 }
 
 }  // namespace

@@ -283,8 +283,8 @@ TEST(Paths, AProportionalServoLagsAndTheRunSaysSo) {
   DemSystem sys = jammed(0.72);
   PathOptions o = short_path("drained_compression", 2e-2);
   o.rate = 400.0;
-  o.servo.integral_gain = 0.0;
-  o.servo.gain = 1e4;
+  o.servo_integral_gain = 0.0;
+  o.servo_gain = 2e-3;  // x 1/t_c: ~1e4 1/s on this material
   const PathSummary p = run_path(sys, o);
   EXPECT_FALSE(p.servo_held);
   EXPECT_GT(p.servo_error, o.servo_tolerance);
@@ -309,8 +309,8 @@ TEST(Paths, LoadingToAPressureStopsThereAndTheRelaxationHoldsIt) {
   RelaxOptions r;
   r.kinetic_to_elastic = 1e-5;
   r.time_cap = 2e-3;
-  const RelaxSummary held =
-      relax_at_pressure(sys, o.target_pressure_star * k_star, r, PathOptions{}.servo);
+  const RelaxSummary held = relax_at_pressure(sys, o.target_pressure_star * k_star, r,
+                                              PathOptions{}.servo(sys.material()));
   EXPECT_TRUE(held.converged);
   EXPECT_NEAR(sys.stress().trace() / 3.0 / k_star, o.target_pressure_star,
               kPressureHold * o.target_pressure_star);

@@ -60,7 +60,7 @@ TEST(RunScenario, EveryKeyReachesItsMember) {
       "rate_min = 60.0\npressure_star = 0.02\nfriction_factor = 0.25\n"
       "[pressure]\nvolume_fractions = [0.7]\n"
       "[path]\nrate = 300.0\neps_dev_max = 0.1\nsamples = 50\ntype = \"proportional\"\n"
-      "direction = [1.0, 0.0, -1.0]\nservo_gain = 1e5\nservo_integral_gain = 1e9\n"
+      "direction = [1.0, 0.0, -1.0]\nservo_gain = 1.5\nservo_integral_gain = 0.25\n"
       "servo_tolerance = 0.05\ninertial_number = 2e-4\nrate_min = 7.0\n"
       "[states]\neps_dev = [0.01, 0.05]\nlabels = [\"p\", \"q\"]\nkinetic_to_elastic = 1e-7\n"
       "time_cap = 1e-3\nforce_tolerance = 1e-8\n",
@@ -105,8 +105,8 @@ TEST(RunScenario, EveryKeyReachesItsMember) {
   EXPECT_EQ(o.path.snapshot_eps_dev, (std::vector<double>{0.01, 0.05}));
   EXPECT_EQ(o.path.type, "proportional");
   EXPECT_EQ(o.path.direction, (std::vector<double>{1.0, 0.0, -1.0}));
-  EXPECT_EQ(o.path.servo.gain, 1e5);
-  EXPECT_EQ(o.path.servo.integral_gain, 1e9);
+  EXPECT_EQ(o.path.servo_gain, 1.5);
+  EXPECT_EQ(o.path.servo_integral_gain, 0.25);
   EXPECT_EQ(o.path.servo_tolerance, 0.05);
   EXPECT_EQ(o.loading.target_pressure_star, 0.02);
   EXPECT_EQ(o.loading_friction_factor, 0.25);

@@ -200,6 +200,9 @@ double restitution(const NormalContact& c, double m_reduced);
 // tangential damping is x_gamma_t times the normal one, so x_gamma_t = gamma_t / gamma.
 std::string lammps_pair_lines(const Material& m);
 
+// t_c of the two smallest particles: the unit of dem.dt_factor and of the servo's gains
+// (docs/physics.md section 1, docs/dem.md "Paths").
+double contact_duration(const Material& m);
 // Time step: dt = factor * t_c of the two smallest particles (docs/physics.md section 1).
 double time_step(const Material& m, double factor);
 // A sufficient bound for the stability of the explicit scheme on any packing of this

@@ -169,14 +169,22 @@ struct PathOptions {
   // largest relative error of what the path holds (drained: |sigma_yy - p0| and |sigma_zz - p0|;
   // constant p: |p - p0|; over p0) at a sample after the first tenth of the path; a larger one
   // is reported (PathSummary::servo_error).
-  // The gains make the servo critically damped for K* ~ 0.45 (the affine stiffness of the
-  // states of this mission) with the closed-loop rate gain K* ~ 1.4e6 1/s: thousands of times
-  // the path's rate, yet gain K* dt ~ 1e-2 per step, far inside the explicit limit of 2 (the
-  // cell's strain reaches the stress at once, through the affine remap).
-  ServoOptions servo{.gain = 3e6, .integral_gain = 1e12};
+  // The gains are in units of the contact duration t_c (contact_duration): gain x t_c and
+  // integral_gain x t_c^2, so that the servo acts alike in any units and on any material's
+  // time scale (an absolute gain in 1/s that suits one material's step is beyond the explicit
+  // limit on a softer or heavier one). They make the servo critically damped for K* ~ 0.45
+  // (the affine stiffness of the states of this mission) with the closed-loop rate gain
+  // K* gain ~ 0.31 / t_c (1.3e6 1/s on the seed's material): thousands of times the path's
+  // rate, yet K* gain dt = 0.31 dem.dt_factor ~ 6e-3 per step, far inside the explicit limit
+  // of 2 (the cell's strain reaches the stress at once, through the affine remap).
+  double servo_gain = 0.68;            // x 1/t_c
+  double servo_integral_gain = 0.052;  // x 1/t_c^2; 0: proportional only
   double servo_max_rate_factor = 2.0;
   double servo_tolerance = 0.02;
   bool IsValid(std::string* why) const;
+  // The servo in SI units for a packing of material m, its rate bound servo_max_rate_factor x
+  // rate.
+  ServoOptions servo(const Material& m) const;
 };
 struct PathSummary {
   double time = 0;

@@ -42,10 +42,6 @@ struct DemRunOptions {
   RestOptions state_rest{.relax = {.kinetic_to_elastic = 1e-6, .time_cap = 2e-3}};
 };
 
-// The servo that holds the pressure of a loading to a pressure: the paths' lateral servo
-// (PathOptions{}.servo, the same reasoning) with the loading's largest rate as its bound.
-inline const ServoOptions kPressureServo = PathOptions{}.servo;
-
 // The system options of the preparation and the isotropic loading: the run's, with the friction
 // mu x loading_friction_factor and the rolling friction mu_r x the same (docs/dem.md "Dense
 // frictional packings": a packing loaded with less friction jams denser).
@@ -80,10 +76,12 @@ struct IsotropicLoading {
 };
 // The isotropic loading of `sys` to loading.target_nu, then its relaxation ("loading to nu_max",
 // "relax at nu_max"); with loading.target_pressure_star > 0 the loading to that pressure and a
-// relaxation holding it (relax_at_pressure, with `servo`).
+// relaxation holding it (relax_at_pressure) with the paths' lateral servo, `servo_of`'s gains
+// (path.servo_gain, path.servo_integral_gain: the same reasoning) and the loading's largest
+// rate as its bound.
 IsotropicLoading load_isotropic(DemSystem& sys, const CompressOptions& loading,
                                 const RelaxOptions& relax, const SampleFn& sample = {},
                                 const TaskFn& task = {}, const ProgressFn& progress = {},
-                                const ServoOptions& servo = kPressureServo);
+                                const PathOptions& servo_of = {});
 
 }  // namespace rendulic::dem
