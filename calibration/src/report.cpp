@@ -159,10 +159,13 @@ void write_calibration(ResultsWriter& out, const CalibrationSummary& s) {
   out.attr(g, "undetermined", s.undetermined);
   // The yardstick (selection.hpp): one entry per block, and its summaries.
   {
-    std::vector<std::string> ids;
+    std::vector<std::string> ids, scale_units;
     std::vector<double> misfit, noise, scale, comps, held;
     for (const auto& b : s.score.blocks) {
       ids.push_back(b.id);
+      // A stress block's scale is a stress, a fabric block's a number: one unit per entry, as
+      // params carries (docs/results.md "Units").
+      scale_units.push_back(is_stress_kind(b.kind) ? "Pa" : "1");
       misfit.push_back(b.misfit);
       noise.push_back(b.noise);
       scale.push_back(b.scale);
@@ -173,6 +176,7 @@ void write_calibration(ResultsWriter& out, const CalibrationSummary& s) {
     out.attr(g, "yardstick_misfit", misfit);
     out.attr(g, "yardstick_noise", noise);
     out.attr(g, "yardstick_scale", scale);
+    out.attr(g, "yardstick_scale_units", scale_units);
     out.attr(g, "yardstick_components", comps);
     out.attr(g, "yardstick_held_out", held);
     const SetScore all = score_set(s.score, BlockSet::kAll);

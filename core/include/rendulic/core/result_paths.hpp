@@ -264,6 +264,7 @@ inline constexpr Entry kAttributes[] = {
     {"elastic_major", "Pa"},
     {"elastic_minor", "Pa"},
     {"minimise_max_displacement", "m"},
+    {"min_overlap", "m"},
     {"sliding_dissipation", "J"},
     {"B", "Pa"},
     {"G", "Pa"},
@@ -274,6 +275,7 @@ inline constexpr Entry kAttributes[] = {
     {"inclination_deg", "deg"},
     {"inclination_deg_stderr", "deg"},
     {"plastic_inclination_deg", "deg"},
+    {"plastic_shift", "Pa"},
 };
 
 // Per-probe and per-state counters: stored as integers, without a unit.
