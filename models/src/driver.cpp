@@ -70,7 +70,7 @@ StepResult integrate_fixed(const Law& law, const MaterialState& start, const Eig
     if (second) {
       r2 = law.rate(y1, de);
       ++res.rate_evaluations;
-      if (finite(r2)) err = error_estimate(r1, r2, y1, o.stress_floor);
+      if (finite(r2)) err = error_estimate(r1, r2, y1, y.stress.norm());
     }
     if (heun) {
       if (!second || !finite(r2)) {
@@ -127,7 +127,6 @@ bool StepOptions::IsValid(std::string* why) const {
     return fail("fixed_substeps (" + std::to_string(fixed_substeps) +
                 ") must not exceed max_substeps (" + std::to_string(max_substeps) + ")");
   if (!(min_fraction > 0.0 && min_fraction < 1.0)) return fail("min_fraction must be in (0, 1)");
-  if (!(stress_floor > 0.0)) return fail("stress_floor must be > 0");
   if ((scheme == Scheme::kBogackiShampine || scheme == Scheme::kAuto) && !adaptive)
     return fail(std::string("scheme ") + kSchemeNames[static_cast<int>(scheme)] +
                 " is adaptive only (fixed substeps: modified or explicit Euler)");

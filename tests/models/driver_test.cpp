@@ -128,6 +128,32 @@ TEST(Driver, ErrorControlHoldsToleranceWhereExplicitFailsAndSaysSo) {
   EXPECT_NE(one.reason.find("tr(sigma)"), std::string::npos) << one.reason;
 }
 
+// The error control has no constant in Pa: hypoplastic_wu has no stress scale (degree 1 in
+// sigma), so the same increment from a stress 8 times larger is the same integration, substep
+// for substep and to the bit. At a fraction of a pascal, where the former floor of 1 Pa stood
+// in for |sigma|, the two took different substeps.
+TEST(Driver, TheSubstepsDoNotDependOnTheStressUnit) {
+  auto law = make_law("hypoplastic_wu");
+  const Eigen::Matrix3d de = large_increment();
+  for (const Scheme scheme : {Scheme::kModifiedEuler, Scheme::kBogackiShampine}) {
+    StepOptions o;
+    o.scheme = scheme;
+    const auto from = [&](double p) {
+      return integrate(
+          *law, law->make_state(p * Eigen::Matrix3d::Identity(), Eigen::Matrix3d::Zero(), 0.6), de,
+          o);
+    };
+    const StepResult a = from(0.25), b = from(2.0);
+    ASSERT_TRUE(a.success) << a.reason;
+    ASSERT_TRUE(b.success) << b.reason;
+    EXPECT_GT(a.substeps, 1);
+    EXPECT_EQ(a.substeps, b.substeps);
+    EXPECT_EQ(a.rejected, b.rejected);
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) EXPECT_EQ(8.0 * a.end.stress(i, j), b.end.stress(i, j));
+  }
+}
+
 TEST(Driver, ErrorControlAcrossTheElastoplasticKink) {
   auto law = make_law("elastoplastic_fabric");
   const MaterialState s =

@@ -44,7 +44,6 @@ struct StepOptions {
   int fixed_substeps = 1;
   int max_substeps = 100000;
   double min_fraction = 1e-10;  // smallest substep, as a fraction of the increment
-  double stress_floor = 1.0;    // Pa: floor of |sigma| in the relative error (stress-free states)
   bool IsValid(std::string* why) const;
 };
 

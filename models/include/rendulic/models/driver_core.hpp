@@ -112,9 +112,13 @@ StateT<T> advance_heun(const StateT<T>& s, const RateT<T>& r1, const RateT<T>& r
 
 // The local error of a difference d = y_high - y_low of the two solutions of an embedded
 // pair: relative for stress and fabric, absolute for the (dimensionless) internal variables;
-// the worst block counts.
-inline double difference_error(const LawRate& d, const MaterialState& y, double stress_floor) {
-  const double e_s = d.d_stress.norm() / std::max(y.stress.norm(), stress_floor);
+// the worst block counts. The stress's is relative to the larger of the end's and the
+// substep start's |sigma| (`start`), which is positive unless the stress is zero throughout
+// (then so is d). A floor in Pa, as there was (1 Pa), made the substeps of a stress passing
+// near zero depend on the unit system (tests/app/units_system_test.cpp).
+inline double difference_error(const LawRate& d, const MaterialState& y, double start) {
+  const double e_s = d.d_stress.norm() / std::max({y.stress.norm(), start,
+                                                   std::numeric_limits<double>::min()});
   const double e_f = d.d_fabric.norm() / std::max(y.fabric.norm(), 1e-12);
   const double e_q = d.d_internal.lpNorm<Eigen::Infinity>();
   return std::max({e_s, e_f, e_q});
@@ -123,12 +127,12 @@ inline double difference_error(const LawRate& d, const MaterialState& y, double 
 // Modified Euler's: |y_heun - y_euler| = |r2 - r1| / 2 (the halving is exact, so this is the
 // same number as halving the norms).
 inline double error_estimate(const LawRate& r1, const LawRate& r2, const MaterialState& y,
-                             double stress_floor) {
+                             double start) {
   LawRate d;
   d.d_stress = 0.5 * (r2.d_stress - r1.d_stress);
   d.d_fabric = 0.5 * (r2.d_fabric - r1.d_fabric);
   d.d_internal = 0.5 * (r2.d_internal - r1.d_internal);
-  return difference_error(d, y, stress_floor);
+  return difference_error(d, y, start);
 }
 
 inline std::string fmt(double v) {
@@ -148,7 +152,7 @@ struct Trial {
 };
 
 template <typename T, class RateF, class CorrectF, class AdmissibleF>
-Trial<T> heun_trial(const StateT<T>& y, const Mat3<T>& de, double stress_floor, const RateF& rate,
+Trial<T> heun_trial(const StateT<T>& y, const Mat3<T>& de, const RateF& rate,
                     const CorrectF& correct, const AdmissibleF& admissible, int* evaluations) {
   Trial<T> tr;
   const T tr_de = de.trace();
@@ -169,7 +173,7 @@ Trial<T> heun_trial(const StateT<T>& y, const Mat3<T>& de, double stress_floor, 
   const MaterialState vh = value_state(tr.yh);
   tr.ok = admissible(vh);
   tr.plastic = r1.plastic;
-  tr.err = error_estimate(v1, v2, vh, stress_floor);
+  tr.err = error_estimate(v1, v2, vh, value_state(y).stress.norm());
   tr.ok = tr.ok && std::isfinite(tr.err);
   return tr;
 }
@@ -198,7 +202,7 @@ StateT<T> advance_stages(const StateT<T>& s, std::initializer_list<double> a,
 // difference is the local error estimate, of third order where Heun's is of second. The stage
 // states of a plastic step are corrected onto the surface as Heun's predictor is.
 template <typename T, class RateF, class CorrectF, class AdmissibleF>
-Trial<T> bs32_trial(const StateT<T>& y, const Mat3<T>& de, double stress_floor, const RateF& rate,
+Trial<T> bs32_trial(const StateT<T>& y, const Mat3<T>& de, const RateF& rate,
                     const CorrectF& correct, const AdmissibleF& admissible, int* evaluations) {
   Trial<T> tr;
   const T tr_de = de.trace();
@@ -233,7 +237,7 @@ Trial<T> bs32_trial(const StateT<T>& y, const Mat3<T>& de, double stress_floor, 
   const MaterialState vh = value_state(tr.yh);
   tr.ok = admissible(vh);
   tr.plastic = plastic;
-  tr.err = difference_error(d, vh, stress_floor);
+  tr.err = difference_error(d, vh, value_state(y).stress.norm());
   tr.ok = tr.ok && std::isfinite(tr.err);
   return tr;
 }
@@ -274,17 +278,17 @@ StepResultT<typename Ops::Scalar> integrate_adaptive(const Ops& law,
   // Value-only trial over the fraction h of the increment (event location, on doubles).
   const auto value_trial = [&](const MaterialState& yv, double h) {
     const Eigen::Matrix3d de = h * d_eps;
-    return third ? driver_detail::bs32_trial<double>(yv, de, o.stress_floor, vrate, vcorrect,
+    return third ? driver_detail::bs32_trial<double>(yv, de, vrate, vcorrect,
                                                      admissible, &res.rate_evaluations)
-                 : driver_detail::heun_trial<double>(yv, de, o.stress_floor, vrate, vcorrect,
+                 : driver_detail::heun_trial<double>(yv, de, vrate, vcorrect,
                                                      admissible, &res.rate_evaluations);
   };
   // The trial over the (possibly parameter-dependent) fraction h.
   const auto trial = [&](const T& h) {
     const Mat3<T> de = h * d_eps_t;
-    return third ? driver_detail::bs32_trial<T>(y, de, o.stress_floor, rate, correct, admissible,
+    return third ? driver_detail::bs32_trial<T>(y, de, rate, correct, admissible,
                                                 &res.rate_evaluations)
-                 : driver_detail::heun_trial<T>(y, de, o.stress_floor, rate, correct, admissible,
+                 : driver_detail::heun_trial<T>(y, de, rate, correct, admissible,
                                                 &res.rate_evaluations);
   };
   // Sloan's factor q = 0.9 (TOL/R)^(1/p), p the order of the local error estimate.
