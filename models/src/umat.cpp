@@ -457,9 +457,9 @@ StepResult UmatLaw::integrate(const UmatState& start, const Eigen::Matrix3d& d_e
       // Scaled: finite stresses of 1e160 overflowed norm()'s sum of squares (err NaN).
       // Relative to the larger of the end's and the start's |sigma|, as the laws' driver
       // (driver_core.hpp, difference_error): no floor in Pa.
-      err = scaled_norm(diff) / std::max({scaled_norm(b.end.point.stress),
-                                          scaled_norm(y.point.stress),
-                                          std::numeric_limits<double>::min()});
+      err = scaled_norm(diff) /
+            std::max({scaled_norm(b.end.point.stress), scaled_norm(y.point.stress),
+                      std::numeric_limits<double>::min()});
       kept = std::move(b);
       // Local extrapolation of the stress (Richardson, for a first-order update: 2 halves - 1
       // full), as modified Euler keeps its second-order value over the Euler one it measures

@@ -117,8 +117,8 @@ StateT<T> advance_heun(const StateT<T>& s, const RateT<T>& r1, const RateT<T>& r
 // (then so is d). A floor in Pa, as there was (1 Pa), made the substeps of a stress passing
 // near zero depend on the unit system (tests/app/units_system_test.cpp).
 inline double difference_error(const LawRate& d, const MaterialState& y, double start) {
-  const double e_s = d.d_stress.norm() / std::max({y.stress.norm(), start,
-                                                   std::numeric_limits<double>::min()});
+  const double e_s =
+      d.d_stress.norm() / std::max({y.stress.norm(), start, std::numeric_limits<double>::min()});
   const double e_f = d.d_fabric.norm() / std::max(y.fabric.norm(), 1e-12);
   const double e_q = d.d_internal.lpNorm<Eigen::Infinity>();
   return std::max({e_s, e_f, e_q});
@@ -278,10 +278,10 @@ StepResultT<typename Ops::Scalar> integrate_adaptive(const Ops& law,
   // Value-only trial over the fraction h of the increment (event location, on doubles).
   const auto value_trial = [&](const MaterialState& yv, double h) {
     const Eigen::Matrix3d de = h * d_eps;
-    return third ? driver_detail::bs32_trial<double>(yv, de, vrate, vcorrect,
-                                                     admissible, &res.rate_evaluations)
-                 : driver_detail::heun_trial<double>(yv, de, vrate, vcorrect,
-                                                     admissible, &res.rate_evaluations);
+    return third ? driver_detail::bs32_trial<double>(yv, de, vrate, vcorrect, admissible,
+                                                     &res.rate_evaluations)
+                 : driver_detail::heun_trial<double>(yv, de, vrate, vcorrect, admissible,
+                                                     &res.rate_evaluations);
   };
   // The trial over the (possibly parameter-dependent) fraction h.
   const auto trial = [&](const T& h) {
