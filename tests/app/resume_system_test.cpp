@@ -85,11 +85,6 @@ int run(const fs::path& dir, const std::string& stop_in, bool resume = false) {
 // ("/a/b" for a dataset, "/a/b@name" for an attribute), without the wall-clock times.
 using Contents = std::map<std::string, std::string>;
 
-bool is_time(const std::string& path, const std::string& attribute) {
-  return path.rfind("/timings", 0) == 0 || attribute == "wall_time_s" || attribute == "seconds" ||
-         (attribute.empty() && path.size() >= 8 && path.substr(path.size() - 8) == "/seconds");
-}
-
 std::string hex_join(const std::vector<double>& v) {
   std::string s;
   char buf[64];
@@ -110,7 +105,7 @@ herr_t visit_attribute(hid_t object, const char* name, const H5A_info_t*, void* 
   auto* w = static_cast<Walk*>(data);
   char path[1024];
   H5Iget_name(object, path, sizeof path);
-  if (is_time(path, name)) return 0;
+  if (rendulic::testing::is_wall_clock(path, name)) return 0;
   const hid_t a = H5Aopen(object, name, H5P_DEFAULT);
   const hid_t type = H5Aget_type(a), space = H5Aget_space(a);
   std::string value;
@@ -134,7 +129,7 @@ herr_t visit_attribute(hid_t object, const char* name, const H5A_info_t*, void* 
 herr_t visit_object(hid_t root, const char* name, const H5O_info_t* info, void* data) {
   auto* w = static_cast<Walk*>(data);
   const std::string path = std::string("/") + (std::strcmp(name, ".") == 0 ? "" : name);
-  if (is_time(path, "")) return 0;
+  if (rendulic::testing::is_wall_clock(path, "")) return 0;
   const hid_t o = H5Oopen(root, name, H5P_DEFAULT);
   hsize_t idx = 0;
   H5Aiterate2(o, H5_INDEX_NAME, H5_ITER_INC, &idx, visit_attribute, data);

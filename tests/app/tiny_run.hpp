@@ -64,6 +64,14 @@ inline std::filesystem::path tiny_scenario(const std::filesystem::path& root) {
   return s;
 }
 
+// Whether a results file's dataset `path` (attribute "") or its attribute `attribute` holds a
+// wall-clock time, which two runs of the same input do not share: /timings, wall_time_s,
+// seconds.
+inline bool is_wall_clock(const std::string& path, const std::string& attribute) {
+  return path.rfind("/timings", 0) == 0 || attribute == "wall_time_s" || attribute == "seconds" ||
+         (attribute.empty() && path.size() >= 8 && path.substr(path.size() - 8) == "/seconds");
+}
+
 // The shared tiny run of the extra command-line arguments `args`: its folder in
 // RENDULIC_TEST_TMP/tiny_run, one per `args`, and the scenario file it reads, beside it (the
 // stored scenario names that file: a resumed run must read the same one).
