@@ -724,6 +724,13 @@ LinearResponse state_linear_response(const DemSystem& state, const ProbeOptions&
                                ")");
     lr = linear_response(packing, lo);
     lr.minimised_first = true;
+    // FIRE stopped where the forces balance, and the Hessian there still has negative modes:
+    // a saddle, which no relaxation from rest leaves. Say so, and where such states come from.
+    if (!lr.ok && lr.n_negative_pivots > 0) {
+      lr.message += "; its forces balance, so it is a saddle of its energy, not a minimum (copies ";
+      lr.message += "of a smaller periodic packing side by side often are: docs/probes.md, ";
+      lr.message += "\"Replicated packings\")";
+    }
   }
   return lr;
 }

@@ -9,7 +9,10 @@
 #include <numbers>
 
 #include "rendulic/core/errors.hpp"
+#include "rendulic/dem/probe_campaign.hpp"
 #include "rendulic/dem/probe_minimise.hpp"
+#include "rendulic/dem/probe_options.hpp"
+#include "rendulic/dem/protocols.hpp"
 
 namespace rendulic::dem {
 namespace {
@@ -252,6 +255,20 @@ TEST(LinearResponse, ADoubledPackingsNegativeModesAreCountedExactly) {
   }
   // Not vacuous: if the generator changes and no doubling is unstable, choose another seed.
   EXPECT_GE(unstable, 1);
+
+  // As a state to probe (`rendulic probe` of such a file): minimising first cannot leave a
+  // saddle whose forces balance, and the reason says what the state is.
+  const PackingData two = doubled(one, 1);
+  const std::vector<double> radii(two.radii.data(), two.radii.data() + two.size());
+  const LinearResponse lr = state_linear_response(
+      system_from_positions(two.positions, radii, two.cell.lengths(), SystemOptions{}),
+      ProbeOptions{});
+  EXPECT_FALSE(lr.ok);
+  EXPECT_TRUE(lr.minimised_first);
+  EXPECT_EQ(lr.n_negative_pivots, 2);
+  EXPECT_NE(lr.message.find("unstable (2 negative"), std::string::npos) << lr.message;
+  EXPECT_NE(lr.message.find("a saddle of its energy, not a minimum"), std::string::npos)
+      << lr.message;
 }
 
 }  // namespace
