@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
 #include <numbers>
 
 #include "rendulic/core/errors.hpp"
@@ -111,17 +112,23 @@ TEST(LinearResponse, RejectsBadInput) {
   EXPECT_THROW(linear_response(cubic_lattice(3, 3e-3, 1e-3, {{0, 0, 0}}), opt), InputError);
 }
 
+// 250 random spheres at volume fraction `nu`, minimised (FIRE) to 1e-10 of the mean force.
+PackingData jammed_packing(double nu, std::uint64_t seed) {
+  GeneratedPackingOptions g;
+  g.n = 250;
+  g.volume_fraction = nu;
+  g.seed = seed;
+  g.minimise.force_tolerance = 1e-10;
+  MinimiseSummary s;
+  PackingData p = generate_packing(g, &s);
+  EXPECT_TRUE(s.converged) << s.message;
+  return p;
+}
+
 class JammedPacking : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    GeneratedPackingOptions g;
-    g.n = 250;
-    g.volume_fraction = 0.70;
-    g.seed = 7;
-    g.minimise.force_tolerance = 1e-10;
-    MinimiseSummary s;
-    packing_ = new PackingData(generate_packing(g, &s));
-    ASSERT_TRUE(s.converged) << s.message;
+    packing_ = new PackingData(jammed_packing(0.70, 7));
     response_ = new LinearResponse(linear_response(*packing_, LinearResponseOptions{}));
   }
   static void TearDownTestSuite() {
@@ -232,14 +239,7 @@ int negative_eigenvalues(const PackingData& p, const std::vector<char>& backbone
 // doubled along each axis, has 1, 2 and 1. The linear response must count the same negative
 // modes as the dense eigensolver, refuse those doublings, and keep every contact twice.
 TEST(LinearResponse, ADoubledPackingsNegativeModesAreCountedExactly) {
-  GeneratedPackingOptions g;
-  g.n = 250;
-  g.volume_fraction = 0.70;
-  g.seed = 6;
-  g.minimise.force_tolerance = 1e-10;
-  MinimiseSummary s;
-  const PackingData one = generate_packing(g, &s);
-  ASSERT_TRUE(s.converged) << s.message;
+  const PackingData one = jammed_packing(0.70, 6);
   const LinearResponse single = linear_response(one, LinearResponseOptions{});
   ASSERT_TRUE(single.ok) << single.message;
   int unstable = 0;
