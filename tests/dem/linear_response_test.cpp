@@ -1,6 +1,7 @@
 // Linear response of the contact network: closed-form elastic constants of a
 // compressed FCC lattice including the pre-stress terms, detection of an unstable lattice,
-// symmetries and positive definiteness on a jammed random packing, rattler handling.
+// symmetries and positive definiteness on a jammed random packing, rattler handling, and the
+// negative modes of a doubled packing counted against a dense eigensolver (docs/probes.md).
 #include "rendulic/dem/linear_response.hpp"
 
 #include <gtest/gtest.h>
