@@ -1,7 +1,8 @@
 // Unit tests of the four laws (docs/models.md sections 1-4): parameter tables,
 // tangents against central finite differences and against automatic differentiation
 // (ceres::Jet through the templated laws), the pinned anisotropic form against its scalar
-// form, and the loading/unloading behaviour of elastoplastic_fabric.
+// form, the loading/unloading behaviour of elastoplastic_fabric, and every law's objectivity
+// (a rotated state and strain give the rotated increments).
 #include <ceres/jet.h>
 #include <gtest/gtest.h>
 
@@ -326,6 +327,58 @@ TEST(Laws, ElastoplasticSmallProbesElasticLargeProbesNot) {
   const LawRate r = ep->rate(on, 5e-5 * n);
   EXPECT_GT(r.d_internal.norm(), 0.0);
   EXPECT_LT(signed_deviator(Eigen::Matrix3d(fabric + r.d_fabric)), signed_deviator(fabric));
+}
+
+// The laws are isotropic functions of their tensor arguments (objectivity, docs/models.md):
+// rotating the state (stress, fabric, back ratio) and the strain increment by any Q rotates the
+// increments by the same Q. DEM states and probes are axisymmetric along fixed axes, so no other
+// test would see a law that used components in the lab's frame.
+TEST(Laws, RotatingTheStateAndTheStrainRotatesTheRate) {
+  const Eigen::Matrix3d Q =
+      Eigen::AngleAxisd(0.7, Eigen::Vector3d(0.3, -0.5, 0.8).normalized()).toRotationMatrix();
+  auto rotated = [&](const Eigen::Matrix3d& a) { return Eigen::Matrix3d(Q * a * Q.transpose()); };
+  for (const std::string& name : law_names()) {
+    auto law = make_law(name);
+    for (const bool on_surface : {false, true}) {
+      if (on_surface && name != "elastoplastic_fabric") continue;
+      MaterialState s = law->make_state(test_stress(2e9), test_fabric(), 0.8);
+      Eigen::Matrix3d de = test_strain();
+      if (on_surface) {  // as in ElastoplasticPlasticBranchTangentMatchesFiniteDifferences
+        Eigen::Matrix3d n = deviator(test_strain());
+        n /= n.norm();
+        s.internal = to_mandel(Eigen::Matrix3d(deviator(s.stress) / (s.stress.trace() / 3.0) -
+                                               law->parameter("m_e") * n));
+        de = n;
+      }
+      MaterialState r = s;
+      r.stress = rotated(s.stress);
+      r.fabric = rotated(s.fabric);
+      r.internal = to_mandel(rotated(from_mandel(s.internal)));
+      const LawRate a = law->rate(s, de);
+      const LawRate b = law->rate(r, rotated(de));
+      // Round-off: 2e-16 elastic; 4e-12 on the surface, where the plastic multiplier divides by
+      // a difference of nearly equal terms.
+      const double tol = on_surface ? 1e-10 : 1e-14;
+      const std::string what = name + (on_surface ? " on its yield surface" : "");
+      EXPECT_EQ(a.plastic, on_surface) << what;
+      EXPECT_EQ(b.plastic, a.plastic) << what;
+      EXPECT_LE((rotated(a.d_stress) - b.d_stress).norm(), tol * a.d_stress.norm()) << what;
+      EXPECT_LE((rotated(a.d_fabric) - b.d_fabric).norm(), tol * a.d_fabric.norm()) << what;
+      EXPECT_LE((rotated(from_mandel(a.d_internal)) - from_mandel(b.d_internal)).norm(),
+                tol * std::max(1.0, a.d_internal.norm()))
+          << what;
+      const double f = law->yield_function(s);  // -inf without a yield surface
+      if (std::isinf(f))
+        EXPECT_EQ(law->yield_function(r), f) << what;
+      else
+        EXPECT_NEAR(law->yield_function(r), f, 1e-12) << what;
+      EXPECT_LE((from_mandel(law->initial_internal(r.stress, r.fabric)) -
+                 rotated(from_mandel(law->initial_internal(s.stress, s.fabric))))
+                    .norm(),
+                1e-14)
+          << what;
+    }
+  }
 }
 
 }  // namespace
