@@ -131,6 +131,23 @@ std::unique_ptr<Ldlt> count_pivots(const SparseMatrix& hessian, double tolerance
   return ldlt;
 }
 
+// The direction of the most negative pivot r of P H P^T = L D L^T: L^T y = e_r gives
+// y^T L D L^T y = D_r < 0, so x = P^-1 y has x^T H x = D_r. On the dofs (3 per entry of dof),
+// laid out as [N,3] with zero rows where dof < 0.
+Eigen::MatrixX3d negative_direction(const Ldlt& ldlt, const std::vector<int>& dof) {
+  const Eigen::VectorXd d = ldlt.vectorD();
+  Eigen::Index r = 0;
+  d.minCoeff(&r);
+  Eigen::VectorXd y = Eigen::VectorXd::Zero(d.size());
+  y(r) = 1.0;
+  ldlt.matrixU().solveInPlace(y);
+  const Eigen::VectorXd x = ldlt.permutationPinv() * y;
+  Eigen::MatrixX3d u = Eigen::MatrixX3d::Zero(static_cast<Eigen::Index>(dof.size()), 3);
+  for (std::size_t p = 0; p < dof.size(); ++p)
+    if (dof[p] >= 0) u.row(static_cast<Eigen::Index>(p)) = x.segment<3>(dof[p]).transpose();
+  return u;
+}
+
 #ifdef RENDULIC_WITH_CHOLMOD
 // CHOLMOD's reciprocal condition estimate, (min diag L / max diag L)^2, is the pivot ratio.
 class SupernodalLlt : public Eigen::CholmodSupernodalLLT<SparseMatrix, Eigen::Lower> {
@@ -316,7 +333,9 @@ LinearResponse linear_response(const PackingData& packing, const LinearResponseO
             "linear response: the Hessian is not positive definite (the contact network is "
             "unstable or floppy): no elastic response exists");
       }
-      count_pivots(hessian, options.pivot_tolerance, &out);
+      const auto ldlt = count_pivots(hessian, options.pivot_tolerance, &out);
+      if (ldlt && out.n_negative_pivots > 0)
+        out.negative_direction = negative_direction(*ldlt, dof);
       return pivot_failure();
     }
     out.seconds_factorisation = seconds_since(t_factor);
@@ -331,6 +350,7 @@ LinearResponse linear_response(const PackingData& packing, const LinearResponseO
     const auto ldlt = count_pivots(hessian, options.pivot_tolerance, &out);
     out.seconds_factorisation = seconds_since(t_factor);
     if (!ldlt) return fail("linear response: the LDL^T factorisation of the Hessian failed");
+    if (out.n_negative_pivots > 0) out.negative_direction = negative_direction(*ldlt, dof);
     if (out.n_zero_pivots > 0 || out.n_negative_pivots > 0) return pivot_failure();
     u = ldlt->solve(rhs);
   }

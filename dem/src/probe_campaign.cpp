@@ -729,7 +729,7 @@ LinearResponse state_linear_response(const DemSystem& state, const ProbeOptions&
     if (!lr.ok && lr.n_negative_pivots > 0) {
       lr.message += "; its forces balance, so it is a saddle of its energy, not a minimum (copies ";
       lr.message += "of a smaller periodic packing side by side often are: docs/probes.md, ";
-      lr.message += "\"Replicated packings\")";
+      lr.message += "\"Replicated packings\"; `rendulic probe --leave-saddle` moves it off)";
     }
   }
   return lr;

@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "rendulic/core/errors.hpp"
+#include "rendulic/dem/linear_response.hpp"
 #include "rendulic/dem/measures.hpp"
 #include "rendulic/dem/probe_campaign.hpp"
 
@@ -111,16 +112,11 @@ bool RestOptions::IsValid(std::string* why) const {
   return relax.IsValid(why) && minimise.IsValid(why);
 }
 
-MinimiseSummary settle_at_minimum(DemSystem& sys, const MinimiseOptions& options,
-                                  double* max_displacement) {
-  MinimiseOptions mo = options;
-  mo.k = sys.material().k;
-  PackingData packing = packing_of(sys);
-  const Eigen::MatrixX3d start = packing.positions;
-  const MinimiseSummary summary = minimise_energy(packing, mo);
-  if (max_displacement) *max_displacement = (packing.positions - start).rowwise().norm().maxCoeff();
-  // The minimum becomes the state: positions wrapped into the cell, at rest, and a neighbour
-  // list built afresh from there (restore() builds it from the reference positions).
+namespace {
+
+// The packing's positions become the state's: wrapped into the cell, at rest, and a neighbour
+// list built afresh from there (restore() builds it from the reference positions).
+void put_at(DemSystem& sys, const PackingData& packing) {
   State st = sys.save();
   const Eigen::Vector3d L = sys.cell().lengths();
   Particles& p = st.particles;
@@ -144,7 +140,66 @@ MinimiseSummary settle_at_minimum(DemSystem& sys, const MinimiseOptions& options
   st.last_D = Eigen::Vector3d::Zero();
   sys = DemSystem::restore(st, sys.options());
   sys.zero_velocities();  // recomputes the forces at the new positions
+}
+
+}  // namespace
+
+MinimiseSummary settle_at_minimum(DemSystem& sys, const MinimiseOptions& options,
+                                  double* max_displacement) {
+  MinimiseOptions mo = options;
+  mo.k = sys.material().k;
+  PackingData packing = packing_of(sys);
+  const Eigen::MatrixX3d start = packing.positions;
+  const MinimiseSummary summary = minimise_energy(packing, mo);
+  if (max_displacement) *max_displacement = (packing.positions - start).rowwise().norm().maxCoeff();
+  put_at(sys, packing);  // the minimum becomes the state
   return summary;
+}
+
+SaddleEscape leave_saddle(DemSystem& sys, const MinimiseOptions& options, int max_rounds) {
+  SaddleEscape e;
+  MinimiseOptions mo = options;
+  mo.k = sys.material().k;
+  LinearResponseOptions lo;
+  lo.k = mo.k;
+  // A minimum is told by the fastest factorisation (CHOLMOD where the build has it); a saddle's
+  // modes are counted, and its direction found, by the simplicial LDL^T, which counts them at any
+  // size (a failed CHOLMOD is diagnosed only up to diagnose_max_dof) but takes longer: about 35 s
+  // against 2 s for 8000 spheres at nu = 0.82.
+  LinearResponseOptions ldlt = lo;
+  ldlt.solver = LinearSolver::kSimplicialLdlt;
+  PackingData packing = packing_of(sys);
+  const Eigen::MatrixX3d start = packing.positions;
+  bool ok = false;
+  for (;;) {
+    LinearResponse lr = linear_response(packing, lo);
+    if (!lr.ok && lr.negative_direction.rows() == 0) lr = linear_response(packing, ldlt);
+    if (e.rounds == 0) e.negative_modes = lr.n_negative_pivots;
+    e.remaining = lr.n_negative_pivots;
+    e.message = lr.message;
+    ok = lr.ok;
+    if (lr.ok || lr.n_negative_pivots <= 0 || lr.negative_direction.rows() == 0 ||
+        e.rounds == max_rounds)
+      break;
+    // At a saddle the forces balance, so FIRE from there does not move: step off it first, by
+    // the mean overlap at the particle that moves most (the energy falls either way, by
+    // |D_r| / 2 per unit of the direction squared), far enough for the forces to exceed FIRE's
+    // tolerance by orders of magnitude and small enough to stay near the saddle's contacts.
+    const double overlap = force_balance(packing, mo.k).mean_contact_force / mo.k;
+    const double largest = lr.negative_direction.rowwise().norm().maxCoeff();
+    packing.positions += (overlap / largest) * lr.negative_direction;
+    const MinimiseSummary m = minimise_energy(packing, mo);
+    ++e.rounds;
+    e.iterations += m.iterations;
+    if (!m.converged) {
+      e.message = "minimising after the step off the saddle: " + m.message;
+      break;
+    }
+  }
+  e.left = e.negative_modes > 0 && ok;
+  e.max_displacement = (packing.positions - start).rowwise().norm().maxCoeff();
+  if (e.rounds > 0) put_at(sys, packing);
+  return e;
 }
 
 RestSummary bring_to_rest(DemSystem& sys, const RestOptions& options) {

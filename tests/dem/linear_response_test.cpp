@@ -15,6 +15,7 @@
 #include "rendulic/dem/probe_minimise.hpp"
 #include "rendulic/dem/probe_options.hpp"
 #include "rendulic/dem/protocols.hpp"
+#include "rendulic/dem/rest.hpp"
 
 namespace rendulic::dem {
 namespace {
@@ -215,7 +216,7 @@ PackingData doubled(const PackingData& p, int axis) {
 // second method for the LDL^T's pivot count. Each contact of stiffness k and force f = k
 // overlap adds k n n^T - (f / |l|) (I - n n^T) to its two diagonal blocks and minus that to its
 // off-diagonal ones.
-int negative_eigenvalues(const PackingData& p, const std::vector<char>& backbone) {
+Eigen::MatrixXd dense_hessian(const PackingData& p, const std::vector<char>& backbone) {
   Eigen::MatrixXd h = Eigen::MatrixXd::Zero(3 * p.size(), 3 * p.size());
   for (const PairGeometry& c : find_pairs(p, 0.0)) {
     if (!(c.overlap > 0.0) || !backbone[c.i] || !backbone[c.j]) continue;
@@ -228,8 +229,15 @@ int negative_eigenvalues(const PackingData& p, const std::vector<char>& backbone
     h.block<3, 3>(3 * c.i, 3 * c.j) -= block;
     h.block<3, 3>(3 * c.j, 3 * c.i) -= block;
   }
-  const Eigen::VectorXd w =
-      Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(h, Eigen::EigenvaluesOnly).eigenvalues();
+  return h;
+}
+Eigen::VectorXd dense_eigenvalues(const PackingData& p, const std::vector<char>& backbone) {
+  return Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(dense_hessian(p, backbone),
+                                                        Eigen::EigenvaluesOnly)
+      .eigenvalues();
+}
+int negative_eigenvalues(const PackingData& p, const std::vector<char>& backbone) {
+  const Eigen::VectorXd w = dense_eigenvalues(p, backbone);
   // Rattlers and the translations are exact zeros; round-off leaves them at 1e-12 k or so.
   return static_cast<int>((w.array() < -1e-9 * kK).count());
 }
@@ -270,6 +278,61 @@ TEST(LinearResponse, ADoubledPackingsNegativeModesAreCountedExactly) {
   EXPECT_NE(lr.message.find("unstable (2 negative"), std::string::npos) << lr.message;
   EXPECT_NE(lr.message.find("a saddle of its energy, not a minimum"), std::string::npos)
       << lr.message;
+}
+
+// leave_saddle (`rendulic probe --leave-saddle`) steps off along the LDL^T's negative direction
+// and minimises until no negative mode is left: the dense eigensolver then finds none either,
+// the forces balance, and the linear response exists. A stable packing is left untouched.
+TEST(LinearResponse, ASaddleIsLeftAlongItsNegativeModesToAMinimum) {
+  const PackingData one = jammed_packing(0.70, 6);
+  const PackingData two = doubled(one, 1);
+  const std::vector<double> radii(two.radii.data(), two.radii.data() + two.size());
+  // The direction is one of negative curvature: its Rayleigh quotient with the dense Hessian
+  // lies between the lowest eigenvalue and zero.
+  const LinearResponse at_saddle = linear_response(two, LinearResponseOptions{});
+  ASSERT_EQ(at_saddle.negative_direction.rows(), two.size());
+  const Eigen::MatrixX3d& u = at_saddle.negative_direction;
+  Eigen::VectorXd flat(3 * two.size());
+  for (int i = 0; i < two.size(); ++i) flat.segment<3>(3 * i) = u.row(i).transpose();
+  const double rayleigh =
+      flat.dot(dense_hessian(two, at_saddle.backbone) * flat) / flat.squaredNorm();
+  const double lowest = dense_eigenvalues(two, at_saddle.backbone).minCoeff();
+  EXPECT_LT(rayleigh, -1e-6 * kK);
+  EXPECT_GE(rayleigh, lowest * (1 + 1e-9));
+  EXPECT_EQ(linear_response(one, LinearResponseOptions{}).negative_direction.rows(), 0);
+
+  DemSystem sys = system_from_positions(two.positions, radii, two.cell.lengths(), SystemOptions{});
+  MinimiseOptions mo;
+  mo.force_tolerance = 1e-10;
+  const SaddleEscape e = leave_saddle(sys, mo);
+  EXPECT_EQ(e.negative_modes, 2);
+  EXPECT_TRUE(e.left) << e.message;
+  EXPECT_EQ(e.remaining, 0);
+  EXPECT_GE(e.rounds, 1);
+  const PackingData moved = packing_of(sys);
+  const LinearResponse lr = linear_response(moved, LinearResponseOptions{});
+  ASSERT_TRUE(lr.ok) << lr.message;
+  EXPECT_EQ(negative_eigenvalues(moved, lr.backbone), 0);
+  EXPECT_LT(force_balance(moved, sys.material().k).ratio, kEquilibrium);
+  // A minimum below the saddle, not a packing come apart. Near jamming (nu = 0.70) the way down
+  // is an avalanche: every particle moved, rms 0.37 <r>, largest 1.5 <r>; the pressure fell by
+  // 10 % and the shear stiffness C44 rose by 24 %, against 1 % fewer contacts. The run reports
+  // these (`rendulic probe --leave-saddle`); the bounds here only catch a packing come apart.
+  const LinearResponse single = linear_response(one, LinearResponseOptions{});
+  EXPECT_GT(e.max_displacement, 0.0);
+  EXPECT_NEAR(lr.stress.trace() / single.stress.trace(), 1.0, 0.2);
+  EXPECT_NEAR(lr.n_contacts / (2.0 * single.n_contacts), 1.0, 0.05);
+
+  // A minimum is not a saddle: nothing to do and nothing moved.
+  DemSystem stable = system_from_positions(
+      one.positions, std::vector<double>(one.radii.data(), one.radii.data() + one.size()),
+      one.cell.lengths(), SystemOptions{});
+  const Eigen::MatrixX3d before = packing_of(stable).positions;
+  const SaddleEscape none = leave_saddle(stable, mo);
+  EXPECT_EQ(none.negative_modes, 0);
+  EXPECT_FALSE(none.left);
+  EXPECT_EQ(none.rounds, 0);
+  EXPECT_EQ(packing_of(stable).positions, before);
 }
 
 }  // namespace

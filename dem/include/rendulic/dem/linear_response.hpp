@@ -104,8 +104,12 @@ struct LinearResponse {
   int n_negative_pivots = 0;     // -1 where not counted (large failed Cholesky)
   int n_zero_pivots = 0;         // -1 where not counted
   double min_pivot_ratio = 0.0;  // smallest / largest pivot
-  std::string solver;            // "cholmod" or "simplicial_ldlt"
-  double solve_residual = 0.0;   // max over the 6 columns of |H u - b| / |b|
+  // Where there are negative pivots (counted): [N,3] displacements u along which the energy
+  // curves down, u^T H u = the most negative pivot (zero rows on rattlers and on the particle
+  // held fixed); empty otherwise. leave_saddle() (rest.hpp) moves a saddle's packing along it.
+  Eigen::MatrixX3d negative_direction;
+  std::string solver;           // "cholmod" or "simplicial_ldlt"
+  double solve_residual = 0.0;  // max over the 6 columns of |H u - b| / |b|
   double seconds_assembly = 0.0;
   double seconds_factorisation = 0.0;
   double seconds_total = 0.0;

@@ -12,6 +12,9 @@
 //    balance of its contact forces, tangential ones included, holds (or the time cap).
 #pragma once
 
+#include <cstdint>
+#include <string>
+
 #include "rendulic/dem/dem_system.hpp"
 #include "rendulic/dem/probe_geometry.hpp"
 #include "rendulic/dem/probe_minimise.hpp"
@@ -65,6 +68,23 @@ struct RestSummary {
 // dynamic probes' relaxation with probes.relax_method = "fire" (docs/probes.md).
 MinimiseSummary settle_at_minimum(DemSystem& sys, const MinimiseOptions& options,
                                   double* max_displacement = nullptr);
+
+// A frictionless packing at rest may be a saddle of its energy: its forces balance, yet its
+// Hessian has negative modes, and no relaxation from rest leaves it (copies of a smaller
+// periodic packing side by side often are; docs/probes.md "Replicated packings"). This moves it
+// off: a step along the most negative mode (by the mean overlap), FIRE to the minimum below,
+// and again while negative modes remain, at most max_rounds times. The state is put where it
+// ended (as settle_at_minimum does) if it moved. A state that is not a saddle is left as it is.
+struct SaddleEscape {
+  int negative_modes = 0;  // of the state as given (-1: not counted)
+  int remaining = 0;       // at the end
+  int rounds = 0;          // steps off and minimisations
+  std::int64_t iterations = 0;
+  bool left = false;              // it was a saddle and is now at a minimum
+  double max_displacement = 0.0;  // m, largest move of a particle
+  std::string message;            // the linear response's last reason, or FIRE's
+};
+SaddleEscape leave_saddle(DemSystem& sys, const MinimiseOptions& options, int max_rounds = 20);
 
 // Relaxes `sys` dynamically, then minimises its energy at the fixed cell and puts the state
 // at the minimum: positions there (wrapped into the cell), velocities zero, forces and the
