@@ -261,9 +261,39 @@ std::filesystem::path probe_packing(const ProbeRequest& r) {
     log::info("at rest as read: net force ", rest.at_rest.ratio,
               " of the mean contact force; nothing moved");
   }
+  std::optional<dem::SaddleEscape> saddle;
+  if (r.leave_saddle && frictional) {
+    log::warning(
+        "--leave-saddle: a frictional packing has no energy whose saddles to leave; "
+        "ignored");
+  } else if (r.leave_saddle) {
+    const double p0 = sys->measure().pressure;
+    const Eigen::Matrix3d s0 = sys->stress();
+    saddle = dem::leave_saddle(*sys, dro.state_rest.minimise);
+    if (saddle->rounds == 0) {
+      log::info("not a saddle of its energy (", saddle->negative_modes,
+                " negative modes at rest): nothing moved");
+    } else {
+      const Moved m = what_moved(packing, *sys, r_mean);
+      log::info("a saddle of its energy with ", saddle->negative_modes,
+                " negative mode(s): moved off along them and minimised (", saddle->rounds,
+                " round(s), ", saddle->iterations, " FIRE iterations); ", m.count, " of ",
+                packing.size(), " particles moved more than ", kMovedOverR,
+                " <r> from the file's positions (largest ", m.max_over_r, " <r>, rms ",
+                m.rms_over_r, " <r>); the stress changed by ", (sys->stress() - s0).norm() / p0,
+                " of p, p by ", sys->measure().pressure / p0 - 1);
+      if (!saddle->left)
+        log::warning("still not at a minimum after ", saddle->rounds,
+                     " round(s): ", saddle->message);
+    }
+  }
   const std::string group = paths::state(r.label);
   write_state(out, group, *sys, rest, dro.state_rest.minimise.force_tolerance, true);
   out.attr(group, "source", packing.origin);
+  if (saddle) {
+    out.attr(group, "saddle_negative_modes", static_cast<std::int64_t>(saddle->negative_modes));
+    out.attr(group, "saddle_rounds", static_cast<std::int64_t>(saddle->rounds));
+  }
   out.attr(paths::kTimings, "rest", since(t0));
   log::info("[rest] done in ", human_seconds(since(t0)));
 
@@ -343,6 +373,10 @@ Subcommand add_probe(CLI::App& parent) {
       ->take_all();
   sub->add_option("--threads", o->threads, "OpenMP threads over the probes (0: all cores)")
       ->check(thread_count());
+  sub->add_flag("--leave-saddle", o->leave_saddle,
+                "a frictionless packing at rest whose energy has negative modes (a saddle, as "
+                "copies of a smaller packing side by side often are) is moved off along them and "
+                "minimised before it is probed; how far it moved is reported");
   sub->add_flag("--quiet", o->quiet, "no progress; warnings and errors still print");
   add_progress_every(sub, o->progress_every);
   return {sub, [o]() -> int {

@@ -65,6 +65,9 @@ struct ProbeRequest {
   bool quiet = false;
   double progress_every = 30.0;
   bool summary = true;  // the CLI's table of the fits on stdout
+  // A frictionless packing that is a saddle of its energy is moved off it to a minimum first
+  // (dem::leave_saddle; docs/probes.md "Replicated packings").
+  bool leave_saddle = false;
 };
 std::filesystem::path probe_packing(const ProbeRequest& request);
 

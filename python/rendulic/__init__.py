@@ -256,14 +256,16 @@ def material_point_path(model: str, state, params=None, kind: str = "undrained",
 
 def probe(packing: str | os.PathLike, out: str | os.PathLike, methods=(), amplitudes=(),
           directions: int = 0, label: str = "imported", sets=None, threads: int = 0,
-          quiet: bool = False, progress: Progress = None, planes=()) -> Results:
+          quiet: bool = False, progress: Progress = None, planes=(),
+          leave_saddle: bool = False) -> Results:
     """Probes a packing as `rendulic probe` (docs/interop.md): a LAMMPS data file or dump, or
     "RESULTS.h5:/states/LABEL". planes: probe planes as `--planes` (rendulic, deviatoric,
     meridian_<Lode deg>; docs/probes.md "Probe planes"), empty for the scenario's.
-    sets: {key: value} or ["key=value"] scenario overrides. Returns the written results file."""
+    sets: {key: value} or ["key=value"] scenario overrides. leave_saddle: as `--leave-saddle`
+    (docs/probes.md "Replicated packings"). Returns the written results file."""
     return Results(_rendulic.probe(os.fspath(packing), os.fspath(out), label, list(methods),
                                    list(amplitudes), directions, list(planes), sets, threads,
-                                   quiet, progress))
+                                   quiet, progress, leave_saddle))
 
 
 def run(scenario: str | os.PathLike, out: str | os.PathLike, sets=None, threads: int = 0,

@@ -687,7 +687,7 @@ PYBIND11_MODULE(_rendulic, m) {
       [](const std::string& packing, const std::string& out, const std::string& label,
          const std::vector<std::string>& methods, const std::vector<double>& amplitudes,
          long long directions, const std::vector<std::string>& planes, const py::object& sets,
-         long long threads, bool quiet, const py::object& progress) {
+         long long threads, bool quiet, const py::object& progress, bool leave_saddle) {
         app::ProbeRequest r;
         r.packing = packing;
         r.out = out;
@@ -699,13 +699,14 @@ PYBIND11_MODULE(_rendulic, m) {
         r.sets = sets_of(sets);
         r.threads = count_of(threads, "threads");
         r.quiet = quiet;
+        r.leave_saddle = leave_saddle;
         r.summary = false;  // the caller has the file
         return long_work(progress, quiet, [&] { return app::probe_packing(r).string(); });
       },
       "packing"_a, "out"_a, "label"_a = "imported", "methods"_a = std::vector<std::string>{},
       "amplitudes"_a = std::vector<double>{}, "directions"_a = 0,
       "planes"_a = std::vector<std::string>{}, "sets"_a = py::none(), "threads"_a = 0,
-      "quiet"_a = false, "progress"_a = py::none());
+      "quiet"_a = false, "progress"_a = py::none(), "leave_saddle"_a = false);
 
   m.def(
       "run",

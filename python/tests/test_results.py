@@ -169,3 +169,15 @@ def test_fit_recovers_an_exact_ellipse():
     np.testing.assert_allclose(f.semi_axes, (3.0, 1.0), atol=1e-9)
     assert f.inclination_deg == pytest.approx(30.0, abs=1e-7)
     assert f.rms < 1e-9 and f.covariance.shape == (5, 5)
+
+
+def test_leave_saddle_leaves_a_minimum_as_it_is(cli_run, tmp_path):
+    # A run's state is at a minimum: --leave-saddle finds no negative mode and moves nothing
+    # (a saddle left: tests/app/probe_packing_system_test.cpp).
+    rendulic.probe(f"{cli_run}:/states/a", tmp_path / "out", methods=["linear_response"],
+                   threads=1, quiet=True, leave_saddle=True)
+    with h5py.File(tmp_path / "out" / "results.h5", "r") as f, h5py.File(cli_run, "r") as g:
+        assert f["/states/imported"].attrs["saddle_negative_modes"] == 0
+        assert f["/states/imported"].attrs["saddle_rounds"] == 0
+        np.testing.assert_array_equal(f["/states/imported/positions"][()],
+                                      g["/states/a/positions"][()])

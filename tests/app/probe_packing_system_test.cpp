@@ -6,6 +6,8 @@
 //    is installed, with its units and time items, and by this test in another column layout)
 //    and the results file's state give the same linear-response envelopes;
 //  - a packing away from equilibrium is brought to rest, and the report says what moved;
+//  - a packing at a saddle of its energy has no linear response, until --leave-saddle moves it
+//    off to a minimum;
 //  - bad packing files exit 2 with one line and write nothing, and so does a results file's
 //    state probed with another dem.skin than its list was made with or with a number in its
 //    checkpoint that is not finite;
@@ -28,6 +30,7 @@
 #include "rendulic/core/packing_file.hpp"
 #include "rendulic/core/result_paths.hpp"
 #include "rendulic/core/results.hpp"
+#include "rendulic/dem/probe_minimise.hpp"
 #include "tiny_run.hpp"
 
 namespace {
@@ -219,6 +222,50 @@ TEST(Probe, APackingAwayFromEquilibriumIsBroughtToRestAndSaysWhatMoved) {
   EXPECT_GT(got.attr_double(g, "minimise_max_displacement"), 0);
   // Linear response and its fit: an ellipse per amplitude, semi-axes printed per unit strain.
   EXPECT_NE(r.out.find("linear_response_5e-05"), std::string::npos) << r.out;
+}
+
+// A packing at a saddle of its energy (a stable 250-sphere packing, nu = 0.70, seed 6, side by
+// side with a copy of itself along y: 2 negative modes, dem's linear_response_test): probed as
+// read, it has no linear response and the reason says it is a saddle; with --leave-saddle it is
+// moved off to a minimum first, says how far, and has one.
+TEST(Probe, ASaddleHasNoLinearResponseUntilItIsLeft) {
+  const fs::path dir = rendulic::testing::fresh_dir("app_probe/saddle");
+  rendulic::dem::GeneratedPackingOptions g;
+  g.n = 250;
+  g.volume_fraction = 0.70;
+  g.seed = 6;
+  g.minimise.force_tolerance = 1e-10;
+  rendulic::dem::MinimiseSummary made;
+  const rendulic::dem::PackingData one = rendulic::dem::generate_packing(g, &made);
+  ASSERT_TRUE(made.converged) << made.message;
+  rendulic::Packing two;
+  two.lengths = one.cell.lengths();
+  two.lengths[1] *= 2.0;
+  two.positions.resize(2 * one.size(), 3);
+  two.positions << one.positions, one.positions;
+  two.positions.bottomRows(one.size()).col(1).array() += one.cell.lengths()[1];
+  for (int copy = 0; copy < 2; ++copy)
+    for (int i = 0; i < one.size(); ++i) two.radii.push_back(one.radii[i]);
+  rendulic::write_lammps_data(dir / "doubled.data", two, 2000, "doubled");
+  const std::string args = "probe " + (dir / "doubled.data").string() +
+                           " --methods linear_response --directions 8 --threads 1 --out ";
+  const CliResult as_read = run_rendulic(args + (dir / "as_read").string(), false);
+  ASSERT_EQ(as_read.code, 0) << as_read.err;
+  EXPECT_NE(as_read.err.find("a saddle of its energy, not a minimum"), std::string::npos)
+      << as_read.err;
+  EXPECT_NE(as_read.err.find("--leave-saddle"), std::string::npos) << as_read.err;
+  const CliResult left = run_rendulic(args + (dir / "left").string() + " --leave-saddle", false);
+  ASSERT_EQ(left.code, 0) << left.err;
+  EXPECT_NE(left.err.find("a saddle of its energy with 2 negative mode(s): moved off"),
+            std::string::npos)
+      << left.err;
+  EXPECT_EQ(left.err.find("no linear response"), std::string::npos) << left.err;
+  EXPECT_NE(left.out.find("linear_response_5e-05"), std::string::npos) << left.out;
+  const ResultsReader got(dir / "left" / "results.h5");
+  const std::string g_state = paths::state("imported");
+  EXPECT_EQ(got.attr_int(g_state, "saddle_negative_modes"), 2);
+  EXPECT_GE(got.attr_int(g_state, "saddle_rounds"), 1);
+  EXPECT_FALSE(got.has_attr(paths::envelope(g_state, "linear_response_5e-05"), "error"));
 }
 
 // Exit 2, one line that names `what`, no results file.
