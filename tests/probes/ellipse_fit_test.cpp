@@ -117,6 +117,45 @@ TEST(EllipseFit, NoisyFitWithinReportedErrors) {
   }
 }
 
+// fits.shape = "circle" (`rendulic fit --shape circle`): Kasa's linear start refined in the
+// orthogonal distances. Exact on a noiseless circle, within its reported errors on a noisy one,
+// and the same circle as the ellipse fit of the same points (a second method).
+TEST(CircleFit, RequestedCircleIsTheGeneratingOneAndTheEllipseFitsToo) {
+  FitOptions circle;
+  circle.shape = FitShape::kCircle;
+  const TrueEllipse c{{0.3, -0.2}, 1.7, 1.7, 0.0};
+  for (bool theta : {false, true}) {
+    SCOPED_TRACE(theta ? "with directions" : "without directions");
+    const EnvelopeFit f = fit_envelope(ellipse_envelope(c, 24, 0.0, 1, theta), circle);
+    ASSERT_EQ(f.shape, FitShape::kCircle) << f.selection_note;
+    EXPECT_NEAR(f.center.x(), 0.3, kExact);
+    EXPECT_NEAR(f.center.y(), -0.2, kExact);
+    EXPECT_NEAR(f.a, 1.7, kExact);
+    EXPECT_EQ(f.b, f.a);
+    EXPECT_FALSE(f.inclination_deg.has_value());
+    EXPECT_LT(f.rms, kExact);
+
+    const double sigma = 0.01;
+    const Envelope noisy = ellipse_envelope(c, 36, sigma, 7, theta);
+    const EnvelopeFit n = fit_envelope(noisy, circle);
+    ASSERT_TRUE(n.has_stderr);
+    EXPECT_NEAR(n.rms, sigma, 0.3 * sigma);
+    EXPECT_LT(std::abs(n.a - 1.7), 4.0 * n.a_stderr);
+    EXPECT_LT(std::abs(n.center.x() - 0.3), 4.0 * n.center_stderr.x());
+    EXPECT_LT(std::abs(n.center.y() + 0.2), 4.0 * n.center_stderr.y());
+    EXPECT_LT(n.a_stderr, 3.0 * sigma);
+    const EnvelopeFit e = fit_envelope(noisy, ellipse_only());
+    EXPECT_NEAR(n.a, 0.5 * (e.a + e.b), 2.0 * n.a_stderr);
+    EXPECT_LT((n.center - e.center).norm(), 2.0 * n.center_stderr.norm());
+  }
+  // An ellipse asked to be a circle is fitted as one, and its rms says how badly.
+  const EnvelopeFit bad = fit_envelope(ellipse_envelope({{0, 0}, 1.0, 0.5, 30.0}, 24), circle);
+  ASSERT_EQ(bad.shape, FitShape::kCircle);
+  EXPECT_GT(bad.a, 0.5);
+  EXPECT_LT(bad.a, 1.0);
+  EXPECT_GT(bad.rms, 0.1);
+}
+
 TEST(EllipseFit, NoisyHalfArcWithDirections) {
   // Half arcs are where the directions matter: the points alone leave the far side free.
   TrueEllipse e{{0.0, 0.0}, 1.0, 0.2, 35.0};
