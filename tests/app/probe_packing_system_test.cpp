@@ -265,6 +265,7 @@ TEST(Probe, ASaddleHasNoLinearResponseUntilItIsLeft) {
   const std::string g_state = paths::state("imported");
   EXPECT_EQ(got.attr_int(g_state, "saddle_negative_modes"), 2);
   EXPECT_GE(got.attr_int(g_state, "saddle_rounds"), 1);
+  EXPECT_LT(got.attr_double(g_state, "force_balance"), 1e-4);
   EXPECT_FALSE(got.has_attr(paths::envelope(g_state, "linear_response_5e-05"), "error"));
 }
 
