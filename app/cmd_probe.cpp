@@ -270,13 +270,12 @@ std::filesystem::path probe_packing(const ProbeRequest& r) {
     const double p0 = sys->measure().pressure;
     const Eigen::Matrix3d s0 = sys->stress();
     saddle = dem::leave_saddle(*sys, dro.state_rest.minimise);
-    // The state's force_balance is that of where it ended.
-    if (saddle->rounds > 0)
-      rest.at_rest = dem::force_balance(dem::packing_of(*sys), dro.system.material.k);
     if (saddle->rounds == 0) {
       log::info("not a saddle of its energy (", saddle->negative_modes,
                 " negative modes at rest): nothing moved");
     } else {
+      // The state's force_balance is that of where it ended.
+      rest.at_rest = dem::force_balance(dem::packing_of(*sys), dro.system.material.k);
       const Moved m = what_moved(packing, *sys, r_mean);
       log::info("a saddle of its energy with ", saddle->negative_modes,
                 " negative mode(s): moved off along them and minimised (", saddle->rounds,
