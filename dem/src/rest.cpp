@@ -164,8 +164,8 @@ SaddleEscape leave_saddle(DemSystem& sys, const MinimiseOptions& options, int ma
   lo.k = mo.k;
   // A minimum is told by the fastest factorisation (CHOLMOD where the build has it); a saddle's
   // modes are counted, and its direction found, by the simplicial LDL^T, which counts them at any
-  // size (a failed CHOLMOD is diagnosed only up to diagnose_max_dof) but takes longer: about 35 s
-  // against 2 s for 8000 spheres at nu = 0.82.
+  // size (a failed CHOLMOD is diagnosed only up to diagnose_max_dof) but takes longer: a 40 s
+  // rest stage for 8000 spheres, whose response CHOLMOD gives in 2 s (docs/probes.md).
   LinearResponseOptions ldlt = lo;
   ldlt.solver = LinearSolver::kSimplicialLdlt;
   PackingData packing = packing_of(sys);
