@@ -56,6 +56,9 @@ struct CirclePointResidual {
 // covariance of the shape, at a fraction of the cost of the (n + 5)-square one.
 class EllipseDistanceCost : public ceres::SizedCostFunction<1, 5> {
  public:
+  // Distances below this fraction of the ellipse's size are rounding: their direction is noise.
+  static constexpr double kCornerRel = 1e-8;
+
   EllipseDistanceCost(const Eigen::Vector2d& p, double t0) : p_(p), t_(t0) {}
   double latent_angle() const { return t_; }
   bool Evaluate(double const* const* x, double* r, double** jac) const override {
@@ -66,7 +69,16 @@ class EllipseDistanceCost : public ceres::SizedCostFunction<1, 5> {
     const double ct = std::cos(t_), st = std::sin(t_);
     const Eigen::Vector2d e = c + R * Eigen::Vector2d(s[2] * ct, s[3] * st);
     Eigen::Vector2d nv = R * Eigen::Vector2d(s[3] * ct, s[2] * st);
-    if (nv.norm() < 1e-300) nv = p_ - e;  // tip of a zero-width ellipse
+    // A zero-width ellipse (b = 0, or b below rounding of a) has a corner at each tip. A point
+    // beyond a tip is nearest to the corner, where the normal is undefined; the normal at an
+    // angle a rounding away from the tip points across the axis, which made that point's
+    // distance zero and stalled the fit at its start. Elsewhere p - e lies along the normal
+    // of the nearest point, so there p - e is the direction.
+    const Eigen::Vector2d d = p_ - e;
+    const double dn = d.norm(), size = std::abs(s[2]) + std::abs(s[3]);
+    if (nv.norm() < 1e-300 ||
+        (dn > kCornerRel * size && std::abs(nv.dot(d)) < 0.5 * nv.norm() * dn))
+      nv = d;
     const double nn = nv.norm();
     if (nn < 1e-300) {  // point exactly at such a tip: no direction, no residual
       r[0] = 0.0;
@@ -74,7 +86,7 @@ class EllipseDistanceCost : public ceres::SizedCostFunction<1, 5> {
       return true;
     }
     const Eigen::Vector2d nh = nv / nn;
-    r[0] = nh.dot(p_ - e);
+    r[0] = nh.dot(d);
     if (jac && jac[0]) {
       const Eigen::Vector2d local(s[2] * ct, s[3] * st);
       const Eigen::Vector2d de_phi = R * Eigen::Vector2d(-local.y(), local.x());
@@ -312,6 +324,20 @@ Normalized normalize(const std::vector<Eigen::Vector2d>& points) {
   return out;
 }
 
+double line_ssr(const Normalized& nz) {
+  point_operations() += static_cast<std::int64_t>(nz.q.size());
+  // The points are centred (normalize): the line is their principal axis. The distances are
+  // summed, not read off the scatter's smaller eigenvalue, which is only good to rounding of the
+  // larger one (n 1e-16), far above rounding_ssr.
+  Eigen::Matrix2d S = Eigen::Matrix2d::Zero();
+  for (const auto& p : nz.q) S += p * p.transpose();
+  const Eigen::Vector2d normal =
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(S).eigenvectors().col(0);
+  double ssr = 0.0;
+  for (const auto& p : nz.q) ssr += normal.dot(p) * normal.dot(p);
+  return ssr;
+}
+
 int count_distinct(const std::vector<Eigen::Vector2d>& q, double tol, int enough) {
   std::vector<Eigen::Vector2d> kept;
   for (const auto& p : q) {
@@ -357,7 +383,8 @@ EllipseGuess best_guess(const std::vector<Eigen::Vector2d>& q, const std::vector
   EllipseGuess g = ellipse_guess_algebraic(q);
   if (g.ok) return g;
   // Principal axes: for points spread evenly in t, the variance along an axis of length a is
-  // a^2 / 2. This always exists (collinear points give b = 0, a line).
+  // a^2 / 2. This always exists; fit_ellipse refuses collinear points (b = 0) without
+  // directions before it fits.
   Eigen::Vector2d mean = Eigen::Vector2d::Zero();
   for (const auto& p : q) mean += p;
   mean /= static_cast<double>(q.size());
@@ -456,6 +483,16 @@ EnvelopeFit circle_result(const fit_detail::Normalized& nz, const CurveFit& f,
 
 namespace {
 EnvelopeFit fit_ellipse_or_circle(const Envelope& env, const FitOptions& options);
+
+// Points collinear to rounding (fit_detail::line_ssr) determine a line; `why` says what they
+// leave undetermined for the shape asked for.
+void refuse_collinear(const fit_detail::Normalized& nz, const std::string& why) {
+  if (fit_detail::line_ssr(nz) > fit_detail::rounding_ssr(nz.q.size())) return;
+  throw InputError("fit: the " + std::to_string(nz.q.size()) +
+                   " points are collinear to rounding: " + why +
+                   "; fit a line (shape line or "
+                   "auto)");
+}
 }  // namespace
 
 EnvelopeFit fit_circle(const Envelope& env, const FitOptions& options) {
@@ -463,6 +500,7 @@ EnvelopeFit fit_circle(const Envelope& env, const FitOptions& options) {
   check_points(env, 3, "a circle");
   const fit_detail::Normalized nz = fit_detail::normalize(env.response);
   if (!(nz.scale > 0.0)) throw InputError("fit: degenerate data, all points coincide");
+  refuse_collinear(nz, "a circle through them would have an infinite radius");
   // Kasa's linear fit x^2 + y^2 + D x + E y + F = 0 as the start.
   const auto n = static_cast<Eigen::Index>(nz.q.size());
   Eigen::MatrixXd X(n, 3);
@@ -512,6 +550,13 @@ EnvelopeFit fit_ellipse_or_circle(const Envelope& env, const FitOptions& options
           ? fit_detail::best_guess(nz.q, env.theta_deg, options.use_theta, &used_theta)
           : fit_detail::robust_guess(nz.q, env.theta_deg, options.use_theta, options.seed,
                                      &used_theta);
+  // Every segment that covers collinear points fits them exactly: only the directions (a
+  // rank-one map) say which. Without them the fit stalled at its start and reported a wrong
+  // segment (b = 0, a from the points' spread) as converged.
+  if (!used_theta)
+    refuse_collinear(nz,
+                     "without the probe directions (theta_deg) no ellipse through them is "
+                     "determined");
   const double scale = options.loss_scale > 0.0 ? options.loss_scale / nz.scale : 0.0;
   CurveFit f = fit_detail::solve_ellipse(nz.q, g, options.loss, scale, options.compute_covariance,
                                          options.max_iterations, options.method);

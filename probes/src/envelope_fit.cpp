@@ -198,8 +198,7 @@ EnvelopeFit select_shape(const Envelope& env, const FitOptions& options) {
   const fit_detail::Normalized nz = fit_detail::normalize(env.response);
   const double L = nz.scale;
   const double n = static_cast<double>(env.size());
-  constexpr double kExactRel = 1e-9;  // rounding level of a noiseless fit, relative to size
-  const double tiny = kExactRel * kExactRel * n;
+  const double tiny = fit_detail::rounding_ssr(env.size());
   const double ssr_line = sum_of_squares(line.residuals, L);
   if (ssr_line <= tiny) {
     line.selection_note = "auto: line (points collinear to rounding)";

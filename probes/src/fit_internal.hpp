@@ -4,6 +4,7 @@
 
 #include <Eigen/Dense>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
@@ -80,6 +81,19 @@ struct Normalized {
 };
 Normalized normalize(const std::vector<Eigen::Vector2d>& points);
 
+// A noiseless fit's residuals relative to the data's size (Normalized::scale): a sum of
+// squared residuals, in units of that size squared, within rounding_ssr(n) is rounding.
+constexpr double kRoundingRel = 1e-9;
+inline double rounding_ssr(std::size_t n) {
+  return kRoundingRel * kRoundingRel * static_cast<double>(n);
+}
+
+// Sum of squared distances of the normalized points from their total-least-squares line.
+// Within rounding_ssr the points are collinear: a line without a test in the automatic
+// choice, no circle (its radius would be infinite), and an ellipse only with the probe
+// directions, which fix the segment's length (docs/fitting.md "Shape criterion").
+double line_ssr(const Normalized& nz);
+
 // The range of a robust loss scale relative to the normalized data size. Below it, exact data
 // (MAD = 0) would make every point an outlier; a given scale beyond its inverse discounts no
 // point (that is --loss none), and its square, which the losses take, overflows near 1e154.
@@ -103,7 +117,7 @@ struct CurveFit {
 // Ellipse from guess g (normalized units). With a robust loss and loss_scale <= 0 the scale is
 // chosen from the residuals (two passes: from the guess, then from the first robust fit).
 CurveFit solve_ellipse(const std::vector<Eigen::Vector2d>& q, const EllipseGuess& g, FitLoss loss,
-                       double loss_scale, bool covariance, int max_iterations);
+                       double loss_scale, bool covariance, int max_iterations, FitMethod method);
 CurveFit solve_circle(const std::vector<Eigen::Vector2d>& q, const Eigen::Vector2d& c, double r,
                       const std::vector<double>& t, FitLoss loss, double loss_scale,
                       bool covariance, int max_iterations);

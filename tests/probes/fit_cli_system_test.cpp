@@ -171,6 +171,10 @@ TEST(FitCli, BadInputExits2WithAReason) {
   expect_input_error(
       "--in " + write_csv("same.csv", "x,y\n1,1\n1,1\n1,1\n1,1\n1,1\n1,1\n").string(),
       "all points coincide");
+  // Evenly spaced on a segment, no directions: no ellipse is determined (it was a wrong one).
+  const fs::path segment = write_csv("segment.csv", "x,y\n0,0\n1,2\n2,4\n3,6\n4,8\n5,10\n");
+  expect_input_error("--in " + segment.string() + " --shape ellipse",
+                     "the 6 points are collinear to rounding");
   const fs::path ok = write_csv("ok.csv", "x,y\n1,0\n0,1\n-1,0\n0,-1\n0.7,0.7\n");
   // In data units (this file's size is 1): 1e308 went into the fit as inf, 1e-320 failed it
   // and the message blamed the data.
