@@ -176,101 +176,141 @@ StepResult integrate(const Law& law, const MaterialState& start, const Eigen::Ma
   return integrate_adaptive(VirtualLawOps{law}, start, d_eps, options);
 }
 
+namespace {
+
+// One load step of mixed control: Newton on the unknown strain components from the state y.
+// On failure `reason` says why and the step changes nothing.
+struct LoadStep {
+  bool ok = false;
+  std::string reason;
+  StepResult res;
+  Vector6d e = Vector6d::Zero();
+  int iterations = 0;
+  double residual = 0.0;
+};
+
+LoadStep mixed_load_step(const Law& law, const MaterialState& y, const MixedControl& control,
+                         const MixedOptions& options, const std::vector<int>& s_idx,
+                         const std::vector<int>& e_idx, double fraction) {
+  LoadStep out;
+  Vector6d e = control.strain_increment * fraction;
+  const Vector6d target = control.stress_increment * fraction;
+  const int ns = static_cast<int>(s_idx.size());
+  if (ns == 0) {
+    out.res = integrate(law, y, from_mandel(e), options.step);
+    out.ok = out.res.success;
+    out.reason = out.res.reason;
+    out.e = e;
+    return out;
+  }
+  auto solve_update = [&](const Matrix6d& c, const Eigen::VectorXd& rhs,
+                          Eigen::VectorXd* dx) -> bool {
+    Eigen::MatrixXd css(ns, ns);
+    for (int a = 0; a < ns; ++a)
+      for (int b = 0; b < ns; ++b) css(a, b) = c(s_idx[a], s_idx[b]);
+    Eigen::FullPivLU<Eigen::MatrixXd> lu(css);
+    if (!lu.isInvertible()) return false;
+    *dx = lu.solve(rhs);
+    return true;
+  };
+  const std::string singular = "tangent singular on the stress-controlled components";
+  // Predictor from the tangent at the start, in the direction of the prescribed strain.
+  for (int i : s_idx) e(i) = 0.0;
+  Matrix6d c = law.tangent(y, from_mandel(e));
+  Eigen::VectorXd rhs(ns), dx;
+  for (int a = 0; a < ns; ++a) {
+    double v = target(s_idx[a]);
+    for (int j : e_idx) v -= c(s_idx[a], j) * e(j);
+    rhs(a) = v;
+  }
+  if (!solve_update(c, rhs, &dx)) {
+    out.reason = singular;
+    return out;
+  }
+  for (int a = 0; a < ns; ++a) e(s_idx[a]) = dx(a);
+  for (int it = 0; it < options.max_iterations; ++it) {
+    out.res = integrate(law, y, from_mandel(e), options.step);
+    ++out.iterations;
+    if (!out.res.success) {
+      out.reason = "iteration " + std::to_string(it + 1) + ": " + out.res.reason;
+      return out;
+    }
+    const Vector6d ds = to_mandel(Eigen::Matrix3d(out.res.end.stress - y.stress));
+    Eigen::VectorXd r(ns);
+    for (int a = 0; a < ns; ++a) r(a) = ds(s_idx[a]) - target(s_idx[a]);
+    out.residual = r.lpNorm<Eigen::Infinity>();
+    if (out.residual <=
+        options.stress_tolerance_abs + options.stress_tolerance_rel * out.res.end.stress.norm()) {
+      out.ok = true;
+      out.e = e;
+      return out;
+    }
+    // The secant through the increment is best approximated by the mean of the tangents
+    // at its two ends (exact for a tangent that varies linearly along the step).
+    const Eigen::Matrix3d de = from_mandel(e);
+    c = 0.5 * (law.tangent(y, de) + law.tangent(out.res.end, de));
+    if (!solve_update(c, r, &dx)) {
+      out.reason = singular;
+      return out;
+    }
+    for (int a = 0; a < ns; ++a) e(s_idx[a]) -= dx(a);
+  }
+  out.reason = "Newton did not converge in " + std::to_string(options.max_iterations) +
+               " iterations (residual " + fmt(out.residual) + " Pa)";
+  return out;
+}
+
+}  // namespace
+
 MixedResult integrate_mixed(const Law& law, const MaterialState& start, const MixedControl& control,
                             const MixedOptions& options) {
   MixedResult out;
+  out.step.end = start;
   std::string why;
   if (!options.IsValid(&why)) {
     out.step.reason = "invalid mixed options: " + why;
-    out.step.end = start;
     return out;
   }
   std::vector<int> s_idx, e_idx;
   for (int i = 0; i < 6; ++i) (control.stress_controlled[i] ? s_idx : e_idx).push_back(i);
-  const int ns = static_cast<int>(s_idx.size());
   MaterialState y = start;
-  const double inv_l = 1.0 / options.load_steps;
-  for (int step = 0; step < options.load_steps; ++step) {
-    Vector6d e = control.strain_increment * inv_l;
-    const Vector6d target = control.stress_increment * inv_l;
-    StepResult res;
-    if (ns == 0) {
-      res = integrate(law, y, from_mandel(e), options.step);
-      if (!res.success) {
-        out.step = res;
-        return out;
+  // A load step that fails is halved and tried again: Newton's secant loses its way on a large
+  // step, and near a limit state a step must shrink to follow the curve (the sand's drained
+  // stress-controlled triaxial needed 20 steps by hand for 2e5 Pa). A step that still fails
+  // below kMinLoadFraction of the increment means the target cannot be followed: beyond the
+  // law's strength, typically, where no strain gives the prescribed stress.
+  constexpr double kMinLoadFraction = 1e-6;
+  const double nominal = 1.0 / options.load_steps;
+  double h = nominal;
+  while (out.fraction_done < 1.0) {
+    h = std::min(h, 1.0 - out.fraction_done);
+    // The last step takes the remainder exactly: rounding must not leave a sliver.
+    if (1.0 - out.fraction_done - h < 1e-12) h = 1.0 - out.fraction_done;
+    const LoadStep ls = mixed_load_step(law, y, control, options, s_idx, e_idx, h);
+    out.iterations += ls.iterations;
+    if (!ls.ok) {
+      if (h * 0.5 >= kMinLoadFraction) {
+        h *= 0.5;
+        ++out.load_step_cuts;
+        continue;
       }
-    } else {
-      auto solve_update = [&](const Matrix6d& c, const Eigen::VectorXd& rhs,
-                              Eigen::VectorXd* dx) -> bool {
-        Eigen::MatrixXd css(ns, ns);
-        for (int a = 0; a < ns; ++a)
-          for (int b = 0; b < ns; ++b) css(a, b) = c(s_idx[a], s_idx[b]);
-        Eigen::FullPivLU<Eigen::MatrixXd> lu(css);
-        if (!lu.isInvertible()) return false;
-        *dx = lu.solve(rhs);
-        return true;
-      };
-      // Predictor from the tangent at the start, in the direction of the prescribed strain.
-      for (int i : s_idx) e(i) = 0.0;
-      Matrix6d c = law.tangent(y, from_mandel(e));
-      Eigen::VectorXd rhs(ns), dx;
-      for (int a = 0; a < ns; ++a) {
-        double v = target(s_idx[a]);
-        for (int j : e_idx) v -= c(s_idx[a], j) * e(j);
-        rhs(a) = v;
-      }
-      if (!solve_update(c, rhs, &dx)) {
-        out.step.reason = "mixed control: tangent singular on the stress-controlled components";
-        out.step.end = y;
-        return out;
-      }
-      for (int a = 0; a < ns; ++a) e(s_idx[a]) = dx(a);
-      bool converged = false;
-      double res_norm = 0.0;
-      for (int it = 0; it < options.max_iterations; ++it) {
-        res = integrate(law, y, from_mandel(e), options.step);
-        ++out.iterations;
-        if (!res.success) {
-          out.step = res;
-          out.step.reason =
-              "mixed control, iteration " + std::to_string(it + 1) + ": " + res.reason;
-          return out;
-        }
-        const Vector6d ds = to_mandel(Eigen::Matrix3d(res.end.stress - y.stress));
-        Eigen::VectorXd r(ns);
-        for (int a = 0; a < ns; ++a) r(a) = ds(s_idx[a]) - target(s_idx[a]);
-        res_norm = r.lpNorm<Eigen::Infinity>();
-        const double tol =
-            options.stress_tolerance_abs + options.stress_tolerance_rel * res.end.stress.norm();
-        if (res_norm <= tol) {
-          converged = true;
-          break;
-        }
-        // The secant through the increment is best approximated by the mean of the tangents
-        // at its two ends (exact for a tangent that varies linearly along the step).
-        const Eigen::Matrix3d de = from_mandel(e);
-        c = 0.5 * (law.tangent(y, de) + law.tangent(res.end, de));
-        if (!solve_update(c, r, &dx)) {
-          out.step.reason = "mixed control: tangent singular on the stress-controlled components";
-          out.step.end = res.end;
-          return out;
-        }
-        for (int a = 0; a < ns; ++a) e(s_idx[a]) -= dx(a);
-      }
-      out.stress_residual = std::max(out.stress_residual, res_norm);
-      if (!converged) {
-        out.step = res;
-        out.step.success = false;
-        out.step.reason = "mixed control: Newton did not converge in " +
-                          std::to_string(options.max_iterations) + " iterations (residual " +
-                          fmt(res_norm) + " Pa)";
-        return out;
-      }
+      out.step = ls.res;
+      out.step.success = false;
+      out.step.end = y;
+      out.step.reason = "mixed control: a load step of " + fmt(h) + " of the increment fails at " +
+                        fmt(out.fraction_done) + " of it (" + ls.reason + ")" +
+                        (s_idx.empty() ? ""
+                                       : "; typically the stress target is beyond the law's "
+                                         "strength, where no strain gives it");
+      return out;
     }
-    out.strain_increment += e;
-    y = res.end;
-    out.step = res;
+    out.strain_increment += ls.e;
+    out.stress_residual = std::max(out.stress_residual, ls.residual);
+    out.fraction_done = 1.0 - out.fraction_done - h <= 0.0 ? 1.0 : out.fraction_done + h;
+    ++out.load_steps_taken;
+    y = ls.res.end;
+    out.step = ls.res;
+    h = std::min(2.0 * h, nominal);  // grow back after a cut
   }
   out.step.end = y;
   return out;

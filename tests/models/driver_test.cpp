@@ -266,6 +266,54 @@ TEST(Driver, MixedControlMeetsStressTargetOnHypoplasticDrainedTriaxial) {
   EXPECT_TRUE(r.strain_increment.allFinite());
 }
 
+// A stress-controlled load step too large for Newton is halved until it converges. The sand's
+// drained triaxial to sigma_xx = 3e5 Pa (from 1e5) in one load step said "Newton did not
+// converge in 50 iterations (residual 137 Pa)"; 20 load steps had to be asked for by hand.
+TEST(Driver, MixedControlHalvesALoadStepThatNewtonCannotTake) {
+  auto law = make_law("hypoplastic_wu");
+  const MaterialState s = sand_state(*law);
+  MixedControl c;
+  c.stress_controlled = {true, true, true, true, true, true};
+  c.stress_increment(0) = 2e5;
+  const MixedOptions o;  // one load step
+  const MixedResult r = integrate_mixed(*law, s, c, o);
+  ASSERT_TRUE(r.step.success) << r.step.reason;
+  EXPECT_GT(r.load_step_cuts, 0);
+  EXPECT_EQ(r.fraction_done, 1.0);
+  // Each converged load step meets its target to the Newton tolerance.
+  const double tol = r.load_steps_taken * (o.stress_tolerance_abs + o.stress_tolerance_rel * 4e5);
+  EXPECT_NEAR(r.step.end.stress(0, 0), 3e5, tol);
+  EXPECT_NEAR(r.step.end.stress(1, 1), 1e5, tol);
+  EXPECT_NEAR(r.step.end.stress(2, 2), 1e5, tol);
+  EXPECT_GT(r.strain_increment(0), 0.0);  // compression positive
+}
+
+// Beyond the law's strength no strain gives the stress asked for: the sand's drained triaxial
+// peaks near sigma_xx = 3.66e5 Pa. The result is the last state that met its target, with the
+// strain and the fraction of the increment that led there; before, `end` was Newton's last
+// unconverged iterate (3.73e5 Pa), with no fraction to say how far the path got.
+TEST(Driver, MixedControlBeyondTheStrengthEndsAtTheLastConvergedState) {
+  auto law = make_law("hypoplastic_wu");
+  const MaterialState s = sand_state(*law);
+  MixedControl c;
+  c.stress_controlled = {true, true, true, true, true, true};
+  c.stress_increment(0) = 3e5;
+  MixedOptions o;
+  o.load_steps = 20;
+  const MixedResult r = integrate_mixed(*law, s, c, o);
+  ASSERT_FALSE(r.step.success);
+  EXPECT_NE(r.step.reason.find("mixed control: a load step of"), std::string::npos)
+      << r.step.reason;
+  EXPECT_NE(r.step.reason.find("beyond the law's strength"), std::string::npos) << r.step.reason;
+  EXPECT_GT(r.fraction_done, 0.8);
+  EXPECT_LT(r.fraction_done, 1.0);
+  const double tol = r.load_steps_taken * (o.stress_tolerance_abs + o.stress_tolerance_rel * 4e5);
+  EXPECT_NEAR(r.step.end.stress(0, 0), 1e5 + r.fraction_done * 3e5, tol);
+  EXPECT_NEAR(r.step.end.stress(1, 1), 1e5, tol);
+  EXPECT_TRUE(r.strain_increment.allFinite());
+  EXPECT_GT(r.strain_increment(0), 0.02);  // the peak lies at about 5 % axial strain
+}
+
 TEST(Driver, FailuresAreReasonsNotExceptions) {
   auto law = make_law("hypoplastic_wu");
   MaterialState s = sand_state(*law);

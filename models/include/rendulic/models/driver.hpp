@@ -91,14 +91,20 @@ struct MixedOptions {
   // reproducibility, so Newton is not chasing sub-step noise.
   double stress_tolerance_rel = 1e-9;
   double stress_tolerance_abs = 1e-6;  // Pa
-  // The increment is applied in this many equal load steps, each solved by Newton.
+  // The increment is applied in this many equal load steps, each solved by Newton; a load step
+  // that fails is halved and tried again (down to 1e-6 of the increment).
   int load_steps = 1;
   bool IsValid(std::string* why) const;
 };
 
+// On failure `step.end` is the state after the last load step that converged, and
+// strain_increment and fraction_done are the part of the increment applied up to it.
 struct MixedResult {
   StepResult step;  // of the last load step, with `end` the final state
-  Vector6d strain_increment = Vector6d::Zero();  // the full solved increment (Mandel)
+  Vector6d strain_increment = Vector6d::Zero();  // the solved increment applied (Mandel)
+  double fraction_done = 0.0;                    // of the prescribed increments applied
+  int load_steps_taken = 0;                      // converged load steps
+  int load_step_cuts = 0;                        // load steps halved after a failure
   int iterations = 0;                            // Newton iterations, summed over load steps
   double stress_residual = 0.0;                  // largest final residual over load steps (Pa)
 };
