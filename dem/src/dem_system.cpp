@@ -42,6 +42,41 @@ bool SystemOptions::IsValid(std::string* why) const {
   return true;
 }
 
+namespace {
+
+// x wrapped into the cell [0, L): as the list bins it.
+inline double wrapped(double x, double L) {
+  double q = x - L * std::floor(x / L);
+  if (q >= L) q -= L;  // floor rounding can leave q == L
+  return q < 0 ? 0.0 : q;
+}
+
+// Two particles at one point (a particle listed twice in a file, say) have no contact normal:
+// their force was NaN, and the first step ended in "DEM integration diverged", an internal
+// error (exit 1). Only equal wrapped positions are such a pair: any distance above zero has
+// its normal.
+void refuse_coincident(const Particles& p, const Eigen::Vector3d& L) {
+  const std::size_t n = p.size();
+  std::vector<std::array<double, 3>> q(n);
+  for (std::size_t i = 0; i < n; ++i)
+    q[i] = {wrapped(p.x[i], L[0]), wrapped(p.y[i], L[1]), wrapped(p.z[i], L[2])};
+  std::vector<std::size_t> order(n);
+  for (std::size_t i = 0; i < n; ++i) order[i] = i;
+  std::sort(order.begin(), order.end(),
+            [&](std::size_t a, std::size_t b) { return q[a] != q[b] ? q[a] < q[b] : a < b; });
+  for (std::size_t k = 1; k < n; ++k) {
+    const std::size_t i = order[k - 1], j = order[k];
+    if (q[i] != q[j]) continue;
+    throw InputError("DEM system: particles " + std::to_string(i) + " and " + std::to_string(j) +
+                     " (counted from 0 in the packing's order) are both at (" + decimal_g(q[i][0]) +
+                     ", " + decimal_g(q[i][1]) + ", " + decimal_g(q[i][2]) +
+                     ") m: two spheres at one point have no contact normal (a particle listed "
+                     "twice?)");
+  }
+}
+
+}  // namespace
+
 DemSystem::DemSystem(Particles particles, const PeriodicCell& cell, const SystemOptions& options)
     : p_(std::move(particles)), cell_(cell), options_(options) {
   std::string why;
@@ -50,6 +85,7 @@ DemSystem::DemSystem(Particles particles, const PeriodicCell& cell, const System
   if (!cell_.is_orthorhombic() || !(cell_.lengths().minCoeff() > 0) || !cell_.h.allFinite())
     throw InputError("DEM system: the cell must be orthorhombic with positive finite lengths");
   if (p_.size() < 2) throw InputError("DEM system needs at least 2 particles");
+  refuse_coincident(p_, cell_.lengths());
   dt_ = time_step(options_.material, options_.dt_factor);
   solid_volume_ = p_.total_volume();
   stress_scratch_.assign(3 * p_.size(), 0.0);
@@ -132,6 +168,7 @@ DemSystem DemSystem::restore(const State& s, const SystemOptions& options) {
   d.steps_ = s.steps;
   d.dt_ = time_step(options.material, options.dt_factor);
   check_saved_state(s, d.dt_);
+  refuse_coincident(s.particles, s.lengths);
   d.solid_volume_ = d.p_.total_volume();
   d.stress_scratch_.assign(3 * d.p_.size(), 0.0);
   d.init_rotations();
@@ -227,12 +264,7 @@ void DemSystem::rebuild_list() {
   }
 #pragma omp parallel for schedule(static) num_threads(team) if (team > 1)
   for (std::size_t i = 0; i < n; ++i)
-    for (int a = 0; a < 3; ++a) {
-      double q = pos[a][i] - L[a] * std::floor(pos[a][i] / L[a]);
-      if (q >= L[a]) q -= L[a];  // floor rounding can leave q == L
-      if (q < 0) q = 0;
-      pos[a][i] = q;
-    }
+    for (int a = 0; a < 3; ++a) pos[a][i] = wrapped(pos[a][i], L[a]);
   if (friction_) {
     const std::vector<std::int64_t> old_offset = list_.offset;
     const std::vector<std::int32_t> old_index = list_.index;

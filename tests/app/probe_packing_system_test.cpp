@@ -486,6 +486,13 @@ TEST(Probe, BadPackingFilesExitTwoWithOneLine) {
                  data_file(kBox, "Atoms # sphere",
                            "1 1 0.009 2000 0.001 0.001 0.001\n2 1 0.009 2000 0.005 0.005 0.005\n"),
                  "periodic cell too small");
+  // Two atoms at one point: their force was NaN, "internal error: DEM integration diverged"
+  // (exit 1).
+  expect_refused("coincident.data",
+                 data_file(kBox, "Atoms # sphere",
+                           "1 1 0.002 2000 0.003 0.001 0.001\n2 1 0.002 2000 0.003 0.001 0.001\n"),
+                 "coincident.data (LAMMPS data file): DEM system: particles 0 and 1 (counted "
+                 "from 0 in the packing's order) are both at (0.003, 0.001, 0.001) m");
   expect_refused("duplicate.data",
                  data_file(kBox, "Atoms # sphere",
                            "1 1 0.002 2000 0.001 0.001 0.001\n1 1 0.002 2000 0.005 0.005 0.005\n"),

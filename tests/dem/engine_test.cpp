@@ -306,6 +306,43 @@ TEST_F(EngineInACommaLocale, RefusalsKeepTheirPoint) {
   EXPECT_NE(skin.find("dem.skin = 0.25, not 0.5:"), std::string::npos) << skin;
 }
 
+// Two spheres at one point have no contact normal: their force was NaN, and the first step
+// ended in "DEM integration diverged", an internal error (exit 1). A particle listed twice in a
+// packing file, or in a saved state, is refused naming both.
+TEST(Engine, TwoParticlesAtOnePointAreRefusedNamingThem) {
+  SystemOptions o;
+  const State good = compressed_gas(o).save();
+  State twice = good;
+  twice.particles.x[5] = twice.particles.x[3];
+  twice.particles.y[5] = twice.particles.y[3];
+  twice.particles.z[5] = twice.particles.z[3];
+  const std::string why = input_error([&] { DemSystem::restore(twice, o); });
+  EXPECT_NE(why.find("DEM system: particles 3 and 5 (counted from 0 in the packing's order) are "
+                     "both at ("),
+            std::string::npos)
+      << why;
+  EXPECT_NE(why.find("two spheres at one point have no contact normal"), std::string::npos);
+
+  const auto n = static_cast<Eigen::Index>(good.particles.size());
+  Eigen::MatrixXd x(n, 3);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    x.row(i) << good.particles.x[k], good.particles.y[k], good.particles.z[k];
+  }
+  EXPECT_NO_THROW(system_from_positions(x, good.particles.radius, good.lengths, o));
+  Eigen::MatrixXd twice_x = x;
+  twice_x.row(7) = x.row(2);
+  const std::string read =
+      input_error([&] { system_from_positions(twice_x, good.particles.radius, good.lengths, o); });
+  EXPECT_NE(read.find("particles 2 and 7"), std::string::npos) << read;
+  // One rounding apart is a pair with a normal: its force is finite.
+  Eigen::MatrixXd near = x;
+  near.row(7) = x.row(2);
+  near(7, 0) = std::nextafter(near(7, 0), 1.0);
+  const DemSystem s = system_from_positions(near, good.particles.radius, good.lengths, o);
+  EXPECT_TRUE(std::isfinite(s.stress().norm()));
+}
+
 TEST(Engine, CellTooSmallForOneImageIsRefused) {
   Material mat;
   EXPECT_THROW(lattice(2, 1e-3, 2.1e-3, mat), InputError);
