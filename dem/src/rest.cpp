@@ -23,6 +23,7 @@ ForceBalance force_balance(const PackingData& packing, double k) {
   Eigen::MatrixX3d net = Eigen::MatrixX3d::Zero(n, 3);
   ForceBalance b;
   double sum = 0.0;
+  b.all_contacts = static_cast<int>(contacts.size());
   for (const Contact& c : contacts) {
     const Eigen::RowVector3d f = (c.force / c.branch.norm()) * c.branch.transpose();
     net.row(c.i) += f;
@@ -52,6 +53,7 @@ ForceBalance force_balance(const DemSystem& sys) {
   const std::vector<bool> keep = non_rattlers(static_cast<std::size_t>(n), contacts, min_contacts);
   Eigen::MatrixX3d net = Eigen::MatrixX3d::Zero(n, 3), torque = Eigen::MatrixX3d::Zero(n, 3);
   ForceBalance b;
+  b.all_contacts = static_cast<int>(contacts.size());
   double sum = 0.0;
   for (const Contact& c : contacts) {
     const double d = c.branch.norm();

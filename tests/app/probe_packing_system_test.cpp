@@ -428,6 +428,30 @@ std::string data_file(const std::string& box, const std::string& atoms_header,
 }
 const std::string kBox = "0 0.01 xlo xhi\n0 0.01 ylo yhi\n0 0.01 zlo zhi\n";
 
+// Two spheres pressed together (overlap 1.9 radii), no backbone: not at rest, so relaxed and
+// minimised until they part, and the log says no contact is left. Before, the balance, judged
+// over non-rattlers, was 0: "at rest as read", and the minimisation's stress change was
+// printed as 2e+306 of a pressure of 0. With no pressure the inertial number sets no rate:
+// exit 2, nothing written.
+TEST(Probe, SpheresPressedTogetherWithoutABackboneAreRelaxedApart) {
+  const fs::path dir = rendulic::testing::fresh_dir("app_probe/pressed");
+  std::ofstream(dir / "pressed.data")
+      << data_file("0 1 xlo xhi\n0 1 ylo yhi\n0 1 zlo zhi\n", "Atoms # sphere",
+                   "1 1 0.3 2000 0.2 0.2 0.2\n2 1 0.3 2000 0.2 0.2 0.21\n");
+  const CliResult r = run_rendulic(
+      "probe " + (dir / "pressed.data").string() + " --threads 1 --out " + (dir / "out").string(),
+      false);
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_EQ(r.err.find("at rest as read"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("1 contact(s) but no rigid backbone: every particle is a rattler, so "
+                       "nothing balances their forces; relaxing and minimising"),
+            std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find("no contact is left (p = 0;"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("the state has no pressure"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "out" / "results.h5"));
+}
+
 TEST(Probe, BadPackingFilesExitTwoWithOneLine) {
   expect_refused(
       "noradius.dump",

@@ -31,6 +31,7 @@ struct ForceBalance {
   double ratio = 0.0;               // max_net_force / mean_contact_force; 0 without contacts
   int non_rattlers = 0;             // particles with >= 4 contacts among non-rattlers
   int contacts = 0;                 // contacts between non-rattlers
+  int all_contacts = 0;             // contacts of any particles, rattlers' included
   // Frictional packings: the largest |net torque| on a non-rattler (N m) and it over the mean
   // contact force times <r>; zero without friction.
   double max_net_torque = 0.0;
