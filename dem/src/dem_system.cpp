@@ -44,13 +44,6 @@ bool SystemOptions::IsValid(std::string* why) const {
 
 namespace {
 
-// x wrapped into the cell [0, L): as the list bins it.
-inline double wrapped(double x, double L) {
-  double q = x - L * std::floor(x / L);
-  if (q >= L) q -= L;  // floor rounding can leave q == L
-  return q < 0 ? 0.0 : q;
-}
-
 // Two particles at one point (a particle listed twice in a file, say) have no contact normal:
 // their force was NaN, and the first step ended in "DEM integration diverged", an internal
 // error (exit 1). Only equal wrapped positions are such a pair: any distance above zero has
@@ -59,7 +52,8 @@ void refuse_coincident(const Particles& p, const Eigen::Vector3d& L) {
   const std::size_t n = p.size();
   std::vector<std::array<double, 3>> q(n);
   for (std::size_t i = 0; i < n; ++i)
-    q[i] = {wrapped(p.x[i], L[0]), wrapped(p.y[i], L[1]), wrapped(p.z[i], L[2])};
+    q[i] = {wrap_coordinate(p.x[i], L[0]), wrap_coordinate(p.y[i], L[1]),
+            wrap_coordinate(p.z[i], L[2])};
   std::vector<std::size_t> order(n);
   for (std::size_t i = 0; i < n; ++i) order[i] = i;
   std::sort(order.begin(), order.end(),
@@ -264,7 +258,7 @@ void DemSystem::rebuild_list() {
   }
 #pragma omp parallel for schedule(static) num_threads(team) if (team > 1)
   for (std::size_t i = 0; i < n; ++i)
-    for (int a = 0; a < 3; ++a) pos[a][i] = wrapped(pos[a][i], L[a]);
+    for (int a = 0; a < 3; ++a) pos[a][i] = wrap_coordinate(pos[a][i], L[a]);
   if (friction_) {
     const std::vector<std::int64_t> old_offset = list_.offset;
     const std::vector<std::int32_t> old_index = list_.index;

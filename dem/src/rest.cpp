@@ -125,11 +125,7 @@ void put_at(DemSystem& sys, const PackingData& packing) {
   for (int i = 0; i < packing.size(); ++i) {
     const auto u = static_cast<std::size_t>(i);
     double* x[3] = {&p.x[u], &p.y[u], &p.z[u]};
-    for (int a = 0; a < 3; ++a) {
-      double w = packing.positions(i, a) - L[a] * std::floor(packing.positions(i, a) / L[a]);
-      if (w >= L[a]) w -= L[a];  // a tiny negative coordinate rounds to L
-      *x[a] = w;
-    }
+    for (int a = 0; a < 3; ++a) *x[a] = wrap_coordinate(packing.positions(i, a), L[a]);
     p.vx[u] = p.vy[u] = p.vz[u] = 0.0;
   }
   st.ref_x = p.x;

@@ -36,6 +36,14 @@ struct PeriodicCell {
   void deform(const Eigen::Matrix3d& F) { h = F * h; }
 };
 
+// A coordinate wrapped into [0, L) along an orthorhombic cell's axis, as the engine keeps its
+// particles (a coordinate a rounding below a multiple of L lands on 0).
+inline double wrap_coordinate(double x, double L) {
+  double q = x - L * std::floor(x / L);
+  if (q >= L) q -= L;  // floor rounding can leave q == L
+  return q < 0 ? 0.0 : q;
+}
+
 // Minimum-image vector of a separation in a (nearly orthorhombic) cell; h_inverse = cell.h^-1,
 // passed in because callers take it once for many pairs.
 inline Eigen::Vector3d minimum_image(const PeriodicCell& cell, const Eigen::Matrix3d& h_inverse,
