@@ -288,10 +288,37 @@ TEST(Driver, MixedControlHalvesALoadStepThatNewtonCannotTake) {
   EXPECT_GT(r.strain_increment(0), 0.0);  // compression positive
 }
 
-// Beyond the law's strength no strain gives the stress asked for: the sand's drained triaxial
-// peaks near sigma_xx = 3.66e5 Pa. The result is the last state that met its target, with the
-// strain and the fraction of the increment that led there; before, `end` was Newton's last
-// unconverged iterate (3.73e5 Pa), with no fraction to say how far the path got.
+// The sand's limit surface at sigma = diag(R, 1, 1) p, a second implementation from the
+// equation (docs/models.md, Wu and Bauer 1994): d_sigma = L : d_eps + N |d_eps| can vanish, for
+// some d_eps, only where |L^-1 : N| = 1. Tensors as 3 x 3 arrays, |.| Frobenius; bisection on R.
+double wu_limit_ratio(const Law& law, double p) {
+  const double c1 = law.parameter("c1"), c2 = law.parameter("c2"), c3 = law.parameter("c3"),
+               c4 = law.parameter("c4");
+  auto excess = [&](double R) {
+    const Eigen::Matrix3d s = p * Eigen::Vector3d(R, 1.0, 1.0).asDiagonal().toDenseMatrix();
+    const double tr = s.trace();
+    Eigen::Matrix<double, 9, 9> L;
+    for (int k = 0; k < 9; ++k) {
+      Eigen::Matrix3d x = Eigen::Matrix3d::Zero();
+      x(k / 3, k % 3) = 1.0;
+      const Eigen::Matrix3d y = -c1 * tr * x - c2 * (s.cwiseProduct(x).sum() / tr) * s;
+      L.col(k) = Eigen::Map<const Eigen::Matrix<double, 9, 1>>(y.data());
+    }
+    const Eigen::Matrix3d sd = s - tr / 3.0 * Eigen::Matrix3d::Identity();
+    const Eigen::Matrix3d n = (c3 * s * s + c4 * sd * sd) / tr;
+    return L.fullPivLu().solve(Eigen::Map<const Eigen::Matrix<double, 9, 1>>(n.data())).norm() -
+           1.0;
+  };
+  double lo = 1.0, hi = 20.0;
+  for (int it = 0; it < 200 && hi - lo > 1e-14 * hi; ++it)
+    (excess(0.5 * (lo + hi)) < 0.0 ? lo : hi) = 0.5 * (lo + hi);
+  return 0.5 * (lo + hi);
+}
+
+// Beyond the law's strength no strain gives the stress asked for. The result is the last state
+// that met its target, with the strain and the fraction of the increment that led there;
+// before, `end` was Newton's last unconverged iterate (3.73e5 Pa), with no fraction to say how
+// far the path got. Where it stops is the law's limit surface, found by a second method.
 TEST(Driver, MixedControlBeyondTheStrengthEndsAtTheLastConvergedState) {
   auto law = make_law("hypoplastic_wu");
   const MaterialState s = sand_state(*law);
@@ -312,6 +339,10 @@ TEST(Driver, MixedControlBeyondTheStrengthEndsAtTheLastConvergedState) {
   EXPECT_NEAR(r.step.end.stress(1, 1), 1e5, tol);
   EXPECT_TRUE(r.strain_increment.allFinite());
   EXPECT_GT(r.strain_increment(0), 0.02);  // the peak lies at about 5 % axial strain
+  // The drained triaxial peak is on the limit surface, sigma_xx = 366498.58 Pa (34.8 deg): the
+  // path ends 0.46 Pa below it, one smallest load step (1.5e-6 of 3e5 Pa).
+  const double peak = 1e5 * wu_limit_ratio(*law, 1e5);
+  EXPECT_NEAR(r.step.end.stress(0, 0), peak, 1e-5 * peak);
 }
 
 TEST(Driver, FailuresAreReasonsNotExceptions) {
