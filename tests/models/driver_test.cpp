@@ -266,15 +266,21 @@ TEST(Driver, MixedControlMeetsStressTargetOnHypoplasticDrainedTriaxial) {
   EXPECT_TRUE(r.strain_increment.allFinite());
 }
 
+// Every stress component controlled: sigma_xx rises by `increment`, the others stay.
+MixedControl axial_stress(double increment) {
+  MixedControl c;
+  c.stress_controlled = {true, true, true, true, true, true};
+  c.stress_increment(0) = increment;
+  return c;
+}
+
 // A stress-controlled load step too large for Newton is halved until it converges. The sand's
 // drained triaxial to sigma_xx = 3e5 Pa (from 1e5) in one load step said "Newton did not
 // converge in 50 iterations (residual 137 Pa)"; 20 load steps had to be asked for by hand.
 TEST(Driver, MixedControlHalvesALoadStepThatNewtonCannotTake) {
   auto law = make_law("hypoplastic_wu");
   const MaterialState s = sand_state(*law);
-  MixedControl c;
-  c.stress_controlled = {true, true, true, true, true, true};
-  c.stress_increment(0) = 2e5;
+  const MixedControl c = axial_stress(2e5);
   const MixedOptions o;  // one load step
   const MixedResult r = integrate_mixed(*law, s, c, o);
   ASSERT_TRUE(r.step.success) << r.step.reason;
@@ -322,9 +328,7 @@ double wu_limit_ratio(const Law& law, double p) {
 TEST(Driver, MixedControlBeyondTheStrengthEndsAtTheLastConvergedState) {
   auto law = make_law("hypoplastic_wu");
   const MaterialState s = sand_state(*law);
-  MixedControl c;
-  c.stress_controlled = {true, true, true, true, true, true};
-  c.stress_increment(0) = 3e5;
+  const MixedControl c = axial_stress(3e5);
   MixedOptions o;
   o.load_steps = 20;
   const MixedResult r = integrate_mixed(*law, s, c, o);
