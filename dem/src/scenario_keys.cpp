@@ -403,6 +403,8 @@ Material material_from_scenario(const Scenario& sc) {
 
 void complete_dem_run_options(DemRunOptions& o) {
   o.prepare.rate_min = o.prepare.rate_max;  // the gas is compressed at one rate
+  o.prepare.rate_key = "preparation.rate";
+  o.loading.rate_key = "isotropic.rate_max";
   o.loading.snapshot_nu = o.branch_nu;
   o.state_rest.minimise.k = o.system.material.k;
 }

@@ -209,6 +209,32 @@ TEST(Paths, ARateNeedingMoreThanKMaxStepsIsRefusedNamingIt) {
             std::string::npos);
 }
 
+// The isotropic compression too (preparation and isotropic loading to a volume fraction): a
+// stiffness of 1e300 kg/s^2 gives dt = 7e-154 s, and `rendulic run` ran its preparation for
+// ever. The fewest steps the loading can take (at rate_max) are judged before the first.
+TEST(Paths, ACompressionNeedingMoreThanKMaxStepsIsRefusedNamingItsRate) {
+  SystemOptions stiff;
+  stiff.material.k = 1e300;
+  GasOptions g;
+  g.n_particles = 50;
+  g.volume_fraction = 0.3;
+  DemSystem sys = make_gas(stiff, g, 1);
+  const std::int64_t steps = sys.steps();
+  CompressOptions c;
+  c.rate_key = "isotropic.rate_max";
+  const std::string why = input_error([&] { compress_isotropic(sys, c); });
+  EXPECT_NE(why.find("isotropic compression from nu = 0.3 to 0.64 at isotropic.rate_max = 1000 "
+                     "1/s (dt = "),
+            std::string::npos)
+      << why;
+  EXPECT_NE(why.find("time steps, more than 1e+15"), std::string::npos) << why;
+  EXPECT_EQ(sys.steps(), steps);  // refused before the first step
+  // At the default stiffness a loading runs.
+  DemSystem soft = make_gas(SystemOptions{}, g, 1);
+  c.target_nu = 0.31;
+  EXPECT_NO_THROW(compress_isotropic(soft, c));
+}
+
 // The message's numbers keep their point under a Python session's decimal-comma locale (it read
 // "needs 1,5e+16 time steps").
 using StepCountInACommaLocale = CommaLocale;

@@ -89,6 +89,8 @@ struct CompressOptions {
   // not pass (an InputError if it does; so are snapshots beyond the stop). The samples keep
   // their ln(nu) spacing up to the stop, where one more is taken.
   double target_pressure_star = 0;
+  // The key that set rate_max, for the refusal of a loading that needs more than kMaxSteps.
+  std::string rate_key = "the compression's rate_max";
   bool IsValid(std::string* why) const;
 };
 // The inertial number I = rate 2<r> sqrt(rho / P) of a strain rate (1/s, the largest |D_aa|)
