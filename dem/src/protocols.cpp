@@ -354,7 +354,7 @@ CompressSummary compress_isotropic(DemSystem& sys, const CompressOptions& o, con
   const double sign = total >= 0 ? 1.0 : -1.0;
   const double dt = sys.dt();
   // The fewest steps a loading to a volume fraction can take (at rate_max throughout): beyond
-  // kMaxSteps it never ends. A stiffness of 1e300 kg/s^2 (dt = 7e-154 s) made the preparation
+  // kMaxSteps it never ends. A stiffness of 1e300 kg/s^2 (dt = 2e-154 s) made the preparation
   // run for ever. A loading to a pressure may stop long before its bound: not judged here.
   if (o.target_pressure_star <= 0)
     (void)step_count(std::abs(total) / (3.0 * o.rate_max * dt),

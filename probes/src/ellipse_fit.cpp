@@ -490,8 +490,7 @@ void refuse_collinear(const fit_detail::Normalized& nz, const std::string& why) 
   if (fit_detail::line_ssr(nz) > fit_detail::rounding_ssr(nz.q.size())) return;
   throw InputError("fit: the " + std::to_string(nz.q.size()) +
                    " points are collinear to rounding: " + why +
-                   "; fit a line (shape line or "
-                   "auto)");
+                   "; fit a line (shape line or auto)");
 }
 }  // namespace
 

@@ -210,7 +210,7 @@ TEST(Paths, ARateNeedingMoreThanKMaxStepsIsRefusedNamingIt) {
 }
 
 // The isotropic compression too (preparation and isotropic loading to a volume fraction): a
-// stiffness of 1e300 kg/s^2 gives dt = 7e-154 s, and `rendulic run` ran its preparation for
+// stiffness of 1e300 kg/s^2 gives dt ~ 1e-154 s, and `rendulic run` ran its preparation for
 // ever. The fewest steps the loading can take (at rate_max) are judged before the first.
 TEST(Paths, ACompressionNeedingMoreThanKMaxStepsIsRefusedNamingItsRate) {
   SystemOptions stiff;
