@@ -324,20 +324,6 @@ Normalized normalize(const std::vector<Eigen::Vector2d>& points) {
   return out;
 }
 
-double line_ssr(const Normalized& nz) {
-  point_operations() += static_cast<std::int64_t>(nz.q.size());
-  // The points are centred (normalize): the line is their principal axis. The distances are
-  // summed, not read off the scatter's smaller eigenvalue, which is only good to rounding of the
-  // larger one (n 1e-16), far above rounding_ssr.
-  Eigen::Matrix2d S = Eigen::Matrix2d::Zero();
-  for (const auto& p : nz.q) S += p * p.transpose();
-  const Eigen::Vector2d normal =
-      Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(S).eigenvectors().col(0);
-  double ssr = 0.0;
-  for (const auto& p : nz.q) ssr += normal.dot(p) * normal.dot(p);
-  return ssr;
-}
-
 int count_distinct(const std::vector<Eigen::Vector2d>& q, double tol, int enough) {
   std::vector<Eigen::Vector2d> kept;
   for (const auto& p : q) {

@@ -88,6 +88,15 @@ inline double rounding_ssr(std::size_t n) {
   return kRoundingRel * kRoundingRel * static_cast<double>(n);
 }
 
+// Total least squares, the line fit's (line_fit.cpp): the principal axis d of the weighted
+// scatter about the weighted centroid, its normal, and each point's along (s) and across (h)
+// coordinates. Iteratively reweighted by fit_line for the robust losses.
+struct Tls {
+  Eigen::Vector2d centroid, d, nrm;
+  std::vector<double> s, h;  // along and across coordinates of each point
+};
+Tls weighted_tls(const std::vector<Eigen::Vector2d>& q, const std::vector<double>& w);
+
 // Sum of squared distances of the normalized points from their total-least-squares line.
 // Within rounding_ssr the points are collinear: a line without a test in the automatic
 // choice, no circle (its radius would be infinite), and an ellipse only with the probe

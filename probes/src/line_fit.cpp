@@ -19,13 +19,12 @@ constexpr double kHuberK = 1.345;
 constexpr double kCauchyK = 2.385;
 constexpr int kIrlsIterations = 30;
 
-struct Tls {
-  Eigen::Vector2d centroid, d, nrm;
-  std::vector<double> s, h;  // along and across coordinates of each point
-};
+}  // namespace
+
+namespace fit_detail {
 
 Tls weighted_tls(const std::vector<Eigen::Vector2d>& q, const std::vector<double>& w) {
-  fit_detail::point_operations() += static_cast<std::int64_t>(q.size());
+  point_operations() += static_cast<std::int64_t>(q.size());
   Tls out;
   double wsum = 0.0;
   out.centroid.setZero();
@@ -44,7 +43,13 @@ Tls weighted_tls(const std::vector<Eigen::Vector2d>& q, const std::vector<double
   return out;
 }
 
-}  // namespace
+double line_ssr(const Normalized& nz) {
+  double ssr = 0.0;
+  for (double h : weighted_tls(nz.q, std::vector<double>(nz.q.size(), 1.0)).h) ssr += h * h;
+  return ssr;
+}
+
+}  // namespace fit_detail
 
 EnvelopeFit fit_line(const Envelope& env, const FitOptions& options) {
   const std::int64_t start = fit_detail::point_operations();
@@ -59,7 +64,7 @@ EnvelopeFit fit_line(const Envelope& env, const FitOptions& options) {
   const std::size_t n = q.size();
 
   std::vector<double> w(n, 1.0);
-  Tls tls = weighted_tls(q, w);
+  fit_detail::Tls tls = fit_detail::weighted_tls(q, w);
   double loss_scale = 0.0;
   if (options.loss != FitLoss::kNone) {
     const double k = options.loss == FitLoss::kHuber ? kHuberK : kCauchyK;
@@ -71,7 +76,7 @@ EnvelopeFit fit_line(const Envelope& env, const FitOptions& options) {
         const double u = std::abs(tls.h[i]) / loss_scale;
         w[i] = options.loss == FitLoss::kHuber ? (u <= 1.0 ? 1.0 : 1.0 / u) : 1.0 / (1.0 + u * u);
       }
-      const Tls next = weighted_tls(q, w);
+      const fit_detail::Tls next = fit_detail::weighted_tls(q, w);
       const bool done =
           (next.centroid - tls.centroid).norm() < 1e-14 && std::abs(next.d.dot(tls.nrm)) < 1e-14;
       tls = next;
