@@ -353,16 +353,22 @@ CompressSummary compress_isotropic(DemSystem& sys, const CompressOptions& o, con
   const double total = ln_target - ln_start;  // > 0: compression
   const double sign = total >= 0 ? 1.0 : -1.0;
   const double dt = sys.dt();
-  // The fewest steps a loading to a volume fraction can take (at rate_max throughout): beyond
-  // kMaxSteps it never ends. A stiffness of 1e300 kg/s^2 (dt = 2e-154 s) made the preparation
-  // run for ever. A loading to a pressure may stop long before its bound: not judged here.
-  if (o.target_pressure_star <= 0)
-    (void)step_count(std::abs(total) / (3.0 * o.rate_max * dt),
-                     "isotropic compression from nu = " + decimal_g(sys.volume_fraction()) +
-                         " to " + decimal_g(o.target_nu) + " at " + o.rate_key + " = " +
-                         decimal_g(o.rate_max) + " 1/s (dt = " + decimal_g(dt) +
-                         " s, set by material.k, density and r_mean)");
   const Material& mat = sys.material();
+  const bool to_pressure = o.target_pressure_star > 0;
+  // The fewest steps a loading to its volume fraction can take (at rate_max throughout): beyond
+  // kMaxSteps it never ends. A stiffness of 1e300 kg/s^2 (dt = 2e-154 s) made the preparation
+  // run for ever. A loading to a pressure may stop before its bound, but where the whole span
+  // needs that many steps each step moves ln(nu) by less than 1e-15 of it, and a loading that
+  // starts below its P* does not reach it in any run's time either (isotropic.rate_max =
+  // 1e-300 1/s ran for ever, its progress line estimating 4e8 years).
+  if (!to_pressure || pressure(sys.stress()) / mat.k_star() < o.target_pressure_star)
+    (void)step_count(
+        std::abs(total) / (3.0 * o.rate_max * dt),
+        "isotropic compression from nu = " + decimal_g(sys.volume_fraction()) + " to " +
+            (to_pressure ? "its bound " : "") + decimal_g(o.target_nu) +
+            (to_pressure ? " (loading to P* = " + decimal_g(o.target_pressure_star) + ")" : "") +
+            " at " + o.rate_key + " = " + decimal_g(o.rate_max) + " 1/s (dt = " + decimal_g(dt) +
+            " s, set by material.k, density and r_mean)");
   int next_sample = 0;
   double rate = o.rate_max;
   // Samples carry the loading's rate (the first one: at rest), not the shortened last step's.
@@ -394,7 +400,6 @@ CompressSummary compress_isotropic(DemSystem& sys, const CompressOptions& o, con
           "isotropic compression: snapshot volume fractions must lie strictly "
           "between the start and the target");
   std::size_t next_snap = 0;
-  const bool to_pressure = o.target_pressure_star > 0;
   bool reached = false;
   for (std::int64_t it = 0;; ++it) {
     const double done = std::log(sys.volume_fraction()) - ln_start;

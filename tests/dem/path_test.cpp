@@ -8,9 +8,11 @@
 
 #include <cmath>
 #include <random>
+#include <stdexcept>
 
 #include "comma_locale.hpp"
 #include "input_error.hpp"
+#include "rendulic/core/conventions.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/dem/probe_minimise.hpp"
 #include "rendulic/dem/protocols.hpp"
@@ -233,6 +235,31 @@ TEST(Paths, ACompressionNeedingMoreThanKMaxStepsIsRefusedNamingItsRate) {
   DemSystem soft = make_gas(SystemOptions{}, g, 1);
   c.target_nu = 0.31;
   EXPECT_NO_THROW(compress_isotropic(soft, c));
+  // A loading to a pressure is judged by its span to the bound: it may stop earlier, but not in
+  // 1e15 steps of 1e-300 of the span each (isotropic.rate_max = 1e-300 1/s ran for ever).
+  CompressOptions to_p;
+  to_p.rate_key = "isotropic.rate_max";
+  to_p.target_pressure_star = 1e-3;
+  to_p.target_nu = 0.75;
+  to_p.rate_max = to_p.rate_min = 1e-300;
+  DemSystem gas = make_gas(SystemOptions{}, g, 1);
+  int checks = 0;  // without the refusal the loading would run for ever: stop it instead
+  const auto bounded = [&](double) {
+    if (++checks > 1000) throw std::runtime_error("the loading to P* was not refused");
+  };
+  const std::string why_p = input_error([&] { compress_isotropic(gas, to_p, nullptr, bounded); });
+  EXPECT_NE(why_p.find("isotropic compression from nu = 0.3 to its bound 0.75 (loading to P* = "
+                       "0.001) at isotropic.rate_max = 1e-300 1/s (dt = "),
+            std::string::npos)
+      << why_p;
+  EXPECT_EQ(gas.steps(), steps);
+  // A packing already at its P* ends at the first check, however slow the rate.
+  DemSystem dense = jammed(0.70);
+  to_p.target_pressure_star = 0.1 * pressure(dense.stress()) / dense.material().k_star();
+  EXPECT_GT(to_p.target_pressure_star, 0.0);
+  CompressSummary done;
+  EXPECT_NO_THROW(done = compress_isotropic(dense, to_p));
+  EXPECT_LE(done.steps, 100);  // the pressure is checked every few steps
 }
 
 // The message's numbers keep their point under a Python session's decimal-comma locale (it read
