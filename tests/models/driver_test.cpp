@@ -380,6 +380,39 @@ TEST(Driver, FailuresAreReasonsNotExceptions) {
   EXPECT_NE(e.reason.find("left the law's domain"), std::string::npos) << e.reason;
 }
 
+// The fabric law ends at P = 0 and its elastic part keeps its stiffness there (3.7e10 Pa at the
+// defaults), so isotropic extension by 1e-3 from 1e5 Pa unloads it to zero pressure after 3e-6.
+// The substeps shrink towards that point as the stress vanishes; the failure says so and names
+// the law's domain, where it said "law too stiff or undefined". The stiff but well-scaled failure
+// keeps that wording.
+TEST(Driver, AnIncrementThatUnloadsTheLawToZeroStressNamesItsDomain) {
+  auto law = make_law("elastoplastic_fabric");
+  const MaterialState s =
+      law->make_state(1e5 * Eigen::Matrix3d::Identity(), Eigen::Matrix3d::Identity() / 3.0, 0.64);
+  for (const Scheme scheme : {Scheme::kModifiedEuler, Scheme::kBogackiShampine}) {
+    StepOptions o;
+    o.scheme = scheme;
+    const StepResult r = integrate(*law, s, probe_strain(kIsoExtensionDeg, 1e-3), o);
+    EXPECT_FALSE(r.success);
+    EXPECT_FALSE(r.on_substep_limit);
+    EXPECT_NE(r.reason.find("substep below 1e-10 of the increment at fraction 0.00"),
+              std::string::npos)
+        << r.reason;
+    EXPECT_NE(r.reason.find(", where the stress has fallen to "), std::string::npos) << r.reason;
+    EXPECT_NE(r.reason.find("leaves the law's domain: elastoplastic_fabric needs P > 0"),
+              std::string::npos)
+        << r.reason;
+    EXPECT_GT(r.end.stress.trace(), 0.0);
+    EXPECT_LT(r.end.stress.norm(), 1e-3 * s.stress.norm());
+  }
+  StepOptions stiff;
+  stiff.min_fraction = 0.5;  // the first rejection drops below it, far from zero stress
+  auto sand = make_law("hypoplastic_wu");
+  const StepResult w = integrate(*sand, sand_state(*sand), large_increment(), stiff);
+  EXPECT_FALSE(w.success);
+  EXPECT_NE(w.reason.find("(law too stiff or undefined)"), std::string::npos) << w.reason;
+}
+
 // The cap on substeps is the one failure a larger cap cures, so it carries its own flag (the
 // calibration counts it apart); a substep below min_fraction or a state outside the law's
 // domain does not set it. The reason names the scheme that ran.

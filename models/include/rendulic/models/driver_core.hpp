@@ -142,6 +142,10 @@ inline std::string fmt(double v) {
   return os.str();
 }
 
+// A stress below this fraction of the increment's start has "all but vanished": where the
+// substeps then shrink below min_fraction the failure names the law's domain (integrate_adaptive).
+inline constexpr double kVanishingStress = 1e-3;
+
 // One Heun trial over the strain increment de from y.
 template <typename T>
 struct Trial {
@@ -291,6 +295,27 @@ StepResultT<typename Ops::Scalar> integrate_adaptive(const Ops& law,
                  : driver_detail::heun_trial<T>(y, de, rate, correct, admissible,
                                                 &res.rate_evaluations);
   };
+  // Why the substeps shrank without end. Where the stress has all but vanished the relative error
+  // has no scale left, and a law that ends at P = 0 is approached in ever shorter substeps: an
+  // unloading probe of the fabric law at 1e5 Pa stopped at P = 0.65 Pa, its reason "law too stiff
+  // or undefined". Then the law's own reason is named, from one trial over the rest of the
+  // increment at the rate there.
+  const double start_stress = value_state(start).stress.norm();
+  const auto vanishing_stress = [&](const MaterialState& yv, double rest) {
+    const double fallen = yv.stress.norm() / start_stress;
+    if (!(fallen < driver_detail::kVanishingStress))
+      return std::string(" (law too stiff or undefined)");
+    std::string why;
+    const auto asking = [&](const MaterialState& s) { return law.admissible(s, &why); };
+    int evaluations = 0;
+    (void)driver_detail::heun_trial<double>(yv, rest * d_eps, vrate, vcorrect, asking,
+                                            &evaluations);
+    return ", where the stress has fallen to " + fmt(fallen) + " of its start" +
+           (why.empty() ? std::string()
+                        : "; the rest of the increment at the rate there leaves the law's "
+                          "domain: " +
+                              why);
+  };
   // Sloan's factor q = 0.9 (TOL/R)^(1/p), p the order of the local error estimate.
   const auto factor = [&](double err) {
     return third ? 0.9 * std::cbrt(o.tolerance / err) : 0.9 * std::sqrt(o.tolerance / err);
@@ -306,7 +331,7 @@ StepResultT<typename Ops::Scalar> integrate_adaptive(const Ops& law,
     if (dt < o.min_fraction) {
       res.reason = std::string(scheme) + ": substep below " + fmt(o.min_fraction) +
                    " of the increment at fraction " + fmt(value_of(t)) +
-                   " (law too stiff or undefined)";
+                   vanishing_stress(value_state(y), 1.0 - value_of(t));
       res.end = y;
       return res;
     }
