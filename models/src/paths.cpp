@@ -19,6 +19,11 @@ void record(PathSeries* s, const Eigen::Matrix3d& eps, const MaterialState& y) {
 
 PathSeries run_path(const Law& law, const MaterialState& start, const Eigen::Matrix3d& total,
                     const PathOptions& o) {
+  if (!total.allFinite()) {
+    PathSeries s;
+    s.reason = "the path's end strain is not finite";  // before its first step, for a UMAT too
+    return s;
+  }
   // A UMAT's path carries its whole STATEV (umat.hpp).
   if (const auto* umat = dynamic_cast<const UmatLaw*>(&law)) return umat->run_path(start, total, o);
   PathSeries s;

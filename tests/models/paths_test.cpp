@@ -56,6 +56,11 @@ TEST(Paths, APathBeyondSolidOrWithoutBoundOnItsStepsIsRefused) {
   const MaterialState unknown =
       law->make_state(Eigen::Matrix3d::Identity() * 1e8, Eigen::Matrix3d::Identity() * 2.0, 0.0);
   EXPECT_TRUE(undrained_axisymmetric_path(*law, unknown, -0.05, o).success);
+  // A NaN end (material_point_path(end=nan)) is refused before the first step; it read "step 1
+  // of 200: non-finite strain increment".
+  const PathSeries nan_end = undrained_axisymmetric_path(*law, dense, std::nan(""), o);
+  EXPECT_EQ(nan_end.reason, "the path's end strain is not finite");
+  EXPECT_TRUE(nan_end.stress.empty());
   o.steps = PathOptions::kMaxSteps + 1;
   std::string why;
   EXPECT_FALSE(o.IsValid(&why));
