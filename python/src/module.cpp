@@ -601,7 +601,6 @@ PYBIND11_MODULE(_rendulic, m) {
         FitOptions o;
         o.shape = fit_shape_from_string(shape);
         o.loss = fit_loss_from_string(loss);
-        if (!(loss_scale >= 0)) throw InputError("loss_scale must be >= 0");
         o.loss_scale = loss_scale;
         o.use_theta = use_theta;
         EnvelopeFit f;

@@ -110,6 +110,16 @@ def test_model_input_errors_have_the_file_readers_messages():
         rendulic.model_envelope("isotropic_elastic", 5)
     with pytest.raises(rendulic.InputError, match="unknown shape"):
         rendulic.fit_envelope(np.ones((6, 2)), shape="ellipsoid")
+    # The fit's own checks, as `rendulic fit` has them: a NaN scale read "must be >= 0".
+    for scale in (float("nan"), float("inf"), -1.0):
+        with pytest.raises(rendulic.InputError,
+                           match=r"^fit: loss_scale must be finite and >= 0 \(0: automatic\)$"):
+            rendulic.fit_envelope(np.ones((6, 2)), loss="huber", loss_scale=scale)
+    # A path's end that is not finite is refused before its first step.
+    with pytest.raises(rendulic.InputError,
+                       match=r"^undrained path of isotropic_elastic: the path's end strain is not "
+                             r"finite$"):
+        rendulic.material_point_path("isotropic_elastic", state, end=float("nan"))
 
 
 def test_odd_keys_and_argument_types_are_named_not_misread(tiny_toml, tmp_path):
