@@ -227,7 +227,7 @@ CalibrationSummary calibrate(const CalibrationData& data, const CalibrationOptio
     if (i < 0) throw InputError("calibrate: " + law->unknown_parameter(name));
     const auto& pi = law->parameter_info()[i];
     if (!(v >= pi.lower && v <= pi.upper))
-      throw InputError("calibrate: value of '" + name + "' outside its bounds");
+      throw InputError("calibrate: --value " + pi.out_of_bounds(v));
     values[i] = v;
   }
   ObjectiveOptions oo = options.objective;

@@ -93,6 +93,11 @@ const std::vector<std::string>& ElastoplasticFabric::internal_names() {
   return names;
 }
 
+std::string ParameterInfo::out_of_bounds(double value) const {
+  return "parameter '" + name + "' = " + format_g(value) + " is outside its bounds [" +
+         format_g(lower) + ", " + format_g(upper) + "]" + (unit.empty() ? "" : " " + unit);
+}
+
 bool Law::set_parameters(const std::vector<double>& values, std::string* why) {
   const auto& info = parameter_info();
   if (values.size() != info.size()) {
@@ -104,9 +109,7 @@ bool Law::set_parameters(const std::vector<double>& values, std::string* why) {
   for (size_t i = 0; i < info.size(); ++i) {
     const double v = values[i];
     if (!std::isfinite(v) || v < info[i].lower || v > info[i].upper) {
-      if (why)
-        *why = "parameter " + info[i].name + " = " + format_g(v) + " is outside its bounds [" +
-               format_g(info[i].lower) + ", " + format_g(info[i].upper) + "]";
+      if (why) *why = info[i].out_of_bounds(v);
       return false;
     }
   }

@@ -73,10 +73,7 @@ void parse_parameters_toml(const std::string& text, const std::string& path, Law
     }
     const double v = number(node, key, path);
     const ParameterInfo& info = law->parameter_info()[i];
-    if (v < info.lower || v > info.upper)
-      throw InputError(path + ": parameter '" + key + "' = " + format_g(v) +
-                       " is outside its bounds [" + format_g(info.lower) + ", " +
-                       format_g(info.upper) + "] " + info.unit);
+    if (v < info.lower || v > info.upper) throw InputError(path + ": " + info.out_of_bounds(v));
     values[i] = v;
   }
   std::string why;

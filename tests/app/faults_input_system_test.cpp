@@ -356,6 +356,10 @@ TEST(Faults, CalibrateValuesGivenTwiceOrNotDecimalAreRefused) {
   for (const std::string v : {"K=0x10", "K=1e10x", "K=nan", "K=inf", "K=1e400", "K="})
     expect_refusal(rendulic(calibrate + v),
                    "--value '" + v + "': '" + v.substr(2) + "' is not a finite decimal number");
+  // Out of bounds names the value and the bounds, as a parameters file does (it read "value of
+  // 'K' outside its bounds").
+  expect_refusal(rendulic(calibrate + "K=-5"),
+                 "calibrate: --value parameter 'K' = -5 is outside its bounds [1, 1e+13] Pa");
 }
 
 TEST(Faults, CalibrateOutToAPathItCannotWriteTouchesNothing) {

@@ -82,6 +82,9 @@ struct ParameterInfo {
   double lower;  // inclusive bounds
   double upper;
   std::string help;
+  // "parameter 'K' = -5 is outside its bounds [1, 1e+13] Pa": the one wording of a value out of
+  // bounds, wherever it came from (a parameters file, set_parameters, calibrate --value).
+  std::string out_of_bounds(double value) const;
 };
 
 class Law {
