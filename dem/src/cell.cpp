@@ -3,6 +3,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <sstream>
+
+#include "rendulic/core/errors.hpp"
 
 namespace rendulic::dem {
 
@@ -23,6 +26,17 @@ std::array<int, 3> cell_list_bins(const Eigen::Vector3d& widths, double min_widt
       if (v > 1.0) v = std::max(1.0, std::floor(v * s));
   }
   return {static_cast<int>(b[0]), static_cast<int>(b[1]), static_cast<int>(b[2])};
+}
+
+void require_minimum_image(const Eigen::Vector3d& widths, double range) {
+  for (int a = 0; a < 3; ++a)
+    if (!(widths[a] > 2.0 * range)) {
+      std::ostringstream s;
+      s << "periodic cell too small: width " << widths[a] << " m on axis " << a
+        << " must exceed twice the interaction range " << range
+        << " m, or the minimum image is ambiguous (use more particles or a smaller skin)";
+      throw InputError(s.str());
+    }
 }
 
 bool ServoOptions::IsValid(std::string* why) const {

@@ -67,14 +67,7 @@ void NeighborList::build(const Particles& p, const Eigen::Vector3d& L, double sk
     throw std::invalid_argument("NeighborList::build: half skin out of its bounds");
   half_skin_ = std::move(half_skins);
   const double cutoff = 2.0 * r_max_ + skin;
-  for (int a = 0; a < 3; ++a)
-    if (!(L[a] > 2.0 * cutoff)) {
-      std::ostringstream s;
-      s << "periodic cell too small: length " << L[a] << " m on axis " << a
-        << " must exceed twice the interaction range " << cutoff
-        << " m (use more particles or a smaller skin)";
-      throw InputError(s.str());
-    }
+  require_minimum_image(L, cutoff);
   ref_x_ = p.x;
   ref_y_ = p.y;
   ref_z_ = p.z;

@@ -59,14 +59,8 @@ void find_pairs_unordered(const PackingData& packing, double skin,
   for (int a = 0; a < 3; ++a) {
     const double width = volume / h.col((a + 1) % 3).cross(h.col((a + 2) % 3)).norm();
     widths[a] = width;
-    if (width < 2.0 * cutoff) {
-      std::ostringstream os;
-      os << "packing: cell width " << width << " m along axis " << a
-         << " is below twice the contact range " << cutoff
-         << " m; the minimum image would be ambiguous";
-      throw InputError(os.str());
-    }
   }
+  require_minimum_image(widths, cutoff);
   const std::array<int, 3> bins = cell_list_bins(widths, cutoff, static_cast<std::size_t>(n));
   const int n_bins = bins[0] * bins[1] * bins[2];
   // Bin of each particle from its wrapped fractional coordinates; counting sort into cells.

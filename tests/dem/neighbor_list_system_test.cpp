@@ -13,6 +13,7 @@
 #include <map>
 #include <utility>
 
+#include "rendulic/core/errors.hpp"
 #include "rendulic/dem/cell.hpp"
 #include "rendulic/dem/neighbor_list.hpp"
 #include "rendulic/dem/protocols.hpp"
@@ -153,6 +154,34 @@ TEST(NeighborList, TheBinnedSearchListsEveryPairWithinReachOnce) {
     ASSERT_GE(L.minCoeff(), 3 * (2 * r_max + skin));  // binned, not the all-pairs search
     EXPECT_GT(expect_every_pair_within_reach_listed_once(p, L, h, list), 4 * n);
   }
+}
+
+// The engine's list and the probe tools' pair search refused a cell narrower than twice the
+// interaction range in two wordings ("cell width ... the minimum image would be ambiguous");
+// one now, naming the axis. A NaN width (a damaged cell) is refused too.
+TEST(CellListBins, ACellNarrowerThanTwiceTheRangeIsRefusedNamingItsAxis) {
+  EXPECT_NO_THROW(require_minimum_image(Eigen::Vector3d(1.0, 0.61, 1.0), 0.3));
+  try {
+    require_minimum_image(Eigen::Vector3d(1.0, 0.6, 1.0), 0.3);
+    ADD_FAILURE() << "a width of exactly twice the range was accepted";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              "periodic cell too small: width 0.6 m on axis 1 must exceed twice the interaction "
+              "range 0.3 m, or the minimum image is ambiguous (use more particles or a smaller "
+              "skin)");
+  }
+  EXPECT_THROW(require_minimum_image(
+                   Eigen::Vector3d(1.0, 1.0, std::numeric_limits<double>::quiet_NaN()), 0.3),
+               InputError);
+  // The engine's list asks the same question.
+  Particles p;
+  p.resize(2);
+  p.radius = {0.1, 0.1};
+  p.x = {0.1, 0.5};
+  p.y = {0.1, 0.1};
+  p.z = {0.1, 0.1};
+  NeighborList list;
+  EXPECT_THROW(list.build(p, Eigen::Vector3d(1.0, 0.6, 1.0), 0.1), InputError);
 }
 
 TEST(CellListBins, AsManyAsFitInADenseCellBoundedInADiluteOne) {

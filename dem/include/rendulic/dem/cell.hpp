@@ -76,6 +76,11 @@ inline Eigen::Vector3d minimum_image_orthorhombic(const Eigen::Vector3d& h_diago
 inline constexpr double kMaxBinsPerParticle = 64.0;
 std::array<int, 3> cell_list_bins(const Eigen::Vector3d& widths, double min_width, std::size_t n);
 
+// The minimum-image convention holds only where every perpendicular width of the cell exceeds
+// twice the interaction range (2 r_max + skin): InputError naming the axis otherwise ("periodic
+// cell too small: ..."), for the engine's list and the probe tools' pair search alike.
+void require_minimum_image(const Eigen::Vector3d& widths, double range);
+
 // How one axis of the cell moves.
 struct AxisControl {
   enum class Mode { kStrainRate, kStress };
