@@ -16,6 +16,7 @@
 
 #include "rendulic/core/comma_list.hpp"
 #include "rendulic/core/conventions.hpp"
+#include "rendulic/core/decimal.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/option_table.hpp"
 #include "rendulic/core/result_paths.hpp"
@@ -573,6 +574,11 @@ bool SweepOptions::IsValid(std::string* why) const {
   if (!(path_rate_target > 0 && path_rate_target < 1))
     return fail("sweep: path_rate_target must be in (0, 1)");
   if (path_seeds < 1 || path_seeds > 64) return fail("sweep: path seeds must be in 1..64");
+  // --path-rates 400,400 ran the same packings at the same rate twice, and wrote twice the rows.
+  std::vector<double> rates = path_rates;
+  std::sort(rates.begin(), rates.end());
+  if (const auto again = std::adjacent_find(rates.begin(), rates.end()); again != rates.end())
+    return fail("sweep: path rate " + decimal_g(*again) + " listed twice");
   for (const auto& m : methods)
     if (const std::string why = choice_refusal(m, kProbeMethods); !why.empty())
       return fail("sweep: method " + why);

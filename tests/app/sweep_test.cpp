@@ -108,6 +108,10 @@ TEST(SweepOptionsTest, PresetsAreValidAndBadValuesAreNamed) {
   EXPECT_FALSE(o.IsValid(&why));
   EXPECT_EQ(why, "sweep: factor 'relax' listed twice");
   o = SweepOptions::preset(true);
+  o.path_rates = {400, 1000, 400};
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_EQ(why, "sweep: path rate 400 listed twice");
+  o = SweepOptions::preset(true);
   o.n_particles = {250.5};
   EXPECT_FALSE(o.IsValid(&why));
   o = SweepOptions::preset(true);
