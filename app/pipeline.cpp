@@ -230,10 +230,19 @@ void check_stages_available(const Scenario& scenario) {
 ResumePlan resume_plan(const Scenario& scenario, const ResultsReader& kept) {
   ResumePlan plan;
   if (!kept.has_attr("/", "scenario")) return plan;  // nothing kept
-  if (kept.attr_string("/", "scenario") != scenario.to_toml())
+  // Compared setting by setting, not as text: the same scenario file given by another path was
+  // refused as "another scenario", and the refusal did not say which setting differed.
+  const auto differ = scenario.differences_from(kept.attr_string("/", "scenario"));
+  if (!differ.empty()) {
+    std::string which;
+    for (std::size_t i = 0; i < differ.size() && i < 3; ++i)
+      which += (i ? "; " : "") + differ[i].key + " = " + differ[i].stored + " there, " +
+               differ[i].now + " now";
+    if (differ.size() > 3) which += "; and " + std::to_string(differ.size() - 3) + " more";
     throw InputError("run --resume: " + kept.path().string() +
-                     " holds the stages of another scenario (or other --set values); give the "
-                     "interrupted run's, or run without --resume");
+                     " holds the stages of another scenario (" + which +
+                     "); give the interrupted run's settings, or run without --resume");
+  }
   for (const auto& s : stages()) {
     if (!stage_requested(scenario, s.name) || !s.run) continue;
     if (kept.has_attr(paths::kTimings, s.name)) {
@@ -259,7 +268,8 @@ bool holds_every_stage(const Scenario& scenario, const std::filesystem::path& re
   if (!std::filesystem::is_regular_file(results, ec)) return false;
   try {
     const ResultsReader file(results);
-    if (!file.has_attr("/", "scenario") || file.attr_string("/", "scenario") != scenario.to_toml())
+    if (!file.has_attr("/", "scenario") ||
+        !scenario.differences_from(file.attr_string("/", "scenario")).empty())
       return false;
     for (const auto& s : stages())
       if (stage_requested(scenario, s.name) && s.run && !file.has_attr(paths::kTimings, s.name))

@@ -12,6 +12,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <map>
 #include <sstream>
 #include <stdexcept>
 
@@ -618,6 +619,44 @@ bool Scenario::is_set(std::string_view p) const { return origin(p) != "default";
 std::string Scenario::origin(std::string_view p) const {
   spec(p);
   return origins_.find(p)->second;
+}
+
+namespace {
+// "section.key" -> value text of every setting line of to_toml()'s text, in key order.
+std::map<std::string, std::string> settings_of(const std::string& toml_text) {
+  std::map<std::string, std::string> out;
+  std::istringstream in(toml_text);
+  std::string line, section;
+  while (std::getline(in, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    if (line[0] == '[' && line.back() == ']') {
+      section = line.substr(1, line.size() - 2);
+      continue;
+    }
+    const std::size_t eq = line.find(" = ");
+    if (eq == std::string::npos) continue;
+    out[(section.empty() ? "" : section + ".") + line.substr(0, eq)] = line.substr(eq + 3);
+  }
+  return out;
+}
+}  // namespace
+
+std::vector<Scenario::Difference> Scenario::differences_from(const std::string& stored_toml) const {
+  const auto stored = settings_of(stored_toml), now = settings_of(to_toml());
+  std::vector<Difference> out;
+  const std::string absent = "(absent)";
+  for (const auto& [key, value] : stored) {
+    const auto it = now.find(key);
+    if (it == now.end())
+      out.push_back({key, value, absent});
+    else if (it->second != value)
+      out.push_back({key, value, it->second});
+  }
+  for (const auto& [key, value] : now)
+    if (!stored.count(key)) out.push_back({key, absent, value});
+  std::sort(out.begin(), out.end(),
+            [](const Difference& a, const Difference& b) { return a.key < b.key; });
+  return out;
 }
 
 std::string Scenario::to_toml() const {

@@ -227,6 +227,17 @@ TEST(Resume, OfAFinishedRunRunsNoStageAndKeepsItsFile) {
       << same.err;
   EXPECT_EQ(same.err.find("started"), std::string::npos) << same.err;
   EXPECT_TRUE(bytes(dir / "results.h5") == before) << "the file changed";
+  // The same scenario by another path (here a copy) is the same run: compared as text, the
+  // header line that names the file as given made it "another scenario".
+  const fs::path copy = dir / "copy of the scenario.toml";
+  fs::copy_file(rendulic::testing::tiny_run_scenario(), copy);
+  const auto by_copy = rendulic::testing::run_rendulic(
+      "run '" + copy.string() + "' --out " + dir.string() + " --resume --threads 1", false);
+  EXPECT_EQ(by_copy.code, 0) << by_copy.err;
+  EXPECT_NE(by_copy.err.find("already holds every stage of this scenario; nothing to run"),
+            std::string::npos)
+      << by_copy.err;
+  EXPECT_TRUE(bytes(dir / "results.h5") == before) << "the file changed";
   // Its first stage is enough to show a plain run (the whole run would be the tiny run again).
   const auto other = rendulic::testing::run_rendulic(
       command + " --set run.seed=2 --set run.stages=prepare", false);
@@ -244,7 +255,10 @@ TEST(ResumeRefusal, AnotherScenariosKeptStagesAreRefused) {
       false);
   EXPECT_EQ(r.code, 2);
   EXPECT_EQ(rendulic::testing::error_lines(r.err), 1) << r.err;
-  EXPECT_NE(r.err.find("another scenario"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("another scenario (run.seed = 1 there, 2 now); give the interrupted "
+                       "run's settings"),
+            std::string::npos)
+      << r.err;
   // Named as the file the user has, not the working copy the run reads.
   EXPECT_NE(r.err.find((dir / "results.h5.partial").string() + " holds"), std::string::npos)
       << r.err;

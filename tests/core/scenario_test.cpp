@@ -250,6 +250,33 @@ TEST(Scenario, EffectiveScenarioRoundTripsThroughToml) {
             sc.to_toml().substr(sc.to_toml().find('\n')));
 }
 
+// `run --resume` compares the kept file's scenario with this run's setting by setting: the same
+// settings from another file name are the same run, and a difference is named with both values.
+TEST(Scenario, DifferencesFromAStoredScenarioAreItsSettingsNotItsFileName) {
+  const auto schema = make_schema();
+  const auto a = Scenario::from_string("[material]\nk = 2e8\n", "a.toml", schema);
+  const auto b = Scenario::from_string("[material]\nk = 2e8\n", "/elsewhere/b.toml", schema);
+  EXPECT_NE(a.to_toml(), b.to_toml());  // the header names the file
+  EXPECT_TRUE(b.differences_from(a.to_toml()).empty());
+  auto c = b;
+  c.apply_override("material.k=3e8");
+  c.apply_override("probes.method=minimisation");
+  const auto d = c.differences_from(a.to_toml());
+  ASSERT_EQ(d.size(), 2u);
+  EXPECT_EQ(d[0].key, "material.k");
+  EXPECT_EQ(d[0].stored, "2e+08");
+  EXPECT_EQ(d[0].now, "3e+08");
+  EXPECT_EQ(d[1].key, "probes.method");
+  EXPECT_EQ(d[1].now, "\"minimisation\"");
+  // A setting the stored text lacks (a file of an older version) is a difference too.
+  std::string older = a.to_toml();
+  older.erase(older.find("k = 2e+08\n"), std::string("k = 2e+08\n").size());
+  const auto e = a.differences_from(older);
+  ASSERT_EQ(e.size(), 1u);
+  EXPECT_EQ(e[0].key, "material.k");
+  EXPECT_EQ(e[0].stored, "(absent)");
+}
+
 TEST(Scenario, SchemaRejectsBadDeclarations) {
   ScenarioSchema s;
   s.add({.path = "a.b", .type = KeyType::kDouble, .default_value = 1.0});

@@ -92,6 +92,14 @@ class Scenario {
 
   // The effective scenario, every key, as TOML text that parses back to the same values.
   std::string to_toml() const;
+  // The settings in which an effective scenario stored by to_toml() (a results file's
+  // /@scenario) differs from this one, in key order; empty for the same run. Its first line, the
+  // scenario file's name as it was given, is not a setting: the same file by another path (or a
+  // copy of it) is the same scenario.
+  struct Difference {
+    std::string key, stored, now;  // stored/now: the value's text, "(absent)" where there is none
+  };
+  std::vector<Difference> differences_from(const std::string& stored_toml) const;
   const std::string& source_name() const { return source_name_; }
   const ScenarioSchema& schema() const { return *schema_; }
 
