@@ -30,13 +30,23 @@ std::string lower(std::string s) {
   return s;
 }
 
-std::vector<std::string> split(const std::string& line) {
+std::vector<std::string> split(const std::string& line, char separator) {
   std::vector<std::string> out;
   std::string field;
   std::istringstream in(line);
-  while (std::getline(in, field, ',')) out.push_back(trim(field));
-  if (!line.empty() && line.back() == ',') out.emplace_back();
+  while (std::getline(in, field, separator)) out.push_back(trim(field));
+  if (!line.empty() && line.back() == separator) out.emplace_back();
   return out;
+}
+
+// The header's separator: a comma, or where it has none a semicolon (what a spreadsheet in a
+// decimal-comma locale writes as "CSV") or a tab. Such files were refused with "the header must
+// name columns 'x' and 'y' (got 'theta_deg;x;y')".
+char separator_of(const std::string& header) {
+  if (header.find(',') != std::string::npos) return ',';
+  if (header.find(';') != std::string::npos) return ';';
+  if (header.find('\t') != std::string::npos) return '\t';
+  return ',';
 }
 
 }  // namespace
@@ -49,13 +59,15 @@ Envelope parse_envelope_csv(const std::string& text, const std::string& name) {
   std::string line;
   int line_no = 0;
   std::vector<std::string> header;
+  char separator = ',';
   int ix = -1, iy = -1, it = -1;
   Envelope env;
   while (std::getline(in, line)) {
     ++line_no;
     const std::string t = trim(line);
     if (t.empty() || t[0] == '#') continue;
-    const std::vector<std::string> fields = split(line);
+    if (header.empty()) separator = separator_of(line);
+    const std::vector<std::string> fields = split(line, separator);
     const std::string where = name + ":" + std::to_string(line_no);
     if (header.empty()) {
       // A file of rows alone said "column '0' appears twice" of its first row.
@@ -93,10 +105,20 @@ Envelope parse_envelope_csv(const std::string& text, const std::string& name) {
       const std::string& cname = header[static_cast<std::size_t>(col)];
       if (f.empty()) throw InputError(where + ": column '" + cname + "' is empty");
       const std::optional<double> v = decimal_number(f);
-      if (!v) throw InputError(where + ": column '" + cname + "': " + not_a_decimal_number(f));
+      if (!v) {
+        // A decimal comma (the same locales' "1,5") is not read as 1.5: numbers take a point.
+        std::string pointed = f;
+        std::replace(pointed.begin(), pointed.end(), ',', '.');
+        const bool comma = separator != ',' && pointed != f && decimal_number(pointed);
+        throw InputError(where + ": column '" + cname + "': " + not_a_decimal_number(f) +
+                         (comma ? " (a decimal comma: write numbers with a point, " + pointed + ")"
+                                : std::string()));
+      }
       return *v;
     };
-    env.response.emplace_back(number(ix), number(iy));
+    const double x = number(ix);  // in the file's order: the first bad cell is named
+    const double y = number(iy);
+    env.response.emplace_back(x, y);
     if (it >= 0) env.theta_deg.push_back(number(it));
   }
   if (header.empty()) throw InputError(name + ": empty file (no header line)");

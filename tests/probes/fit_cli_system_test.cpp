@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <array>
 #include <cstdio>
 #include <filesystem>
@@ -144,6 +145,19 @@ TEST(FitCli, ASpreadsheetsCsvIsReadAndADirectionsColumnMisnamedIsSaid) {
                               ":1: column 'Theta' is not read; the probe directions' column is "
                               "theta_deg (degrees)\n");
   EXPECT_EQ(misnamed.out.find("directions used"), std::string::npos) << misnamed.out;
+  // A decimal-comma locale's spreadsheet writes ';' between cells, and some tools a tab: the
+  // header's separator is the file's (they were refused, "must name columns 'x' and 'y'").
+  for (const char sep : {';', '\t'}) {
+    std::string text = "theta_deg,x,y\n" + rows;
+    std::replace(text.begin(), text.end(), ',', sep);
+    const CmdResult other = run_fit("--in " + write_csv("separated.csv", text).string());
+    EXPECT_EQ(other.code, 0) << other.err;
+    EXPECT_EQ(other.out, plain.out);
+  }
+  // Its numbers with a decimal comma are refused with the point they need.
+  expect_input_error("--in " + write_csv("comma.csv", "x;y\n1;0\n0,5;1\n").string(),
+                     "comma.csv:3: column 'x': '0,5' is not a finite decimal number (a decimal "
+                     "comma: write numbers with a point, 0.5)");
 }
 
 TEST(FitCli, BadInputExits2WithAReason) {
