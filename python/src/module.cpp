@@ -214,7 +214,9 @@ class Reader {
   // (The lists are read only for the refusal: envelopes() calls this for every envelope.)
   std::string state_group(const std::string& label, const std::string& root) const {
     const std::string g = paths::state(label, root);
-    if (in_.is_group(g)) return g;
+    // A label is one name: '' (the states' own group) and 'a/envelopes' were groups "with no
+    // stress".
+    if (!label.empty() && label.find('/') == std::string::npos && in_.is_group(g)) return g;
     const std::vector<std::string> labels = states(root);  // a root not there is named first
     throw InputError(path() + ": no state '" + label + "'" +
                      (root.empty() ? "" : " under " + root) + " (states: " + joined(labels) + ")");

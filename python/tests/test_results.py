@@ -72,6 +72,11 @@ def test_a_mistyped_root_or_label_is_refused_not_read_as_no_data(cli_run):
         r.envelopes(root="nu0.7")
     with pytest.raises(rendulic.InputError, match=r"no state 'zz' \(states: a, b\)"):
         r.envelope_names("zz")
+    # A label is one name: '' and 'a/envelopes' are groups of the file, but not states (they
+    # were "state '' has no stress").
+    for label in ("", "a/envelopes"):
+        with pytest.raises(rendulic.InputError, match=rf"no state '{label}' \(states: a, b\)"):
+            r.state(label)
 
 
 def test_an_unknown_probe_method_is_refused_in_the_clis_words(cli_run, tmp_path):
