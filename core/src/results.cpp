@@ -856,6 +856,8 @@ struct ResultsReader::Impl {
   }
 
   H5O_type_t require(const std::string& object) const {
+    // An empty name is no object (it read "file: : is not a group").
+    if (object.empty()) fail("''", "no such object (the root is '/')");
     if (object != "/" && !link_exists(holder->getId(), object)) fail(object, "missing");
     return object_type(holder->getId(), object);
   }

@@ -77,6 +77,8 @@ def test_a_mistyped_root_or_label_is_refused_not_read_as_no_data(cli_run):
     for label in ("", "a/envelopes"):
         with pytest.raises(rendulic.InputError, match=rf"no state '{label}' \(states: a, b\)"):
             r.state(label)
+    with pytest.raises(rendulic.InputError, match=r": '': no such object \(the root is '/'\)$"):
+        r.attributes("")
 
 
 def test_an_unknown_probe_method_is_refused_in_the_clis_words(cli_run, tmp_path):
