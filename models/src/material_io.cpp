@@ -3,6 +3,7 @@
 
 #include <toml++/toml.h>
 
+#include <Eigen/Eigenvalues>
 #include <cmath>
 
 #include "rendulic/core/errors.hpp"
@@ -93,6 +94,17 @@ MaterialState parse_state_toml(const std::string& text, const std::string& path,
       have_stress = true;
     } else if (key == "fabric") {
       fabric = matrix3(node, key, path);
+      // A second moment of contact normals has no negative eigenvalue. diag(-1, 0.5, 0.5) (trace
+      // 0) failed every probe with "substep below 1e-10 ... (law too stiff or undefined)": the
+      // elastic fabric increment F / tr(F) switches branch where tr(F) crosses 0.
+      const Eigen::Vector3d eig =
+          Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(fabric, Eigen::EigenvaluesOnly)
+              .eigenvalues();
+      if (eig.minCoeff() < -1e-12 * eig.cwiseAbs().maxCoeff())
+        throw InputError(path +
+                         ": key 'fabric' must be positive semi-definite (a second moment of "
+                         "contact normals), got eigenvalues " +
+                         format_g(eig[0]) + ", " + format_g(eig[1]) + ", " + format_g(eig[2]));
     } else if (key == "volume_fraction") {
       nu = number(node, key, path);
       if (!(nu >= 0.0 && nu < 1.0))

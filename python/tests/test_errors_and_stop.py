@@ -92,6 +92,12 @@ def test_model_input_errors_have_the_file_readers_messages():
     with pytest.raises(rendulic.InputError, match="must be a symmetric 3x3 tensor"):
         rendulic.model_envelope("isotropic_elastic", {"stress": [[1, 2, 0], [0, 1, 0],
                                                                   [0, 0, 1]]})
+    # A fabric is a second moment of contact normals: diag(-1, 0.5, 0.5) failed every probe
+    # with "law too stiff or undefined".
+    with pytest.raises(rendulic.InputError,
+                       match=r"^state: key 'fabric' must be positive semi-definite \(a second "
+                             r"moment of contact normals\), got eigenvalues -1, 0.5, 0.5$"):
+        rendulic.model_envelope("isotropic_elastic", dict(state, fabric=np.diag([-1, 0.5, 0.5])))
     # A value that is not numbers names its key (numpy's own message named none).
     with pytest.raises(rendulic.InputError, match="parameters: 'K' must be a number"):
         rendulic.model_envelope("isotropic_elastic", state, {"K": "stiff"})
