@@ -8,6 +8,7 @@
 #include <map>
 
 #include "progress.hpp"
+#include "rendulic/core/decimal.hpp"
 #include "rendulic/core/envelope_io.hpp"
 #include "rendulic/core/errors.hpp"
 #include "rendulic/core/log.hpp"
@@ -143,6 +144,13 @@ std::vector<dem::Envelope> write_probe_campaign(const dem::DemSystem& state,
         const std::string group =
             paths::envelope(state_group, paths::envelope_name(method, amplitude, env.plane.name));
         write_envelope(out, group, env);
+        if (const auto a = env.attributes.find("affine_force_over_tolerance");
+            a != env.attributes.end() && a->second < dem::kMinAffineForceOverTolerance)
+          log::warning(group, ": the affine step leaves net forces of only ",
+                       decimal_g(a->second, 2),
+                       " x the force tolerance (probes.force_tolerance), so FIRE stops short of "
+                       "the non-affine relaxation and the envelope keeps part of the affine, too "
+                       "stiff response; raise the amplitude or lower probes.force_tolerance");
         if (lr) {
           if (lr->direction_dependent() && amplitude == options.amplitudes.front())
             log::warning(state_group, ": ", lr->n_coulomb_limit, " of ", lr->n_backbone_contacts,

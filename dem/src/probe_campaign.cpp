@@ -217,9 +217,9 @@ void io(A& a, RelaxSummary& s) {
 template <class A>
 void io(A& a, MinimiseSummary& s) {
   auto& [converged, iterations, pair_rebuilds, max_force, mean_contact_force, elastic_energy,
-         message, stalled_at] = s;
+         message, stalled_at, start_ratio] = s;
   a(converged), a(iterations), a(pair_rebuilds), a(max_force), a(mean_contact_force);
-  a(elastic_energy), a(message), a(stalled_at);
+  a(elastic_energy), a(message), a(stalled_at), a(start_ratio);
 }
 
 namespace {
@@ -575,11 +575,14 @@ Envelope minimisation_envelope_of(const MinimisationBasis& b, const ProbePlane& 
                                   const std::vector<MinimisationProbe>& probes) {
   Envelope env = assemble_envelope("minimisation", plane, amplitude, b.k_star, theta_deg, probes);
   auto& diag = env.diagnostics;
+  double affine = std::numeric_limits<double>::infinity();
   for (const MinimisationProbe& r : probes) {
     diag["iterations"].push_back(static_cast<double>(r.summary.iterations));
     diag["max_force"].push_back(r.summary.max_force);
     diag["converged"].push_back(r.summary.converged ? 1.0 : 0.0);
+    affine = std::min(affine, r.summary.start_ratio);
   }
+  env.attributes["affine_force_over_tolerance"] = affine / b.mo.force_tolerance;
   env.attributes["force_tolerance"] = b.mo.force_tolerance;
   env.attributes["min_overlap"] = b.min_overlap;
   env.attributes["reference_iterations"] = static_cast<double>(b.summary.iterations);

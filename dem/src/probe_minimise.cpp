@@ -115,6 +115,7 @@ MinimiseSummary minimise_energy(PackingData& packing, const MinimiseOptions& opt
   double best = std::numeric_limits<double>::infinity();
   std::int64_t best_at = 0;
   evaluate();
+  summary.start_ratio = ratio();
   double dt = dt_start, alpha = alpha_start;
   int n_positive = 0, n_negative = 0;
   for (std::int64_t it = 0; it < options.max_iterations; ++it) {

@@ -93,6 +93,27 @@ TEST(Probe, AResultsFileStateGivesTheStoredEnvelopesAndFits) {
   EXPECT_EQ(again.attr_int(g, "minimise_iterations"), 0);  // at rest as stored: nothing moved
 }
 
+// A minimisation probe too small for its force tolerance keeps part of the affine response
+// (dem::kMinAffineForceOverTolerance): the run says so per envelope, and not for one well above.
+TEST(Probe, AMinimisationEnvelopeTooSmallForTheForceToleranceIsWarnedAbout) {
+  const fs::path base = tiny();
+  const fs::path out = rendulic::testing::fresh_dir("app_probe/too_small");
+  const CliResult r = probe(base.string() +
+                            ":/states/b --label b --methods minimisation --directions 8 "
+                            "--amplitudes 1e-12,5e-5 --out " +
+                            out.string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("warning: /states/b/envelopes/minimisation_1e-12: the affine step leaves "
+                       "net forces of only "),
+            std::string::npos)
+      << r.err;
+  EXPECT_EQ(r.err.find("minimisation_5e-05: the affine step"), std::string::npos) << r.err;
+  const ResultsReader again(out / "results.h5");
+  EXPECT_LT(again.attr_double("/states/b/envelopes/minimisation_1e-12",
+                              "affine_force_over_tolerance"),
+            100.0);
+}
+
 // A results file whose stored scenario does not parse (written by another version): the probes
 // take the material from /material, here with k doubled, which doubles every stress increment
 // of the linear response (the positions at rest do not depend on k) and says so in a warning.

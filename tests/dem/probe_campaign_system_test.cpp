@@ -72,6 +72,38 @@ void expect_same_ellipse(const Envelope& a, const Envelope& b, const char* what)
             << ", incl = " << ma.inclination_deg << " / " << mb.inclination_deg << " deg\n";
 }
 
+// A minimisation probe whose affine step leaves net forces near the force tolerance stops FIRE
+// short of the non-affine relaxation, and its envelope keeps part of the affine, too stiff
+// response (quick.toml's state a: 1e-10 had a minor axis 55 % too long, without a word). The
+// envelope's attribute affine_force_over_tolerance says so; below kMinAffineForceOverTolerance
+// the probes stage warns.
+TEST_F(ProbeCampaign, AMinimisationProbeTooSmallForItsForceToleranceSaysSo) {
+  const ProbeOptions opt;
+  const std::vector<double> theta = probe_directions(12);
+  LinearResponse lr;
+  const RendulicMap linear = [&] {
+    const Envelope e = linear_response_envelope(*state_, 5e-5, theta, opt, &lr);
+    return fit_rendulic_map(e.strain, e.stress_star);
+  }();
+  for (const double amp : {5e-5, 1e-11}) {
+    const Envelope e = minimisation_envelope(*state_, amp, theta, opt);
+    const double ratio = e.attributes.at("affine_force_over_tolerance");
+    const RendulicMap m = fit_rendulic_map(e.strain, e.stress_star);
+    // Per unit amplitude: the linear response is at 5e-5.
+    const double off =
+        std::abs(m.semi_minor / amp - linear.semi_minor / 5e-5) / (linear.semi_minor / 5e-5);
+    std::cout << "amplitude " << amp << ": affine force / tolerance " << ratio
+              << ", minor axis off by " << off << "\n";
+    if (amp == 5e-5) {
+      EXPECT_GT(ratio, kMinAffineForceOverTolerance);
+      EXPECT_LT(off, kAxisTol);
+    } else {
+      EXPECT_LT(ratio, kMinAffineForceOverTolerance);
+      EXPECT_GT(off, 5 * kAxisTol);  // the failure the attribute flags is real
+    }
+  }
+}
+
 TEST_F(ProbeCampaign, LinearResponseMinimisationAndDynamicElasticEnvelopesAgree) {
   ProbeOptions opt;
   opt.relax_method = "dynamic";  // the seed's relaxation; FIRE's: FireRelaxationKeeps...

@@ -54,6 +54,13 @@ Envelope dynamic_envelope(const DemSystem& state, double amplitude,
 Envelope minimisation_envelope(const DemSystem& state, double amplitude,
                                const std::vector<double>& theta_deg, const ProbeOptions& options,
                                const ProbePlane& plane = rendulic_plane());
+// A minimisation envelope's attribute `affine_force_over_tolerance`: over its probes, the
+// smallest largest net force that the affine step leaves, in units of force_tolerance x the
+// mean contact force. FIRE resolves the non-affine relaxation to about its inverse; below
+// kMinAffineForceOverTolerance the envelope keeps part of the affine (too stiff) response, and
+// the probes stage says so (quick.toml's state a, 12 directions: 1e-8 matches the linear
+// response to 1e-4, 1e-10 is 55 % off, 1e-12 takes no FIRE step at all).
+inline constexpr double kMinAffineForceOverTolerance = 100.0;
 // envelopes[s][a]: the minimisation envelope of *states[s] at amplitudes[a], the same bits as
 // minimisation_envelope, with the probes of all of them in one pool of tasks (the largest
 // amplitudes first) instead of envelope by envelope: no thread idles at the end of each

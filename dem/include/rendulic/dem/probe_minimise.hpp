@@ -41,6 +41,10 @@ struct MinimiseSummary {
   // Where the largest net force stalled, as a fraction of the mean contact force, when the
   // tolerance lies below the round-off floor of the forces (0: it did not stall there).
   double stalled_at = 0.0;
+  // The largest net force before the first iteration, as a fraction of the mean contact force:
+  // where it is not well above force_tolerance the minimiser barely moves the particles (a probe
+  // of a tiny amplitude keeps its affine, too stiff response).
+  double start_ratio = 0.0;
 };
 
 // The one-line refusal of a tolerance below the round-off floor that `summary` stalled at:
