@@ -109,9 +109,9 @@ TEST(Probe, AMinimisationEnvelopeTooSmallForTheForceToleranceIsWarnedAbout) {
       << r.err;
   EXPECT_EQ(r.err.find("minimisation_5e-05: the affine step"), std::string::npos) << r.err;
   const ResultsReader again(out / "results.h5");
-  EXPECT_LT(again.attr_double("/states/b/envelopes/minimisation_1e-12",
-                              "affine_force_over_tolerance"),
-            100.0);
+  EXPECT_LT(
+      again.attr_double("/states/b/envelopes/minimisation_1e-12", "affine_force_over_tolerance"),
+      100.0);
 }
 
 // A results file whose stored scenario does not parse (written by another version): the probes
