@@ -33,18 +33,34 @@ nlohmann::ordered_json pairs(const std::vector<Eigen::Vector2d>& v) {
 
 }  // namespace
 
+// An option as the front end spells it (EnvelopeRequest::cli): "--substeps 7" on the command
+// line, "substeps = 7" in Python's keyword arguments.
+std::string spelt(bool cli, const char* name, const std::string& value) {
+  return (cli ? "--" : "") + std::string(name) + (cli ? " " : " = ") + value;
+}
+
 std::unique_ptr<models::Law> law_for(const std::string& model, const std::string& umat,
-                                     const std::string& params, bool params_is_text) {
-  // A user's UMAT (docs/umat.md): the library from --umat, its PROPS from --params.
-  if (model == "umat" ? umat.empty() : !umat.empty())
-    throw InputError("--umat PATH.so goes with --model umat, and --model umat needs it");
+                                     const std::string& params, bool params_is_text, bool cli) {
+  // A user's UMAT (docs/umat.md): its library and its PROPS file, named as the user gave them.
+  const std::string with_umat = cli ? "--model umat" : "model 'umat'";
+  if (model == "umat" && umat.empty())
+    throw InputError(with_umat + " needs " + spelt(cli, "umat", cli ? "PATH.so" : "'PATH.so'") +
+                     " (the UMAT library)");
+  if (model != "umat" && !umat.empty())
+    throw InputError(spelt(cli, "umat", cli ? umat : "'" + umat + "'") + " goes with " + with_umat +
+                     ", not with " + (cli ? "--model " + model : "'" + model + "'"));
   if (model == "umat") {
-    if (params_is_text) throw InputError("a UMAT's parameters come from a TOML file (--params)");
+    const std::string file = spelt(cli, "params", cli ? "FILE.toml" : "'FILE.toml'");
+    if (params_is_text)
+      throw InputError("a UMAT's parameters come from a TOML file (" + file +
+                       "), not a dictionary: docs/umat.md");
+    if (params.empty())
+      throw InputError(with_umat + " needs " + file + " (props, nstatv, ...: docs/umat.md)");
     return models::make_umat_law(umat, params);
   }
   std::unique_ptr<models::Law> law = models::make_law(model);
   if (!law) {
-    throw InputError("--model: unknown model '" + model +
+    throw InputError((cli ? "--model" : "model") + std::string(": unknown model '") + model +
                      "' (known: " + comma_list(models::law_names()) + ", umat)");
   }
   if (params_is_text)
@@ -58,11 +74,6 @@ models::MaterialState state_for(const models::Law& law, const std::string& state
                                 bool state_is_text) {
   return state_is_text ? models::parse_state_toml(state, "state", law)
                        : models::load_state_toml(state, law);
-}
-
-// An option with its value as the front end spells it (EnvelopeRequest::cli).
-std::string spelt(bool cli, const char* name, const std::string& value) {
-  return (cli ? "--" : "") + std::string(name) + (cli ? " " : " = ") + value;
 }
 
 // The CLI's options check these before; the words here are for the Python module, whose
@@ -90,7 +101,8 @@ models::StepOptions step_options_for(const std::string& scheme, double tolerance
 }
 
 EnvelopeRecord envelope_for(const EnvelopeRequest& o, std::string* law_name) {
-  const std::unique_ptr<models::Law> law = law_for(o.model, o.umat, o.params, o.params_is_text);
+  const std::unique_ptr<models::Law> law =
+      law_for(o.model, o.umat, o.params, o.params_is_text, o.cli);
   const models::MaterialState state = state_for(*law, o.state, o.state_is_text);
   const auto& methods = models::kEnvelopeMethodNames;
   const auto method = std::ranges::find(methods, o.method);

@@ -90,9 +90,10 @@ struct EnvelopeRequest {
 };
 EnvelopeRecord envelope_for(const EnvelopeRequest& request, std::string* law_name = nullptr);
 // Its pieces: the law with its parameters (params empty: the defaults), the state, the driver's
-// step options.
+// step options. `cli` as in EnvelopeRequest.
 std::unique_ptr<models::Law> law_for(const std::string& model, const std::string& umat,
-                                     const std::string& params, bool params_is_text);
+                                     const std::string& params, bool params_is_text,
+                                     bool cli = false);
 models::MaterialState state_for(const models::Law& law, const std::string& state,
                                 bool state_is_text);
 models::StepOptions step_options_for(const std::string& scheme, double tolerance, int substeps,

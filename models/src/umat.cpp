@@ -41,12 +41,14 @@ class UmatLibrary {
   explicit UmatLibrary(const std::string& path) {
     // Checked before dlopen, which would block on a FIFO and call a folder "cannot read file
     // data"; in the words of every input file (docs/usage.md, the paragraph on text inputs).
-    refuse_unless_regular_file(path, "--umat " + path, "UMAT library", "a .so file");
+    // Named by its path alone: it comes from --umat, calibration.umat or Python's umat=.
+    refuse_unless_regular_file(path, path, "UMAT library", "a .so file");
     // RTLD_LOCAL: two UMAT libraries in one process keep their own symbols.
     handle_ = ::dlopen(std::filesystem::absolute(path).c_str(), RTLD_NOW | RTLD_LOCAL);
     if (!handle_) {
       const char* e = ::dlerror();
-      throw InputError("--umat " + path + ": cannot load: " + printable(e ? e : "unknown error"));
+      throw InputError(path +
+                       ": cannot load the UMAT library: " + printable(e ? e : "unknown error"));
     }
     for (const char* s : {"umat_", "umat", "UMAT"}) {
       if (void* f = ::dlsym(handle_, s)) {
@@ -57,7 +59,7 @@ class UmatLibrary {
     }
     if (!entry_) {
       ::dlclose(handle_);
-      throw InputError("--umat " + path +
+      throw InputError(path +
                        ": exports no UMAT entry (looked for umat_ (Fortran), umat and UMAT (C))");
     }
   }
@@ -560,9 +562,10 @@ PathSeries UmatLaw::run_path(const MaterialState& start, const Eigen::Matrix3d& 
 }
 
 std::unique_ptr<UmatLaw> make_umat_law(const std::string& library, const std::string& params) {
-  if (library.empty()) throw InputError("--model umat needs --umat PATH.so (the UMAT library)");
+  // The front ends name their own options first (app::law_for, calibration_plan).
+  if (library.empty()) throw InputError("a UMAT needs its library (a .so file: docs/umat.md)");
   if (params.empty())
-    throw InputError("--model umat needs --params FILE.toml (props, nstatv, ...: docs/umat.md)");
+    throw InputError("a UMAT needs its parameters file (props, nstatv, ...: docs/umat.md)");
   return std::make_unique<UmatLaw>(library, load_umat_parameters_toml(params));
 }
 

@@ -237,9 +237,9 @@ def model_envelope(model: str, state, params=None, amplitude: float = 5e-5,
     state: {"stress": 3x3 (Pa), "fabric": 3x3, "volume_fraction": x} or a TOML file; params:
     {name: value} or a TOML file (missing names keep their defaults). Returns theta_deg and
     the Rendulic pairs strain, stress (Pa), fabric, with the tensors and the driver's error."""
-    return _rendulic.model_envelope(model, _arg(state, "state"), _arg(params, "parameters"),
-                                    amplitude, directions, method, scheme, tolerance, substeps,
-                                    umat)
+    return _rendulic.model_envelope(model, _arg(state, "state", "state"),
+                                    _arg(params, "params", "parameters"), amplitude,
+                                    directions, method, scheme, tolerance, substeps, umat)
 
 
 def material_point_path(model: str, state, params=None, kind: str = "undrained",
@@ -249,9 +249,9 @@ def material_point_path(model: str, state, params=None, kind: str = "undrained",
     kind "undrained" (axisymmetric, to signed deviatoric strain `end`; negative is extension)
     or "isotropic" (to volumetric strain `end`). Arrays strain, stress, fabric [n,3,3], eps_v,
     eps_dev, volume_fraction [n], the first row the start."""
-    return _rendulic.material_point_path(model, _arg(state, "state"),
-                                         _arg(params, "parameters"), kind, end, steps, scheme,
-                                         tolerance, substeps, umat)
+    return _rendulic.material_point_path(model, _arg(state, "state", "state"),
+                                         _arg(params, "params", "parameters"), kind, end, steps,
+                                         scheme, tolerance, substeps, umat)
 
 
 def probe(packing: str | os.PathLike, out: str | os.PathLike, methods=(), amplitudes=(),
@@ -275,16 +275,17 @@ def run(scenario: str | os.PathLike, out: str | os.PathLike, sets=None, threads:
                                  resume, progress))
 
 
-def _arg(x, what: str):
+def _arg(x, name: str, what: str):
     """A dictionary as it is (its values as arrays of floats), a path as a path. A value that
-    is not numbers is an InputError naming its key, as a TOML file's would be; numpy's own
-    "could not convert string to float" named none."""
+    is not numbers is an InputError naming its key, as a TOML file's would be ("parameters:
+    'K' ..."); numpy's own "could not convert string to float" named none. Neither a dictionary
+    nor a path names the argument itself (name)."""
     if x is None or isinstance(x, (str, os.PathLike)):
         return x
     try:
         items = dict(x).items()
     except (TypeError, ValueError):
-        raise TypeError(f"{what}: expected a dict or the path of a TOML file, got "
+        raise TypeError(f"{name}: expected a dict or the path of a TOML file, got "
                         f"{type(x).__name__}") from None
     out = {}
     for k, v in items:

@@ -465,6 +465,14 @@ std::pair<std::string, bool> toml_input(const py::object& x, const char* what,
   throw InputError("expected a dictionary or the path of a TOML file");
 }
 
+// A law's parameters (toml_input). A UMAT's come from a file only (props of any length, names,
+// [bounds]: docs/umat.md); a dictionary is left for app::law_for to refuse in its own words,
+// before toml_of would stumble on the props' length.
+std::pair<std::string, bool> params_input(const std::string& model, const py::object& params) {
+  if (model == "umat" && py::isinstance<py::dict>(params)) return {"", true};
+  return toml_input(params, "params", "parameters");
+}
+
 std::vector<std::string> sets_of(const py::object& sets) {
   std::vector<std::string> out;
   if (sets.is_none()) return out;
@@ -623,7 +631,7 @@ PYBIND11_MODULE(_rendulic, m) {
         app::EnvelopeRequest r;
         r.model = model;
         r.umat = umat;
-        std::tie(r.params, r.params_is_text) = toml_input(params, "params", "parameters");
+        std::tie(r.params, r.params_is_text) = params_input(model, params);
         std::tie(r.state, r.state_is_text) = toml_input(state, "state", "state");
         if (r.state.empty() && !r.state_is_text) throw InputError("a state is required");
         r.amplitude = amplitude;
@@ -649,7 +657,7 @@ PYBIND11_MODULE(_rendulic, m) {
       [](const std::string& model, const py::object& state, const py::object& params,
          const std::string& kind, double end, long long steps, const std::string& scheme,
          double tolerance, long long substeps, const std::string& umat) {
-        const auto [p, p_text] = toml_input(params, "params", "parameters");
+        const auto [p, p_text] = params_input(model, params);
         const auto [s, s_text] = toml_input(state, "state", "state");
         constexpr std::array<const char*, 2> kinds = {"undrained", "isotropic"};
         if (const std::string why = choice_refusal(kind, kinds); !why.empty())

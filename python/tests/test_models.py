@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import rendulic
-from conftest import cli
+from conftest import SOURCE, cli
 
 STATE = {"stress": np.diag([1.2e6, 1.0e6, 1.0e6]), "fabric": np.diag([1.1, 1.0, 1.0]),
          "volume_fraction": 0.8}
@@ -156,3 +156,55 @@ def test_an_empty_file_name_is_refused_not_read_as_no_file():
         rendulic.material_point_path("isotropic_elastic", state, kind="drained")
     with pytest.raises(rendulic.InputError, match=r"^the name of the results file is empty$"):
         rendulic.Results("")
+
+
+def umat_library(name):
+    """A UMAT built with the tests (data/umat, docs/umat.md); ctest says where."""
+    return os.path.join(os.environ.get("RENDULIC_UMAT_DIR", str(SOURCE / "build" / "umat")),
+                        name + ".so")
+
+
+def test_a_users_umat_from_python_equals_the_built_in_law():
+    # The hypoplastic UMAT of data/umat with the built-in law's defaults, as the CLI test does.
+    lib = umat_library("hypoplastic_wu")
+    assert os.path.exists(lib), lib
+    params = SOURCE / "data" / "umat" / "hypoplastic_wu_params.toml"
+    state = {"stress": 1e5 * np.eye(3), "volume_fraction": 0.64}
+    u = rendulic.model_envelope("umat", state, params, amplitude=1e-4, directions=12,
+                                method="rate", umat=lib)
+    b = rendulic.model_envelope("hypoplastic_wu", state, amplitude=1e-4, directions=12,
+                                method="rate")
+    assert u["model"] == "umat"
+    np.testing.assert_allclose(u["stress"], b["stress"], rtol=1e-12, atol=1e-12 * 1e5)
+    pu = rendulic.material_point_path("umat", state, params, end=-0.01, steps=20, umat=lib)
+    pb = rendulic.material_point_path("hypoplastic_wu", state, end=-0.01, steps=20)
+    np.testing.assert_allclose(pu["stress"], pb["stress"], rtol=1e-6, atol=1e-6 * 1e5)
+
+
+def test_umat_arguments_are_named_as_pythons_not_the_clis():
+    # The messages said "--umat PATH.so goes with --model umat" to a Python user.
+    state = {"stress": -1e5 * np.eye(3), "volume_fraction": 0.64}
+    lib = umat_library("hypoplastic_wu")
+    params = SOURCE / "data" / "umat" / "hypoplastic_wu_params.toml"
+    for f in (rendulic.model_envelope, rendulic.material_point_path):
+        for model, kwargs, words in [
+                ("umat", {}, r"^model 'umat' needs umat = 'PATH.so' \(the UMAT library\)$"),
+                ("isotropic_elastic", dict(umat=lib),
+                 r"^umat = '.*hypoplastic_wu.so' goes with model 'umat', not with "
+                 r"'isotropic_elastic'$"),
+                ("umat", dict(umat=lib),
+                 r"^model 'umat' needs params = 'FILE.toml' \(props, nstatv, "),
+                # A dictionary failed on its props' length: "'props' must be a number or a 3x3
+                # array of numbers".
+                ("umat", dict(umat=lib, params={"props": [-101.2, -962.1, -877.7, 1229.2]}),
+                 r"^a UMAT's parameters come from a TOML file \(params = 'FILE.toml'\), not a "
+                 r"dictionary"),
+                ("umat", dict(umat=str(params), params=params),
+                 r"hypoplastic_wu_params.toml: cannot load the UMAT library: "),
+                ("elastc", {}, r"^model: unknown model 'elastc' \(known: ")]:
+            with pytest.raises(rendulic.InputError, match=words) as e:
+                f(model, state, **kwargs)
+            assert "--" not in str(e.value)
+    with pytest.raises(TypeError, match=r"^params: expected a dict or the path of a TOML file, "
+                                        r"got int$"):
+        rendulic.model_envelope("isotropic_elastic", state, 5)
