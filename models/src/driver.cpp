@@ -179,7 +179,8 @@ StepResult integrate(const Law& law, const MaterialState& start, const Eigen::Ma
 namespace {
 
 // One load step of mixed control: Newton on the unknown strain components from the state y.
-// On failure `reason` says why and the step changes nothing.
+// `target`: the stress increment wanted on the controlled components. On failure `reason`
+// says why and the step changes nothing.
 struct LoadStep {
   bool ok = false;
   std::string reason;
@@ -191,10 +192,9 @@ struct LoadStep {
 
 LoadStep mixed_load_step(const Law& law, const MaterialState& y, const MixedControl& control,
                          const MixedOptions& options, const std::vector<int>& s_idx,
-                         const std::vector<int>& e_idx, double fraction) {
+                         const std::vector<int>& e_idx, double fraction, const Vector6d& target) {
   LoadStep out;
   Vector6d e = control.strain_increment * fraction;
-  const Vector6d target = control.stress_increment * fraction;
   const int ns = static_cast<int>(s_idx.size());
   if (ns == 0) {
     out.res = integrate(law, y, from_mandel(e), options.step);
@@ -274,6 +274,7 @@ MixedResult integrate_mixed(const Law& law, const MaterialState& start, const Mi
   std::vector<int> s_idx, e_idx;
   for (int i = 0; i < 6; ++i) (control.stress_controlled[i] ? s_idx : e_idx).push_back(i);
   MaterialState y = start;
+  const Vector6d start_stress = to_mandel(start.stress);
   // A load step that fails is halved and tried again: Newton's secant loses its way on a large
   // step, and near a limit state a step must shrink to follow the curve (the sand's drained
   // stress-controlled triaxial needed 20 steps by hand for 2e5 Pa). A step that still fails
@@ -286,7 +287,11 @@ MixedResult integrate_mixed(const Law& law, const MaterialState& start, const Mi
     h = std::min(h, 1.0 - out.fraction_done);
     // The last step takes the remainder exactly: rounding must not leave a sliver.
     if (1.0 - out.fraction_done - h < 1e-12) h = 1.0 - out.fraction_done;
-    const LoadStep ls = mixed_load_step(law, y, control, options, s_idx, e_idx, h);
+    // The controlled components aim at the start's stress plus the increment's share done
+    // after this step, not at h times the increment: the load steps' residuals do not add up.
+    const double after = 1.0 - out.fraction_done - h <= 0.0 ? 1.0 : out.fraction_done + h;
+    const Vector6d target = start_stress + after * control.stress_increment - to_mandel(y.stress);
+    const LoadStep ls = mixed_load_step(law, y, control, options, s_idx, e_idx, h, target);
     out.iterations += ls.iterations;
     if (!ls.ok) {
       if (h * 0.5 >= kMinLoadFraction) {
@@ -306,7 +311,9 @@ MixedResult integrate_mixed(const Law& law, const MaterialState& start, const Mi
     }
     out.strain_increment += ls.e;
     out.stress_residual = std::max(out.stress_residual, ls.residual);
-    out.fraction_done = 1.0 - out.fraction_done - h <= 0.0 ? 1.0 : out.fraction_done + h;
+    out.substeps += ls.res.substeps;
+    out.max_error_estimate = std::max(out.max_error_estimate, ls.res.error_estimate);
+    out.fraction_done = after;
     ++out.load_steps_taken;
     y = ls.res.end;
     out.step = ls.res;

@@ -1,5 +1,8 @@
-// Isotropic compression and undrained axisymmetric paths through a law (paths.hpp).
+// Isotropic compression, undrained axisymmetric and drained triaxial paths through a law
+// (paths.hpp, docs/models.md "Paths").
 #include "rendulic/models/paths.hpp"
+
+#include <cmath>
 
 #include "rendulic/core/decimal.hpp"
 #include "rendulic/models/umat.hpp"
@@ -15,6 +18,10 @@ void record(PathSeries* s, const Eigen::Matrix3d& eps, const MaterialState& y) {
   s->fabric.push_back(y.fabric);
   s->volume_fraction.push_back(y.volume_fraction);
   s->internal.push_back(y.internal);
+}
+
+std::string step_failure(int k, const PathOptions& o, const std::string& why) {
+  return "step " + std::to_string(k + 1) + " of " + std::to_string(o.steps) + ": " + why;
 }
 
 PathSeries run_path(const Law& law, const MaterialState& start, const Eigen::Matrix3d& total,
@@ -39,14 +46,13 @@ PathSeries run_path(const Law& law, const MaterialState& start, const Eigen::Mat
   for (int k = 0; k < o.steps; ++k) {
     const StepResult r = integrate(law, y, de, o.step);
     if (!r.success) {
-      s.reason =
-          "step " + std::to_string(k + 1) + " of " + std::to_string(o.steps) + ": " + r.reason;
+      s.reason = step_failure(k, o, r.reason);
       return s;
     }
     y = r.end;
     eps += de;
     if (const std::string bad = volume_fraction_problem(y.volume_fraction); !bad.empty()) {
-      s.reason = "step " + std::to_string(k + 1) + " of " + std::to_string(o.steps) + ": " + bad;
+      s.reason = step_failure(k, o, bad);
       return s;
     }
     s.max_error_estimate = std::max(s.max_error_estimate, r.error_estimate);
@@ -95,6 +101,59 @@ Eigen::Matrix3d undrained_axisymmetric_strain(double eps_dev) {
 PathSeries undrained_axisymmetric_path(const Law& law, const MaterialState& start,
                                        double eps_dev_end, const PathOptions& options) {
   return run_path(law, start, undrained_axisymmetric_strain(eps_dev_end), options);
+}
+
+PathSeries drained_triaxial_path(const Law& law, const MaterialState& start, double eps_axial_end,
+                                 const PathOptions& o) {
+  PathSeries s;
+  if (!std::isfinite(eps_axial_end)) {
+    s.reason = "the path's end strain is not finite";
+    return s;
+  }
+  // integrate_mixed drives the law through its rate; a UMAT's STATEV beyond the six internal
+  // variables would be lost between its calls (UmatLaw::run_path carries them).
+  if (dynamic_cast<const UmatLaw*>(&law)) {
+    s.reason =
+        "a drained path is for the built-in laws: a UMAT is driven by strain only "
+        "(strain_path with the strains it should follow)";
+    return s;
+  }
+  std::string why;
+  if (!o.IsValid(&why)) {
+    s.reason = "invalid path options: " + why;
+    return s;
+  }
+  MixedOptions mixed;
+  mixed.step = o.step;
+  MixedControl c;
+  c.stress_controlled = {false, true, true, false, false, false};  // Mandel: xx yy zz yz xz xy
+  c.strain_increment(0) = eps_axial_end / o.steps;
+  const Vector6d held = to_mandel(start.stress);
+  Eigen::Matrix3d eps = Eigen::Matrix3d::Zero();
+  MaterialState y = start;
+  record(&s, eps, y);
+  for (int k = 0; k < o.steps; ++k) {
+    // Each step aims at the start's lateral stresses, not at a zero increment, so that Newton's
+    // residuals (1e-9 relative) do not add up over the steps.
+    const Vector6d now = to_mandel(y.stress);
+    for (int i : {1, 2}) c.stress_increment(i) = held(i) - now(i);
+    const MixedResult r = integrate_mixed(law, y, c, mixed);
+    if (!r.step.success) {
+      s.reason = step_failure(k, o, r.step.reason);
+      return s;
+    }
+    y = r.step.end;
+    eps += from_mandel(r.strain_increment);
+    if (const std::string bad = volume_fraction_problem(y.volume_fraction); !bad.empty()) {
+      s.reason = step_failure(k, o, bad);
+      return s;
+    }
+    s.max_error_estimate = std::max(s.max_error_estimate, r.max_error_estimate);
+    s.total_substeps += r.substeps;
+    record(&s, eps, y);
+  }
+  s.success = true;
+  return s;
 }
 
 }  // namespace rendulic::models

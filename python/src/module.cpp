@@ -659,7 +659,7 @@ PYBIND11_MODULE(_rendulic, m) {
          double tolerance, long long substeps, const std::string& umat) {
         const auto [p, p_text] = params_input(model, params);
         const auto [s, s_text] = toml_input(state, "state", "state");
-        constexpr std::array<const char*, 2> kinds = {"undrained", "isotropic"};
+        constexpr std::array<const char*, 3> kinds = {"undrained", "isotropic", "drained"};
         if (const std::string why = choice_refusal(kind, kinds); !why.empty())
           throw InputError("kind: " + why);
         models::PathOptions o;
@@ -672,8 +672,12 @@ PYBIND11_MODULE(_rendulic, m) {
           py::gil_scoped_release release;
           const auto law = app::law_for(model, umat, p, p_text);
           const models::MaterialState start = app::state_for(*law, s, s_text);
-          series = kind == "undrained" ? models::undrained_axisymmetric_path(*law, start, end, o)
-                                       : models::isotropic_compression_path(*law, start, end, o);
+          if (kind == "undrained")
+            series = models::undrained_axisymmetric_path(*law, start, end, o);
+          else if (kind == "drained")
+            series = models::drained_triaxial_path(*law, start, end, o);
+          else
+            series = models::isotropic_compression_path(*law, start, end, o);
         }
         if (!series.success) throw InputError(kind + " path of " + model + ": " + series.reason);
         py::dict d;

@@ -152,10 +152,25 @@ def test_an_empty_file_name_is_refused_not_read_as_no_file():
     with pytest.raises(rendulic.InputError, match=r"^state: the file name is empty$"):
         rendulic.material_point_path("isotropic_elastic", "")
     with pytest.raises(rendulic.InputError,
-                       match=r"^kind: 'drained' is not one of undrained, isotropic$"):
-        rendulic.material_point_path("isotropic_elastic", state, kind="drained")
+                       match=r"^kind: 'triaxial' is not one of undrained, isotropic, drained$"):
+        rendulic.material_point_path("isotropic_elastic", state, kind="triaxial")
     with pytest.raises(rendulic.InputError, match=r"^the name of the results file is empty$"):
         rendulic.Results("")
+
+
+def test_a_drained_path_holds_the_lateral_stress_young_and_poisson():
+    # kind="drained": axial strain along x, sigma_yy = sigma_zz held (docs/models.md "Paths").
+    k, g = PARAMS["K"], PARAMS["G"]
+    young, poisson = 9 * k * g / (3 * k + g), (3 * k - 2 * g) / (2 * (3 * k + g))
+    state = {"stress": 1e6 * np.eye(3), "volume_fraction": 0.64}
+    p = rendulic.material_point_path("isotropic_elastic", state, PARAMS, kind="drained",
+                                     end=0.002, steps=8)
+    ea = p["strain"][:, 0, 0]
+    np.testing.assert_allclose(ea, np.linspace(0, 0.002, 9), rtol=0, atol=1e-16)
+    np.testing.assert_allclose(p["stress"][:, 0, 0] - 1e6, young * ea, rtol=1e-9, atol=1e-6)
+    np.testing.assert_allclose(p["stress"][:, 1, 1], 1e6, rtol=1e-9)
+    np.testing.assert_allclose(p["strain"][:, 2, 2], -poisson * ea, rtol=1e-9, atol=1e-18)
+    np.testing.assert_allclose(p["eps_v"], (1 - 2 * poisson) * ea, rtol=1e-9, atol=1e-18)
 
 
 def umat_library(name):
@@ -205,6 +220,9 @@ def test_umat_arguments_are_named_as_pythons_not_the_clis():
             with pytest.raises(rendulic.InputError, match=words) as e:
                 f(model, state, **kwargs)
             assert "--" not in str(e.value)
+    with pytest.raises(rendulic.InputError,
+                       match=r"^drained path of umat: a drained path is for the built-in laws"):
+        rendulic.material_point_path("umat", state, params, kind="drained", umat=lib)
     with pytest.raises(TypeError, match=r"^params: expected a dict or the path of a TOML file, "
                                         r"got int$"):
         rendulic.model_envelope("isotropic_elastic", state, 5)

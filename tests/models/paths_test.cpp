@@ -1,11 +1,14 @@
-// Unit tests of the main paths driven through the laws: isotropic compression
-// and undrained axisymmetric extension, against closed forms for the linear law and against
-// the steady state that elastoplastic_fabric is built to reach.
+// Unit tests of the main paths driven through the laws: isotropic compression, undrained
+// axisymmetric extension and drained triaxial paths, against closed forms for the linear law,
+// the hypoplastic sand's limit state found by a second method, and the steady state that
+// elastoplastic_fabric is built to reach.
 #include "rendulic/models/paths.hpp"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
+
+#include "wu_limit.hpp"
 
 namespace rendulic::models {
 namespace {
@@ -113,6 +116,94 @@ TEST(Paths, ElastoplasticReachesItsSteadyState) {
   for (size_t i = 1; i < und.stress.size(); ++i)
     EXPECT_LE(signed_deviator(und.stress[i]) / pressure(und.stress[i]),
               signed_deviator(und.stress[i - 1]) / pressure(und.stress[i - 1]) + 1e-12);
+}
+
+// Drained triaxial: sigma_yy = sigma_zz held at the start's, no shear strain. The linear law's
+// closed form is Young's modulus and Poisson's ratio: d sigma_xx = E d eps_xx, d eps_yy = -nu
+// d eps_xx.
+TEST(Paths, DrainedTriaxialOfTheLinearLawIsYoungAndPoisson) {
+  auto law = make_law("isotropic_elastic");
+  const double k = law->parameter("K"), g = law->parameter("G");
+  const double young = 9 * k * g / (3 * k + g), poisson = (3 * k - 2 * g) / (2 * (3 * k + g));
+  const MaterialState s =
+      law->make_state(Eigen::Matrix3d::Identity() * 1e8, Eigen::Matrix3d::Identity() * 2.0, 0.7);
+  PathOptions o;
+  o.steps = 40;
+  for (const double end : {0.01, -0.004}) {
+    const PathSeries d = drained_triaxial_path(*law, s, end, o);
+    ASSERT_TRUE(d.success) << d.reason;
+    ASSERT_EQ(d.stress.size(), 41u);
+    EXPECT_NEAR(d.strain.back()(0, 0), end, 1e-15);
+    for (size_t i = 0; i < d.stress.size(); ++i) {
+      const double ea = d.strain[i](0, 0);
+      EXPECT_NEAR(d.stress[i](0, 0) - 1e8, young * ea, 1e-9 * young * std::abs(end));
+      EXPECT_NEAR(d.stress[i](1, 1), 1e8, 1e-9 * 1e8);
+      EXPECT_NEAR(d.stress[i](2, 2), 1e8, 1e-9 * 1e8);
+      EXPECT_NEAR(d.strain[i](1, 1), -poisson * ea, 1e-9 * std::abs(end));
+      EXPECT_NEAR(d.strain[i](2, 2), -poisson * ea, 1e-9 * std::abs(end));
+      EXPECT_NEAR(d.eps_v[i], (1 - 2 * poisson) * ea, 1e-9 * std::abs(end));
+      EXPECT_EQ(d.strain[i](0, 1), 0.0);
+    }
+  }
+}
+
+// The hypoplastic sand, sheared drained far enough, ends at its limit state: there the stress
+// rate vanishes for the path's strain rate, so sigma_xx / sigma_yy is the limit surface's ratio,
+// found from the law's equation by bisection (wu_limit.hpp), in compression and in extension.
+TEST(Paths, DrainedTriaxialOfTheSandEndsOnItsLimitSurface) {
+  auto law = make_law("hypoplastic_wu");
+  const MaterialState s =
+      law->make_state(1e5 * Eigen::Matrix3d::Identity(), Eigen::Matrix3d::Zero(), 0.6);
+  PathOptions o;
+  o.steps = 100;
+  const struct {
+    double end, limit;
+  } cases[] = {{0.3, wu_limit_ratio(*law, 1e5)}, {-0.1, wu_limit_ratio(*law, 1e5, 1.0, 0.01)}};
+  for (const auto& c : cases) {
+    const PathSeries d = drained_triaxial_path(*law, s, c.end, o);
+    ASSERT_TRUE(d.success) << d.reason;
+    const Eigen::Matrix3d& end = d.stress.back();
+    EXPECT_NEAR(end(1, 1), 1e5, 1e-8 * 1e5);
+    EXPECT_NEAR(end(2, 2), 1e5, 1e-8 * 1e5);
+    EXPECT_NEAR(end(0, 0) / end(1, 1), c.limit, 1e-6 * c.limit) << c.end;
+  }
+  // The bisections found the two sides of the surface: axial stress above the lateral in
+  // compression, below it in extension.
+  EXPECT_GT(cases[0].limit, 1.0);
+  EXPECT_LT(cases[1].limit, 1.0);
+}
+
+TEST(Paths, ADrainedPathOfElastoplasticFabricReachesItsSteadyStateRatio) {
+  auto law = make_law("elastoplastic_fabric");
+  const MaterialState s =
+      law->make_state(Eigen::Matrix3d::Identity() * 2e9, Eigen::Matrix3d::Identity() * 2.0, 0.82);
+  PathOptions o;
+  o.steps = 64;
+  for (const double end : {0.3, -0.3}) {
+    const PathSeries d = drained_triaxial_path(*law, s, end, o);
+    ASSERT_TRUE(d.success) << d.reason;
+    for (const auto& st : d.stress) {
+      EXPECT_NEAR(st(1, 1), 2e9, 1e-8 * 2e9);
+      EXPECT_NEAR(st(2, 2), 2e9, 1e-8 * 2e9);
+    }
+    const double ratio = signed_deviator(d.stress.back()) / pressure(d.stress.back());
+    EXPECT_NEAR(std::abs(ratio), law->parameter("M_ss") + law->parameter("m_e"),
+                0.1 * law->parameter("M_ss"))
+        << end;
+    EXPECT_EQ(ratio > 0.0, end > 0.0);
+  }
+}
+
+TEST(Paths, ADrainedPathRefusesANonFiniteEndAndBadOptions) {
+  auto law = make_law("isotropic_elastic");
+  const MaterialState s =
+      law->make_state(Eigen::Matrix3d::Identity() * 1e8, Eigen::Matrix3d::Identity() * 2.0, 0.7);
+  EXPECT_EQ(drained_triaxial_path(*law, s, std::nan("")).reason,
+            "the path's end strain is not finite");
+  PathOptions o;
+  o.steps = 0;
+  EXPECT_EQ(drained_triaxial_path(*law, s, 0.01, o).reason,
+            "invalid path options: steps must be in [1, 1000000]");
 }
 
 }  // namespace

@@ -161,6 +161,18 @@ TEST(Umat, HypoplasticUmatIntegratedEnvelopeAndPathAreTheBuiltInLaws) {
   }
 }
 
+// A drained path holds stresses through the laws' rate (integrate_mixed), which would lose a
+// UMAT's STATEV beyond the six internal variables between calls: refused with the reason, not
+// run wrong.
+TEST(Umat, ADrainedPathIsRefusedForAUmat) {
+  const UmatLaw law(umat_lib("hypoplastic_wu"), spec_of("hypoplastic_wu"));
+  const PathSeries d = drained_triaxial_path(law, isotropic(law, 1e5), 0.01);
+  EXPECT_FALSE(d.success);
+  EXPECT_TRUE(d.stress.empty());
+  EXPECT_NE(d.reason.find("a drained path is for the built-in laws"), std::string::npos)
+      << d.reason;
+}
+
 TEST(Umat, PnewdtCutsAreHonouredAndLeaveNoTrace) {
   const double limit = 1e-6;
   UmatSpec spec = spec_of("hypoplastic_wu");

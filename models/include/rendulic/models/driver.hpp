@@ -107,6 +107,8 @@ struct MixedResult {
   int load_step_cuts = 0;                        // load steps halved after a failure
   int iterations = 0;                            // Newton iterations, summed over load steps
   double stress_residual = 0.0;                  // largest final residual over load steps (Pa)
+  int substeps = 0;                 // of the converged load steps' integrations, summed
+  double max_error_estimate = 0.0;  // of the converged load steps' integrations, largest
 };
 
 MixedResult integrate_mixed(const Law& law, const MaterialState& start, const MixedControl& control,

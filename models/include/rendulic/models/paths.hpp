@@ -1,7 +1,8 @@
 // Main loading paths driven through a law (compared with the DEM curves of the
-// seed's Fig. 1 and the isotropic branch of docs/physics.md section 4): isotropic compression, and
+// seed's Fig. 1 and the isotropic branch of docs/physics.md section 4): isotropic compression,
 // undrained (constant-volume) axisymmetric deformation along x,
-// d_eps = a diag(1, -1/2, -1/2) (compression positive; a < 0 is the seed's axial extension).
+// d_eps = a diag(1, -1/2, -1/2) (compression positive; a < 0 is the seed's axial extension), and
+// the drained triaxial path of the DEM's path.type = drained_* (docs/models.md "Paths").
 #pragma once
 
 #include <string>
@@ -48,5 +49,13 @@ Eigen::Matrix3d undrained_axisymmetric_strain(double eps_dev);
 // (negative: axial extension along x, as in the seed; e.g. -0.32).
 PathSeries undrained_axisymmetric_path(const Law& law, const MaterialState& start,
                                        double eps_dev_end, const PathOptions& options = {});
+
+// Drained triaxial path from `start` to axial strain eps_axial_end along x (compression
+// positive; negative: drained extension): the lateral stresses sigma_yy, sigma_zz are held at
+// their start values by the mixed-control driver (integrate_mixed), no shear strain, as the
+// DEM's drained paths hold an orthorhombic cell's lateral stress. Built-in laws only: a UMAT is
+// driven by strain (docs/umat.md).
+PathSeries drained_triaxial_path(const Law& law, const MaterialState& start, double eps_axial_end,
+                                 const PathOptions& options = {});
 
 }  // namespace rendulic::models
