@@ -58,6 +58,7 @@ PathSeries run_path(const Law& law, const MaterialState& start, const Eigen::Mat
     s.max_error_estimate = std::max(s.max_error_estimate, r.error_estimate);
     s.total_substeps += r.substeps;
     record(&s, eps, y);
+    if (o.after_step) o.after_step(k + 1, o.steps);
   }
   s.success = true;
   return s;
@@ -151,6 +152,7 @@ PathSeries drained_triaxial_path(const Law& law, const MaterialState& start, dou
     s.max_error_estimate = std::max(s.max_error_estimate, r.max_error_estimate);
     s.total_substeps += r.substeps;
     record(&s, eps, y);
+    if (o.after_step) o.after_step(k + 1, o.steps);
   }
   s.success = true;
   return s;

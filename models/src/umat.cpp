@@ -555,6 +555,7 @@ PathSeries UmatLaw::run_path(const MaterialState& start, const Eigen::Matrix3d& 
     s.max_error_estimate = std::max(s.max_error_estimate, r.error_estimate);
     s.total_substeps += r.substeps;
     record();
+    if (o.after_step) o.after_step(k + 1, o.steps);
   }
   if (end_state) *end_state = y;
   s.success = true;

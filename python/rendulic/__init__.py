@@ -244,16 +244,18 @@ def model_envelope(model: str, state, params=None, amplitude: float = 5e-5,
 
 def material_point_path(model: str, state, params=None, kind: str = "undrained",
                         end: float = -0.05, steps: int = 200, scheme: str = "modified-euler",
-                        tolerance: float = _rendulic.DEFAULT_TOLERANCE, substeps: int = 1, umat: str = "") -> dict:
+                        tolerance: float = _rendulic.DEFAULT_TOLERANCE, substeps: int = 1, umat: str = "",
+                        progress: Progress = None) -> dict:
     """A law driven along a path from `state` by the error-controlled driver (docs/models.md):
     kind "undrained" (axisymmetric, to signed deviatoric strain `end`; negative is extension),
     "isotropic" (to volumetric strain `end`) or "drained" (triaxial: axial strain `end` along x,
     compression positive, the lateral stresses held at the start's; built-in laws only). Arrays
     strain, stress, fabric [n,3,3], eps_v, eps_dev, volume_fraction [n], the first row the
-    start."""
+    start. progress(stage, task, fraction) as for `run`, called after steps ("path", e.g.
+    "drained path of hypoplastic_wu"); Ctrl-C or an exception it raises ends the path."""
     return _rendulic.material_point_path(model, _arg(state, "state", "state"),
                                          _arg(params, "params", "parameters"), kind, end, steps,
-                                         scheme, tolerance, substeps, umat)
+                                         scheme, tolerance, substeps, umat, progress)
 
 
 def probe(packing: str | os.PathLike, out: str | os.PathLike, methods=(), amplitudes=(),

@@ -20,6 +20,7 @@
 
 #include <algorithm>
 #include <array>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -323,6 +324,27 @@ struct PendingError {
   }
 };
 
+// Under the GIL: Ctrl-C (PyErr_CheckSignals, as KeyboardInterrupt) and the user's progress
+// callback (or None). Either's exception is kept in `pending`; false says the work should stop.
+bool tell_python(PendingError& pending, const py::object& callback, const std::string& stage,
+                 const std::string& task, double fraction) {
+  py::gil_scoped_acquire gil;
+  if (pending.set()) return false;
+  if (PyErr_CheckSignals() != 0) {
+    pending.fetch();
+    return false;
+  }
+  if (callback.is_none()) return true;
+  try {
+    callback(stage, task, fraction);
+  } catch (py::error_already_set& e) {
+    e.restore();
+    pending.fetch();
+    return false;
+  }
+  return true;
+}
+
 // The progress observer, the stop flag (app/progress.hpp) and the log level are the process's:
 // two calls in two threads at once swapped each other's callbacks, and one's stop stopped the
 // other. So long calls take turns, and one started from a progress callback (which would reset
@@ -361,21 +383,7 @@ auto long_work(const py::object& callback, bool quiet, Work&& work) {
         // Python's signals are run on its main thread only, and the callback is called from one
         // thread: the one that called in (the master of every OpenMP team it opens).
         if (std::this_thread::get_id() != owner) return;
-        py::gil_scoped_acquire gil;
-        if (pending.set()) return;
-        if (PyErr_CheckSignals() != 0) {
-          pending.fetch();
-          app::request_stop();
-          return;
-        }
-        if (callback.is_none()) return;
-        try {
-          callback(stage, task, fraction);
-        } catch (py::error_already_set& e) {
-          e.restore();
-          pending.fetch();
-          app::request_stop();
-        }
+        if (!tell_python(pending, callback, stage, task, fraction)) app::request_stop();
       });
   const log::Level level = log::level();
   if (quiet) log::set_level(log::Level::kWarning);
@@ -656,7 +664,8 @@ PYBIND11_MODULE(_rendulic, m) {
       "material_point_path",
       [](const std::string& model, const py::object& state, const py::object& params,
          const std::string& kind, double end, long long steps, const std::string& scheme,
-         double tolerance, long long substeps, const std::string& umat) {
+         double tolerance, long long substeps, const std::string& umat,
+         const py::object& progress) {
         const auto [p, p_text] = params_input(model, params);
         const auto [s, s_text] = toml_input(state, "state", "state");
         constexpr std::array<const char*, 3> kinds = {"undrained", "isotropic", "drained"};
@@ -667,8 +676,25 @@ PYBIND11_MODULE(_rendulic, m) {
         o.step = app::step_options_for(scheme, tolerance, count_of(substeps, "substeps"));
         std::string why;
         if (!o.IsValid(&why)) throw InputError("path options: " + why);
+        // A path may take minutes (elastoplastic_fabric far below its stress scale, docs/
+        // models.md "Paths"): Ctrl-C and the progress callback are heard after each step, at
+        // most every app::kObserveEvery seconds and at the end. This call holds no process-wide
+        // state (unlike run and probe), so paths in several threads still run at once.
+        PendingError pending;
+        struct Stopped {};
+        using Clock = std::chrono::steady_clock;
+        Clock::time_point last{};
+        const std::string task = kind + " path of " + model;
+        o.after_step = [&](int done, int total) {
+          const Clock::time_point now = Clock::now();
+          if (done < total &&
+              std::chrono::duration<double>(now - last).count() < app::kObserveEvery)
+            return;
+          last = now;
+          if (!tell_python(pending, progress, "path", task, double(done) / total)) throw Stopped{};
+        };
         models::PathSeries series;
-        {
+        try {
           py::gil_scoped_release release;
           const auto law = app::law_for(model, umat, p, p_text);
           const models::MaterialState start = app::state_for(*law, s, s_text);
@@ -678,7 +704,9 @@ PYBIND11_MODULE(_rendulic, m) {
             series = models::drained_triaxial_path(*law, start, end, o);
           else
             series = models::isotropic_compression_path(*law, start, end, o);
+        } catch (const Stopped&) {
         }
+        if (pending.set()) pending.raise();
         if (!series.success) throw InputError(kind + " path of " + model + ": " + series.reason);
         py::dict d;
         d["strain"] = tensors_of(series.strain);
@@ -693,7 +721,8 @@ PYBIND11_MODULE(_rendulic, m) {
       },
       "model"_a, "state"_a, "params"_a = py::none(), "kind"_a = "undrained", "end"_a = -0.05,
       "steps"_a = 200, "scheme"_a = "modified-euler",
-      "tolerance"_a = models::StepOptions{}.tolerance, "substeps"_a = 1, "umat"_a = "");
+      "tolerance"_a = models::StepOptions{}.tolerance, "substeps"_a = 1, "umat"_a = "",
+      "progress"_a = py::none());
 
   m.def(
       "probe",

@@ -195,6 +195,43 @@ def test_sigint_from_another_thread_stops_the_run(tiny_toml, tmp_path):
     assert env["stress"].shape == (36, 2)
 
 
+# elastoplastic_fabric far below its stress scale: a drained path of minutes (docs/models.md
+# "Paths"), 350 s for 100 steps at 1e5 Pa; it could be neither followed nor stopped.
+SLOW_PATH = dict(model="elastoplastic_fabric", kind="drained", end=0.1, steps=100,
+                 state={"stress": 1e6 * np.eye(3), "volume_fraction": 0.64,
+                        "fabric": np.eye(3) / 3})
+
+
+def test_a_long_material_point_path_reports_and_stops_on_its_callback():
+    seen = []
+
+    def progress(stage, task, fraction):
+        seen.append((stage, task, fraction))
+        raise LookupError("stop the path")
+
+    with pytest.raises(LookupError, match="stop the path"):
+        rendulic.material_point_path(progress=progress, **SLOW_PATH)
+    assert seen == [("path", "drained path of elastoplastic_fabric", 0.01)]
+    # A path that runs through reports its end.
+    seen.clear()
+    rendulic.material_point_path("isotropic_elastic", SLOW_PATH["state"], kind="drained",
+                                 end=0.01, steps=10, progress=lambda *a: seen.append(a))
+    assert seen[-1] == ("path", "drained path of isotropic_elastic", 1.0)
+
+
+def test_ctrl_c_stops_a_long_material_point_path():
+    # SIGINT from another thread once the path has started, seen at its next step.
+    started = threading.Event()
+
+    def progress(stage, task, fraction):
+        if not started.is_set():
+            started.set()
+            threading.Thread(target=os.kill, args=(os.getpid(), signal.SIGINT)).start()
+
+    with pytest.raises(KeyboardInterrupt):
+        rendulic.material_point_path(progress=progress, **SLOW_PATH)
+
+
 def test_callback_raising_during_the_probes_stops_them(cli_run, tmp_path):
     # Raised from a report made while the probes run (inside their parallel loop): the
     # remaining probes are skipped (ProbeOptions::stop) and the exception comes back.

@@ -5,6 +5,7 @@
 // the drained triaxial path of the DEM's path.type = drained_* (docs/models.md "Paths").
 #pragma once
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -20,6 +21,9 @@ struct PathOptions {
   static constexpr int kMaxSteps = 1000000;
   int steps = 200;  // recorded, equal strain steps; each is integrated with error control
   StepOptions step;
+  // Called after each recorded step with (steps done, steps): the Python module reports
+  // progress and honours Ctrl-C through it, throwing to end a path of minutes (docs/python.md).
+  std::function<void(int, int)> after_step;
   bool IsValid(std::string* why) const;
 };
 
