@@ -248,8 +248,9 @@ def material_point_path(model: str, state, params=None, kind: str = "undrained",
                         progress: Progress = None) -> dict:
     """A law driven along a path from `state` by the error-controlled driver (docs/models.md):
     kind "undrained" (axisymmetric, to signed deviatoric strain `end`; negative is extension),
-    "isotropic" (to volumetric strain `end`) or "drained" (triaxial: axial strain `end` along x,
-    compression positive, the lateral stresses held at the start's; built-in laws only). Arrays
+    "isotropic" (to volumetric strain `end`), "drained" (triaxial: axial strain `end` along x,
+    compression positive, the lateral stresses held at the start's; built-in laws only) or
+    "proportional" (to the 3x3 strain tensor `end`, compression positive, a UMAT too). Arrays
     strain, stress, fabric [n,3,3], eps_v, eps_dev, volume_fraction [n], the first row the
     start. progress(stage, task, fraction) as for `run`, called after steps ("path", e.g.
     "drained path of hypoplastic_wu"); Ctrl-C or an exception it raises ends the path."""

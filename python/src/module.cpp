@@ -519,6 +519,30 @@ std::vector<Eigen::Vector2d> points_of(const py::object& x, const char* what) {
   return out;
 }
 
+// The end of a material-point path: a strain tensor (symmetric 3x3, compression positive) for
+// kind "proportional", else a number.
+double end_number(const py::object& end, const std::string& kind) {
+  try {
+    return end.cast<double>();  // numpy's scalars and 0-d arrays too
+  } catch (const py::cast_error&) {
+    PyErr_Clear();
+    throw InputError("end: the end strain of kind '" + kind +
+                     "' is a number (a strain tensor is for kind 'proportional')");
+  }
+}
+Eigen::Matrix3d end_tensor(const py::object& end) {
+  const auto a = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(end);
+  if (!a || a.ndim() != 2 || a.shape(0) != 3 || a.shape(1) != 3)
+    throw InputError("end: the end of a proportional path is a 3x3 strain tensor");
+  Eigen::Matrix3d m;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) m(i, j) = a.at(i, j);
+  // As a state's tensors (material_io.cpp): an asymmetric strain is a typo, not a rotation.
+  if (m.allFinite() && (m - m.transpose()).norm() > 1e-12 * m.norm())
+    throw InputError("end: the end strain must be a symmetric 3x3 tensor");
+  return m;
+}
+
 // A count taken from Python as a 64-bit integer and narrowed here: pybind's own refusal of an
 // int beyond 32 bits (directions=2**31) is a TypeError that lists every signature and names no
 // argument. Within 32 bits the count's own range is checked where it is used.
@@ -663,14 +687,18 @@ PYBIND11_MODULE(_rendulic, m) {
   m.def(
       "material_point_path",
       [](const std::string& model, const py::object& state, const py::object& params,
-         const std::string& kind, double end, long long steps, const std::string& scheme,
+         const std::string& kind, const py::object& end, long long steps, const std::string& scheme,
          double tolerance, long long substeps, const std::string& umat,
          const py::object& progress) {
         const auto [p, p_text] = params_input(model, params);
         const auto [s, s_text] = toml_input(state, "state", "state");
-        constexpr std::array<const char*, 3> kinds = {"undrained", "isotropic", "drained"};
+        constexpr std::array<const char*, 4> kinds = {"undrained", "isotropic", "drained",
+                                                      "proportional"};
         if (const std::string why = choice_refusal(kind, kinds); !why.empty())
           throw InputError("kind: " + why);
+        const bool proportional = kind == "proportional";
+        const Eigen::Matrix3d end_strain = proportional ? end_tensor(end) : Eigen::Matrix3d::Zero();
+        const double end_value = proportional ? 0.0 : end_number(end, kind);
         models::PathOptions o;
         o.steps = count_of(steps, "steps");
         o.step = app::step_options_for(scheme, tolerance, count_of(substeps, "substeps"));
@@ -699,11 +727,13 @@ PYBIND11_MODULE(_rendulic, m) {
           const auto law = app::law_for(model, umat, p, p_text);
           const models::MaterialState start = app::state_for(*law, s, s_text);
           if (kind == "undrained")
-            series = models::undrained_axisymmetric_path(*law, start, end, o);
+            series = models::undrained_axisymmetric_path(*law, start, end_value, o);
           else if (kind == "drained")
-            series = models::drained_triaxial_path(*law, start, end, o);
+            series = models::drained_triaxial_path(*law, start, end_value, o);
+          else if (proportional)
+            series = models::strain_path(*law, start, end_strain, o);
           else
-            series = models::isotropic_compression_path(*law, start, end, o);
+            series = models::isotropic_compression_path(*law, start, end_value, o);
         } catch (const Stopped&) {
         }
         if (pending.set()) pending.raise();

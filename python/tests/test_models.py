@@ -152,7 +152,8 @@ def test_an_empty_file_name_is_refused_not_read_as_no_file():
     with pytest.raises(rendulic.InputError, match=r"^state: the file name is empty$"):
         rendulic.material_point_path("isotropic_elastic", "")
     with pytest.raises(rendulic.InputError,
-                       match=r"^kind: 'triaxial' is not one of undrained, isotropic, drained$"):
+                       match=r"^kind: 'triaxial' is not one of undrained, isotropic, drained, "
+                             r"proportional$"):
         rendulic.material_point_path("isotropic_elastic", state, kind="triaxial")
     with pytest.raises(rendulic.InputError, match=r"^the name of the results file is empty$"):
         rendulic.Results("")
@@ -171,6 +172,33 @@ def test_a_drained_path_holds_the_lateral_stress_young_and_poisson():
     np.testing.assert_allclose(p["stress"][:, 1, 1], 1e6, rtol=1e-9)
     np.testing.assert_allclose(p["strain"][:, 2, 2], -poisson * ea, rtol=1e-9, atol=1e-18)
     np.testing.assert_allclose(p["eps_v"], (1 - 2 * poisson) * ea, rtol=1e-9, atol=1e-18)
+
+
+def test_a_proportional_path_is_hookes_law_for_the_linear_law():
+    # kind="proportional": any strain tensor, in equal steps; sigma = sigma0 + lambda tr(E) I
+    # + 2 G E for the linear law (lambda = K - 2G/3).
+    k, g = PARAMS["K"], PARAMS["G"]
+    state = {"stress": 1e6 * np.eye(3), "volume_fraction": 0.64}
+    end = np.array([[0.004, 0.001, 0.0], [0.001, -0.002, 0.0005], [0.0, 0.0005, 0.001]])
+    p = rendulic.material_point_path("isotropic_elastic", state, PARAMS, kind="proportional",
+                                     end=end, steps=5)
+    for i, f in enumerate(np.linspace(0, 1, 6)):
+        e = f * end
+        want = 1e6 * np.eye(3) + (k - 2 * g / 3) * np.trace(e) * np.eye(3) + 2 * g * e
+        np.testing.assert_allclose(p["strain"][i], e, rtol=0, atol=1e-16)
+        np.testing.assert_allclose(p["stress"][i], want, rtol=1e-9, atol=1e-3)
+    for kind, end, words in [
+            ("proportional", 0.01, r"^end: the end of a proportional path is a 3x3 strain tensor$"),
+            ("proportional", [[0, 1e-3, 0], [0, 0, 0], [0, 0, 0]],
+             r"^end: the end strain must be a symmetric 3x3 tensor$"),
+            ("undrained", np.eye(3) * 1e-3,
+             r"^end: the end strain of kind 'undrained' is a number \(a strain tensor is for "
+             r"kind 'proportional'\)$")]:
+        with pytest.raises(rendulic.InputError, match=words):
+            rendulic.material_point_path("isotropic_elastic", state, kind=kind, end=end)
+    # numpy's scalars are numbers.
+    assert rendulic.material_point_path("isotropic_elastic", state, kind="drained",
+                                        end=np.float64(1e-3), steps=2)["strain"][-1, 0, 0] == 1e-3
 
 
 def umat_library(name):
@@ -193,6 +221,13 @@ def test_a_users_umat_from_python_equals_the_built_in_law():
     np.testing.assert_allclose(u["stress"], b["stress"], rtol=1e-12, atol=1e-12 * 1e5)
     pu = rendulic.material_point_path("umat", state, params, end=-0.01, steps=20, umat=lib)
     pb = rendulic.material_point_path("hypoplastic_wu", state, end=-0.01, steps=20)
+    np.testing.assert_allclose(pu["stress"], pb["stress"], rtol=1e-6, atol=1e-6 * 1e5)
+    # A proportional path, which a UMAT may follow (a drained one it may not).
+    end = np.diag([0.01, -0.004, -0.002])
+    pu = rendulic.material_point_path("umat", state, params, kind="proportional", end=end,
+                                      steps=20, umat=lib)
+    pb = rendulic.material_point_path("hypoplastic_wu", state, kind="proportional", end=end,
+                                      steps=20)
     np.testing.assert_allclose(pu["stress"], pb["stress"], rtol=1e-6, atol=1e-6 * 1e5)
 
 
