@@ -24,33 +24,37 @@ std::string step_failure(int k, const PathOptions& o, const std::string& why) {
   return "step " + std::to_string(k + 1) + " of " + std::to_string(o.steps) + ": " + why;
 }
 
-PathSeries run_path(const Law& law, const MaterialState& start, const Eigen::Matrix3d& total,
-                    const PathOptions& o) {
-  if (!total.allFinite()) {
-    PathSeries s;
-    s.reason = "the path's end strain is not finite";  // before its first step, for a UMAT too
-    return s;
-  }
-  // A UMAT's path carries its whole STATEV (umat.hpp).
-  if (const auto* umat = dynamic_cast<const UmatLaw*>(&law)) return umat->run_path(start, total, o);
+// One recorded step of a path: whether it succeeded (else why not), the state it ends in, the
+// strain it applied and its driver's figures.
+struct PathStep {
+  bool success = false;
+  std::string reason;
+  MaterialState end;
+  Eigen::Matrix3d d_eps;
+  double error_estimate = 0.0;
+  int substeps = 0;
+};
+
+// The steps of a path from `start` with options `o` (checked first), `step(y)` taking each from
+// the state y: recorded, checked for the volume fraction, reported to PathOptions::after_step.
+template <class Step>
+PathSeries follow(const MaterialState& start, const PathOptions& o, Step&& step) {
   PathSeries s;
-  std::string why;
-  if (!o.IsValid(&why)) {
+  if (std::string why; !o.IsValid(&why)) {
     s.reason = "invalid path options: " + why;
     return s;
   }
-  const Eigen::Matrix3d de = total / o.steps;
   Eigen::Matrix3d eps = Eigen::Matrix3d::Zero();
   MaterialState y = start;
   record(&s, eps, y);
   for (int k = 0; k < o.steps; ++k) {
-    const StepResult r = integrate(law, y, de, o.step);
+    const PathStep r = step(y);
     if (!r.success) {
       s.reason = step_failure(k, o, r.reason);
       return s;
     }
     y = r.end;
-    eps += de;
+    eps += r.d_eps;
     if (const std::string bad = volume_fraction_problem(y.volume_fraction); !bad.empty()) {
       s.reason = step_failure(k, o, bad);
       return s;
@@ -62,6 +66,22 @@ PathSeries run_path(const Law& law, const MaterialState& start, const Eigen::Mat
   }
   s.success = true;
   return s;
+}
+
+PathSeries run_path(const Law& law, const MaterialState& start, const Eigen::Matrix3d& total,
+                    const PathOptions& o) {
+  if (!total.allFinite()) {
+    PathSeries s;
+    s.reason = "the path's end strain is not finite";  // before its first step, for a UMAT too
+    return s;
+  }
+  // A UMAT's path carries its whole STATEV (umat.hpp).
+  if (const auto* umat = dynamic_cast<const UmatLaw*>(&law)) return umat->run_path(start, total, o);
+  return follow(start, o, [&](const MaterialState& y) {
+    const Eigen::Matrix3d de = total / o.steps;  // after follow's check of o.steps
+    const StepResult r = integrate(law, y, de, o.step);
+    return PathStep{r.success, r.reason, r.end, de, r.error_estimate, r.substeps};
+  });
 }
 
 }  // namespace
@@ -119,43 +139,22 @@ PathSeries drained_triaxial_path(const Law& law, const MaterialState& start, dou
         "(strain_path with the strains it should follow)";
     return s;
   }
-  std::string why;
-  if (!o.IsValid(&why)) {
-    s.reason = "invalid path options: " + why;
-    return s;
-  }
   MixedOptions mixed;
   mixed.step = o.step;
   MixedControl c;
   c.stress_controlled = {false, true, true, false, false, false};  // Mandel: xx yy zz yz xz xy
-  c.strain_increment(0) = eps_axial_end / o.steps;
   const Vector6d held = to_mandel(start.stress);
-  Eigen::Matrix3d eps = Eigen::Matrix3d::Zero();
-  MaterialState y = start;
-  record(&s, eps, y);
-  for (int k = 0; k < o.steps; ++k) {
+  return follow(start, o, [&](const MaterialState& y) {
     // Each step aims at the start's lateral stresses, not at a zero increment, so that Newton's
     // residuals (1e-9 relative) do not add up over the steps.
+    c.strain_increment(0) = eps_axial_end / o.steps;  // after follow's check of o.steps
     const Vector6d now = to_mandel(y.stress);
     for (int i : {1, 2}) c.stress_increment(i) = held(i) - now(i);
     const MixedResult r = integrate_mixed(law, y, c, mixed);
-    if (!r.step.success) {
-      s.reason = step_failure(k, o, r.step.reason);
-      return s;
-    }
-    y = r.step.end;
-    eps += from_mandel(r.strain_increment);
-    if (const std::string bad = volume_fraction_problem(y.volume_fraction); !bad.empty()) {
-      s.reason = step_failure(k, o, bad);
-      return s;
-    }
-    s.max_error_estimate = std::max(s.max_error_estimate, r.max_error_estimate);
-    s.total_substeps += r.substeps;
-    record(&s, eps, y);
-    if (o.after_step) o.after_step(k + 1, o.steps);
-  }
-  s.success = true;
-  return s;
+    return PathStep{r.step.success,       r.step.reason,
+                    r.step.end,           from_mandel(r.strain_increment),
+                    r.max_error_estimate, r.substeps};
+  });
 }
 
 }  // namespace rendulic::models
