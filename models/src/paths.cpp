@@ -135,8 +135,8 @@ PathSeries drained_triaxial_path(const Law& law, const MaterialState& start, dou
   // variables would be lost between its calls (UmatLaw::run_path carries them).
   if (dynamic_cast<const UmatLaw*>(&law)) {
     s.reason =
-        "a drained path is for the built-in laws: a UMAT is driven by strain only "
-        "(strain_path with the strains it should follow)";
+        "a drained path is for the built-in laws: a UMAT is driven by strain only (a "
+        "proportional strain path with the strains it should follow)";
     return s;
   }
   MixedOptions mixed;
