@@ -44,11 +44,14 @@ class UmatLibrary {
     // Named by its path alone: it comes from --umat, calibration.umat or Python's umat=.
     refuse_unless_regular_file(path, path, "UMAT library", "a .so file");
     // RTLD_LOCAL: two UMAT libraries in one process keep their own symbols.
-    handle_ = ::dlopen(std::filesystem::absolute(path).c_str(), RTLD_NOW | RTLD_LOCAL);
+    const std::string absolute = std::filesystem::absolute(path).string();
+    handle_ = ::dlopen(absolute.c_str(), RTLD_NOW | RTLD_LOCAL);
     if (!handle_) {
       const char* e = ::dlerror();
-      throw InputError(path +
-                       ": cannot load the UMAT library: " + printable(e ? e : "unknown error"));
+      std::string why = e ? e : "unknown error";
+      // dlerror names the file again, absolute: "/abs/x.so: invalid ELF header".
+      if (why.starts_with(absolute + ": ")) why.erase(0, absolute.size() + 2);
+      throw InputError(path + ": cannot load the UMAT library: " + printable(why));
     }
     for (const char* s : {"umat_", "umat", "UMAT"}) {
       if (void* f = ::dlsym(handle_, s)) {
